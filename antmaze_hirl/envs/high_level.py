@@ -1,0 +1,263 @@
+"""High-level subgoal-selection env: the action is an xy subgoal that a low-level controller walks to."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils.ezpickle import EzPickle
+
+from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.controllers import LowLevelController, PointGoToController, as_controller
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
+from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector
+from antmaze_hirl.envs.simulator import Body, body_spec
+
+STATE_AGENT_XY = slice(0, 2)
+STATE_GOAL_XY = slice(2, 4)
+
+
+def default_low_level(body: Body) -> LowLevelController:
+    """The controller a high-level env uses when none is given.
+
+    Raises:
+        ValueError: For the ant, which needs a trained policy passed as ``low_level=``.
+    """
+    if body == "point":
+        return PointGoToController()
+    raise ValueError(
+        "antmaze_hirl/AntMaze-v0 needs a low-level controller: pass low_level=<SB3 model or callable "
+        "obs -> action>, e.g. gym.make('antmaze_hirl/AntMaze-v0', low_level=model)"
+    )
+
+
+class HighLevelMazeEnv(gym.Env, EzPickle):
+    """Reach a random goal in a maze by choosing xy subgoals for a low-level controller.
+
+    Each episode draws a layout (a random connected maze, or the fixed ``maze_map``), starts the body
+    in a corner and puts the goal in a free cell at least ``min_goal_distance`` grid steps away. Each
+    :meth:`step` takes a subgoal and runs the low-level controller on the inner :class:`ReachEnv` for
+    up to ``horizon`` steps, stopping early once the subgoal or the goal is reached. The episode ends
+    when the goal is reached (``terminated``, reward 1) or after ``max_steps`` low-level steps
+    (``truncated``, reward 0).
+
+    Observation ``Dict``:
+        * ``image``: ``uint8 (3, rows*ppc, cols*ppc)`` bird's-eye view, channels walls/agent/goal,
+        * ``state``: ``float32`` vector ``[agent_x, agent_y, goal_x, goal_y, *body_observation]``.
+
+    Action: subgoal xy in metres, ``Box`` over the maze inside its border walls.
+
+    ``info``: ``low_level_steps`` (this step), ``total_low_level_steps``, ``subgoal_reached``,
+    ``attempts`` (subgoals so far, the paper's measure), ``is_success``, ``subgoal`` (as executed),
+    ``subgoal_clipped``, ``subgoal_in_wall`` and ``agent_path`` (xy after every low-level step).
+
+    Args:
+        body: ``"point"`` or ``"ant"``.
+        maze_map: ``None`` for a new random layout every episode, else a fixed map (rows or a
+            standard name ``"u"``, ``"open"``, ``"medium"``, ``"large"``) with random start corner and goal.
+        maze_size: Free cells of random layouts, ``n`` or ``(rows, cols)``.
+        wall_fraction: Share of interior cells that random layouts turn into walls.
+        min_goal_distance: Least grid steps from the start cell to the goal cell.
+        low_level: SB3 model or callable ``goal observation -> action``. Default: the point's
+            scripted controller; the ant has no default yet.
+        horizon: Low-level steps per subgoal, H. Default per body (ant 100, point 50).
+        max_steps: Low-level step budget per episode.
+        goal_threshold: Final-goal radius, metres. Default per body (ant 0.45, point 0.2).
+        position_noise: Start and goal offsets, uniform in ``±position_noise`` cells.
+        pixels_per_cell: Image resolution.
+        clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
+        reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
+        render_mode: ``"rgb_array"`` for a bird's-eye picture.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+
+    def __init__(
+        self,
+        body: Body = "point",
+        maze_map: str | MazeMap | None = None,
+        *,
+        maze_size: int | tuple[int, int] = 5,
+        wall_fraction: float = 0.3,
+        min_goal_distance: int = 3,
+        low_level: Any = None,
+        horizon: int | None = None,
+        max_steps: int = 500,
+        goal_threshold: float | None = None,
+        position_noise: float = 0.25,
+        pixels_per_cell: int = 8,
+        clip_subgoals: bool = False,
+        reach_kwargs: dict[str, Any] | None = None,
+        render_mode: str | None = None,
+    ) -> None:
+        EzPickle.__init__(
+            self,
+            body,
+            maze_map,
+            maze_size=maze_size,
+            wall_fraction=wall_fraction,
+            min_goal_distance=min_goal_distance,
+            low_level=low_level,
+            horizon=horizon,
+            max_steps=max_steps,
+            goal_threshold=goal_threshold,
+            position_noise=position_noise,
+            pixels_per_cell=pixels_per_cell,
+            clip_subgoals=clip_subgoals,
+            reach_kwargs=reach_kwargs,
+            render_mode=render_mode,
+        )
+        spec = body_spec(body)
+        if max_steps < 1:
+            raise ValueError(f"max_steps must be >= 1, got {max_steps}")
+        if not 0 <= position_noise < 0.5:
+            raise ValueError(f"position_noise must lie in [0, 0.5) cells, got {position_noise}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.body = body
+        self.render_mode = render_mode
+        self.max_steps = int(max_steps)
+        self.goal_threshold = float(goal_threshold if goal_threshold is not None else spec.distance_threshold)
+        self.position_noise = float(position_noise)
+        self.clip_subgoals = clip_subgoals
+        self.min_goal_distance = int(min_goal_distance)
+        self.wall_fraction = float(wall_fraction)
+        n_rows, n_cols = (maze_size, maze_size) if isinstance(maze_size, int) else maze_size
+        self.maze_size = (int(n_rows), int(n_cols))
+        self._fixed_map = None if maze_map is None else maze_map
+        first_layout = self._draw_layout(np.random.default_rng(0))
+        self.controller = as_controller(low_level) if low_level is not None else default_low_level(body)
+        self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **(reach_kwargs or {}))
+        self.layout = first_layout
+        self.geometry: MazeGeometry = self.reach.sim.geometry
+        self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
+        scale = self.geometry.scale
+        self.action_space = spaces.Box(
+            (self.geometry.low + scale).astype(np.float32), (self.geometry.high - scale).astype(np.float32), dtype=np.float32
+        )
+        state_dim = 4 + self.reach.sim.observation_dim
+        self.observation_space = spaces.Dict(
+            {
+                "image": spaces.Box(0, 255, shape=self.renderer.shape, dtype=np.uint8),
+                "state": spaces.Box(-np.inf, np.inf, shape=(state_dim,), dtype=np.float32),
+            }
+        )
+        self.goal_xy = np.zeros(2)
+        self.attempts = 0
+        self.total_low_level_steps = 0
+
+    @property
+    def agent_xy(self) -> np.ndarray:
+        """Current body xy, metres."""
+        return self.reach.agent_xy
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
+        """Starts an episode.
+
+        Args:
+            seed: Seeds ``self.np_random``, the only source of randomness.
+            options: Optional ``"layout"`` (a :class:`MazeLayout` of this env's map shape),
+                ``"start_xy"`` and ``"goal_xy"`` (exact positions, metres, in free cells).
+
+        Raises:
+            ValueError: If a given layout has another shape or a position is NaN or in a wall.
+        """
+        super().reset(seed=seed)
+        options = options or {}
+        layout = options.get("layout") or self._draw_layout(self.np_random)
+        if not isinstance(layout, MazeLayout):
+            raise ValueError(f"options['layout'] must be a MazeLayout, got {type(layout).__name__}")
+        self.reach.set_walls(layout.walls)
+        self.layout = layout
+        start = options.get("start_xy")
+        if start is None:
+            start = self._noisy_centre(layout.start_cell)
+        goal = options.get("goal_xy")
+        self.goal_xy = self._noisy_centre(layout.goal_cell) if goal is None else self._free_xy(goal, "goal_xy")
+        self.reach.reset(seed=int(self.np_random.integers(2**31)), options={"start_xy": start, "goal": self.goal_xy})
+        self.attempts = 0
+        self.total_low_level_steps = 0
+        return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        """Runs the low-level controller towards subgoal ``action`` for up to ``horizon`` steps.
+
+        Raises:
+            ValueError: If the subgoal is NaN/inf or, unless ``clip_subgoals``, outside the maze.
+        """
+        subgoal = as_finite_vector(action, 2, "subgoal")
+        low, high = self.action_space.low, self.action_space.high
+        clipped = bool(np.any(subgoal < low) or np.any(subgoal > high))
+        if clipped and not self.clip_subgoals:
+            raise ValueError(
+                f"subgoal {subgoal.tolist()} is outside the maze bounds x in [{low[0]}, {high[0]}], "
+                f"y in [{low[1]}, {high[1]}]; pass clip_subgoals=True to clip instead"
+            )
+        subgoal = np.clip(subgoal, low, high)
+        low_obs = self.reach.set_goal(subgoal)
+        self.attempts += 1
+        path = [self.reach.agent_xy]
+        subgoal_reached = success = False
+        while self.total_low_level_steps < self.max_steps:
+            low_obs, _, fell, horizon_over, low_info = self.reach.step(self.controller(low_obs))
+            self.total_low_level_steps += 1
+            path.append(low_obs["achieved_goal"])
+            success = self._goal_reached()
+            subgoal_reached = low_info["is_success"]
+            if success or subgoal_reached or fell or horizon_over:
+                break
+        info = {
+            "low_level_steps": len(path) - 1,
+            "total_low_level_steps": self.total_low_level_steps,
+            "subgoal_reached": bool(subgoal_reached),
+            "attempts": self.attempts,
+            "is_success": success,
+            "subgoal": subgoal,
+            "subgoal_clipped": clipped,
+            "subgoal_in_wall": not self.geometry.is_free(self.layout.walls, subgoal),
+            "agent_path": np.asarray(path),
+        }
+        truncated = not success and self.total_low_level_steps >= self.max_steps
+        return self._get_obs(), float(success), success, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        """Bird's-eye RGB picture when ``render_mode="rgb_array"``."""
+        if self.render_mode != "rgb_array":
+            return None
+        return self.renderer.rgb(self.layout.walls, self.agent_xy, self.goal_xy)
+
+    def close(self) -> None:
+        """Releases the simulator."""
+        self.reach.close()
+
+    def _draw_layout(self, rng: np.random.Generator) -> MazeLayout:
+        if self._fixed_map is None:
+            n_rows, n_cols = self.maze_size
+            return generate_layout(
+                rng, n_rows=n_rows, n_cols=n_cols, wall_fraction=self.wall_fraction, min_goal_distance=self.min_goal_distance
+            )
+        return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_distance)
+
+    def _noisy_centre(self, cell: tuple[int, int]) -> np.ndarray:
+        noise = self.np_random.uniform(-self.position_noise, self.position_noise, size=2)
+        return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
+
+    def _free_xy(self, value: Any, name: str) -> np.ndarray:
+        point = as_finite_vector(value, 2, name)
+        if not self.geometry.is_free(self.layout.walls, point):
+            raise ValueError(f"{name} {point.tolist()} is not in a free cell of the maze")
+        return point
+
+    def _goal_reached(self) -> bool:
+        return bool(np.linalg.norm(self.reach.agent_xy - self.goal_xy) <= self.goal_threshold)
+
+    def _get_obs(self) -> dict[str, np.ndarray]:
+        agent_xy = self.reach.agent_xy
+        state = np.concatenate([agent_xy, self.goal_xy, self.reach.body_observation]).astype(np.float32)
+        return {"image": self.renderer.observation(self.layout.walls, agent_xy, self.goal_xy), "state": state}
+
+
+

@@ -1,0 +1,263 @@
+"""Low-level goal-reaching env: walk the body to an xy subgoal within H steps (what SB3 + HER trains)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils.ezpickle import EzPickle
+from gymnasium_robotics.core import GoalEnv
+
+from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.layouts import MazeMap, validate_maze_map
+from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
+
+REWARD_TYPES = ("sparse", "dense")
+
+
+def as_finite_vector(value: Any, size: int, name: str) -> np.ndarray:
+    """``value`` as a float64 vector of ``size`` finite entries.
+
+    Raises:
+        ValueError: Naming ``name`` and the value if the shape is wrong or an entry is NaN/inf.
+    """
+    vector = np.asarray(value, dtype=np.float64)
+    if vector.shape != (size,):
+        raise ValueError(f"{name} must have shape ({size},), got shape {vector.shape}: {value!r}")
+    if not np.all(np.isfinite(vector)):
+        raise ValueError(f"{name} must be finite, got {vector.tolist()}")
+    return vector
+
+
+class ReachEnv(GoalEnv, EzPickle):
+    """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
+
+    Each episode places the body in a random free cell of ``maze_map`` (or where ``options`` say) and
+    samples a subgoal uniformly in the disk of radius ``goal_radius`` around it, in free space and in
+    line of sight (a straight walk can reach it). The episode is truncated after ``horizon`` steps.
+
+    Observation ``Dict``:
+        * ``observation``: body state without its xy (ant: 27 values, 105 with contact forces;
+          point: its 2 velocities),
+        * ``achieved_goal``: body xy (metres),
+        * ``desired_goal``: subgoal xy (metres).
+
+    Action: the body's own ``Box(-1, 1)`` (ant: 8 joint torques, point: 2 forces), multiplied by
+    ``action_scale`` before it reaches the actuators.
+
+    Reward: ``sparse`` gives 1.0 within ``distance_threshold`` of the subgoal, else 0.0 (the
+    gymnasium-robotics convention); ``dense`` gives ``exp(-distance)``. ``info["is_success"]`` says
+    whether the body is within the threshold now.
+
+    Args:
+        body: ``"ant"`` (Gymnasium Ant-v5 in 4 m cells) or ``"point"`` (PointMaze ball in 1 m cells).
+        maze_map: Layout, a list of rows or a standard map name. Default ``"open"`` (3x5 free cells).
+        horizon: Steps per episode, H. Default per body: ant 100, point 50.
+        goal_radius: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
+        min_goal_distance: Smallest subgoal distance, metres. Default: the distance threshold.
+        distance_threshold: Reach radius, metres. Default per body: ant 0.45, point 0.2.
+        reward_type: ``"sparse"`` or ``"dense"``.
+        action_scale: Multiplier in ``(0, 1]`` on actions. The paper's rllab Ant used a (-30, 30)
+            control range with gear 1; Gymnasium's Ant-v5, used here, has (-1, 1) with gear 150, so the
+            full range (scale 1) is 150 N m peak torque and smaller scales mimic weaker motors.
+        terminate_on_flip: Ant only: end the episode when the torso drops below 0.2 m (fallen or flipped).
+        include_contact_forces: Ant only: keep contact forces in ``observation``.
+        render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+
+    def __init__(
+        self,
+        body: Body = "ant",
+        maze_map: str | MazeMap = "open",
+        *,
+        horizon: int | None = None,
+        goal_radius: float | None = None,
+        min_goal_distance: float | None = None,
+        distance_threshold: float | None = None,
+        reward_type: str = "sparse",
+        action_scale: float = 1.0,
+        terminate_on_flip: bool = False,
+        include_contact_forces: bool = False,
+        render_mode: str | None = None,
+    ) -> None:
+        EzPickle.__init__(
+            self,
+            body,
+            maze_map,
+            horizon=horizon,
+            goal_radius=goal_radius,
+            min_goal_distance=min_goal_distance,
+            distance_threshold=distance_threshold,
+            reward_type=reward_type,
+            action_scale=action_scale,
+            terminate_on_flip=terminate_on_flip,
+            include_contact_forces=include_contact_forces,
+            render_mode=render_mode,
+        )
+        spec = body_spec(body)
+        self.body = body
+        self.horizon = int(horizon if horizon is not None else spec.default_horizon)
+        self.goal_radius = float(goal_radius if goal_radius is not None else spec.scale)
+        self.distance_threshold = float(distance_threshold if distance_threshold is not None else spec.distance_threshold)
+        self.min_goal_distance = float(min_goal_distance if min_goal_distance is not None else self.distance_threshold)
+        if self.horizon < 1:
+            raise ValueError(f"horizon must be >= 1, got {horizon}")
+        if not 0 <= self.min_goal_distance < self.goal_radius:
+            raise ValueError(
+                f"need 0 <= min_goal_distance < goal_radius, got {self.min_goal_distance} and {self.goal_radius}"
+            )
+        if self.distance_threshold <= 0:
+            raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
+        if reward_type not in REWARD_TYPES:
+            raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
+        if not 0 < action_scale <= 1:
+            raise ValueError(f"action_scale must lie in (0, 1], got {action_scale}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.reward_type = reward_type
+        self.action_scale = float(action_scale)
+        self.terminate_on_flip = terminate_on_flip and body == "ant"
+        self.render_mode = render_mode
+        self._include_contact_forces = include_contact_forces
+        self.sim = MazeSimulator(body, validate_maze_map(maze_map), include_contact_forces=include_contact_forces)
+        self.action_space = spaces.Box(-1.0, 1.0, shape=self.sim.action_space.shape, dtype=np.float32)
+        xy_space = spaces.Box(-np.inf, np.inf, shape=(2,), dtype=np.float64)
+        self.observation_space = spaces.Dict(
+            {
+                "observation": spaces.Box(-np.inf, np.inf, shape=(self.sim.observation_dim,), dtype=np.float64),
+                "achieved_goal": xy_space,
+                "desired_goal": xy_space,
+            }
+        )
+        self._renderer = BirdseyeRenderer(self.sim.geometry)
+        self._body_obs = np.zeros(self.sim.observation_dim)
+        self._xy = np.zeros(2)
+        self._goal = np.zeros(2)
+        self._steps = 0
+
+    @property
+    def walls(self) -> np.ndarray:
+        """Boolean wall grid of the current layout."""
+        return self.sim.walls
+
+    @property
+    def agent_xy(self) -> np.ndarray:
+        """Current body xy, metres."""
+        return self._xy.copy()
+
+    @property
+    def body_observation(self) -> np.ndarray:
+        """Current body state without xy."""
+        return self._body_obs.copy()
+
+    @property
+    def goal(self) -> np.ndarray:
+        """Current subgoal xy, metres."""
+        return self._goal.copy()
+
+    def set_walls(self, walls: np.ndarray) -> None:
+        """Swaps in another layout (rebuilds the MuJoCo model if the walls differ; takes ~10 ms)."""
+        walls = np.asarray(walls, dtype=bool)
+        if walls.shape != self.sim.walls.shape:
+            raise ValueError(f"new layout has shape {walls.shape}, this env's spaces are for {self.sim.walls.shape}")
+        if not np.array_equal(walls, self.sim.walls):
+            self.sim.close()
+            self.sim = MazeSimulator(self.body, walls, include_contact_forces=self._include_contact_forces)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
+        """Starts an episode.
+
+        Args:
+            seed: Seeds ``self.np_random`` (the only source of randomness).
+            options: Optional ``"start_xy"`` (exact body xy; default a random free cell centre with
+                ±0.25 cell of noise) and ``"goal"`` (exact subgoal xy; default sampled near the body).
+
+        Raises:
+            ValueError: If a given start or goal is NaN, or outside the maze's free space.
+        """
+        super().reset(seed=seed)
+        options = options or {}
+        geometry = self.sim.geometry
+        if options.get("start_xy") is not None:
+            start = self._free_point(options["start_xy"], "start_xy")
+        else:
+            free = np.argwhere(~self.walls)
+            cell = free[self.np_random.integers(len(free))]
+            start = geometry.cell_to_xy(cell) + self.np_random.uniform(-0.25, 0.25, size=2) * geometry.scale
+        self._body_obs, self._xy = self.sim.reset(start, seed=int(self.np_random.integers(2**31)))
+        goal = options.get("goal")
+        self.set_goal(self.sample_goal() if goal is None else self._free_point(goal, "goal"))
+        return self._get_obs(), {"is_success": self._is_success()}
+
+    def set_goal(self, goal: np.ndarray) -> dict[str, np.ndarray]:
+        """Gives the body a new subgoal and restarts the step count (one new sub-episode of H steps).
+
+        Returns:
+            The observation with the new ``desired_goal``.
+        """
+        self._goal = as_finite_vector(goal, 2, "goal")
+        self._steps = 0
+        self.sim.show_target(self._goal)
+        return self._get_obs()
+
+    def sample_goal(self) -> np.ndarray:
+        """A subgoal in free space and line of sight, ``min_goal_distance..goal_radius`` from the body.
+
+        Falls back to the body's own cell centre if 1000 draws find none (a body squeezed into a corner).
+        """
+        geometry = self.sim.geometry
+        for _ in range(1000):
+            radius = np.sqrt(self.np_random.uniform(self.min_goal_distance**2, self.goal_radius**2))
+            angle = self.np_random.uniform(0, 2 * np.pi)
+            goal = self._xy + radius * np.array([np.cos(angle), np.sin(angle)])
+            if geometry.segment_is_free(self.walls, self._xy, goal):
+                return goal
+        return geometry.cell_to_xy(geometry.xy_to_cell(self._xy))
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        """Applies ``action`` for one step (``dt`` = 0.05 s ant, 0.01 s point).
+
+        Raises:
+            ValueError: If ``action`` has the wrong shape or holds NaN/inf.
+        """
+        action = as_finite_vector(action, self.action_space.shape[0], "action")
+        self._body_obs, self._xy = self.sim.step(np.clip(action, -1.0, 1.0) * self.action_scale)
+        self._steps += 1
+        obs = self._get_obs()
+        info = {"is_success": self._is_success()}
+        reward = float(self.compute_reward(self._xy, self._goal, info))
+        terminated = self.terminate_on_flip and self.sim.torso_height < 0.2
+        truncated = self._steps >= self.horizon
+        return obs, reward, terminated, truncated, info
+
+    def compute_reward(self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any) -> np.ndarray:
+        """Reward for (batches of) achieved and desired goals; vectorised over leading axes for HER."""
+        distance = np.linalg.norm(np.asarray(achieved_goal) - np.asarray(desired_goal), axis=-1)
+        if self.reward_type == "dense":
+            return np.exp(-distance)
+        return (distance <= self.distance_threshold).astype(np.float64)
+
+    def render(self) -> np.ndarray | None:
+        """Bird's-eye RGB image (rows, cols, 3) of walls, body and subgoal when ``render_mode="rgb_array"``."""
+        if self.render_mode != "rgb_array":
+            return None
+        return self._renderer.rgb(self.walls, self._xy, self._goal)
+
+    def close(self) -> None:
+        """Releases the simulator."""
+        self.sim.close()
+
+    def _free_point(self, value: Any, name: str) -> np.ndarray:
+        point = as_finite_vector(value, 2, name)
+        if not self.sim.geometry.is_free(self.walls, point):
+            raise ValueError(f"{name} {point.tolist()} is not in a free cell of the maze")
+        return point
+
+    def _is_success(self) -> bool:
+        return bool(np.linalg.norm(self._xy - self._goal) <= self.distance_threshold)
+
+    def _get_obs(self) -> dict[str, np.ndarray]:
+        return {"observation": self._body_obs.copy(), "achieved_goal": self._xy.copy(), "desired_goal": self._goal.copy()}

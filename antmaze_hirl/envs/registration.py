@@ -1,0 +1,20 @@
+"""Registers the ``antmaze_hirl/...`` ids with Gymnasium (called when ``antmaze_hirl`` is imported)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
+    "antmaze_hirl/AntReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "ant"}),
+    "antmaze_hirl/PointReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "point"}),
+    "antmaze_hirl/AntMaze-v0": ("antmaze_hirl.envs.high_level:HighLevelMazeEnv", {"body": "ant"}),
+    "antmaze_hirl/PointMaze-v0": ("antmaze_hirl.envs.high_level:HighLevelMazeEnv", {"body": "point"}),
+}
+"""Registered ids: entry point and default keyword arguments."""
+
+
+def register_envs() -> None:
+    """Registers every id in :data:`ENV_IDS` that is not registered yet (safe to call twice)."""
+    for env_id, (entry_point, kwargs) in ENV_IDS.items():
+        if env_id not in gym.registry:
+            gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)

@@ -1,0 +1,113 @@
+"""One gymnasium-robotics maze simulation (Ant or point mass) that places the body at exact xy."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from gymnasium_robotics.envs.maze.ant_maze_v5 import AntMazeEnv
+from gymnasium_robotics.envs.maze.maze_v4 import MazeEnv
+from gymnasium_robotics.envs.maze.point_maze import PointMazeEnv
+
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.layouts import walls_to_maze_map
+
+Body = Literal["ant", "point"]
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """Fixed facts about a body in gymnasium-robotics' mazes.
+
+    Attributes:
+        scale: Maze cell side in metres (``maze_size_scaling``, fixed by gymnasium-robotics).
+        distance_threshold: Default reach radius in metres for subgoals and the final goal.
+        default_horizon: Default low-level steps per subgoal (H).
+        dt: Simulated seconds per env step.
+    """
+
+    scale: float
+    distance_threshold: float
+    default_horizon: int
+    dt: float
+
+
+BODY_SPECS: dict[str, BodySpec] = {
+    # 0.45 m is gymnasium-robotics' own success radius; H=100 (5 s) leaves a walking ant time for one cell.
+    "ant": BodySpec(scale=4.0, distance_threshold=0.45, default_horizon=100, dt=0.05),
+    # The point mass lives in 1 m cells, so the radius shrinks with it; it crosses a cell in ~20 steps.
+    "point": BodySpec(scale=1.0, distance_threshold=0.2, default_horizon=50, dt=0.01),
+}
+
+
+def body_spec(body: str) -> BodySpec:
+    """Returns the spec of ``body``.
+
+    Raises:
+        ValueError: If ``body`` is not ``"ant"`` or ``"point"``.
+    """
+    if body not in BODY_SPECS:
+        raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_SPECS)}")
+    return BODY_SPECS[body]
+
+
+class MazeSimulator:
+    """Owns the gymnasium-robotics ``AntMazeEnv``/``PointMazeEnv`` for one wall layout.
+
+    The maze env builds the MuJoCo model (walls added to the stock Ant/point XML); this class only
+    drives its body directly, skipping the maze env's own goal bookkeeping, which our envs replace.
+    Observations exclude the body's xy (returned separately), so policies are translation invariant.
+
+    Args:
+        body: ``"ant"`` or ``"point"``.
+        walls: Boolean wall grid of the layout.
+        include_contact_forces: Ant only: keep the 78 contact-force entries in the observation.
+    """
+
+    def __init__(self, body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> None:
+        self.body = body
+        self.spec = body_spec(body)
+        self.walls = np.array(walls, dtype=bool)
+        self.geometry = MazeGeometry(self.walls.shape[0], self.walls.shape[1], self.spec.scale)
+        maze_map = walls_to_maze_map(self.walls)
+        self._maze_env: MazeEnv
+        if body == "ant":
+            self._maze_env = AntMazeEnv(maze_map=maze_map, include_cfrc_ext_in_observation=include_contact_forces)
+            self._mujoco_env = self._maze_env.ant_env
+        else:
+            self._maze_env = PointMazeEnv(maze_map=maze_map)
+            self._mujoco_env = self._maze_env.point_env
+        # The model is compiled; the XML gymnasium-robotics wrote to the temp dir is no longer needed.
+        os.remove(self._maze_env.tmp_xml_file_path)
+        self.action_space = self._mujoco_env.action_space
+        self.observation_dim = int(self._mujoco_env.observation_space.shape[0]) - 2
+
+    def reset(self, xy: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
+        """Puts the body at rest at ``xy`` and returns ``(observation, xy)``."""
+        self._mujoco_env.init_qpos[:2] = xy
+        raw_obs, _ = self._mujoco_env.reset(seed=seed)
+        return self._split(raw_obs)
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Advances one env step (``spec.dt`` seconds) and returns ``(observation, xy)``."""
+        raw_obs = self._mujoco_env.step(action)[0]
+        return self._split(raw_obs)
+
+    def show_target(self, xy: np.ndarray) -> None:
+        """Moves the red target marker of the MuJoCo scene (visual only)."""
+        self._maze_env.goal = np.asarray(xy, dtype=np.float64)
+        self._maze_env.update_target_site_pos()
+
+    @property
+    def torso_height(self) -> float:
+        """Height of the body's root above the floor, metres."""
+        return float(self._mujoco_env.data.qpos[2]) if self.body == "ant" else 0.0
+
+    def close(self) -> None:
+        """Frees the MuJoCo renderer, if one was opened."""
+        self._mujoco_env.close()
+
+    def _split(self, raw_obs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return raw_obs[2:].copy(), raw_obs[:2].copy()

@@ -1,0 +1,124 @@
+"""Scripted oracle expert: plans the shortest grid path and gives the next subgoal along it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.high_level import STATE_AGENT_XY, STATE_GOAL_XY
+from antmaze_hirl.envs.layouts import shortest_path
+
+
+def plan_subgoal(
+    walls: np.ndarray,
+    geometry: MazeGeometry,
+    agent_xy: np.ndarray,
+    goal_xy: np.ndarray,
+    *,
+    max_distance: float,
+    clearance: float,
+) -> np.ndarray:
+    """The farthest point along the shortest path that a straight walk from the agent reaches.
+
+    Waypoints are the centres of the path's cells, then the goal itself. The subgoal is the last
+    waypoint before the first one hidden behind a wall (the segment to it must keep ``clearance``
+    metres from walls), pulled back to at most ``max_distance`` from the agent.
+
+    Raises:
+        ValueError: If the goal cannot be reached from the agent's cell.
+    """
+    agent_cell = _nearest_free_cell(walls, geometry, agent_xy)
+    goal_cell = _nearest_free_cell(walls, geometry, goal_xy)
+    cells = shortest_path(walls, agent_cell, goal_cell)
+    waypoints = [geometry.cell_to_xy(cell) for cell in cells[1:-1]] + [np.asarray(goal_xy, dtype=float)]
+    target = geometry.cell_to_xy(agent_cell)  # own cell centre: always reachable in a straight line
+    for waypoint in waypoints:
+        if not geometry.segment_is_free(walls, agent_xy, waypoint, clearance):
+            break
+        target = waypoint
+    offset = target - agent_xy
+    distance = float(np.linalg.norm(offset))
+    if distance > max_distance:
+        target = agent_xy + offset * (max_distance / distance)
+    return target
+
+
+def _nearest_free_cell(walls: np.ndarray, geometry: MazeGeometry, xy: np.ndarray) -> tuple[int, int]:
+    # A body pressed against a wall can have its centre a hair inside the wall's cell.
+    row, col = geometry.xy_to_cell(xy)
+    if 0 <= row < walls.shape[0] and 0 <= col < walls.shape[1] and not walls[row, col]:
+        return row, col
+    free = np.argwhere(~walls)
+    centres = np.array([geometry.cell_to_xy(cell) for cell in free])
+    nearest = free[np.argmin(np.linalg.norm(centres - xy, axis=1))]
+    return int(nearest[0]), int(nearest[1])
+
+
+class PathOracle:
+    """Scripted expert for the high-level env: labels an observation with a subgoal.
+
+    It reads everything from the observation itself (walls from the image's wall channel, agent and
+    goal from ``state``), so it labels stored or perturbed observations as well as live ones.
+
+    Args:
+        geometry: Map placement of the env it serves.
+        pixels_per_cell: The env's image resolution.
+        max_distance: Farthest subgoal from the agent, metres ("towards the target but not too far").
+            Default one cell.
+        clearance: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
+        noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
+        rng: Source of the noise.
+    """
+
+    def __init__(
+        self,
+        geometry: MazeGeometry,
+        *,
+        pixels_per_cell: int = 8,
+        max_distance: float | None = None,
+        clearance: float | None = None,
+        noise_std: float = 0.0,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        if noise_std < 0:
+            raise ValueError(f"noise_std must be >= 0, got {noise_std}")
+        self.geometry = geometry
+        self.renderer = BirdseyeRenderer(geometry, pixels_per_cell)
+        self.max_distance = float(max_distance if max_distance is not None else geometry.scale)
+        if self.max_distance <= 0:
+            raise ValueError(f"max_distance must be > 0, got {max_distance}")
+        self.clearance = float(clearance if clearance is not None else 0.2 * geometry.scale)
+        self.noise_std = float(noise_std)
+        self.rng = rng if rng is not None else np.random.default_rng()
+
+    @classmethod
+    def for_env(cls, env: Any, **kwargs: Any) -> PathOracle:
+        """An oracle matching the geometry and image resolution of a (wrapped) high-level env."""
+        inner = env.unwrapped
+        return cls(inner.geometry, pixels_per_cell=inner.renderer.pixels_per_cell, **kwargs)
+
+    def label(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """The expert subgoal ``pi*(s)`` for a high-level observation, metres."""
+        state = np.asarray(observation["state"], dtype=np.float64)
+        walls = self.renderer.walls_from_image(observation["image"])
+        subgoal = plan_subgoal(
+            walls,
+            self.geometry,
+            state[STATE_AGENT_XY],
+            state[STATE_GOAL_XY],
+            max_distance=self.max_distance,
+            clearance=self.clearance,
+        )
+        if self.noise_std > 0:
+            subgoal = subgoal + self.rng.normal(0.0, self.noise_std, size=2)
+        inner_low = self.geometry.low + self.geometry.scale
+        return np.clip(subgoal, inner_low, -inner_low)
+
+    def __call__(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        return self.label(observation)
+
+
+
