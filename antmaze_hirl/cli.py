@@ -1,0 +1,111 @@
+"""The ``antmaze-hirl`` command line: ``demo``, ``train-low``, ``eval-low``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+from antmaze_hirl.envs.simulator import BODY_SPECS
+
+
+def _add_demo(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("demo", help="let the oracle drive the hierarchy through a random maze")
+    parser.add_argument("--body", choices=sorted(BODY_SPECS), default="point", help="body to walk (default: point)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the maze, start and goal (default: 0)")
+    parser.add_argument("--out", type=Path, default=Path("runs/demo"), help="folder for demo.png (default: runs/demo)")
+    parser.set_defaults(handler=_run_demo)
+
+
+def _run_demo(args: argparse.Namespace) -> int:
+    from antmaze_hirl.demo import run_demo
+
+    result = run_demo(body=args.body, seed=args.seed, out_dir=args.out)
+    print(
+        f"{'success' if result.success else 'failure'}: {result.subgoals} subgoals, "
+        f"{result.low_level_steps} low-level steps; picture: {result.picture}"
+    )
+    return 0 if result.success else 1
+
+
+def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("train-low", help="train a low-level reach policy with SB3 TD3/DDPG + HER")
+    parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
+    parser.add_argument("--algo", choices=["td3", "ddpg"], default="td3")
+    parser.add_argument("--timesteps", type=int, required=True, help="total env steps, counting resumed ones")
+    parser.add_argument("--out", type=Path, required=True, help="run folder (checkpoints, curve, policy.zip)")
+    parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--checkpoint-freq", type=int, default=50_000, help="env steps between checkpoints")
+    parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between evaluations")
+    parser.add_argument("--eval-episodes", type=int, default=50)
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    parser.set_defaults(handler=_run_train_low)
+
+
+def _run_train_low(args: argparse.Namespace) -> int:
+    from antmaze_hirl.sb3_ext.training import set_torch_threads, train_low_level
+
+    set_torch_threads(args.threads)
+    model = train_low_level(
+        args.body,
+        args.algo,
+        args.timesteps,
+        args.out,
+        seed=args.seed,
+        resume=args.resume,
+        checkpoint_freq=args.checkpoint_freq,
+        eval_freq=args.eval_freq,
+        eval_episodes=args.eval_episodes,
+        progress_bar=not args.no_progress,
+    )
+    print(f"trained {model.num_timesteps} steps; policy: {args.out / 'policy.zip'}")
+    return 0
+
+
+def _add_eval_low(subparsers: argparse._SubParsersAction) -> None:
+    parser = subparsers.add_parser("eval-low", help="success rate of a low-level policy on seeded random subgoals")
+    parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
+    parser.add_argument("--policy", type=Path, default=None, help="policy .zip (default: the shipped one)")
+    parser.add_argument("--episodes", type=int, default=200)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)")
+    parser.add_argument("--json", type=Path, default=None, help="also write the figures to this JSON file")
+    parser.set_defaults(handler=_run_eval_low)
+
+
+def _run_eval_low(args: argparse.Namespace) -> int:
+    from antmaze_hirl.envs.reach import ReachEnv
+    from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
+    from antmaze_hirl.sb3_ext.policies import load_low_level
+
+    policy = load_low_level(args.body, path=args.policy)
+    env = ReachEnv(args.body, goal_radius=args.max_distance)
+    result = evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed)
+    print(json.dumps(result))
+    if args.json is not None:
+        from antmaze_hirl.sb3_ext.checkpoint import atomic_write_text
+
+        atomic_write_text(args.json, json.dumps(result, indent=2))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``antmaze-hirl`` with all subcommands."""
+    parser = argparse.ArgumentParser(prog="antmaze-hirl", description=__doc__)
+    subparsers = parser.add_subparsers(dest="command", required=True)
+    for add in (_add_demo, _add_train_low, _add_eval_low):
+        add(subparsers)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``antmaze-hirl`` console script."""
+    args = build_parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

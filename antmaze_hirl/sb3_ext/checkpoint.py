@@ -1,0 +1,153 @@
+"""Crash-safe checkpoints of an SB3 off-policy run: model, replay buffer and run state.
+
+Each checkpoint is a complete directory ``ckpt-<steps>/``; a ``latest.json`` pointer, replaced
+atomically (temp file + rename) only once the directory is complete, names the one to resume. An
+interrupted save therefore leaves the previous checkpoint intact.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
+
+POINTER = "latest.json"
+MODEL_FILE = "model.zip"
+BUFFER_FILE = "replay_buffer.pkl"
+STATE_FILE = "state.json"
+
+
+class CheckpointError(RuntimeError):
+    """A checkpoint is missing, truncated, or belongs to another run."""
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Writes ``text`` to ``path`` via a temp file in the same folder and an atomic rename."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    with os.fdopen(fd, "w") as handle:
+        handle.write(text)
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(tmp, path)
+
+
+def _sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def save_checkpoint(model: OffPolicyAlgorithm, directory: str | Path, run_state: dict[str, Any]) -> Path:
+    """Saves model, replay buffer and ``run_state`` as the new latest checkpoint of ``directory``.
+
+    Returns:
+        The checkpoint's own folder.
+    """
+    directory = Path(directory)
+    final = directory / f"ckpt-{model.num_timesteps}"
+    staging = Path(tempfile.mkdtemp(dir=directory, prefix=".staging-"))
+    model.save(staging / MODEL_FILE)
+    model.save_replay_buffer(staging / BUFFER_FILE)
+    state = {
+        **run_state,
+        "num_timesteps": model.num_timesteps,
+        "buffer_size": model.replay_buffer.size() if model.replay_buffer is not None else 0,
+        "sha256": {name: _sha256(staging / name) for name in (MODEL_FILE, BUFFER_FILE)},
+    }
+    (staging / STATE_FILE).write_text(json.dumps(state, indent=2))
+    if final.exists():
+        shutil.rmtree(final)
+    os.replace(staging, final)
+    previous = _pointed_dir(directory)
+    atomic_write_text(directory / POINTER, json.dumps({"checkpoint": final.name}))
+    if previous is not None and previous != final and previous.exists():
+        shutil.rmtree(previous)
+    return final
+
+
+def _pointed_dir(directory: Path) -> Path | None:
+    pointer = directory / POINTER
+    if not pointer.exists():
+        return None
+    try:
+        return directory / json.loads(pointer.read_text())["checkpoint"]
+    except (json.JSONDecodeError, KeyError, TypeError) as error:
+        raise CheckpointError(f"checkpoint pointer {pointer} is corrupt: {error}") from error
+
+
+def latest_checkpoint(directory: str | Path, expected: dict[str, Any] | None = None) -> tuple[Path, dict[str, Any]]:
+    """The latest complete checkpoint of ``directory`` and its verified run state.
+
+    Args:
+        directory: Where :func:`save_checkpoint` wrote.
+        expected: Run-state entries the checkpoint must match (body, algo, config, ...).
+
+    Raises:
+        CheckpointError: If there is no checkpoint, a file is missing or truncated (hash mismatch),
+            or a run-state entry differs from ``expected`` (naming the key and both values).
+    """
+    directory = Path(directory)
+    folder = _pointed_dir(directory)
+    if folder is None:
+        raise CheckpointError(f"no checkpoint to resume in {directory} (missing {POINTER})")
+    state_path = folder / STATE_FILE
+    try:
+        state = json.loads(state_path.read_text())
+    except (OSError, json.JSONDecodeError) as error:
+        raise CheckpointError(f"checkpoint state {state_path} is unreadable: {error}") from error
+    for name, digest in state.get("sha256", {}).items():
+        path = folder / name
+        if not path.exists() or _sha256(path) != digest:
+            raise CheckpointError(f"checkpoint file {path} is missing or corrupt (sha256 mismatch)")
+    for key, value in (expected or {}).items():
+        if state.get(key) != value:
+            raise CheckpointError(f"checkpoint in {folder} was made with {key}={state.get(key)!r}, this run has {value!r}")
+    return folder, state
+
+
+class CheckpointCallback(BaseCallback):
+    """Saves a :func:`save_checkpoint` every ``save_freq`` environment steps and at the end of training.
+
+    Args:
+        directory: Checkpoint folder.
+        save_freq: Environment steps between checkpoints; an interrupted run loses at most this many.
+        run_state: Identity of the run (body, algo, seed, config), checked on resume.
+    """
+
+    def __init__(self, directory: str | Path, save_freq: int, run_state: dict[str, Any], verbose: int = 0) -> None:
+        super().__init__(verbose)
+        if save_freq < 1:
+            raise ValueError(f"save_freq must be >= 1, got {save_freq}")
+        self.directory = Path(directory)
+        self.save_freq = save_freq
+        self.run_state = run_state
+        self._last_saved = 0
+
+    def _init_callback(self) -> None:
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self._last_saved = self.model.num_timesteps
+
+    def _on_step(self) -> bool:
+        if self.model.num_timesteps - self._last_saved >= self.save_freq:
+            self._save()
+        return True
+
+    def _on_training_end(self) -> None:
+        if self.model.num_timesteps != self._last_saved:
+            self._save()
+
+    def _save(self) -> None:
+        folder = save_checkpoint(self.model, self.directory, self.run_state)
+        self._last_saved = self.model.num_timesteps
+        if self.verbose:
+            print(f"checkpoint saved: {folder}")

@@ -1,0 +1,107 @@
+"""Success-rate evaluation of low-level policies on a fixed, seeded set of held-out subgoals."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback
+
+from antmaze_hirl.envs.controllers import as_controller
+from antmaze_hirl.envs.reach import ReachEnv
+
+
+def evaluate_reach(
+    policy: Any,
+    env: ReachEnv,
+    *,
+    episodes: int,
+    seed: int,
+) -> dict[str, float | int]:
+    """Runs ``episodes`` subgoal-reaching attempts, episode ``i`` reset with seed ``seed + i``.
+
+    An attempt succeeds when the body comes within the env's ``distance_threshold`` of the subgoal
+    at any step of the horizon (the high-level env stops there too).
+
+    Args:
+        policy: SB3 model or callable goal observation -> action (acting deterministically).
+        env: The reach env; its ``goal_radius`` is the largest subgoal distance tested.
+        episodes: Number of attempts.
+        seed: Base seed; the same seed gives the same subgoals.
+
+    Returns:
+        ``{"success_rate", "episodes", "mean_steps"}``, steps counted to first success (H on failure).
+    """
+    controller = as_controller(policy)
+    successes, steps_used = 0, []
+    for episode in range(episodes):
+        obs, info = env.reset(seed=seed + episode)
+        steps, done, reached = 0, False, info["is_success"]
+        while not (done or reached):
+            obs, _, terminated, truncated, info = env.step(controller(obs))
+            steps += 1
+            done, reached = terminated or truncated, info["is_success"]
+        successes += int(reached)
+        steps_used.append(steps if reached else env.horizon)
+    return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": float(np.mean(steps_used))}
+
+
+class SuccessRateCallback(BaseCallback):
+    """Every ``eval_freq`` steps, logs ``eval/success_rate`` on held-out subgoals and appends a CSV row.
+
+    Args:
+        eval_env: A separate reach env (its own simulator) to evaluate on.
+        eval_freq: Environment steps between evaluations.
+        episodes: Attempts per evaluation.
+        seed: Base seed of the held-out subgoals (the same set at every evaluation).
+        csv_path: Learning-curve file (``timesteps,success_rate,mean_steps``), appended across resumes.
+    """
+
+    def __init__(
+        self,
+        eval_env: ReachEnv,
+        *,
+        eval_freq: int,
+        episodes: int,
+        seed: int = 10_000,
+        csv_path: str | Path | None = None,
+        verbose: int = 0,
+    ) -> None:
+        super().__init__(verbose)
+        self.eval_env = eval_env
+        self.eval_freq = eval_freq
+        self.episodes = episodes
+        self.seed = seed
+        self.csv_path = Path(csv_path) if csv_path is not None else None
+        self._last_eval = 0
+        self.history: list[dict[str, float | int]] = []
+
+    def _init_callback(self) -> None:
+        self._last_eval = self.model.num_timesteps
+
+    def _on_step(self) -> bool:
+        if self.model.num_timesteps - self._last_eval >= self.eval_freq:
+            self.evaluate()
+        return True
+
+    def evaluate(self) -> dict[str, float | int]:
+        """Evaluates now, logs and records the result."""
+        self._last_eval = self.model.num_timesteps
+        result = evaluate_reach(self.model, self.eval_env, episodes=self.episodes, seed=self.seed)
+        row = {"timesteps": self.model.num_timesteps, **result}
+        self.history.append(row)
+        self.logger.record("eval/success_rate", result["success_rate"])
+        self.logger.record("eval/mean_steps", result["mean_steps"])
+        if self.csv_path is not None:
+            new_file = not self.csv_path.exists()
+            self.csv_path.parent.mkdir(parents=True, exist_ok=True)
+            with self.csv_path.open("a", newline="") as handle:
+                writer = csv.DictWriter(handle, fieldnames=["timesteps", "success_rate", "episodes", "mean_steps"])
+                if new_file:
+                    writer.writeheader()
+                writer.writerow(row)
+        if self.verbose:
+            print(f"eval at {row['timesteps']}: success_rate={result['success_rate']:.3f}")
+        return row
