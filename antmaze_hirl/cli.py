@@ -7,6 +7,7 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
+from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.simulator import BODY_SPECS
 
 
@@ -71,7 +72,9 @@ def _add_eval_low(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--policy", type=Path, default=None, help="policy .zip (default: the shipped one)")
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)")
+    parser.add_argument(
+        "--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)"
+    )
     parser.add_argument("--json", type=Path, default=None, help="also write the figures to this JSON file")
     parser.set_defaults(handler=_run_eval_low)
 
@@ -86,9 +89,7 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     result = evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed)
     print(json.dumps(result))
     if args.json is not None:
-        from antmaze_hirl.sb3_ext.checkpoint import atomic_write_text
-
-        atomic_write_text(args.json, json.dumps(result, indent=2))
+        atomic_write_json(args.json, result)
     return 0
 
 

@@ -19,6 +19,7 @@ class BirdseyeRenderer:
         geometry: Map placement in the world.
         pixels_per_cell: Pixels per cell side.
         marker_radius: Half-width of the agent/goal squares, pixels. Default ``pixels_per_cell // 4``.
+
     """
 
     def __init__(self, geometry: MazeGeometry, pixels_per_cell: int = 8, marker_radius: int | None = None) -> None:

@@ -13,7 +13,9 @@ GoalObservation = dict[str, np.ndarray]
 class LowLevelController(Protocol):
     """Maps a goal observation (``observation``, ``achieved_goal``, ``desired_goal``) to an action."""
 
-    def __call__(self, observation: GoalObservation) -> np.ndarray: ...
+    def __call__(self, observation: GoalObservation) -> np.ndarray:
+        """Returns the action for ``observation``."""
+        ...
 
 
 class PredictController:
@@ -22,6 +24,7 @@ class PredictController:
     Args:
         model: An SB3 model or policy (or any object with the same ``predict``).
         deterministic: Passed to ``predict``; deterministic actions by default.
+
     """
 
     def __init__(self, model: Any, *, deterministic: bool = True) -> None:
@@ -29,6 +32,7 @@ class PredictController:
         self.deterministic = deterministic
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
+        """Returns the model's action for ``observation``."""
         action, _ = self.model.predict(observation, deterministic=self.deterministic)
         return np.asarray(action)
 
@@ -38,6 +42,7 @@ def as_controller(low_level: Any) -> LowLevelController:
 
     Raises:
         TypeError: If ``low_level`` has no ``predict`` and is not callable.
+
     """
     if hasattr(low_level, "predict"):
         return PredictController(low_level)
@@ -57,6 +62,7 @@ class PointGoToController:
     Args:
         kp: Gain on the position error (per metre).
         kd: Damping on the velocity (per m/s).
+
     """
 
     def __init__(self, kp: float = 10.0, kd: float = 1.0) -> None:
@@ -64,5 +70,6 @@ class PointGoToController:
         self.kd = kd
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
+        """Returns the clipped PD force towards ``desired_goal``."""
         error = observation["desired_goal"] - observation["achieved_goal"]
         return np.clip(self.kp * error - self.kd * observation["observation"][:2], -1.0, 1.0)

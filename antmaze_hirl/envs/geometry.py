@@ -19,6 +19,7 @@ class MazeGeometry:
         n_rows: Map rows, border included.
         n_cols: Map columns, border included.
         scale: Cell side in metres (4 for the ant, 1 for the point mass).
+
     """
 
     n_rows: int
@@ -38,9 +39,7 @@ class MazeGeometry:
     def cell_to_xy(self, cell: Cell | np.ndarray) -> np.ndarray:
         """Centre of cell ``(row, col)`` in world metres."""
         row, col = cell[0], cell[1]
-        return np.array([(col + 0.5) * self.scale, -(row + 0.5) * self.scale]) + np.array(
-            [self.low[0], self.high[1]]
-        )
+        return np.array([(col + 0.5) * self.scale, -(row + 0.5) * self.scale]) + np.array([self.low[0], self.high[1]])
 
     def xy_to_cell(self, xy: np.ndarray) -> Cell:
         """Cell ``(row, col)`` that contains world point ``xy`` (may lie outside the map)."""
@@ -70,6 +69,7 @@ class MazeGeometry:
             end: Segment end, world metres.
             clearance: Also require the two parallel segments this many metres to either side to be free,
                 so a body of that half-width does not clip a wall corner.
+
         """
         direction = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
         length = float(np.linalg.norm(direction))

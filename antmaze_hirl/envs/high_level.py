@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -25,6 +25,7 @@ def default_low_level(body: Body) -> LowLevelController:
 
     Raises:
         ValueError: For the ant, which needs a trained policy passed as ``low_level=``.
+
     """
     if body == "point":
         return PointGoToController()
@@ -71,9 +72,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a bird's-eye picture.
+
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 4}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
 
     def __init__(
         self,
@@ -136,7 +138,9 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
         scale = self.geometry.scale
         self.action_space = spaces.Box(
-            (self.geometry.low + scale).astype(np.float32), (self.geometry.high - scale).astype(np.float32), dtype=np.float32
+            (self.geometry.low + scale).astype(np.float32),
+            (self.geometry.high - scale).astype(np.float32),
+            dtype=np.float32,
         )
         state_dim = 4 + self.reach.sim.observation_dim
         self.observation_space = spaces.Dict(
@@ -164,6 +168,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
 
         Raises:
             ValueError: If a given layout has another shape or a position is NaN or in a wall.
+
         """
         super().reset(seed=seed)
         options = options or {}
@@ -187,6 +192,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
 
         Raises:
             ValueError: If the subgoal is NaN/inf or, unless ``clip_subgoals``, outside the maze.
+
         """
         subgoal = as_finite_vector(action, 2, "subgoal")
         low, high = self.action_space.low, self.action_space.high
@@ -237,7 +243,11 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         if self._fixed_map is None:
             n_rows, n_cols = self.maze_size
             return generate_layout(
-                rng, n_rows=n_rows, n_cols=n_cols, wall_fraction=self.wall_fraction, min_goal_distance=self.min_goal_distance
+                rng,
+                n_rows=n_rows,
+                n_cols=n_cols,
+                wall_fraction=self.wall_fraction,
+                min_goal_distance=self.min_goal_distance,
             )
         return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_distance)
 
@@ -258,6 +268,3 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         agent_xy = self.reach.agent_xy
         state = np.concatenate([agent_xy, self.goal_xy, self.reach.body_observation]).astype(np.float32)
         return {"image": self.renderer.observation(self.layout.walls, agent_xy, self.goal_xy), "state": state}
-
-
-

@@ -38,6 +38,7 @@ class MazeLayout:
         walls: Boolean grid, ``True`` where a cell is a wall; the border is all walls.
         start_cell: Free cell the agent starts in.
         goal_cell: Free cell holding the final goal, reachable from ``start_cell``.
+
     """
 
     walls: np.ndarray
@@ -65,6 +66,7 @@ def resolve_maze_map(maze_map: str | MazeMap) -> MazeMap:
 
     Raises:
         ValueError: If ``maze_map`` is a string that names no standard map.
+
     """
     if isinstance(maze_map, str):
         key = maze_map.lower()
@@ -87,6 +89,7 @@ def validate_maze_map(maze_map: str | MazeMap) -> np.ndarray:
         ValueError: Naming the problem and the cell: a ragged or empty map, an unknown symbol,
             a gap in the border wall, no free cell, or a marked goal/reset cell unreachable from
             another marked cell.
+
     """
     rows = resolve_maze_map(maze_map)
     if isinstance(rows, np.ndarray):
@@ -105,7 +108,9 @@ def validate_maze_map(maze_map: str | MazeMap) -> np.ndarray:
             if _is_symbol(symbol, _WALL_SYMBOLS):
                 walls[r, c] = True
             elif not _is_symbol(symbol, _FREE_SYMBOLS):
-                raise ValueError(f"maze_map has unknown symbol {symbol!r} at cell ({r}, {c}); use 1, 0, 'g', 'r' or 'c'")
+                raise ValueError(
+                    f"maze_map has unknown symbol {symbol!r} at cell ({r}, {c}); use 1, 0, 'g', 'r' or 'c'"
+                )
             elif symbol in (maps.GOAL, maps.RESET, maps.COMBINED):
                 marked.append((r, c))
     border = np.ones_like(walls)
@@ -117,7 +122,7 @@ def validate_maze_map(maze_map: str | MazeMap) -> np.ndarray:
     if walls.all():
         raise ValueError("maze_map has no free cell")
     for cell in marked[1:]:
-        check_reachable(walls, marked[0], cell, what="marked cell")
+        check_reachable(walls, marked[0], cell, what="marked")
     return walls
 
 
@@ -151,6 +156,7 @@ def shortest_path(walls: np.ndarray, start: Cell, goal: Cell) -> list[Cell]:
 
     Raises:
         ValueError: If ``goal`` cannot be reached from ``start``.
+
     """
     check_reachable(walls, start, goal, what="goal")
     distances = bfs_distances(walls, goal)
@@ -205,6 +211,7 @@ def sample_start_and_goal(
 
     Returns:
         ``(start_cell, goal_cell)`` or ``None`` if no corner has a far enough reachable cell.
+
     """
     corners = corner_cells(walls)
     for start_index in rng.permutation(len(corners)):
@@ -217,13 +224,12 @@ def sample_start_and_goal(
     return None
 
 
-def layout_from_map(
-    maze_map: str | MazeMap, rng: np.random.Generator, *, min_goal_distance: int = 0
-) -> MazeLayout:
+def layout_from_map(maze_map: str | MazeMap, rng: np.random.Generator, *, min_goal_distance: int = 0) -> MazeLayout:
     """A layout on a fixed (user or standard) map with a random start corner and goal.
 
     Raises:
         ValueError: If the map is invalid or no goal is ``min_goal_distance`` steps from a corner.
+
     """
     walls = validate_maze_map(maze_map)
     drawn = sample_start_and_goal(walls, rng, min_goal_distance=min_goal_distance)
@@ -257,12 +263,13 @@ def generate_layout(
     Raises:
         ValueError: On sizes below 1, a ``wall_fraction`` outside ``[0, 1)``, or when no draw has a
             goal ``min_goal_distance`` steps away.
+
     """
     if n_rows < 1 or n_cols < 1:
         raise ValueError(f"maze size must be at least 1x1 free cells, got {n_rows}x{n_cols}")
     if not 0.0 <= wall_fraction < 1.0:
         raise ValueError(f"wall_fraction must lie in [0, 1), got {wall_fraction}")
-    target_walls = int(round(wall_fraction * n_rows * n_cols))
+    target_walls = round(wall_fraction * n_rows * n_cols)
     for _ in range(max_tries):
         walls = np.ones((n_rows + 2, n_cols + 2), dtype=bool)
         walls[1:-1, 1:-1] = False

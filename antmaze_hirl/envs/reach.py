@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -21,6 +21,7 @@ def as_finite_vector(value: Any, size: int, name: str) -> np.ndarray:
 
     Raises:
         ValueError: Naming ``name`` and the value if the shape is wrong or an entry is NaN/inf.
+
     """
     vector = np.asarray(value, dtype=np.float64)
     if vector.shape != (size,):
@@ -64,9 +65,10 @@ class ReachEnv(GoalEnv, EzPickle):
         terminate_on_flip: Ant only: end the episode when the torso drops below 0.2 m (fallen or flipped).
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
+
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(
         self,
@@ -101,7 +103,9 @@ class ReachEnv(GoalEnv, EzPickle):
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)
         self.goal_radius = float(goal_radius if goal_radius is not None else spec.scale)
-        self.distance_threshold = float(distance_threshold if distance_threshold is not None else spec.distance_threshold)
+        self.distance_threshold = float(
+            distance_threshold if distance_threshold is not None else spec.distance_threshold
+        )
         self.min_goal_distance = float(min_goal_distance if min_goal_distance is not None else self.distance_threshold)
         if self.horizon < 1:
             raise ValueError(f"horizon must be >= 1, got {horizon}")
@@ -177,6 +181,7 @@ class ReachEnv(GoalEnv, EzPickle):
 
         Raises:
             ValueError: If a given start or goal is NaN, or outside the maze's free space.
+
         """
         super().reset(seed=seed)
         options = options or {}
@@ -197,6 +202,7 @@ class ReachEnv(GoalEnv, EzPickle):
 
         Returns:
             The observation with the new ``desired_goal``.
+
         """
         self._goal = as_finite_vector(goal, 2, "goal")
         self._steps = 0
@@ -222,6 +228,7 @@ class ReachEnv(GoalEnv, EzPickle):
 
         Raises:
             ValueError: If ``action`` has the wrong shape or holds NaN/inf.
+
         """
         action = as_finite_vector(action, self.action_space.shape[0], "action")
         self._body_obs, self._xy = self.sim.step(np.clip(action, -1.0, 1.0) * self.action_scale)
@@ -260,4 +267,8 @@ class ReachEnv(GoalEnv, EzPickle):
         return bool(np.linalg.norm(self._xy - self._goal) <= self.distance_threshold)
 
     def _get_obs(self) -> dict[str, np.ndarray]:
-        return {"observation": self._body_obs.copy(), "achieved_goal": self._xy.copy(), "desired_goal": self._goal.copy()}
+        return {
+            "observation": self._body_obs.copy(),
+            "achieved_goal": self._xy.copy(),
+            "desired_goal": self._goal.copy(),
+        }

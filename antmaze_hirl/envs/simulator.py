@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from gymnasium_robotics.envs.maze.ant_maze_v5 import AntMazeEnv
@@ -26,6 +26,7 @@ class BodySpec:
         distance_threshold: Default reach radius in metres for subgoals and the final goal.
         default_horizon: Default low-level steps per subgoal (H).
         dt: Simulated seconds per env step.
+
     """
 
     scale: float
@@ -47,6 +48,7 @@ def body_spec(body: str) -> BodySpec:
 
     Raises:
         ValueError: If ``body`` is not ``"ant"`` or ``"point"``.
+
     """
     if body not in BODY_SPECS:
         raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_SPECS)}")
@@ -64,6 +66,7 @@ class MazeSimulator:
         body: ``"ant"`` or ``"point"``.
         walls: Boolean wall grid of the layout.
         include_contact_forces: Ant only: keep the 78 contact-force entries in the observation.
+
     """
 
     def __init__(self, body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> None:
@@ -99,6 +102,11 @@ class MazeSimulator:
         """Moves the red target marker of the MuJoCo scene (visual only)."""
         self._maze_env.goal = np.asarray(xy, dtype=np.float64)
         self._maze_env.update_target_site_pos()
+
+    @property
+    def data(self) -> Any:
+        """The live ``mujoco.MjData`` (positions, velocities, applied controls, contacts)."""
+        return self._mujoco_env.data
 
     @property
     def torso_height(self) -> float:

@@ -29,6 +29,7 @@ def plan_subgoal(
 
     Raises:
         ValueError: If the goal cannot be reached from the agent's cell.
+
     """
     agent_cell = _nearest_free_cell(walls, geometry, agent_xy)
     goal_cell = _nearest_free_cell(walls, geometry, goal_xy)
@@ -71,6 +72,7 @@ class PathOracle:
         clearance: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
         noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
         rng: Source of the noise.
+
     """
 
     def __init__(
@@ -118,7 +120,5 @@ class PathOracle:
         return np.clip(subgoal, inner_low, -inner_low)
 
     def __call__(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """Same as :meth:`label`, so the oracle also serves as a policy callable."""
         return self.label(observation)
-
-
-

@@ -18,6 +18,8 @@ from typing import Any
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
+from antmaze_hirl.atomic_io import atomic_write_text
+
 POINTER = "latest.json"
 MODEL_FILE = "model.zip"
 BUFFER_FILE = "replay_buffer.pkl"
@@ -26,17 +28,6 @@ STATE_FILE = "state.json"
 
 class CheckpointError(RuntimeError):
     """A checkpoint is missing, truncated, or belongs to another run."""
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    """Writes ``text`` to ``path`` via a temp file in the same folder and an atomic rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(fd, "w") as handle:
-        handle.write(text)
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(tmp, path)
 
 
 def _sha256(path: Path) -> str:
@@ -52,6 +43,7 @@ def save_checkpoint(model: OffPolicyAlgorithm, directory: str | Path, run_state:
 
     Returns:
         The checkpoint's own folder.
+
     """
     directory = Path(directory)
     final = directory / f"ckpt-{model.num_timesteps}"
@@ -95,6 +87,7 @@ def latest_checkpoint(directory: str | Path, expected: dict[str, Any] | None = N
     Raises:
         CheckpointError: If there is no checkpoint, a file is missing or truncated (hash mismatch),
             or a run-state entry differs from ``expected`` (naming the key and both values).
+
     """
     directory = Path(directory)
     folder = _pointed_dir(directory)
@@ -111,7 +104,9 @@ def latest_checkpoint(directory: str | Path, expected: dict[str, Any] | None = N
             raise CheckpointError(f"checkpoint file {path} is missing or corrupt (sha256 mismatch)")
     for key, value in (expected or {}).items():
         if state.get(key) != value:
-            raise CheckpointError(f"checkpoint in {folder} was made with {key}={state.get(key)!r}, this run has {value!r}")
+            raise CheckpointError(
+                f"checkpoint in {folder} was made with {key}={state.get(key)!r}, this run has {value!r}"
+            )
     return folder, state
 
 
@@ -122,6 +117,7 @@ class CheckpointCallback(BaseCallback):
         directory: Checkpoint folder.
         save_freq: Environment steps between checkpoints; an interrupted run loses at most this many.
         run_state: Identity of the run (body, algo, seed, config), checked on resume.
+
     """
 
     def __init__(self, directory: str | Path, save_freq: int, run_state: dict[str, Any], verbose: int = 0) -> None:

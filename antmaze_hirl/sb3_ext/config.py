@@ -45,6 +45,7 @@ def load_config(body: str) -> LowLevelConfig:
 
     Raises:
         ValueError: If the file has no section for ``body`` or a section has an unknown key.
+
     """
     text = resources.files("antmaze_hirl.sb3_ext").joinpath("hyperparams.yml").read_text()
     sections = yaml.safe_load(text)

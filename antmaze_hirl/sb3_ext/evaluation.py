@@ -33,6 +33,7 @@ def evaluate_reach(
 
     Returns:
         ``{"success_rate", "episodes", "mean_steps"}``, steps counted to first success (H on failure).
+
     """
     controller = as_controller(policy)
     successes, steps_used = 0, []
@@ -57,6 +58,7 @@ class SuccessRateCallback(BaseCallback):
         episodes: Attempts per evaluation.
         seed: Base seed of the held-out subgoals (the same set at every evaluation).
         csv_path: Learning-curve file (``timesteps,success_rate,mean_steps``), appended across resumes.
+
     """
 
     def __init__(

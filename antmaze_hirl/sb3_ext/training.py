@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
@@ -26,6 +25,7 @@ def algo_class(algo: str) -> type[OffPolicyAlgorithm]:
 
     Raises:
         ValueError: For any other name.
+
     """
     if algo not in ALGO_CLASSES:
         raise ValueError(f"unknown algo {algo!r}; choose one of {list(ALGOS)}")
@@ -37,7 +37,9 @@ def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
     return Monitor(ReachEnv(body, **config.env_kwargs))
 
 
-def make_model(body: str, algo: str, config: LowLevelConfig, *, seed: int, tensorboard_log: str | None = None) -> OffPolicyAlgorithm:
+def make_model(
+    body: str, algo: str, config: LowLevelConfig, *, seed: int, tensorboard_log: str | None = None
+) -> OffPolicyAlgorithm:
     """A fresh SB3 TD3/DDPG with ``HerReplayBuffer`` on the reach env, configured by ``config``."""
     env = make_reach_env(body, config)
     n_actions = env.action_space.shape[0]
@@ -100,6 +102,7 @@ def train_low_level(
 
     Raises:
         antmaze_hirl.sb3_ext.checkpoint.CheckpointError: On a missing, corrupt or mismatched checkpoint.
+
     """
     config = config if config is not None else load_config(body)
     algo_class(algo)
@@ -112,7 +115,9 @@ def train_low_level(
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     else:
         if (checkpoint_dir / "latest.json").exists():
-            raise FileExistsError(f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir")
+            raise FileExistsError(
+                f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir"
+            )
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
     eval_callback = SuccessRateCallback(
         ReachEnv(body), eval_freq=eval_freq, episodes=eval_episodes, csv_path=out_dir / "learning_curve.csv"

@@ -1,0 +1,202 @@
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import StillController
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+from antmaze_hirl.envs import ENV_IDS, ReachEnv
+from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.experts import PathOracle
+
+
+def make(env_id, **kwargs):
+    if env_id == "antmaze_hirl/AntMaze-v0":
+        kwargs.setdefault("low_level", StillController())
+    return gym.make(env_id, **kwargs)
+
+
+def rollout(env, seed, steps=5):
+    """Observations of a short seeded rollout; actions drawn from a seeded action space."""
+    obs, _ = env.reset(seed=seed)
+    env.action_space.seed(seed)
+    trace = [obs]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        trace.append(obs)
+        trace.append(reward)
+        if terminated or truncated:
+            break
+    return trace
+
+
+def assert_same(trace_a, trace_b):
+    assert len(trace_a) == len(trace_b)
+    for a, b in zip(trace_a, trace_b, strict=True):
+        if isinstance(a, dict):
+            for key in a:
+                np.testing.assert_array_equal(a[key], b[key])
+        else:
+            assert a == b
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_IDS))
+def test_registered_env_passes_gymnasium_and_sb3_checkers(env_id):
+    env = make(env_id)
+    gym_check_env(env.unwrapped, skip_render_check=False)
+    sb3_check_env(env.unwrapped, warn=False)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_IDS))
+def test_seeded_rollouts_are_deterministic(env_id):
+    first, second = make(env_id), make(env_id)
+    assert_same(rollout(first, seed=3), rollout(second, seed=3))
+    with pytest.raises(AssertionError):
+        assert_same(rollout(first, seed=4), rollout(second, seed=3))
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_IDS))
+def test_pickle_round_trip(env_id):
+    env = make(env_id)
+    clone = pickle.loads(pickle.dumps(env))
+    assert_same(rollout(env, seed=11), rollout(clone, seed=11))
+
+
+def test_ant_maze_without_low_level_says_what_to_pass():
+    with pytest.raises(ValueError, match="needs a low-level controller: pass low_level="):
+        gym.make("antmaze_hirl/AntMaze-v0")
+
+
+@pytest.mark.parametrize("body", ["ant", "point"])
+def test_reach_env_spaces_reward_and_success(body):
+    env = ReachEnv(body)
+    obs, info = env.reset(seed=0)
+    assert obs["observation"].shape == ({"ant": 27, "point": 2}[body],)
+    assert 0 < np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"]) <= env.goal_radius
+    assert info["is_success"] is False
+    # vectorised compute_reward, as HER calls it on a batch
+    achieved = np.zeros((5, 2))
+    desired = np.stack([np.array([d, 0.0]) for d in (0.0, 0.1, 0.44, 0.46, 3.0)])
+    rewards = env.compute_reward(achieved, desired, [{}] * 5)
+    np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.distance_threshold).astype(float))
+    dense = ReachEnv(body, reward_type="dense").compute_reward(achieved, desired, None)
+    np.testing.assert_allclose(dense, np.exp(-np.linalg.norm(desired, axis=1)))
+    env.reset(seed=0, options={"goal": obs["achieved_goal"]})
+    _, reward, _, _, info = env.step(np.zeros(env.action_space.shape))
+    assert info["is_success"] and reward == 1.0
+
+
+def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
+    env = ReachEnv("point", horizon=7, goal_radius=0.8)
+    for seed in range(20):
+        obs, _ = env.reset(seed=seed)
+        distance = np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"])
+        assert env.min_goal_distance <= distance <= 0.8
+        assert env.sim.geometry.segment_is_free(env.walls, obs["achieved_goal"], obs["desired_goal"])
+    truncations = [env.step(np.zeros(2))[3] for _ in range(7)]
+    assert truncations == [False] * 6 + [True]
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (lambda env: env.step(np.array([np.nan, 0.0])), r"action must be finite, got \[nan, 0.0\]"),
+        (lambda env: env.step(np.zeros(3)), r"action must have shape \(2,\), got shape \(3,\)"),
+        (lambda env: env.reset(options={"goal": [100.0, 0.0]}), r"goal \[100.0, 0.0\] is not in a free cell"),
+        (lambda env: env.reset(options={"start_xy": [0.0, -1.5]}), r"start_xy \[0.0, -1.5\] is not in a free cell"),
+    ],
+)
+def test_reach_env_bad_input(call, message):
+    env = ReachEnv("point", maze_map="u")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        call(env)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"body": "spider"}, "unknown body 'spider'"),
+        ({"reward_type": "shaped"}, "reward_type must be one of"),
+        ({"action_scale": 2.0}, r"action_scale must lie in \(0, 1\]"),
+        ({"horizon": 0}, "horizon must be >= 1"),
+        ({"maze_map": [[1, 1, 1], [1, 0, 0], [1, 1, 1]]}, "border must be all walls"),
+    ],
+)
+def test_reach_env_bad_arguments(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ReachEnv(**{"body": "point", **kwargs})
+
+
+def test_action_scale_reaches_the_actuators():
+    env = ReachEnv("ant", action_scale=0.25)
+    env.reset(seed=1)
+    action = np.linspace(-1, 1, 8)
+    env.step(action)
+    np.testing.assert_allclose(env.sim.data.ctrl, 0.25 * action)
+    env.step(np.full(8, 3.0))  # out-of-range actions are clipped to the Box before scaling
+    np.testing.assert_allclose(env.sim.data.ctrl, np.full(8, 0.25))
+
+
+def test_high_level_step_info_and_subgoal_errors():
+    env = gym.make("antmaze_hirl/PointMaze-v0")
+    obs, info = env.reset(seed=0)
+    inner = env.unwrapped
+    assert obs["image"].shape == (3, 7 * 8, 7 * 8) and obs["image"].dtype == np.uint8
+    np.testing.assert_array_equal(inner.renderer.walls_from_image(obs["image"]), inner.layout.walls)
+    np.testing.assert_allclose(obs["state"][:2], inner.agent_xy, atol=1e-6)
+    np.testing.assert_allclose(obs["state"][2:4], inner.goal_xy, atol=1e-6)
+    near = inner.agent_xy + np.array([0.1, 0.0])
+    _, reward, terminated, truncated, info = env.step(near)
+    assert info["subgoal_reached"] and info["attempts"] == 1 and info["low_level_steps"] < inner.reach.horizon
+    assert np.linalg.norm(info["agent_path"][-1] - near) <= inner.reach.distance_threshold
+    assert info["agent_path"].shape == (info["low_level_steps"] + 1, 2)
+    assert (reward, terminated, truncated) == (0.0, False, False)
+    with pytest.raises(ValueError, match=r"subgoal must be finite, got \[nan, 0.0\]"):
+        env.step(np.array([np.nan, 0.0]))
+    with pytest.raises(ValueError, match=r"subgoal \[50.0, 0.0\] is outside the maze bounds"):
+        env.step(np.array([50.0, 0.0]))
+
+
+def test_high_level_clips_when_asked_and_flags_it():
+    env = gym.make("antmaze_hirl/PointMaze-v0", clip_subgoals=True)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.array([50.0, 0.0]))
+    assert info["subgoal_clipped"]
+    assert info["subgoal"][0] == pytest.approx(env.unwrapped.action_space.high[0])
+
+
+def test_high_level_truncates_at_step_budget_and_counts_attempts():
+    env = gym.make("antmaze_hirl/PointMaze-v0", max_steps=60, horizon=25)
+    env.reset(seed=2)
+    far_wall_corner = env.unwrapped.action_space.low  # unreachable: the point pushes into a wall
+    budget = [env.step(far_wall_corner) for _ in range(3)]
+    assert [step[4]["low_level_steps"] for step in budget] == [25, 25, 10]
+    assert [step[3] for step in budget] == [False, False, True]
+    assert budget[-1][4]["attempts"] == 3 and budget[-1][4]["total_low_level_steps"] == 60
+
+
+def test_high_level_fixed_map_and_layout_option():
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_map="u")
+    env.reset(seed=0)
+    np.testing.assert_array_equal(env.unwrapped.layout.walls, validate_maze_map("u"))
+    with pytest.raises(ValueError, match="must be a MazeLayout"):
+        env.reset(options={"layout": [[1]]})
+    with pytest.raises(ValueError, match=r"goal_xy \[0.0, 0.0\] is not in a free cell"):
+        env.reset(options={"goal_xy": [0.0, 0.0]})
+
+
+def test_reaching_the_goal_terminates_with_reward(still_controller):
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_map="u")
+    obs, _ = env.reset(seed=5)
+    oracle = PathOracle.for_env(env)
+    total_reward, done = 0.0, False
+    while not done:
+        obs, reward, terminated, truncated, info = env.step(oracle.label(obs))
+        total_reward += reward
+        done = terminated or truncated
+    assert terminated and not truncated and total_reward == 1.0 and info["is_success"]
+    assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.goal_threshold
