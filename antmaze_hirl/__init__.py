@@ -6,9 +6,10 @@ Importing the package registers its Gymnasium ids (``antmaze_hirl/AntReach-v0``,
 
 from antmaze_hirl.envs import HighLevelMazeEnv, ReachEnv, register_envs
 from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.sb3_ext.policies import load_low_level
 
 __version__ = "0.1.0"
 
 register_envs()
 
-__all__ = ["HighLevelMazeEnv", "PathOracle", "ReachEnv", "__version__", "register_envs"]
+__all__ = ["HighLevelMazeEnv", "PathOracle", "ReachEnv", "__version__", "load_low_level", "register_envs"]

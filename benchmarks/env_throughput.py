@@ -22,6 +22,7 @@ import numpy as np
 
 import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experts import PathOracle
 
 RESULTS = Path(__file__).parent / "results" / "env_throughput.json"
@@ -55,7 +56,7 @@ def low_level_ratio(steps: int, blocks: int) -> dict[str, float]:
 
 
 def high_level_oracle(mazes: int) -> dict[str, float]:
-    env = gym.make("antmaze_hirl/PointMaze-v0")
+    env = gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController())
     oracle = PathOracle.for_env(env)
     successes, subgoals, steps = 0, [], []
     start = time.perf_counter()

@@ -117,3 +117,16 @@ def test_generator_is_seeded_and_respects_goal_distance():
 def test_generator_rejects_bad_arguments(kwargs, message):
     with pytest.raises(ValueError, match=message):
         generate_layout(np.random.default_rng(0), **kwargs)
+
+
+def test_segment_clearance_is_exact_at_wall_corners():
+    from antmaze_hirl.envs.geometry import MazeGeometry
+
+    walls = validate_maze_map("u")  # cell (2, 1) and (2, 2) are walls: square x in [-1.5, 0.5], y in [-0.5, 0.5]
+    geometry = MazeGeometry(*walls.shape, scale=1.0)
+    along = np.array([0.5 + 0.3, 0.9]), np.array([0.5 + 0.3, -0.9])  # vertical line 0.3 m right of the block
+    assert geometry.segment_is_free(walls, *along, clearance=0.29)
+    assert not geometry.segment_is_free(walls, *along, clearance=0.31)
+    diagonal = np.array([1.0, 0.2]), np.array([0.0, -1.0])  # free ends, but cuts the block's corner (0.5, -0.5)
+    assert not geometry.segment_is_free(walls, *diagonal)
+    assert not geometry.segment_is_free(walls, np.array([1.0, 1.0]), np.array([1.0, 5.0]))  # ends outside

@@ -2,6 +2,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experts import PathOracle, plan_subgoal
@@ -16,8 +17,9 @@ def solve(env, oracle, seed):
     return info
 
 
-def test_oracle_with_scripted_point_solves_random_mazes():
-    env = gym.make("antmaze_hirl/PointMaze-v0")
+@pytest.mark.parametrize("low_level", [PointGoToController(), None], ids=["scripted", "shipped-td3"])
+def test_oracle_with_point_solves_random_mazes(low_level):
+    env = gym.make("antmaze_hirl/PointMaze-v0", low_level=low_level)
     oracle = PathOracle.for_env(env)
     results = [solve(env, oracle, seed) for seed in range(40)]
     assert sum(info["is_success"] for info in results) >= 39

@@ -61,23 +61,61 @@ class MazeGeometry:
         return 0 <= row < self.n_rows and 0 <= col < self.n_cols and not walls[row, col]
 
     def segment_is_free(self, walls: np.ndarray, start: np.ndarray, end: np.ndarray, clearance: float = 0.0) -> bool:
-        """Whether the straight segment ``start -> end`` stays in free cells.
+        """Whether the straight segment ``start -> end`` keeps more than ``clearance`` metres from every wall.
+
+        Exact (no sampling): the distance from the segment to each nearby wall square is computed.
 
         Args:
             walls: Boolean wall grid.
             start: Segment start, world metres.
             end: Segment end, world metres.
-            clearance: Also require the two parallel segments this many metres to either side to be free,
-                so a body of that half-width does not clip a wall corner.
-
+            clearance: Required gap, so a body of that half-width does not clip a wall corner.
         """
-        direction = np.asarray(end, dtype=float) - np.asarray(start, dtype=float)
-        length = float(np.linalg.norm(direction))
-        n_samples = max(2, int(np.ceil(length / (0.1 * self.scale))) + 1)
-        normal = np.array([-direction[1], direction[0]]) / length if length > 0 else np.zeros(2)
-        offsets = [0.0] if clearance <= 0 or length == 0 else [-clearance, 0.0, clearance]
-        for t in np.linspace(0.0, 1.0, n_samples):
-            point = start + t * direction
-            if not all(self.is_free(walls, point + offset * normal) for offset in offsets):
-                return False
+        start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+        if not (self.is_free(walls, start) and self.is_free(walls, end)):
+            return False
+        margin = max(clearance, 1e-9)
+        row_a, col_a = self.xy_to_cell(np.minimum(start, end) - margin)
+        row_b, col_b = self.xy_to_cell(np.maximum(start, end) + margin)
+        rows = range(max(min(row_a, row_b), 0), min(max(row_a, row_b), self.n_rows - 1) + 1)
+        cols = range(max(min(col_a, col_b), 0), min(max(col_a, col_b), self.n_cols - 1) + 1)
+        for row in rows:
+            for col in cols:
+                if walls[row, col]:
+                    centre = self.cell_to_xy((row, col))
+                    half = self.scale / 2
+                    if _segment_box_distance(start, end, centre - half, centre + half) < margin:
+                        return False
         return True
+
+
+def _segment_box_distance(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarray) -> float:
+    """Euclidean distance between a segment and an axis-aligned box (0 if they touch)."""
+    if _segment_hits_box(start, end, low, high):
+        return 0.0
+    # Disjoint convex sets in 2D: the closest pair involves a segment endpoint or a box corner.
+    candidates = [float(np.linalg.norm(np.maximum(np.maximum(low - p, 0.0), p - high))) for p in (start, end)]
+    direction = end - start
+    length_sq = float(direction @ direction)
+    for corner in ((low[0], low[1]), (low[0], high[1]), (high[0], low[1]), (high[0], high[1])):
+        corner = np.asarray(corner)
+        t = 0.0 if length_sq == 0 else float(np.clip((corner - start) @ direction / length_sq, 0.0, 1.0))
+        candidates.append(float(np.linalg.norm(start + t * direction - corner)))
+    return min(candidates)
+
+
+def _segment_hits_box(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarray) -> bool:
+    # Liang-Barsky clipping of the segment's parameter range against the box slabs.
+    t_min, t_max = 0.0, 1.0
+    direction = end - start
+    for axis in range(2):
+        if abs(direction[axis]) < 1e-12:
+            if not low[axis] <= start[axis] <= high[axis]:
+                return False
+            continue
+        t_a = (low[axis] - start[axis]) / direction[axis]
+        t_b = (high[axis] - start[axis]) / direction[axis]
+        t_min, t_max = max(t_min, min(t_a, t_b)), min(t_max, max(t_a, t_b))
+        if t_min > t_max:
+            return False
+    return True

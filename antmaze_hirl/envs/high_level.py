@@ -10,7 +10,7 @@ from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
-from antmaze_hirl.envs.controllers import LowLevelController, PointGoToController, as_controller
+from antmaze_hirl.envs.controllers import LowLevelController, PredictController, as_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector
@@ -21,18 +21,19 @@ STATE_GOAL_XY = slice(2, 4)
 
 
 def default_low_level(body: Body) -> LowLevelController:
-    """The controller a high-level env uses when none is given.
+    """The controller a high-level env uses when none is given: the policy shipped for ``body``.
 
     Raises:
-        ValueError: For the ant, which needs a trained policy passed as ``low_level=``.
-
+        ValueError: If no policy ships for ``body`` (pass ``low_level=`` then).
     """
-    if body == "point":
-        return PointGoToController()
-    raise ValueError(
-        "antmaze_hirl/AntMaze-v0 needs a low-level controller: pass low_level=<SB3 model or callable "
-        "obs -> action>, e.g. gym.make('antmaze_hirl/AntMaze-v0', low_level=model)"
-    )
+    from antmaze_hirl.sb3_ext.policies import load_shipped_policy, shipped_policy_path
+
+    if not shipped_policy_path(body).exists():
+        raise ValueError(
+            f"antmaze_hirl/{body.capitalize()}Maze-v0 needs a low-level controller: pass low_level=<SB3 model or "
+            f"callable obs -> action>, e.g. gym.make('antmaze_hirl/{body.capitalize()}Maze-v0', low_level=model)"
+        )
+    return PredictController(load_shipped_policy(body))
 
 
 class HighLevelMazeEnv(gym.Env, EzPickle):
@@ -62,8 +63,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         maze_size: Free cells of random layouts, ``n`` or ``(rows, cols)``.
         wall_fraction: Share of interior cells that random layouts turn into walls.
         min_goal_distance: Least grid steps from the start cell to the goal cell.
-        low_level: SB3 model or callable ``goal observation -> action``. Default: the point's
-            scripted controller; the ant has no default yet.
+        low_level: SB3 model or callable ``goal observation -> action``. Default: the policy shipped
+            for the body (:func:`antmaze_hirl.load_low_level`).
         horizon: Low-level steps per subgoal, H. Default per body (ant 100, point 50).
         max_steps: Low-level step budget per episode.
         goal_threshold: Final-goal radius, metres. Default per body (ant 0.45, point 0.2).

@@ -27,6 +27,8 @@ class LowLevelConfig:
     net_arch: tuple[int, ...] = (256, 256)
     action_noise_std: float = 0.2
     n_sampled_goal: int = 4
+    relative_goal: bool = True
+    quaternion_index: int | None = None
     env_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def replace(self, **changes: Any) -> LowLevelConfig:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -16,6 +17,7 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext.checkpoint import CheckpointCallback, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
+from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
 
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG}
 
@@ -35,6 +37,15 @@ def algo_class(algo: str) -> type[OffPolicyAlgorithm]:
 def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
     """The training env: a :class:`ReachEnv` with the config's env keywords, under SB3's ``Monitor``."""
     return Monitor(ReachEnv(body, **config.env_kwargs))
+
+
+def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
+    """SB3 ``policy_kwargs`` for ``config``: network sizes and, if asked, the relative-goal extractor."""
+    kwargs: dict[str, Any] = {"net_arch": list(config.net_arch)}
+    if config.relative_goal:
+        kwargs["features_extractor_class"] = RelativeGoalExtractor
+        kwargs["features_extractor_kwargs"] = {"quaternion_index": config.quaternion_index}
+    return kwargs
 
 
 def make_model(
@@ -57,7 +68,7 @@ def make_model(
         action_noise=NormalActionNoise(np.zeros(n_actions), config.action_noise_std * np.ones(n_actions)),
         replay_buffer_class=HerReplayBuffer,
         replay_buffer_kwargs={"n_sampled_goal": config.n_sampled_goal, "goal_selection_strategy": "future"},
-        policy_kwargs={"net_arch": list(config.net_arch)},
+        policy_kwargs=policy_kwargs(config),
         tensorboard_log=tensorboard_log,
         seed=seed,
         verbose=0,

@@ -1,0 +1,144 @@
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3 import SAC, HerReplayBuffer
+
+from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.sb3_ext import CheckpointError, evaluate_reach, load_config, make_model, train_low_level
+from antmaze_hirl.sb3_ext.checkpoint import latest_checkpoint
+from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+
+TINY = {"eval_freq": 10**9, "eval_episodes": 5, "progress_bar": False}
+
+
+def tiny_config(body="point", **changes):
+    return load_config(body).replace(learning_starts=100, buffer_size=20_000, **changes)
+
+
+def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
+    config = tiny_config()
+    env = ReachEnv("point")
+    untrained = evaluate_reach(make_model("point", "td3", config, seed=0), env, episodes=40, seed=500)
+    model = train_low_level("point", "td3", 4000, tmp_path, seed=0, config=config, checkpoint_freq=10**9, **TINY)
+    trained = evaluate_reach(model, env, episodes=40, seed=500)
+    assert trained["success_rate"] >= untrained["success_rate"] + 0.3, (untrained, trained)
+
+
+def test_ddpg_trains_and_writes_policy(tmp_path):
+    model = train_low_level("point", "ddpg", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
+    assert model.num_timesteps == 300
+    assert type(load_low_level("point", tmp_path / "policy.zip")).__name__ in {"TD3", "DDPG"}
+
+
+def test_save_load_round_trip_gives_identical_actions(tmp_path):
+    model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
+    loaded = load_low_level("point", tmp_path / "policy.zip")
+    env = ReachEnv("point")
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        np.testing.assert_array_equal(
+            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
+        )
+
+
+def test_resume_continues_step_count_and_buffer(tmp_path):
+    config = tiny_config()
+    first = train_low_level("point", "td3", 400, tmp_path, config=config, checkpoint_freq=150, **TINY)
+    folder, state = latest_checkpoint(tmp_path / "checkpoints")
+    assert state["num_timesteps"] == 400 and state["buffer_size"] == first.replay_buffer.size() == 400
+    resumed = train_low_level("point", "td3", 700, tmp_path, config=config, resume=True, checkpoint_freq=150, **TINY)
+    assert resumed.num_timesteps == 700
+    assert resumed.replay_buffer.size() == 700
+    assert latest_checkpoint(tmp_path / "checkpoints")[1]["num_timesteps"] == 700
+    assert not folder.exists(), "older checkpoints are removed once a newer one is complete"
+
+
+def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):
+    train_low_level("point", "td3", 200, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
+    with pytest.raises(FileExistsError, match="pass resume=True"):
+        train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
+
+
+def test_corrupt_or_mismatched_checkpoint_raises_clear_error(tmp_path):
+    config = tiny_config()
+    train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=100, **TINY)
+    with pytest.raises(CheckpointError, match="made with algo='td3', this run has 'ddpg'"):
+        train_low_level("point", "ddpg", 400, tmp_path, config=config, resume=True, **TINY)
+    with pytest.raises(CheckpointError, match="made with config="):
+        train_low_level("point", "td3", 400, tmp_path, config=config.replace(gamma=0.5), resume=True, **TINY)
+    folder, _ = latest_checkpoint(tmp_path / "checkpoints")
+    model_zip = folder / "model.zip"
+    model_zip.write_bytes(model_zip.read_bytes()[:100])  # truncated, as by a crash mid-copy
+    with pytest.raises(CheckpointError, match=r"model.zip is missing or corrupt \(sha256 mismatch\)"):
+        train_low_level("point", "td3", 400, tmp_path, config=config, resume=True, **TINY)
+    (tmp_path / "checkpoints" / "latest.json").write_text("{not json")
+    with pytest.raises(CheckpointError, match=r"pointer .* is corrupt"):
+        train_low_level("point", "td3", 400, tmp_path, config=config, resume=True, **TINY)
+
+
+def test_resume_without_checkpoint_is_an_error(tmp_path):
+    with pytest.raises(CheckpointError, match="no checkpoint to resume"):
+        train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), resume=True, **TINY)
+
+
+@pytest.mark.parametrize("body", ["point", "ant"])
+def test_shipped_policies_load_and_act(body):
+    if not shipped_policy_path(body).exists():
+        pytest.skip(f"no {body} policy shipped in this build")
+    policy = load_low_level(body)
+    env = ReachEnv(body)
+    obs, _ = env.reset(seed=0)
+    action, _ = policy.predict(obs, deterministic=True)
+    assert env.action_space.contains(action.astype(np.float32))
+
+
+def test_shipped_point_policy_reaches_subgoals():
+    result = evaluate_reach(load_low_level("point"), ReachEnv("point"), episodes=30, seed=0)
+    assert result["success_rate"] >= 0.9
+
+
+def test_wrong_checkpoint_is_rejected(tmp_path):
+    with pytest.raises(ValueError, match="wrong checkpoint for this body"):
+        load_low_level("ant", shipped_policy_path("point"))
+    junk = tmp_path / "junk.zip"
+    junk.write_text("not a zip")
+    with pytest.raises(ValueError, match="is not an SB3 TD3/DDPG policy zip"):
+        load_low_level("point", junk)
+    with pytest.raises(FileNotFoundError, match="no low-level policy at"):
+        load_low_level("point", tmp_path / "missing.zip")
+
+
+def test_user_brings_sac_with_her_and_no_glue():
+    env = gym.make("antmaze_hirl/AntReach-v0")
+    model = SAC(
+        "MultiInputPolicy",
+        env,
+        replay_buffer_class=HerReplayBuffer,
+        learning_starts=120,
+        batch_size=32,
+        policy_kwargs={"net_arch": [32, 32]},
+        seed=0,
+    )
+    model.learn(150)
+    assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
+
+
+def test_learning_curve_and_tensorboard_are_written(tmp_path):
+    train_low_level(
+        "point",
+        "td3",
+        300,
+        tmp_path,
+        config=tiny_config(),
+        checkpoint_freq=10**9,
+        eval_freq=150,
+        eval_episodes=3,
+        progress_bar=False,
+    )
+    rows = (tmp_path / "learning_curve.csv").read_text().splitlines()
+    assert rows[0] == "timesteps,success_rate,episodes,mean_steps" and len(rows) == 3
+    assert any((tmp_path / "tb").rglob("events.out.tfevents.*"))
+    (state_file,) = (tmp_path / "checkpoints").glob("ckpt-*/state.json")  # the end-of-training checkpoint
+    assert json.loads(state_file.read_text())["num_timesteps"] == 300
