@@ -54,3 +54,26 @@ def plot_episode(
     fig.savefig(out_file, dpi=120)
     plt.close(fig)
     return out_file
+
+
+def plot_learning_curve(
+    timesteps: Sequence[int], success_rate: Sequence[float], out_file: str | Path, *, title: str = ""
+) -> Path:
+    """Saves a PNG of held-out success rate against environment steps.
+
+    Returns:
+        The path of the written file.
+    """
+    out_file = Path(out_file)
+    out_file.parent.mkdir(parents=True, exist_ok=True)
+    fig, ax = plt.subplots(figsize=(6, 3.5))
+    ax.plot(timesteps, success_rate, marker="o", markersize=3)
+    ax.set_xlabel("environment steps")
+    ax.set_ylabel("held-out success rate")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(out_file, dpi=120)
+    plt.close(fig)
+    return out_file

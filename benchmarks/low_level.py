@@ -1,0 +1,152 @@
+"""Low-level benchmark, one seeded run.
+
+1. Training throughput (env steps/s) of our path (``train_low_level``: checkpoints, held-out evaluation,
+   TensorBoard) vs plain SB3 TD3 + HerReplayBuffer with the same hyperparameters, policy and TensorBoard
+   logging, on ``antmaze_hirl/AntReach-v0``, alternating blocks; goal: ratio >= 0.95. Evaluation is
+   scaled to the block in the defaults' proportion (50 held-out episodes per 25k steps). A checkpoint
+   pickles the whole preallocated 1M-row replay buffer (~0.5 GB), so one per short block overstates
+   its share; the ratio is reported both as measured and with the measured save time amortised over
+   the default 50k steps between checkpoints.
+2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies.
+3. The learning curve of the shipped ant run (``benchmarks/results/ant_learning_curve.csv``) as a PNG.
+
+Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 2] [--episodes 200]
+Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from stable_baselines3 import TD3, HerReplayBuffer
+from stable_baselines3.common.noise import NormalActionNoise
+
+import antmaze_hirl
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.plotting import plot_learning_curve
+from antmaze_hirl.sb3_ext import evaluate_reach, load_config, save_checkpoint, train_low_level
+from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+from antmaze_hirl.sb3_ext.training import make_reach_env, policy_kwargs
+
+RESULTS = Path(__file__).parent / "results"
+
+
+def ours_seconds(steps: int, seed: int) -> tuple[float, float]:
+    """Wall time of a ``train_low_level`` block and of one more checkpoint save of its model."""
+    config = load_config("ant").replace(learning_starts=500)
+    with tempfile.TemporaryDirectory() as out:
+        start = time.perf_counter()
+        model = train_low_level(
+            "ant",
+            "td3",
+            steps,
+            out,
+            seed=seed,
+            config=config,
+            checkpoint_freq=steps,
+            eval_freq=steps // 2,
+            eval_episodes=max(1, round(50 * (steps // 2) / 25_000)),
+            progress_bar=False,
+        )
+        elapsed = time.perf_counter() - start
+        save_start = time.perf_counter()
+        save_checkpoint(model, Path(out) / "checkpoints", {})
+        return elapsed, time.perf_counter() - save_start
+
+
+def plain_sb3_seconds(steps: int, seed: int) -> float:
+    config = load_config("ant").replace(learning_starts=500)
+    start = time.perf_counter()
+    model = TD3(
+        "MultiInputPolicy",
+        make_reach_env("ant", config),
+        learning_rate=config.learning_rate,
+        buffer_size=config.buffer_size,
+        batch_size=config.batch_size,
+        gamma=config.gamma,
+        tau=config.tau,
+        learning_starts=config.learning_starts,
+        train_freq=config.train_freq,
+        gradient_steps=config.gradient_steps,
+        action_noise=NormalActionNoise(np.zeros(8), config.action_noise_std * np.ones(8)),
+        replay_buffer_class=HerReplayBuffer,
+        replay_buffer_kwargs={"n_sampled_goal": config.n_sampled_goal, "goal_selection_strategy": "future"},
+        policy_kwargs=policy_kwargs(config),
+        tensorboard_log=tempfile.mkdtemp(),
+        seed=seed,
+    )
+    model.learn(steps)
+    return time.perf_counter() - start
+
+
+def training_ratio(steps: int, blocks: int) -> dict[str, float]:
+    ours, saves, plain = [], [], []
+    for block in range(blocks):  # alternate so drifts in machine load hit both sides alike
+        elapsed, save = ours_seconds(steps, seed=block)
+        ours.append(elapsed)
+        saves.append(save)
+        plain.append(plain_sb3_seconds(steps, seed=block))
+    ours_s, save_s, plain_s = statistics.median(ours), statistics.median(saves), statistics.median(plain)
+    amortised_s = ours_s - save_s + save_s * steps / 50_000
+    return {
+        "steps_per_block": steps,
+        "ours_steps_per_s": round(steps / ours_s, 1),
+        "plain_sb3_steps_per_s": round(steps / plain_s, 1),
+        "checkpoint_save_s": round(save_s, 2),
+        "ratio_one_checkpoint_per_block": round(plain_s / ours_s, 3),
+        "ratio_checkpoint_every_50k": round(plain_s / amortised_s, 3),
+    }
+
+
+def shipped_figures(episodes: int) -> dict[str, dict]:
+    figures = {}
+    for body in ("point", "ant"):
+        if not shipped_policy_path(body).exists():
+            figures[body] = {"shipped": False}
+            continue
+        result = evaluate_reach(load_low_level(body), ReachEnv(body), episodes=episodes, seed=0)
+        figures[body] = {"shipped": True, "max_distance_m": ReachEnv(body).goal_radius, **result}
+    return figures
+
+
+def learning_curve_png() -> str | None:
+    source = RESULTS / "ant_learning_curve.csv"
+    if not source.exists():
+        return None
+    with source.open() as handle:
+        rows = list(csv.DictReader(handle))
+    steps = [int(row["timesteps"]) for row in rows]
+    success = [float(row["success_rate"]) for row in rows]
+    return str(plot_learning_curve(steps, success, RESULTS / "ant_learning_curve.png", title="Ant TD3 + HER"))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
+    parser.add_argument("--blocks", type=int, default=2)
+    parser.add_argument("--episodes", type=int, default=200, help="eval-low subgoals per shipped policy")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    result = {
+        "version": antmaze_hirl.__version__,
+        "training_throughput": training_ratio(args.steps, args.blocks),
+        "eval_low": shipped_figures(args.episodes),
+        "learning_curve_png": learning_curve_png(),
+        "goals": {"ratio_checkpoint_every_50k": ">= 0.95", "ant_success_rate": ">= 0.90 (4 m, 200 episodes)"},
+    }
+    for section in ("training_throughput", "eval_low"):
+        print(f"{section}: {result[section]}")
+    atomic_write_json(RESULTS / "low_level.json", result)
+    print(f"wrote {RESULTS / 'low_level.json'}")
+
+
+if __name__ == "__main__":
+    main()
