@@ -1,4 +1,4 @@
-"""The ``antmaze-hirl`` command line: ``demo``, ``train-low``, ``eval-low``."""
+"""The ``antmaze-hirl`` command line: ``demo``, ``train-low``, ``eval-low``, ``experiment``."""
 
 from __future__ import annotations
 
@@ -93,11 +93,65 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_experiment(subparsers: argparse._SubParsersAction) -> None:
+    from antmaze_hirl.dagger.strategies import STRATEGIES
+    from antmaze_hirl.experiments import ExperimentConfig
+
+    defaults = ExperimentConfig()
+    parser = subparsers.add_parser("experiment", help="DAgger with active learning: the paper's protocol")
+    parser.add_argument("--body", choices=sorted(BODY_SPECS), default=defaults.body)
+    parser.add_argument(
+        "--methods", default="dagger,noise,multi_policy,reward", help=f"comma-separated, from {sorted(STRATEGIES)}"
+    )
+    parser.add_argument("--seeds", type=int, default=5, help="trials per method, seeds 0..N-1 (default: 5)")
+    parser.add_argument("--episodes", type=int, default=defaults.episodes, help="training episodes per trial")
+    parser.add_argument("--out", type=Path, required=True, help="results folder (resumes trials already there)")
+    parser.add_argument("--eval-every", type=int, default=defaults.eval_every, help="M: evaluate every M episodes")
+    parser.add_argument("--eval-episodes", type=int, default=defaults.eval_episodes)
+    parser.add_argument("--final-eval-episodes", type=int, default=defaults.final_eval_episodes)
+    parser.add_argument("--maze-size", type=int, default=defaults.maze_size)
+    parser.add_argument("--gradient-steps", type=int, default=defaults.gradient_steps, help="N per update")
+    parser.add_argument("--decay", type=float, default=defaults.decay, help="d in beta <- beta / d")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
+    parser.add_argument("--no-progress", action="store_true")
+    parser.set_defaults(handler=_run_experiment)
+
+
+def _run_experiment(args: argparse.Namespace) -> int:
+    import torch
+
+    from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+
+    torch.set_num_threads(args.threads)
+    config = ExperimentConfig(
+        body=args.body,
+        episodes=args.episodes,
+        eval_every=args.eval_every,
+        eval_episodes=args.eval_episodes,
+        final_eval_episodes=args.final_eval_episodes,
+        maze_size=args.maze_size,
+        gradient_steps=args.gradient_steps,
+        decay=args.decay,
+    )
+    methods = [method.strip() for method in args.methods.split(",") if method.strip()]
+    summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress)
+    for method, figures in summary["methods"].items():
+        final = figures["final_success"]
+        print(
+            f"{method}: final success median {final['median']} (min {final['min']}, max {final['max']}), "
+            f"expert cost/episode {figures['mean_expert_cost_per_episode']:.1f}, "
+            f"attempts/episode {figures['mean_attempts_per_episode']:.1f}, "
+            f"cost to 60% {figures['cost_to_60_percent']['median']}"
+        )
+    print(f"wrote {args.out / 'summary.json'}, {args.out / 'episodes.csv'}, {args.out / 'panels.png'}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``antmaze-hirl`` with all subcommands."""
     parser = argparse.ArgumentParser(prog="antmaze-hirl", description=__doc__)
     subparsers = parser.add_subparsers(dest="command", required=True)
-    for add in (_add_demo, _add_train_low, _add_eval_low):
+    for add in (_add_demo, _add_train_low, _add_eval_low, _add_experiment):
         add(subparsers)
     return parser
 

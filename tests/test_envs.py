@@ -1,3 +1,4 @@
+import os
 import pickle
 
 import gymnasium as gym
@@ -200,3 +201,13 @@ def test_reaching_the_goal_terminates_with_reward(still_controller):
         done = terminated or truncated
     assert terminated and not truncated and total_reward == 1.0 and info["is_success"]
     assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.goal_threshold
+
+
+@pytest.mark.parametrize("body", ["ant", "point"])
+def test_no_temporary_maze_xml_is_left_behind(body):
+    env = ReachEnv(body)
+    high = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", low_level=StillController())
+    high.reset(seed=0)
+    high.reset(seed=1)  # a new layout rebuilds the model
+    for simulator in (env.sim, high.unwrapped.reach.sim):
+        assert not os.path.exists(simulator._maze_env.tmp_xml_file_path)

@@ -131,7 +131,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         n_rows, n_cols = (maze_size, maze_size) if isinstance(maze_size, int) else maze_size
         self.maze_size = (int(n_rows), int(n_cols))
         self._fixed_map = None if maze_map is None else maze_map
-        first_layout = self._draw_layout(np.random.default_rng(0))
+        first_layout = self.sample_layout(np.random.default_rng(0))
         self.controller = as_controller(low_level) if low_level is not None else default_low_level(body)
         self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **(reach_kwargs or {}))
         self.layout = first_layout
@@ -173,7 +173,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         """
         super().reset(seed=seed)
         options = options or {}
-        layout = options.get("layout") or self._draw_layout(self.np_random)
+        layout = options.get("layout") or self.sample_layout(self.np_random)
         if not isinstance(layout, MazeLayout):
             raise ValueError(f"options['layout'] must be a MazeLayout, got {type(layout).__name__}")
         self.reach.set_walls(layout.walls)
@@ -240,7 +240,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         """Releases the simulator."""
         self.reach.close()
 
-    def _draw_layout(self, rng: np.random.Generator) -> MazeLayout:
+    def sample_layout(self, rng: np.random.Generator) -> MazeLayout:
+        """Draws an episode's layout the way :meth:`reset` does (a random maze, or the fixed map), from ``rng``."""
         if self._fixed_map is None:
             n_rows, n_cols = self.maze_size
             return generate_layout(

@@ -1,0 +1,130 @@
+"""Observation encoding for the high-level policy: an agent-centred maze grid plus planar vectors.
+
+Layouts change every episode, so the policy must generalise across mazes. The encoding is made
+translation invariant by centring the maze grid on the agent's cell (a ``(2R-1) x (2R-1)`` window,
+``R`` the larger map side, so the whole maze is always in view), and the eight symmetries of the
+square (:func:`augment`) multiply the few expert labels a DAgger run collects.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.high_level import STATE_AGENT_XY, STATE_GOAL_XY
+
+GRID_CHANNELS = 2  # walls, goal
+PLANAR_DIM = 4  # goal offset (x, y) and agent offset within its cell (x, y), both in cells
+BODY_CLIP = 10.0
+
+
+@dataclass(frozen=True)
+class EncodedBatch:
+    """Encoded observations: ``grids (B, 2, S, S)`` float32 and ``vectors (B, 4 + body_dim)`` float32."""
+
+    grids: np.ndarray
+    vectors: np.ndarray
+
+    def __post_init__(self) -> None:
+        if self.grids.ndim != 4 or self.vectors.ndim != 2 or len(self.grids) != len(self.vectors):
+            raise ValueError(f"mismatched encoded batch: grids {self.grids.shape}, vectors {self.vectors.shape}")
+
+    def __len__(self) -> int:
+        return len(self.grids)
+
+
+class ObservationEncoder:
+    """Turns high-level observations (or their parts) into policy inputs.
+
+    Args:
+        geometry: Map placement of the env.
+        pixels_per_cell: The env's image resolution (to read walls back from the image).
+    """
+
+    def __init__(self, geometry: MazeGeometry, pixels_per_cell: int) -> None:
+        self.geometry = geometry
+        self.renderer = BirdseyeRenderer(geometry, pixels_per_cell)
+        self.radius = max(geometry.n_rows, geometry.n_cols)
+        self.grid_size = 2 * self.radius - 1
+
+    def encode_observations(self, observations: list[dict[str, np.ndarray]]) -> EncodedBatch:
+        """Encodes a list of high-level observation dicts."""
+        parts = [
+            (
+                self.renderer.walls_from_image(obs["image"]),
+                np.asarray(obs["state"][STATE_AGENT_XY], dtype=np.float64),
+                np.asarray(obs["state"][STATE_GOAL_XY], dtype=np.float64),
+                np.asarray(obs["state"][4:], dtype=np.float64),
+            )
+            for obs in observations
+        ]
+        return self.encode(*map(list, zip(*parts, strict=True)))
+
+    def encode(
+        self, walls: list[np.ndarray], agent_xy: list[np.ndarray], goal_xy: list[np.ndarray], body: list[np.ndarray]
+    ) -> EncodedBatch:
+        """Encodes parallel lists of wall grids, agent xy, goal xy and body observations."""
+        grids = np.stack([self._grid(w, a, g) for w, a, g in zip(walls, agent_xy, goal_xy, strict=True)])
+        vectors = np.stack([self._vector(a, g, b) for a, g, b in zip(agent_xy, goal_xy, body, strict=True)])
+        return EncodedBatch(grids.astype(np.float32), vectors.astype(np.float32))
+
+    def _grid(self, walls: np.ndarray, agent_xy: np.ndarray, goal_xy: np.ndarray) -> np.ndarray:
+        grid = np.zeros((GRID_CHANNELS, self.grid_size, self.grid_size), dtype=np.float32)
+        grid[0] = 1.0  # outside the map counts as wall
+        row, col = self.geometry.xy_to_cell(agent_xy)
+        row, col = int(np.clip(row, 0, walls.shape[0] - 1)), int(np.clip(col, 0, walls.shape[1] - 1))
+        top, left = self.radius - 1 - row, self.radius - 1 - col
+        grid[0, top : top + walls.shape[0], left : left + walls.shape[1]] = walls
+        goal_row, goal_col = self.geometry.xy_to_cell(goal_xy)
+        if 0 <= goal_row < walls.shape[0] and 0 <= goal_col < walls.shape[1]:
+            grid[1, top + goal_row, left + goal_col] = 1.0
+        return grid
+
+    def _vector(self, agent_xy: np.ndarray, goal_xy: np.ndarray, body: np.ndarray) -> np.ndarray:
+        scale = self.geometry.scale
+        cell_centre = self.geometry.cell_to_xy(self.geometry.xy_to_cell(agent_xy))
+        planar = np.concatenate([(goal_xy - agent_xy) / scale, (agent_xy - cell_centre) / scale])
+        return np.concatenate([planar, np.clip(body, -BODY_CLIP, BODY_CLIP) / BODY_CLIP])
+
+
+# Each symmetry of the square: (rotations by 90 degrees counter-clockwise, mirror x first?).
+SYMMETRIES: tuple[tuple[int, bool], ...] = tuple((k, flip) for flip in (False, True) for k in range(4))
+
+
+def transform_planar(vectors: np.ndarray, k: int, flip: bool) -> np.ndarray:
+    """Applies symmetry ``(k, flip)`` to world-frame xy vectors in the last axis (pairs of columns)."""
+    out = np.array(vectors, dtype=np.float32, copy=True)
+    x, y = out[..., 0::2].copy(), out[..., 1::2].copy()
+    if flip:
+        x = -x
+    for _ in range(k):
+        x, y = -y, x
+    out[..., 0::2], out[..., 1::2] = x, y
+    return out
+
+
+def transform_grids(grids: np.ndarray, k: int, flip: bool) -> np.ndarray:
+    """Applies symmetry ``(k, flip)`` to ``(..., S, S)`` grids drawn with row 0 at the top (+y)."""
+    out = np.flip(grids, axis=-1) if flip else grids
+    return np.ascontiguousarray(np.rot90(out, k=k, axes=(-2, -1)))
+
+
+def augment(batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator) -> tuple[EncodedBatch, np.ndarray]:
+    """Applies one random symmetry per sample to grids, planar features and planar labels.
+
+    Body observations (after the planar features) are left as they are: they hold no direction the
+    subgoal depends on strongly, and their frames are body-specific.
+    """
+    grids, vectors, labels = batch.grids.copy(), batch.vectors.copy(), np.array(labels, dtype=np.float32)
+    choices = rng.integers(len(SYMMETRIES), size=len(batch))
+    for index, (k, flip) in enumerate(SYMMETRIES):
+        members = choices == index
+        if not members.any() or (k == 0 and not flip):
+            continue
+        grids[members] = transform_grids(grids[members], k, flip)
+        vectors[members, :PLANAR_DIM] = transform_planar(vectors[members, :PLANAR_DIM], k, flip)
+        labels[members] = transform_planar(labels[members], k, flip)
+    return EncodedBatch(grids, vectors), labels

@@ -1,0 +1,207 @@
+"""DAgger for the high level (the paper's Alg. 1) with pluggable active-learning query strategies."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from typing import Any, Literal
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
+from antmaze_hirl.dagger.policy import HighLevelPolicy
+from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule
+from antmaze_hirl.dagger.strategies import MultiPolicyQuery, QueryStrategy, StartQuery
+from antmaze_hirl.experts.base import Expert
+
+Mixing = Literal["blend", "switch"]
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """Measures of one training episode.
+
+    Attributes:
+        episode: Index, from 0.
+        success: Whether the goal was reached.
+        expert_cost: Expert labels queried in the episode (one per high-level step).
+        attempts: Subgoals executed (the paper's "attempts").
+        low_level_steps: Low-level steps used.
+        beta: Expert weight used in the episode.
+        dataset_size: Labels in D after the episode (and any removal).
+        removed: Labels removed after the episode (reward-based strategy).
+    """
+
+    episode: int
+    success: bool
+    expert_cost: int
+    attempts: int
+    low_level_steps: int
+    beta: float
+    dataset_size: int
+    removed: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict, for CSV rows."""
+        return asdict(self)
+
+
+class DAggerTrainer:
+    """Trains a :class:`HighLevelPolicy` by DAgger on a high-level maze env.
+
+    Per episode: sample a maze, start (the strategy may choose it) and goal; at each high-level step
+    query the expert for ``pi*(s)``, execute the mix of learner and expert subgoals with the env's
+    low-level controller, and aggregate ``(s, pi*(s))`` into D. Every ``episodes_per_update`` episodes,
+    run ``gradient_steps`` of regression on D and advance beta (``beta <- beta / d`` by default).
+
+    Beta is the *expert's* weight, as in Ross et al. and ``imitation``: beta = 1 executes the expert's
+    subgoal, beta = 0 the learner's.
+
+    Args:
+        env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
+        expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
+        policy: The learner.
+        rng: Source of all of the trainer's randomness (maze draws, switching, strategies).
+        strategy: Active-learning strategy; default plain DAgger.
+        beta_schedule: Beta after ``k`` updates; default :class:`ExponentialBetaSchedule` with d = 2.
+        mixing: ``"blend"`` executes ``beta * expert + (1 - beta) * learner`` (the paper); ``"switch"``
+            executes the expert's subgoal with probability beta, else the learner's (``imitation``).
+        episodes_per_update: K, episodes between updates.
+        gradient_steps: N, gradient steps per update.
+        per_step_gradient_steps: Gradient steps after every high-level step (Alg. 4's online
+            updates); 0 disables them.
+    """
+
+    def __init__(
+        self,
+        *,
+        env: Any,
+        expert: Expert,
+        policy: HighLevelPolicy,
+        rng: np.random.Generator,
+        strategy: QueryStrategy | None = None,
+        beta_schedule: BetaSchedule | None = None,
+        mixing: Mixing = "blend",
+        episodes_per_update: int = 1,
+        gradient_steps: int = 200,
+        per_step_gradient_steps: int = 0,
+    ) -> None:
+        if mixing not in ("blend", "switch"):
+            raise ValueError(f"mixing must be 'blend' or 'switch', got {mixing!r}")
+        if episodes_per_update < 1:
+            raise ValueError(f"episodes_per_update must be >= 1, got {episodes_per_update}")
+        if gradient_steps < 0 or per_step_gradient_steps < 0:
+            raise ValueError("gradient step counts must be >= 0")
+        self.env = env
+        self.expert = expert
+        self.policy = policy
+        self.rng = rng
+        self.strategy = strategy if strategy is not None else QueryStrategy()
+        if isinstance(self.strategy, MultiPolicyQuery) and self.strategy.make_policy is None:
+            self.strategy.make_policy = self._member_factory()
+        self.beta_schedule = beta_schedule if beta_schedule is not None else ExponentialBetaSchedule()
+        self.mixing = mixing
+        self.episodes_per_update = episodes_per_update
+        self.gradient_steps = gradient_steps
+        self.per_step_gradient_steps = per_step_gradient_steps
+        self.dataset = DemonstrationDataset()
+        self.updates = 0
+        self.episodes_done = 0
+        self.total_expert_cost = 0
+        self._rest_body: np.ndarray | None = None
+
+    @property
+    def beta(self) -> float:
+        """The current expert weight."""
+        return float(self.beta_schedule(self.updates))
+
+    def train(
+        self,
+        episodes: int,
+        *,
+        callback: Callable[[EpisodeRecord], None] | None = None,
+        progress_bar: bool = False,
+    ) -> list[EpisodeRecord]:
+        """Runs ``episodes`` training episodes.
+
+        Args:
+            episodes: Number of episodes.
+            callback: Called with each episode's record (e.g. to evaluate every M episodes).
+            progress_bar: Show a tqdm bar.
+        """
+        records = []
+        for _ in tqdm(range(episodes), disable=not progress_bar, desc="DAgger", unit="episode"):
+            record = self.run_episode()
+            records.append(record)
+            if callback is not None:
+                callback(record)
+        return records
+
+    def run_episode(self) -> EpisodeRecord:
+        """Runs one training episode, aggregates its labels and updates the learner when due."""
+        inner = self.env.unwrapped
+        layout = inner.sample_layout(self.rng)
+        goal_xy = inner.geometry.cell_to_xy(layout.goal_cell)
+        options: dict[str, Any] = {"layout": layout, "goal_xy": goal_xy}
+        if self._rest_body is not None:
+            start = self.strategy.choose_start(self._start_query(layout.walls, goal_xy), self.rng)
+            if start is not None:
+                options["start_xy"] = start
+        obs, _ = self.env.reset(seed=int(self.rng.integers(2**31)), options=options)
+        if self._rest_body is None:
+            self._rest_body = np.asarray(obs["state"][4:], dtype=np.float64)
+        beta, episode, cost, done, info = self.beta, self.episodes_done, 0, False, {}
+        while not done:
+            expert_subgoal = np.asarray(self.expert.label(obs), dtype=np.float64)
+            cost += 1
+            learner_subgoal = self.policy.predict(obs)
+            self.dataset.add(
+                Demonstration(obs["image"], obs["state"], expert_subgoal, episode, cost - 1),
+                self.policy.encoder.encode_observations([obs]),
+            )
+            if self.per_step_gradient_steps:
+                self._fit(self.per_step_gradient_steps)
+            obs, _, terminated, truncated, info = self.env.step(self._mix(expert_subgoal, learner_subgoal, beta))
+            done = terminated or truncated
+        removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
+        self.episodes_done += 1
+        self.total_expert_cost += cost
+        if self.episodes_done % self.episodes_per_update == 0 and len(self.dataset):
+            self._fit(self.gradient_steps)
+            self.strategy.on_update(self.dataset, self.gradient_steps, self.rng)
+            self.updates += 1
+        return EpisodeRecord(
+            episode=episode,
+            success=bool(info["is_success"]),
+            expert_cost=cost,
+            attempts=int(info["attempts"]),
+            low_level_steps=int(info["total_low_level_steps"]),
+            beta=beta,
+            dataset_size=len(self.dataset),
+            removed=len(removed),
+        )
+
+    def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
+        if self.mixing == "switch":
+            chosen = expert_subgoal if self.rng.random() < beta else learner_subgoal
+        else:
+            chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
+        space = self.env.unwrapped.action_space
+        return np.clip(chosen, space.low, space.high)
+
+    def _fit(self, steps: int) -> float:
+        targets = self.policy.targets(self.dataset.agent_xy(), self.dataset.subgoals())
+        return self.policy.fit(self.dataset.encoded(), targets, steps)
+
+    def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
+        geometry = self.env.unwrapped.geometry
+        goal_cell = geometry.xy_to_cell(goal_xy)
+        cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]
+        candidates = np.stack([geometry.cell_to_xy(cell) for cell in cells])
+        return StartQuery(walls, goal_xy, candidates, self._rest_body, self.policy)
+
+    def _member_factory(self) -> Callable[[np.random.Generator], HighLevelPolicy]:
+        settings = self.policy.config()
+        settings.pop("geometry")
+        return lambda rng: HighLevelPolicy(self.policy.geometry, rng=rng, **settings)

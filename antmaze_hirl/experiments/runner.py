@@ -1,0 +1,183 @@
+"""The paper's experiment: DAgger with each active-learning method, several seeds, one table of episodes."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm.auto import tqdm
+
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
+from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
+from antmaze_hirl.dagger.strategies import make_strategy
+from antmaze_hirl.experiments.plots import plot_panels
+from antmaze_hirl.experiments.summary import summarise
+from antmaze_hirl.experts.oracle import PathOracle
+
+COLUMNS = (
+    "method",
+    "seed",
+    "episode",
+    "success",
+    "expert_cost",
+    "cumulative_expert_cost",
+    "attempts",
+    "low_level_steps",
+    "beta",
+    "dataset_size",
+    "removed",
+    "eval_success",
+    "eval_attempts",
+)
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Settings shared by every (method, seed) trial.
+
+    Attributes:
+        body: ``"point"`` or ``"ant"`` (the ant uses its shipped low-level policy).
+        episodes: Training episodes per trial.
+        eval_every: M: learner-only evaluation every M episodes.
+        eval_episodes: Held-out mazes per intermediate evaluation.
+        final_eval_episodes: Held-out mazes at the end.
+        maze_size: Free cells per side of the random layouts.
+        gradient_steps: N per update.
+        episodes_per_update: K.
+        decay: d in ``beta <- beta / d``.
+        mixing: ``"blend"`` or ``"switch"``.
+    """
+
+    body: str = "point"
+    episodes: int = 100
+    eval_every: int = 10
+    eval_episodes: int = 20
+    final_eval_episodes: int = 100
+    maze_size: int = 5
+    gradient_steps: int = 200
+    episodes_per_update: int = 1
+    decay: float = 2.0
+    mixing: str = "blend"
+
+
+def make_env(config: ExperimentConfig, low_level: Any = None) -> gym.Env:
+    """The high-level env of the experiment."""
+    return gym.make(f"antmaze_hirl/{config.body.capitalize()}Maze-v0", maze_size=config.maze_size, low_level=low_level)
+
+
+def run_trial(
+    method: str, seed: int, config: ExperimentConfig, *, low_level: Any = None, progress: tqdm | None = None
+) -> list[dict[str, Any]]:
+    """Trains one learner with ``method`` from seed ``seed``; returns one row per training episode.
+
+    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation.
+    """
+    env, eval_env = make_env(config, low_level), make_env(config, low_level)
+    rng = np.random.default_rng(seed)
+    trainer = DAggerTrainer(
+        env=env,
+        expert=PathOracle.for_env(env),
+        policy=HighLevelPolicy.for_env(env, rng=rng),
+        rng=rng,
+        strategy=make_strategy(method),
+        beta_schedule=ExponentialBetaSchedule(config.decay),
+        mixing=config.mixing,  # type: ignore[arg-type]
+        episodes_per_update=config.episodes_per_update,
+        gradient_steps=config.gradient_steps,
+    )
+    rows: list[dict[str, Any]] = []
+    for episode in range(config.episodes):
+        record = trainer.run_episode()
+        row = {"method": method, "seed": seed, **record.to_dict(), "cumulative_expert_cost": trainer.total_expert_cost}
+        final = episode == config.episodes - 1
+        if final or (episode + 1) % config.eval_every == 0:
+            result = evaluate_high_level(
+                trainer.policy, eval_env, episodes=config.final_eval_episodes if final else config.eval_episodes
+            )
+            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"])
+        rows.append({column: row.get(column, math.nan) for column in COLUMNS})
+        if progress is not None:
+            progress.update(1)
+    env.close()
+    eval_env.close()
+    return rows
+
+
+def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
+    """The rows as CSV text with :data:`COLUMNS`."""
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=COLUMNS)
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()
+
+
+def read_rows(path: Path) -> list[dict[str, Any]]:
+    """Rows of a trial CSV with numbers parsed back."""
+    with path.open() as handle:
+        return [
+            {
+                key: value if key == "method" else (value == "True" if key == "success" else float(value))
+                for key, value in row.items()
+            }
+            for row in csv.DictReader(handle)
+        ]
+
+
+def run_experiment(
+    methods: Sequence[str],
+    seeds: int,
+    config: ExperimentConfig,
+    out_dir: str | Path,
+    *,
+    low_level: Any = None,
+    progress_bar: bool = True,
+) -> dict[str, Any]:
+    """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
+
+    Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv``, so an
+    interrupted experiment resumes where it stopped (a trial is the unit of resumption).
+
+    Writes ``out_dir/episodes.csv``, ``out_dir/summary.json`` and ``out_dir/panels.png``.
+
+    Raises:
+        ValueError: On an unknown method, or a results folder made with other settings.
+    """
+    for method in methods:
+        make_strategy(method)
+    out_dir = Path(out_dir)
+    config_path = out_dir / "config.json"
+    settings = asdict(config)
+    if config_path.exists():
+        saved = json.loads(config_path.read_text())
+        if saved != settings:
+            raise ValueError(f"{out_dir} holds results made with {saved}, not {settings}; use another --out")
+    atomic_write_json(config_path, settings)
+    pending = [(m, s) for m in methods for s in range(seeds) if not _trial_path(out_dir, m, s).exists()]
+    timings: dict[str, float] = {}
+    with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
+        for method, seed in pending:
+            bar.set_postfix_str(f"{method} seed {seed}")
+            start = time.perf_counter()
+            rows = run_trial(method, seed, config, low_level=low_level, progress=bar)
+            timings[f"{method}_seed{seed}"] = round(time.perf_counter() - start, 1)
+            atomic_write_text(_trial_path(out_dir, method, seed), rows_to_csv(rows))
+    rows = [row for m in methods for s in range(seeds) for row in read_rows(_trial_path(out_dir, m, s))]
+    atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
+    summary = {"config": settings, "methods": summarise(rows, methods), "trial_seconds_this_run": timings}
+    atomic_write_json(out_dir / "summary.json", summary)
+    plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
+    return summary
+
+
+def _trial_path(out_dir: Path, method: str, seed: int) -> Path:
+    return out_dir / "trials" / f"{method}_seed{seed}.csv"

@@ -1,0 +1,211 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from antmaze_hirl import PathOracle
+from antmaze_hirl.dagger import (
+    DAggerTrainer,
+    Demonstration,
+    DemonstrationDataset,
+    ExponentialBetaSchedule,
+    HighLevelPolicy,
+    LinearBetaSchedule,
+    MultiPolicyQuery,
+    NoiseQuery,
+    RewardBasedQuery,
+    evaluate_high_level,
+)
+from antmaze_hirl.dagger.agent import HierarchicalAgent
+from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder, augment
+from antmaze_hirl.dagger.strategies import StartQuery
+from antmaze_hirl.envs import PointGoToController
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.layouts import validate_maze_map
+
+GEOMETRY = MazeGeometry(5, 5, 1.0)
+
+
+def encoded_row(value=0.0):
+    return EncodedBatch(np.full((1, 2, 3, 3), value, np.float32), np.full((1, 6), value, np.float32))
+
+
+def demo(episode, step):
+    return Demonstration(np.zeros((3, 8, 8), np.uint8), np.zeros(6, np.float32), np.zeros(2), episode, step)
+
+
+def failed_episode_dataset(length):
+    dataset = DemonstrationDataset()
+    for step in range(length):
+        dataset.add(demo(episode=0, step=step), encoded_row(step))
+    return dataset
+
+
+def test_reward_based_removal_frequency_matches_exp_minus_t_d():
+    strategy, rng, length, trials = RewardBasedQuery(), np.random.default_rng(0), 5, 4000
+    removed_counts = np.zeros(length)
+    for _ in range(trials):
+        dataset = failed_episode_dataset(length)
+        for index in strategy.on_episode_end(dataset, 0, success=False, rng=rng):
+            removed_counts[index] += 1
+    expected = np.exp(-np.arange(length)[::-1])  # the last sample has t_d = 0
+    frequency = removed_counts / trials
+    tolerance = 4 * np.sqrt(expected * (1 - expected) / trials) + 1e-9
+    assert np.all(np.abs(frequency - expected) <= tolerance), (frequency, expected)
+
+
+def test_reward_based_keeps_successful_episodes_and_other_episodes():
+    strategy, rng = RewardBasedQuery(), np.random.default_rng(0)
+    dataset = failed_episode_dataset(4)
+    dataset.add(demo(episode=1, step=0), encoded_row())
+    assert strategy.on_episode_end(dataset, 0, success=True, rng=rng) == []
+    assert len(dataset) == 5
+    strategy.on_episode_end(dataset, 1, success=False, rng=rng)  # t_d = 0: always removed
+    assert len(dataset) == 4 and all(d.episode == 0 for d in dataset.demonstrations)
+
+
+class CraftedPolicy:
+    """Outputs vary with the body observation only when the goal is exactly 2 cells to the agent's right."""
+
+    def __init__(self):
+        self.encoder = ObservationEncoder(GEOMETRY, pixels_per_cell=4)
+
+    def offsets(self, batch):
+        sensitive = np.isclose(batch.vectors[:, 0], 2.0) & np.isclose(batch.vectors[:, 1], 0.0)
+        return np.where(sensitive[:, None], batch.vectors[:, 4:6], 0.0)
+
+
+def start_query(policy):
+    walls = validate_maze_map("u")
+    candidates = np.stack([GEOMETRY.cell_to_xy(cell) for cell in [(1, 1), (1, 2), (1, 3), (2, 3)]])
+    goal = GEOMETRY.cell_to_xy((1, 3))  # two cells right of (1, 1)
+    return StartQuery(walls, goal, candidates, np.zeros(2), policy)
+
+
+def test_noise_based_picks_the_candidate_where_the_policy_varies():
+    query = start_query(CraftedPolicy())
+    scores = NoiseQuery(n_noises=8).scores(query, np.random.default_rng(0))
+    assert scores[0] > 0 and np.all(scores[1:] == 0)
+    np.testing.assert_array_equal(NoiseQuery().choose_start(query, np.random.default_rng(1)), query.candidates[0])
+
+
+class ConstantMember:
+    """An ensemble member that agrees with the others everywhere except at one candidate."""
+
+    def __init__(self, disagreement):
+        self.disagreement = disagreement
+
+    def offsets(self, batch):
+        out = np.zeros((len(batch), 2))
+        out[2] = self.disagreement  # third candidate
+        return out
+
+
+def test_multi_policy_picks_where_members_disagree():
+    query = start_query(CraftedPolicy())
+    strategy = MultiPolicyQuery(n_policies=3)
+    assert strategy.choose_start(query, np.random.default_rng(0)) is None  # no members before the first update
+    strategy.members = [ConstantMember(value) for value in (-0.5, 0.0, 0.5)]
+    np.testing.assert_array_equal(strategy.choose_start(query, np.random.default_rng(0)), query.candidates[2])
+
+
+def test_beta_schedules_are_exact():
+    schedule = ExponentialBetaSchedule(decay=2.0)
+    assert [schedule(k) for k in range(4)] == [1.0, 0.5, 0.25, 0.125]
+    assert ExponentialBetaSchedule(decay=3.0, beta0=0.9)(2) == 0.9 / 9
+    assert [LinearBetaSchedule(4)(k) for k in (0, 1, 4, 9)] == [1.0, 0.75, 0.0, 0.0]
+    with pytest.raises(ValueError, match="decay d must be >= 1"):
+        ExponentialBetaSchedule(decay=0.5)
+
+
+def test_augmentation_keeps_grid_vector_and_label_consistent():
+    encoder = ObservationEncoder(GEOMETRY, pixels_per_cell=4)
+    walls = np.ones((5, 5), bool)
+    walls[1:-1, 1:-1] = False
+    agent, goal = GEOMETRY.cell_to_xy((2, 2)), GEOMETRY.cell_to_xy((1, 3))  # goal up-right of the agent
+    batch = encoder.encode([walls] * 64, [agent] * 64, [goal] * 64, [np.zeros(2)] * 64)
+    labels = np.tile((goal - agent), (64, 1)).astype(np.float32)
+    augmented, new_labels = augment(batch, labels, np.random.default_rng(0))
+    centre = encoder.radius - 1
+    for grid, vector, label in zip(augmented.grids, augmented.vectors, new_labels, strict=True):
+        (row,), (col,) = np.nonzero(grid[1])
+        # grid rows grow downwards (-y), columns rightwards (+x)
+        np.testing.assert_allclose(vector[:2], [col - centre, centre - row], atol=1e-6)
+        np.testing.assert_allclose(label, vector[:2], atol=1e-6)
+    assert len({tuple(v[:2]) for v in augmented.vectors}) == 4  # the four diagonal directions all appear
+
+
+def make_trainer(seed=0, **kwargs):
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    rng = np.random.default_rng(seed)
+    policy = HighLevelPolicy.for_env(env, rng=rng)
+    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, **kwargs), env
+
+
+def test_blend_executes_the_beta_mix_and_counts_labels():
+    trainer, env = make_trainer(beta_schedule=ExponentialBetaSchedule(decay=1.0, beta0=0.25), gradient_steps=1)
+    executed = []
+    step = env.step
+
+    def recording_step(action):
+        executed.append(np.array(action))
+        return step(action)
+
+    env.step = recording_step
+    labels = []
+    expert_label = trainer.expert.label
+    trainer.expert.label = lambda obs: labels.append((expert_label(obs), trainer.policy.predict(obs))) or labels[-1][0]
+    record = trainer.run_episode()
+    assert record.expert_cost == len(executed) == len(labels) == record.attempts
+    for action, (expert, learner) in zip(executed, labels, strict=True):
+        np.testing.assert_allclose(
+            action, np.clip(0.25 * expert + 0.75 * learner, env.action_space.low, env.action_space.high)
+        )
+
+
+def test_switch_mixing_and_per_step_updates_run():
+    trainer, _ = make_trainer(mixing="switch", per_step_gradient_steps=2, gradient_steps=5)
+    record = trainer.run_episode()
+    assert trainer.policy.gradient_steps == 2 * record.expert_cost + 5
+    assert trainer.updates == 1 and trainer.beta == 0.5
+
+
+def test_dagger_learns_small_mazes_end_to_end():
+    trainer, _ = make_trainer(seed=0, gradient_steps=300)
+    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    untrained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
+    trainer.train(20)
+    trained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
+    assert trained["success_rate"] >= untrained["success_rate"] + 0.4, (untrained, trained)
+
+
+def test_policy_save_load_round_trip_and_bad_files(tmp_path):
+    trainer, env = make_trainer(gradient_steps=10)
+    trainer.run_episode()
+    path = trainer.policy.save(tmp_path / "high.zip")
+    loaded = HighLevelPolicy.load(path)
+    obs, _ = env.reset(seed=3)
+    np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
+    (tmp_path / "bad.zip").write_text("junk")
+    with pytest.raises(ValueError, match="is not a high-level policy file"):
+        HighLevelPolicy.load(tmp_path / "bad.zip")
+    with pytest.raises(FileNotFoundError):
+        HighLevelPolicy.load(tmp_path / "missing.zip")
+    agent = HierarchicalAgent(loaded, PointGoToController())
+    np.testing.assert_array_equal(agent.predict(obs)[0], loaded.predict(obs))
+
+
+def test_trainer_is_seeded():
+    first = [r.to_dict() for r in make_trainer(seed=4, gradient_steps=5)[0].train(2)]
+    second = [r.to_dict() for r in make_trainer(seed=4, gradient_steps=5)[0].train(2)]
+    assert first == second
+
+
+@pytest.mark.parametrize("strategy", [NoiseQuery(), MultiPolicyQuery(n_policies=2)])
+def test_start_selecting_strategies_start_away_from_the_corner(strategy):
+    trainer, env = make_trainer(strategy=strategy, gradient_steps=5)
+    trainer.train(2)  # after the first update the strategy picks starts
+    corners = {tuple(env.unwrapped.geometry.cell_to_xy(c)) for c in [(1, 1), (1, 3), (3, 1), (3, 3)]}
+    chosen = strategy.choose_start(trainer._start_query(env.unwrapped.layout.walls, env.unwrapped.goal_xy), trainer.rng)
+    assert chosen is not None and chosen.shape == (2,)
+    assert env.unwrapped.geometry.is_free(env.unwrapped.layout.walls, chosen)
+    assert len(corners) == 4
