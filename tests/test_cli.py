@@ -6,7 +6,7 @@ import pytest
 from antmaze_hirl.cli import build_parser, main
 
 
-@pytest.mark.parametrize("command", ["demo", "train-low", "eval-low"])
+@pytest.mark.parametrize("command", ["demo", "train-low", "eval-low", "experiment"])
 def test_every_subcommand_has_help(command, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main([command, "--help"])

@@ -144,8 +144,9 @@ def run_experiment(
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
 
-    Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv``, so an
-    interrupted experiment resumes where it stopped (a trial is the unit of resumption).
+    Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv`` (its wall time
+    beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
+    unit of resumption).
 
     Writes ``out_dir/episodes.csv``, ``out_dir/summary.json`` and ``out_dir/panels.png``.
 
@@ -162,18 +163,22 @@ def run_experiment(
         if saved != settings:
             raise ValueError(f"{out_dir} holds results made with {saved}, not {settings}; use another --out")
     atomic_write_json(config_path, settings)
-    pending = [(m, s) for m in methods for s in range(seeds) if not _trial_path(out_dir, m, s).exists()]
-    timings: dict[str, float] = {}
+    # Seed-major order: an interrupted run still has every method on its first seeds.
+    pending = [(m, s) for s in range(seeds) for m in methods if not _trial_path(out_dir, m, s).exists()]
     with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
         for method, seed in pending:
             bar.set_postfix_str(f"{method} seed {seed}")
             start = time.perf_counter()
             rows = run_trial(method, seed, config, low_level=low_level, progress=bar)
-            timings[f"{method}_seed{seed}"] = round(time.perf_counter() - start, 1)
+            seconds = round(time.perf_counter() - start, 1)
+            atomic_write_json(_trial_path(out_dir, method, seed).with_suffix(".json"), {"seconds": seconds})
             atomic_write_text(_trial_path(out_dir, method, seed), rows_to_csv(rows))
     rows = [row for m in methods for s in range(seeds) for row in read_rows(_trial_path(out_dir, m, s))]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
-    summary = {"config": settings, "methods": summarise(rows, methods), "trial_seconds_this_run": timings}
+    seconds = {
+        path.stem: json.loads(path.read_text())["seconds"] for path in sorted((out_dir / "trials").glob("*.json"))
+    }
+    summary = {"config": settings, "methods": summarise(rows, methods), "trial_seconds": seconds}
     atomic_write_json(out_dir / "summary.json", summary)
     plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
     return summary

@@ -1,0 +1,70 @@
+"""The paper's protocol: 100 training episodes x 5 seeds x every method, scripted oracle as the expert.
+
+Runs ``antmaze-hirl experiment`` for the point body and/or the ant (with its shipped low-level policy)
+into ``benchmarks/results/paper_experiment_<body>/`` (summary.json, episodes.csv, panels.png, and one
+CSV per finished trial, so an interrupted run resumes), then prints the figures against the goals:
+
+* ant, best method: final learner-only success >= 0.80 on 100 held-out mazes (the paper: > 0.60);
+* expert cost to reach 60% learner-only success: best active method <= 0.5 x plain DAgger;
+* one 100-episode ant trial <= 15 min on 2 cores.
+
+Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import torch
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+
+METHODS = ("dagger", "noise", "multi_policy", "reward")
+RESULTS = Path(__file__).parent / "results"
+
+
+def goals(summary: dict, body: str) -> dict:
+    methods = summary["methods"]
+    finals = {m: f["final_success"]["median"] for m, f in methods.items() if f["final_success"]["median"] is not None}
+    best = max(finals, key=finals.get) if finals else None
+    dagger_cost = methods.get("dagger", {}).get("cost_to_60_percent", {}).get("median")
+    active_costs = {
+        m: f["cost_to_60_percent"]["median"]
+        for m, f in methods.items()
+        if m != "dagger" and f["cost_to_60_percent"]["median"] is not None
+    }
+    best_active = min(active_costs, key=active_costs.get) if active_costs else None
+    ratio = active_costs[best_active] / dagger_cost if best_active and dagger_cost else None
+    return {
+        "best_method": best,
+        "best_final_success_median": finals.get(best) if best else None,
+        "final_success_goal": 0.8 if body == "ant" else None,
+        "best_active_method_by_cost": best_active,
+        "cost_to_60_ratio_vs_dagger": ratio,
+        "cost_ratio_goal": 0.5,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--body", choices=["point", "ant"], required=True)
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--methods", default=",".join(METHODS))
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    out = RESULTS / f"paper_experiment_{args.body}"
+    config = ExperimentConfig(body=args.body, episodes=args.episodes)
+    summary = run_experiment(args.methods.split(","), args.seeds, config, out)
+    summary["goals"] = goals(summary, args.body)
+    atomic_write_json(out / "summary.json", summary)
+    for method, figures in summary["methods"].items():
+        print(method, figures)
+    print("goals:", summary["goals"])
+    print("trial seconds:", summary["trial_seconds"])
+
+
+if __name__ == "__main__":
+    main()
