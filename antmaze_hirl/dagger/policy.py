@@ -13,6 +13,7 @@ import torch as th
 from torch import nn
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
+from antmaze_hirl.dagger.dataset import DemonstrationDataset
 from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder, augment
 from antmaze_hirl.envs.geometry import MazeGeometry
 
@@ -196,6 +197,11 @@ class HighLevelPolicy:
             losses.append(loss.item())
         self.gradient_steps += steps
         return float(np.mean(losses[-10:]))
+
+    def fit_dataset(self, dataset: DemonstrationDataset, steps: int, indices: np.ndarray | None = None) -> float:
+        """Runs :meth:`fit` on the dataset's labels (or the rows ``indices``, repeats allowed)."""
+        targets = self.targets(dataset.agent_xy(indices), dataset.subgoals(indices))
+        return self.fit(dataset.encoded(indices), targets, steps)
 
     def config(self) -> dict[str, Any]:
         """Constructor settings, stored with saved weights."""

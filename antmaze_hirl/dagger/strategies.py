@@ -134,9 +134,7 @@ class MultiPolicyQuery(QueryStrategy):
                 self.make_policy(np.random.default_rng(rng.integers(2**63))) for _ in range(self.n_policies)
             ]
         for member in self.members:
-            resample = rng.integers(len(dataset), size=len(dataset))
-            targets = member.targets(dataset.agent_xy(resample), dataset.subgoals(resample))
-            member.fit(dataset.encoded(resample), targets, gradient_steps)
+            member.fit_dataset(dataset, gradient_steps, rng.integers(len(dataset), size=len(dataset)))
 
     def scores(self, query: StartQuery) -> np.ndarray:
         """Disagreement (spread across members) at each candidate."""

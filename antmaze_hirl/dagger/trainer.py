@@ -4,18 +4,33 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
+from antmaze_hirl.dagger.features import ObservationEncoder
 from antmaze_hirl.dagger.policy import HighLevelPolicy
 from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule
 from antmaze_hirl.dagger.strategies import MultiPolicyQuery, QueryStrategy, StartQuery
 from antmaze_hirl.experts.base import Expert
 
 Mixing = Literal["blend", "switch"]
+
+
+class Learner(Protocol):
+    """What the trainer needs of a learner (:class:`HighLevelPolicy`, or ``BCLearner`` from ``interop``)."""
+
+    encoder: ObservationEncoder
+
+    def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """The learner's subgoal for ``observation``."""
+        ...
+
+    def fit_dataset(self, dataset: DemonstrationDataset, steps: int) -> Any:
+        """Trains ``steps`` minibatch steps on the aggregated dataset."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -61,7 +76,7 @@ class DAggerTrainer:
     Args:
         env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
         expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
-        policy: The learner.
+        policy: The learner (start-selecting strategies need a :class:`HighLevelPolicy`).
         rng: Source of all of the trainer's randomness (maze draws, switching, strategies).
         strategy: Active-learning strategy; default plain DAgger.
         beta_schedule: Beta after ``k`` updates; default :class:`ExponentialBetaSchedule` with d = 2.
@@ -78,7 +93,7 @@ class DAggerTrainer:
         *,
         env: Any,
         expert: Expert,
-        policy: HighLevelPolicy,
+        policy: Learner,
         rng: np.random.Generator,
         strategy: QueryStrategy | None = None,
         beta_schedule: BetaSchedule | None = None,
@@ -190,9 +205,8 @@ class DAggerTrainer:
         space = self.env.unwrapped.action_space
         return np.clip(chosen, space.low, space.high)
 
-    def _fit(self, steps: int) -> float:
-        targets = self.policy.targets(self.dataset.agent_xy(), self.dataset.subgoals())
-        return self.policy.fit(self.dataset.encoded(), targets, steps)
+    def _fit(self, steps: int) -> None:
+        self.policy.fit_dataset(self.dataset, steps)
 
     def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
         geometry = self.env.unwrapped.geometry

@@ -1,0 +1,89 @@
+"""Interop with ``imitation``: export labels as its transitions, and use its BC as the DAgger learner.
+
+``imitation`` is an optional extra installed with ``pip install --no-deps imitation==1.0.1`` plus
+``datasets`` and ``jsonpickle`` (its own pins predate this stack; see the README).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from imitation.algorithms import bc
+from imitation.data import types
+from imitation.util import logger as imitation_logger
+from stable_baselines3.common.policies import MultiInputActorCriticPolicy
+
+from antmaze_hirl.dagger.dataset import DemonstrationDataset
+from antmaze_hirl.dagger.features import ObservationEncoder
+
+
+def to_transitions(dataset: DemonstrationDataset) -> types.Transitions:
+    """The aggregated labels as ``imitation`` transitions: dict observations, expert subgoals as actions.
+
+    ``next_obs`` is the next label's observation from the same episode; the last label of an episode
+    kept in D points to itself with ``dones=True`` (DAgger stores no observation after it).
+    (``imitation`` 1.0.1's data loader needs ``next_obs`` even for ``TransitionsMinimal``.)
+
+    Raises:
+        ValueError: If the dataset is empty.
+    """
+    if len(dataset) == 0:
+        raise ValueError("the dataset is empty")
+    demos = dataset.demonstrations
+    follows = [i + 1 < len(demos) and demos[i + 1].episode == demos[i].episode for i in range(len(demos))]
+    following = [i + 1 if follows[i] else i for i in range(len(demos))]
+
+    def dict_obs(order: list[int]) -> types.DictObs:
+        return types.DictObs(
+            {"image": np.stack([demos[i].image for i in order]), "state": np.stack([demos[i].state for i in order])}
+        )
+
+    return types.Transitions(
+        obs=dict_obs(list(range(len(demos)))),
+        acts=dataset.subgoals().astype(np.float32),
+        infos=np.array([{}] * len(demos)),
+        next_obs=dict_obs(following),
+        dones=~np.array(follows),
+    )
+
+
+class BCLearner:
+    """``imitation``'s behaviour cloning as the DAgger learner (SB3 ``MultiInputActorCriticPolicy``).
+
+    Works with plain DAgger and the reward-based strategy; the start-selecting strategies read the
+    heading network of :class:`~antmaze_hirl.dagger.policy.HighLevelPolicy` and do not apply.
+
+    Args:
+        env: The high-level env (for its spaces and geometry).
+        rng: Seeds BC's minibatches.
+        batch_size: BC minibatch size.
+        net_arch: Policy MLP sizes after SB3's image/vector extractor.
+    """
+
+    def __init__(self, env: Any, *, rng: np.random.Generator, batch_size: int = 32, net_arch: list[int] | None = None):
+        inner = env.unwrapped
+        self.encoder = ObservationEncoder(inner.geometry, inner.renderer.pixels_per_cell)
+        policy = MultiInputActorCriticPolicy(
+            inner.observation_space, inner.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
+        )
+        self.bc = bc.BC(
+            observation_space=inner.observation_space,
+            action_space=inner.action_space,
+            rng=rng,
+            policy=policy,
+            batch_size=batch_size,
+            custom_logger=imitation_logger.configure(format_strs=[]),
+        )
+
+    def fit_dataset(self, dataset: DemonstrationDataset, steps: int) -> None:
+        """Runs ``steps`` BC minibatches on all labels so far (none while D is smaller than a minibatch)."""
+        if steps <= 0 or len(dataset) < self.bc.batch_size:
+            return
+        self.bc.set_demonstrations(to_transitions(dataset))
+        self.bc.train(n_batches=steps, progress_bar=False)
+
+    def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """The cloned policy's deterministic subgoal."""
+        action, _ = self.bc.policy.predict(observation, deterministic=True)
+        return np.asarray(action, dtype=np.float64)

@@ -1,0 +1,54 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+
+pytest.importorskip("imitation", reason="the imitation extra is not installed")
+
+from imitation.algorithms import bc
+
+from antmaze_hirl import PathOracle
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, RewardBasedQuery
+from antmaze_hirl.dagger.interop import BCLearner, to_transitions
+from antmaze_hirl.envs import PointGoToController
+
+
+def point_env():
+    return gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+
+
+def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
+    env = point_env()
+    rng = np.random.default_rng(0)
+    trainer = DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env), policy=HighLevelPolicy.for_env(env, rng=rng), rng=rng, gradient_steps=2
+    )
+    trainer.train(2)
+    transitions = to_transitions(trainer.dataset)
+    assert len(transitions) == len(trainer.dataset)
+    np.testing.assert_array_equal(transitions.acts, trainer.dataset.subgoals().astype(np.float32))
+    assert transitions.obs.get("image").shape == (len(trainer.dataset), *env.observation_space["image"].shape)
+    assert transitions.dones.sum() == 2  # one episode end per training episode
+    np.testing.assert_array_equal(transitions.next_obs.get("state")[0], transitions.obs.get("state")[1])
+    cloner = bc.BC(
+        observation_space=env.observation_space,
+        action_space=env.action_space,
+        rng=rng,
+        demonstrations=transitions,
+        batch_size=8,
+    )
+    cloner.train(n_batches=3, progress_bar=False)
+
+
+def test_bc_serves_as_dagger_learner_with_reward_based_filtering():
+    env = point_env()
+    rng = np.random.default_rng(1)
+    learner = BCLearner(env, rng=rng, batch_size=4)
+    before = [p.detach().clone() for p in learner.bc.policy.parameters()]
+    trainer = DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=RewardBasedQuery(), gradient_steps=4
+    )
+    records = trainer.train(3)
+    assert trainer.updates == 3 and records[-1].dataset_size == len(trainer.dataset) >= 4
+    assert any(not (a == b).all() for a, b in zip(before, learner.bc.policy.parameters(), strict=True))
+    obs, _ = env.reset(seed=0)
+    assert env.action_space.contains(learner.predict(obs).astype(np.float32))
