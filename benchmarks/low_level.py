@@ -23,18 +23,14 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
-from stable_baselines3 import TD3, HerReplayBuffer
-from stable_baselines3.common.noise import NormalActionNoise
 
 import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.plotting import plot_learning_curve
-from antmaze_hirl.sb3_ext import evaluate_reach, load_config, save_checkpoint, train_low_level
+from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
 from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
-from antmaze_hirl.sb3_ext.training import make_reach_env, policy_kwargs
 
 RESULTS = Path(__file__).parent / "results"
 
@@ -63,27 +59,10 @@ def ours_seconds(steps: int, seed: int) -> tuple[float, float]:
 
 
 def plain_sb3_seconds(steps: int, seed: int) -> float:
+    """Wall time of SB3's own ``learn`` on the same model (same env, hyperparameters, policy), no extensions."""
     config = load_config("ant").replace(learning_starts=500)
     start = time.perf_counter()
-    model = TD3(
-        "MultiInputPolicy",
-        make_reach_env("ant", config),
-        learning_rate=config.learning_rate,
-        buffer_size=config.buffer_size,
-        batch_size=config.batch_size,
-        gamma=config.gamma,
-        tau=config.tau,
-        learning_starts=config.learning_starts,
-        train_freq=config.train_freq,
-        gradient_steps=config.gradient_steps,
-        action_noise=NormalActionNoise(np.zeros(8), config.action_noise_std * np.ones(8)),
-        replay_buffer_class=HerReplayBuffer,
-        replay_buffer_kwargs={"n_sampled_goal": config.n_sampled_goal, "goal_selection_strategy": "future"},
-        policy_kwargs=policy_kwargs(config),
-        tensorboard_log=tempfile.mkdtemp(),
-        seed=seed,
-    )
-    model.learn(steps)
+    make_model("ant", "td3", config, seed=seed, tensorboard_log=tempfile.mkdtemp()).learn(steps)
     return time.perf_counter() - start
 
 
