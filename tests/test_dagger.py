@@ -178,8 +178,12 @@ def test_dagger_learns_small_mazes_end_to_end():
     assert trained["success_rate"] >= untrained["success_rate"] + 0.4, (untrained, trained)
 
 
-def test_policy_save_load_round_trip_and_bad_files(tmp_path):
-    trainer, env = make_trainer(gradient_steps=10)
+@pytest.mark.parametrize("planning_iterations", [0, 4])
+def test_policy_save_load_round_trip_and_bad_files(tmp_path, planning_iterations):
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    rng = np.random.default_rng(0)
+    policy = HighLevelPolicy.for_env(env, rng=rng, planning_iterations=planning_iterations)
+    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
     path = trainer.policy.save(tmp_path / "high.zip")
     loaded = HighLevelPolicy.load(path)

@@ -11,6 +11,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 from antmaze_hirl.envs import ENV_IDS, ReachEnv
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.sb3_ext import policies
 
 
 def make(env_id, **kwargs):
@@ -66,8 +67,9 @@ def test_pickle_round_trip(env_id):
     assert_same(rollout(env, seed=11), rollout(clone, seed=11))
 
 
-def test_ant_maze_without_low_level_says_what_to_pass():
-    with pytest.raises(ValueError, match="needs a low-level controller: pass low_level="):
+def test_maze_without_low_level_or_shipped_policy_says_what_to_pass(monkeypatch, tmp_path):
+    monkeypatch.setattr(policies, "shipped_policy_path", lambda body: tmp_path / f"{body}_td3.zip")
+    with pytest.raises(ValueError, match=r"AntMaze-v0 needs a low-level controller: pass low_level="):
         gym.make("antmaze_hirl/AntMaze-v0")
 
 

@@ -20,8 +20,39 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 FORMAT = "antmaze_hirl.high_level_policy/2"
 
 
+class ValueIterationModule(nn.Module):
+    """A value iteration network (Tamar et al., 2016) over the agent-centred grid.
+
+    A learned reward map is propagated by ``iterations`` rounds of ``Q = conv(R) + conv(V)``,
+    ``V = max_a Q``: a differentiable shortest-path planner whose weights are shared across positions,
+    so what it learns on a few mazes carries over to new layouts. Returns Q in the 3x3 cells around
+    the agent (the grid centre).
+
+    Args:
+        iterations: Rounds of value propagation (>= the longest path in cells).
+        actions: Q channels.
+    """
+
+    def __init__(self, iterations: int, actions: int = 8) -> None:
+        super().__init__()
+        self.iterations = iterations
+        self.reward = nn.Sequential(nn.Conv2d(2, 16, 3, padding=1), nn.ReLU(), nn.Conv2d(16, 1, 1))
+        self.q_from_reward = nn.Conv2d(1, actions, 3, padding=1, bias=False)
+        self.q_from_value = nn.Conv2d(1, actions, 3, padding=1, bias=False)
+        self.features_dim = actions * 9
+
+    def forward(self, grids: th.Tensor) -> th.Tensor:
+        """Returns ``(B, actions * 9)`` Q-values around the agent."""
+        q_reward = self.q_from_reward(self.reward(grids))
+        q = q_reward
+        for _ in range(self.iterations):
+            q = q_reward + self.q_from_value(q.max(dim=1, keepdim=True).values)
+        centre = grids.shape[-1] // 2
+        return q[:, :, centre - 1 : centre + 2, centre - 1 : centre + 2].flatten(1)
+
+
 class SubgoalNetwork(nn.Module):
-    """CNN over the agent-centred grid plus an MLP over the feature vector.
+    """CNN (and optionally a value iteration network) over the agent-centred grid, plus an MLP.
 
     Outputs ``n_directions`` logits over subgoal headings and a distance in ``[0, 1]`` (of the policy's
     ``max_offset``). Classifying the heading, rather than regressing xy, keeps the policy decisive where
@@ -34,9 +65,18 @@ class SubgoalNetwork(nn.Module):
         n_directions: Heading bins (a multiple of 4, so the square's symmetries map bins to bins).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
+        planning_iterations: Value-iteration rounds; 0 leaves the planning module out.
     """
 
-    def __init__(self, grid_size: int, vector_dim: int, n_directions: int = 16, channels: int = 16, hidden: int = 128):
+    def __init__(
+        self,
+        grid_size: int,
+        vector_dim: int,
+        n_directions: int = 16,
+        channels: int = 16,
+        hidden: int = 128,
+        planning_iterations: int = 0,
+    ) -> None:
         super().__init__()
         self.conv = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
@@ -47,8 +87,10 @@ class SubgoalNetwork(nn.Module):
             nn.ReLU(),
             nn.Flatten(),
         )
+        self.planner = ValueIterationModule(planning_iterations) if planning_iterations > 0 else None
+        planner_dim = self.planner.features_dim if self.planner is not None else 0
         self.body = nn.Sequential(
-            nn.Linear(channels * grid_size * grid_size + vector_dim, hidden),
+            nn.Linear(channels * grid_size * grid_size + planner_dim + vector_dim, hidden),
             nn.ReLU(),
             nn.Linear(hidden, hidden),
             nn.ReLU(),
@@ -58,7 +100,10 @@ class SubgoalNetwork(nn.Module):
 
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
         """Returns heading logits ``(B, n_directions)`` and distances ``(B,)`` for a batch."""
-        hidden = self.body(th.cat([self.conv(grids), vectors], dim=1))
+        features = [self.conv(grids), vectors]
+        if self.planner is not None:
+            features.insert(1, self.planner(grids))
+        hidden = self.body(th.cat(features, dim=1))
         return self.direction(hidden), self.distance(hidden).squeeze(1)
 
 
@@ -95,6 +140,9 @@ class HighLevelPolicy:
         batch_size: Minibatch size of :meth:`fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
         n_directions: Heading bins of the network.
+        planning_iterations: Value-iteration rounds of an added planning module (0, the default: CNN
+            only). Twice the larger map side propagates values along any corridor; on 5x5 point mazes it
+            did not beat the CNN within 30 episodes (70% vs 70% learner-only success on 20 mazes).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
     """
@@ -111,6 +159,7 @@ class HighLevelPolicy:
         batch_size: int = 64,
         augment_symmetries: bool = True,
         n_directions: int = 16,
+        planning_iterations: int = 0,
         channels: int = 16,
         hidden: int = 128,
     ) -> None:
@@ -125,11 +174,14 @@ class HighLevelPolicy:
         if n_directions < 4 or n_directions % 4:
             raise ValueError(f"n_directions must be a positive multiple of 4, got {n_directions}")
         self.n_directions = n_directions
+        self.planning_iterations = int(planning_iterations)
         self.channels = channels
         self.hidden = hidden
         self.encoder = ObservationEncoder(geometry, pixels_per_cell)
         th.manual_seed(int(rng.integers(2**31)))
-        self.network = SubgoalNetwork(self.encoder.grid_size, 4 + body_dim, n_directions, channels, hidden)
+        self.network = SubgoalNetwork(
+            self.encoder.grid_size, 4 + body_dim, n_directions, channels, hidden, self.planning_iterations
+        )
         self.optimizer = th.optim.Adam(self.network.parameters(), lr=learning_rate)
         self.gradient_steps = 0
 
@@ -214,6 +266,7 @@ class HighLevelPolicy:
             "batch_size": self.batch_size,
             "augment_symmetries": self.augment_symmetries,
             "n_directions": self.n_directions,
+            "planning_iterations": self.planning_iterations,
             "channels": self.channels,
             "hidden": self.hidden,
         }
