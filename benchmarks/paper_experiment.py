@@ -8,6 +8,8 @@ CSV per finished trial, so an interrupted run resumes), then prints the figures 
 * expert cost to reach 60% learner-only success: best active method <= 0.5 x plain DAgger;
 * one 100-episode ant trial <= 15 min on 2 cores.
 
+It also reports the oracle ceiling: the oracle driving the same low level on the same held-out mazes.
+
 Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100]
 """
 
@@ -19,7 +21,10 @@ from pathlib import Path
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.experts import PathOracle
 
 METHODS = ("dagger", "noise", "multi_policy", "reward")
 RESULTS = Path(__file__).parent / "results"
@@ -59,10 +64,14 @@ def main() -> None:
     config = ExperimentConfig(body=args.body, episodes=args.episodes)
     summary = run_experiment(args.methods.split(","), args.seeds, config, out)
     summary["goals"] = goals(summary, args.body)
+    # The ceiling: the oracle itself driving the same low level on the same held-out mazes.
+    env = make_env(config)
+    summary["oracle_ceiling"] = evaluate_high_level(PathOracle.for_env(env), env, episodes=config.final_eval_episodes)
     atomic_write_json(out / "summary.json", summary)
     for method, figures in summary["methods"].items():
         print(method, figures)
     print("goals:", summary["goals"])
+    print("oracle ceiling:", summary["oracle_ceiling"])
     print("trial seconds:", summary["trial_seconds"])
 
 
