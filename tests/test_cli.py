@@ -1,5 +1,6 @@
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -23,9 +24,8 @@ def test_demo_writes_picture_and_reports(tmp_path, capsys):
 
 
 def test_console_script_is_installed():
-    result = subprocess.run(
-        [sys.executable, "-m", "antmaze_hirl.cli", "--help"], capture_output=True, text=True, check=True
-    )
+    script = Path(sys.executable).parent / "antmaze-hirl"
+    result = subprocess.run([str(script), "--help"], capture_output=True, text=True, check=True)
     assert "demo" in result.stdout and "train-low" in result.stdout
 
 

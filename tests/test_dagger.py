@@ -205,11 +205,51 @@ def test_trainer_is_seeded():
 
 
 @pytest.mark.parametrize("strategy", [NoiseQuery(), MultiPolicyQuery(n_policies=2)])
-def test_start_selecting_strategies_start_away_from_the_corner(strategy):
+def test_start_selecting_strategies_start_episodes_where_they_choose(strategy):
     trainer, env = make_trainer(strategy=strategy, gradient_steps=5)
-    trainer.train(2)  # after the first update the strategy picks starts
-    corners = {tuple(env.unwrapped.geometry.cell_to_xy(c)) for c in [(1, 1), (1, 3), (3, 1), (3, 3)]}
-    chosen = strategy.choose_start(trainer._start_query(env.unwrapped.layout.walls, env.unwrapped.goal_xy), trainer.rng)
-    assert chosen is not None and chosen.shape == (2,)
-    assert env.unwrapped.geometry.is_free(env.unwrapped.layout.walls, chosen)
-    assert len(corners) == 4
+    trainer.train(1)  # the first episode starts in a corner; afterwards the strategy picks
+    chosen, starts = [], []
+    choose, reset = strategy.choose_start, env.reset
+    strategy.choose_start = lambda query, rng: chosen.append(choose(query, rng)) or chosen[-1]
+
+    def recording_reset(**kwargs):
+        result = reset(**kwargs)
+        starts.append(env.unwrapped.agent_xy)
+        return result
+
+    env.reset = recording_reset
+    trainer.train(2)
+    assert len(chosen) == len(starts) == 2
+    for choice, start in zip(chosen, starts, strict=True):
+        assert choice is not None
+        np.testing.assert_allclose(start, choice)  # the episode started exactly at the chosen candidate
+
+
+def test_start_selecting_strategies_need_the_heading_policy():
+    class OtherLearner:
+        encoder = None
+
+    env = gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController())
+    with pytest.raises(ValueError, match="strategy 'noise' reads a HighLevelPolicy's outputs; got OtherLearner"):
+        DAggerTrainer(
+            env=env,
+            expert=PathOracle.for_env(env),
+            policy=OtherLearner(),
+            rng=np.random.default_rng(0),
+            strategy=NoiseQuery(),
+        )
+
+
+def test_point_velocity_is_augmented_with_the_maze():
+    encoder = ObservationEncoder(GEOMETRY, pixels_per_cell=4)
+    walls = validate_maze_map("u")
+    agent, goal = GEOMETRY.cell_to_xy((1, 1)) + 0.1, GEOMETRY.cell_to_xy((1, 3))
+    velocity = np.array([0.3, -0.2])
+    batch = encoder.encode([walls] * 32, [agent] * 32, [goal] * 32, [velocity] * 32)
+    augmented, _ = augment(batch, np.zeros((32, 2), np.float32), np.random.default_rng(1), planar_dim=6)
+    original = batch.vectors[0]
+    for vector in augmented.vectors:
+        # a symmetry preserves the angle between the goal offset and the velocity, and both lengths
+        np.testing.assert_allclose(np.dot(vector[:2], vector[4:6]), np.dot(original[:2], original[4:6]), atol=1e-6)
+        np.testing.assert_allclose(np.linalg.norm(vector[4:6]), np.linalg.norm(original[4:6]), atol=1e-6)
+    assert len({tuple(np.round(v[4:6], 4)) for v in augmented.vectors}) > 1

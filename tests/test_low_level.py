@@ -45,14 +45,19 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
 
 def test_resume_continues_step_count_and_buffer(tmp_path):
     config = tiny_config()
-    first = train_low_level("point", "td3", 400, tmp_path, config=config, checkpoint_freq=150, **TINY)
+    tiny = {**TINY, "eval_freq": 100, "eval_episodes": 2}
+    first = train_low_level("point", "td3", 400, tmp_path, config=config, checkpoint_freq=150, **tiny)
     folder, state = latest_checkpoint(tmp_path / "checkpoints")
     assert state["num_timesteps"] == 400 and state["buffer_size"] == first.replay_buffer.size() == 400
-    resumed = train_low_level("point", "td3", 700, tmp_path, config=config, resume=True, checkpoint_freq=150, **TINY)
+    curve_file = tmp_path / "learning_curve.csv"
+    curve_file.write_text(curve_file.read_text() + "500,0.5,2,10.0\n")  # logged after the checkpoint, then killed
+    resumed = train_low_level("point", "td3", 700, tmp_path, config=config, resume=True, checkpoint_freq=150, **tiny)
     assert resumed.num_timesteps == 700
     assert resumed.replay_buffer.size() == 700
     assert latest_checkpoint(tmp_path / "checkpoints")[1]["num_timesteps"] == 700
     assert not folder.exists(), "older checkpoints are removed once a newer one is complete"
+    curve = [int(line.split(",")[0]) for line in curve_file.read_text().splitlines()[1:]]
+    assert curve == [100, 200, 300, 400, 500, 600, 700], "steps re-run after a resume are logged once"
 
 
 def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):
@@ -142,3 +147,22 @@ def test_learning_curve_and_tensorboard_are_written(tmp_path):
     assert any((tmp_path / "tb").rglob("events.out.tfevents.*"))
     (state_file,) = (tmp_path / "checkpoints").glob("ckpt-*/state.json")  # the end-of-training checkpoint
     assert json.loads(state_file.read_text())["num_timesteps"] == 300
+
+
+def test_relative_goal_extractor_uses_offsets_in_the_heading_frame():
+    import torch as th
+
+    from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
+
+    env = ReachEnv("ant")
+    extractor = RelativeGoalExtractor(env.observation_space, quaternion_index=1)
+    obs, _ = env.reset(seed=0)
+    body = th.tensor(obs["observation"][None], dtype=th.float32).repeat(2, 1)
+    body[0, 1:5] = th.tensor([1.0, 0.0, 0.0, 0.0])  # facing +x
+    body[1, 1:5] = th.tensor([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)])  # turned 90 degrees left: +y
+    shift = th.tensor([[5.0, -3.0]]).repeat(2, 1)  # absolute position must not matter
+    features = extractor({"observation": body, "achieved_goal": shift, "desired_goal": shift + th.tensor([0.0, 2.0])})
+    np.testing.assert_allclose(features[:, -2:].numpy(), [[0.0, 2.0], [2.0, 0.0]], atol=1e-5)
+    assert features.shape == (2, 27 + 2)
+    with pytest.raises(ValueError, match="quaternion_index 30 does not fit"):
+        RelativeGoalExtractor(env.observation_space, quaternion_index=30)

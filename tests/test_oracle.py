@@ -74,5 +74,7 @@ def test_oracle_rejects_bad_settings():
     geometry = MazeGeometry(7, 7, 1.0)
     with pytest.raises(ValueError, match="noise_std must be >= 0"):
         PathOracle(geometry, noise_std=-1.0)
+    with pytest.raises(ValueError, match="noise_std > 0 needs an explicit rng"):
+        PathOracle(geometry, noise_std=0.1)
     with pytest.raises(ValueError, match="max_distance must be > 0"):
         PathOracle(geometry, max_distance=0.0)

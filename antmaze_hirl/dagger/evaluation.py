@@ -14,7 +14,8 @@ def evaluate_high_level(policy: Any, env: Any, *, episodes: int, seed: int = HEL
     """Runs ``policy`` alone (no expert) for ``episodes`` episodes from the env's corner starts.
 
     Args:
-        policy: Callable or object with ``predict(observation) -> subgoal``.
+        policy: Callable or object with ``predict(observation)`` returning a subgoal (or SB3's
+            ``(subgoal, state)`` tuple, as :class:`~antmaze_hirl.dagger.agent.HierarchicalAgent` does).
         env: High-level env; subgoals are clipped to its action space.
         episodes: Number of held-out mazes.
         seed: Seed of the first maze; the same seed gives the same mazes.
@@ -22,6 +23,8 @@ def evaluate_high_level(policy: Any, env: Any, *, episodes: int, seed: int = HEL
     Returns:
         ``{"success_rate", "mean_attempts", "mean_low_level_steps", "episodes"}``.
     """
+    if episodes < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
     act = policy.predict if hasattr(policy, "predict") else policy
     space = env.unwrapped.action_space
     successes, attempts, steps = 0, [], []
@@ -29,7 +32,10 @@ def evaluate_high_level(policy: Any, env: Any, *, episodes: int, seed: int = HEL
         obs, _ = env.reset(seed=seed + episode)
         done, info = False, {}
         while not done:
-            obs, _, terminated, truncated, info = env.step(np.clip(act(obs), space.low, space.high))
+            action = act(obs)
+            if isinstance(action, tuple):  # SB3-style predict: (action, state)
+                action = action[0]
+            obs, _, terminated, truncated, info = env.step(np.clip(action, space.low, space.high))
             done = terminated or truncated
         successes += int(info["is_success"])
         attempts.append(info["attempts"])

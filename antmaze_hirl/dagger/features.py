@@ -112,11 +112,15 @@ def transform_grids(grids: np.ndarray, k: int, flip: bool) -> np.ndarray:
     return np.ascontiguousarray(np.rot90(out, k=k, axes=(-2, -1)))
 
 
-def augment(batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator) -> tuple[EncodedBatch, np.ndarray]:
-    """Applies one random symmetry per sample to grids, planar features and planar labels.
+def augment(
+    batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator, *, planar_dim: int = PLANAR_DIM
+) -> tuple[EncodedBatch, np.ndarray]:
+    """Applies one random symmetry per sample to grids, the first ``planar_dim`` features and labels.
 
-    Body observations (after the planar features) are left as they are: they hold no direction the
-    subgoal depends on strongly, and their frames are body-specific.
+    ``planar_dim`` counts the world-frame xy pairs at the start of the feature vector: the goal offset
+    and in-cell offset, plus the body's velocity for the point mass (its whole body state). The ant's
+    body state (torso orientation, joint state) has no planar form and stays as it is: an approximation
+    that only matters in so far as the subgoal depends on which way the torso faces.
     """
     grids, vectors, labels = batch.grids.copy(), batch.vectors.copy(), np.array(labels, dtype=np.float32)
     choices = rng.integers(len(SYMMETRIES), size=len(batch))
@@ -125,6 +129,6 @@ def augment(batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator) -
         if not members.any() or (k == 0 and not flip):
             continue
         grids[members] = transform_grids(grids[members], k, flip)
-        vectors[members, :PLANAR_DIM] = transform_planar(vectors[members, :PLANAR_DIM], k, flip)
+        vectors[members, :planar_dim] = transform_planar(vectors[members, :planar_dim], k, flip)
         labels[members] = transform_planar(labels[members], k, flip)
     return EncodedBatch(grids, vectors), labels

@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import torch as th
 from imitation.algorithms import bc
 from imitation.data import types
 from imitation.util import logger as imitation_logger
@@ -56,7 +57,8 @@ class BCLearner:
 
     Args:
         env: The high-level env (for its spaces and geometry).
-        rng: Seeds BC's minibatches.
+        rng: Seeds the policy initialisation and, before each fit, torch's global RNG that
+            ``imitation``'s data loader shuffles with (it takes no generator of its own).
         batch_size: BC minibatch size.
         net_arch: Policy MLP sizes after SB3's image/vector extractor.
     """
@@ -64,6 +66,8 @@ class BCLearner:
     def __init__(self, env: Any, *, rng: np.random.Generator, batch_size: int = 32, net_arch: list[int] | None = None):
         inner = env.unwrapped
         self.encoder = ObservationEncoder(inner.geometry, inner.renderer.pixels_per_cell)
+        self.rng = rng
+        th.manual_seed(int(rng.integers(2**31)))
         policy = MultiInputActorCriticPolicy(
             inner.observation_space, inner.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
         )
@@ -80,6 +84,7 @@ class BCLearner:
         """Runs ``steps`` BC minibatches on all labels so far (none while D is smaller than a minibatch)."""
         if steps <= 0 or len(dataset) < self.bc.batch_size:
             return
+        th.manual_seed(int(self.rng.integers(2**31)))
         self.bc.set_demonstrations(to_transitions(dataset))
         self.bc.train(n_batches=steps, progress_bar=False)
 

@@ -14,7 +14,7 @@ from torch import nn
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
-from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder, augment
+from antmaze_hirl.dagger.features import PLANAR_DIM, EncodedBatch, ObservationEncoder, augment
 from antmaze_hirl.envs.geometry import MazeGeometry
 
 FORMAT = "antmaze_hirl.high_level_policy/2"
@@ -178,10 +178,11 @@ class HighLevelPolicy:
         self.channels = channels
         self.hidden = hidden
         self.encoder = ObservationEncoder(geometry, pixels_per_cell)
-        th.manual_seed(int(rng.integers(2**31)))
-        self.network = SubgoalNetwork(
-            self.encoder.grid_size, 4 + body_dim, n_directions, channels, hidden, self.planning_iterations
-        )
+        with th.random.fork_rng():  # seed the initialisation without touching torch's global RNG
+            th.manual_seed(int(rng.integers(2**31)))
+            self.network = SubgoalNetwork(
+                self.encoder.grid_size, 4 + body_dim, n_directions, channels, hidden, self.planning_iterations
+            )
         self.optimizer = th.optim.Adam(self.network.parameters(), lr=learning_rate)
         self.gradient_steps = 0
 
@@ -196,6 +197,11 @@ class HighLevelPolicy:
             rng=rng,
             **kwargs,
         )
+
+    @property
+    def planar_dim(self) -> int:
+        """Leading world-frame xy features: goal and in-cell offsets, and a 2-D body state (the point's velocity)."""
+        return PLANAR_DIM + (2 if self.body_dim == 2 else 0)
 
     def offsets(self, batch: EncodedBatch) -> np.ndarray:
         """Normalised offsets (``[-1, 1]^2``) for an encoded batch."""
@@ -238,7 +244,7 @@ class HighLevelPolicy:
             minibatch = EncodedBatch(batch.grids[index], batch.vectors[index])
             labels = targets[index]
             if self.augment_symmetries:
-                minibatch, labels = augment(minibatch, labels, self.rng)
+                minibatch, labels = augment(minibatch, labels, self.rng, planar_dim=self.planar_dim)
             logits, distance = self.network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
             bins = th.from_numpy(direction_bins(labels, self.n_directions))
             lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
@@ -298,10 +304,14 @@ class HighLevelPolicy:
                 weights = archive.read("weights.pt")
         except (zipfile.BadZipFile, KeyError, json.JSONDecodeError) as error:
             raise ValueError(f"{path} is not a high-level policy file: {error}") from error
-        if meta.get("format") != FORMAT:
-            raise ValueError(f"{path} has format {meta.get('format')!r}, expected {FORMAT!r}")
-        config = dict(meta["config"])
-        geometry = MazeGeometry(*config.pop("geometry"))
-        policy = cls(geometry, rng=rng if rng is not None else np.random.default_rng(0), **config)
-        policy.network.load_state_dict(th.load(io.BytesIO(weights), weights_only=True))
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+            found = meta.get("format") if isinstance(meta, dict) else None
+            raise ValueError(f"{path} has format {found!r}, expected {FORMAT!r}")
+        try:
+            config = dict(meta["config"])
+            geometry = MazeGeometry(*config.pop("geometry"))
+            policy = cls(geometry, rng=rng if rng is not None else np.random.default_rng(0), **config)
+            policy.network.load_state_dict(th.load(io.BytesIO(weights), weights_only=True))
+        except (KeyError, TypeError, RuntimeError) as error:
+            raise ValueError(f"{path} holds settings or weights this version cannot load: {error}") from error
         return policy

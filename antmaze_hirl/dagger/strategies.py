@@ -105,8 +105,9 @@ class NoiseQuery(QueryStrategy):
 class MultiPolicyQuery(QueryStrategy):
     """Multi-policy start selection (Alg. 3, eq. 2).
 
-    Keeps ``n_policies`` extra learners, each refit on a bootstrap resample of D after every update;
-    the episode starts at the candidate where their subgoals disagree most.
+    Keeps ``n_policies`` extra learners; after every update each trains on for the trainer's gradient
+    steps on a fresh bootstrap resample of D (warm-started, as the main learner is). The episode starts
+    at the candidate where their subgoals disagree most.
 
     Args:
         n_policies: Ensemble size.
@@ -126,7 +127,7 @@ class MultiPolicyQuery(QueryStrategy):
         self.members: list[HighLevelPolicy] = []
 
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
-        """Refits every member on its own bootstrap resample of the dataset."""
+        """Trains every member on its own bootstrap resample of the dataset."""
         if self.make_policy is None:
             raise ValueError("MultiPolicyQuery needs make_policy (the trainer sets it)")
         if not self.members:

@@ -13,7 +13,7 @@ from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.features import ObservationEncoder
 from antmaze_hirl.dagger.policy import HighLevelPolicy
 from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule
-from antmaze_hirl.dagger.strategies import MultiPolicyQuery, QueryStrategy, StartQuery
+from antmaze_hirl.dagger.strategies import MultiPolicyQuery, NoiseQuery, QueryStrategy, StartQuery
 from antmaze_hirl.experts.base import Expert
 
 Mixing = Literal["blend", "switch"]
@@ -113,6 +113,10 @@ class DAggerTrainer:
         self.policy = policy
         self.rng = rng
         self.strategy = strategy if strategy is not None else QueryStrategy()
+        if isinstance(self.strategy, NoiseQuery | MultiPolicyQuery) and not isinstance(policy, HighLevelPolicy):
+            raise ValueError(
+                f"strategy {self.strategy.name!r} reads a HighLevelPolicy's outputs; got {type(policy).__name__}"
+            )
         if isinstance(self.strategy, MultiPolicyQuery) and self.strategy.make_policy is None:
             self.strategy.make_policy = self._member_factory()
         self.beta_schedule = beta_schedule if beta_schedule is not None else ExponentialBetaSchedule()
@@ -157,7 +161,8 @@ class DAggerTrainer:
         """Runs one training episode, aggregates its labels and updates the learner when due."""
         inner = self.env.unwrapped
         layout = inner.sample_layout(self.rng)
-        goal_xy = inner.geometry.cell_to_xy(layout.goal_cell)
+        noise = self.rng.uniform(-inner.position_noise, inner.position_noise, size=2) * inner.geometry.scale
+        goal_xy = inner.geometry.cell_to_xy(layout.goal_cell) + noise  # as the env places goals
         options: dict[str, Any] = {"layout": layout, "goal_xy": goal_xy}
         if self._rest_body is not None:
             start = self.strategy.choose_start(self._start_query(layout.walls, goal_xy), self.rng)

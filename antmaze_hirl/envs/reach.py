@@ -35,8 +35,8 @@ class ReachEnv(GoalEnv, EzPickle):
     """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
 
     Each episode places the body in a random free cell of ``maze_map`` (or where ``options`` say) and
-    samples a subgoal uniformly in the disk of radius ``goal_radius`` around it, in free space and in
-    line of sight (a straight walk can reach it). The episode is truncated after ``horizon`` steps.
+    samples a subgoal uniformly (by area) in the ring ``min_goal_distance..goal_radius`` around it, in
+    free space and in line of sight (a straight walk can reach it). The episode is truncated after ``horizon`` steps.
 
     Observation ``Dict``:
         * ``observation``: body state without its xy (ant: 27 values, 105 with contact forces;

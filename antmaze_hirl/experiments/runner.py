@@ -19,6 +19,7 @@ from tqdm.auto import tqdm
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
 from antmaze_hirl.dagger.strategies import make_strategy
+from antmaze_hirl.envs.simulator import body_spec
 from antmaze_hirl.experiments.plots import plot_panels
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experts.oracle import PathOracle
@@ -67,6 +68,21 @@ class ExperimentConfig:
     episodes_per_update: int = 1
     decay: float = 2.0
     mixing: str = "blend"
+
+    def __post_init__(self) -> None:
+        body_spec(self.body)
+        for name in (
+            "episodes",
+            "eval_every",
+            "eval_episodes",
+            "final_eval_episodes",
+            "maze_size",
+            "episodes_per_update",
+        ):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if self.mixing not in ("blend", "switch"):
+            raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
 
 
 def make_env(config: ExperimentConfig, low_level: Any = None) -> gym.Env:

@@ -71,7 +71,7 @@ class PathOracle:
             Default one cell.
         clearance: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
         noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
-        rng: Source of the noise.
+        rng: Source of the noise (required when ``noise_std > 0``).
 
     """
 
@@ -87,6 +87,8 @@ class PathOracle:
     ) -> None:
         if noise_std < 0:
             raise ValueError(f"noise_std must be >= 0, got {noise_std}")
+        if noise_std > 0 and rng is None:
+            raise ValueError("noise_std > 0 needs an explicit rng (np.random.Generator) so labels are reproducible")
         self.geometry = geometry
         self.renderer = BirdseyeRenderer(geometry, pixels_per_cell)
         self.max_distance = float(max_distance if max_distance is not None else geometry.scale)
@@ -94,7 +96,7 @@ class PathOracle:
             raise ValueError(f"max_distance must be > 0, got {max_distance}")
         self.clearance = float(clearance if clearance is not None else 0.2 * geometry.scale)
         self.noise_std = float(noise_std)
-        self.rng = rng if rng is not None else np.random.default_rng()
+        self.rng = rng
 
     @classmethod
     def for_env(cls, env: Any, **kwargs: Any) -> PathOracle:

@@ -46,7 +46,6 @@ def save_checkpoint(model: OffPolicyAlgorithm, directory: str | Path, run_state:
 
     """
     directory = Path(directory)
-    final = directory / f"ckpt-{model.num_timesteps}"
     staging = Path(tempfile.mkdtemp(dir=directory, prefix=".staging-"))
     model.save(staging / MODEL_FILE)
     model.save_replay_buffer(staging / BUFFER_FILE)
@@ -57,14 +56,27 @@ def save_checkpoint(model: OffPolicyAlgorithm, directory: str | Path, run_state:
         "sha256": {name: _sha256(staging / name) for name in (MODEL_FILE, BUFFER_FILE)},
     }
     (staging / STATE_FILE).write_text(json.dumps(state, indent=2))
-    if final.exists():
-        shutil.rmtree(final)
+    for name in (MODEL_FILE, BUFFER_FILE, STATE_FILE):
+        _fsync(staging / name)
+    final = directory / f"ckpt-{model.num_timesteps}"
+    if final.exists():  # a second save at the same step count: never touch the folder the pointer may name
+        final = directory / f"ckpt-{model.num_timesteps}-{staging.name.removeprefix('.staging-')}"
     os.replace(staging, final)
+    _fsync(directory)
     previous = _pointed_dir(directory)
     atomic_write_text(directory / POINTER, json.dumps({"checkpoint": final.name}))
     if previous is not None and previous != final and previous.exists():
         shutil.rmtree(previous)
     return final
+
+
+def _fsync(path: Path) -> None:
+    # Durable before the pointer moves: a power cut must not leave the pointer naming unwritten files.
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def _pointed_dir(directory: Path) -> Path | None:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from antmaze_hirl.atomic_io import atomic_write_text
 from antmaze_hirl.envs.controllers import as_controller
 from antmaze_hirl.envs.reach import ReachEnv
 
@@ -28,13 +30,15 @@ def evaluate_reach(
     Args:
         policy: SB3 model or callable goal observation -> action (acting deterministically).
         env: The reach env; its ``goal_radius`` is the largest subgoal distance tested.
-        episodes: Number of attempts.
+        episodes: Number of attempts (>= 1).
         seed: Base seed; the same seed gives the same subgoals.
 
     Returns:
         ``{"success_rate", "episodes", "mean_steps"}``, steps counted to first success (H on failure).
 
     """
+    if episodes < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
     controller = as_controller(policy)
     successes, steps_used = 0, []
     for episode in range(episodes):
@@ -47,6 +51,17 @@ def evaluate_reach(
         successes += int(reached)
         steps_used.append(steps if reached else env.horizon)
     return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": float(np.mean(steps_used))}
+
+
+CURVE_COLUMNS = ["timesteps", "success_rate", "episodes", "mean_steps"]
+
+
+def _csv_text(rows: list[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=CURVE_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return buffer.getvalue()
 
 
 class SuccessRateCallback(BaseCallback):
@@ -82,6 +97,11 @@ class SuccessRateCallback(BaseCallback):
 
     def _init_callback(self) -> None:
         self._last_eval = self.model.num_timesteps
+        if self.csv_path is not None and self.csv_path.exists():
+            # A resumed run repeats the steps after its checkpoint: drop the rows it will write again.
+            with self.csv_path.open() as handle:
+                rows = [row for row in csv.DictReader(handle) if int(row["timesteps"]) <= self._last_eval]
+            atomic_write_text(self.csv_path, _csv_text(rows))
 
     def _on_step(self) -> bool:
         if self.model.num_timesteps - self._last_eval >= self.eval_freq:
@@ -97,13 +117,8 @@ class SuccessRateCallback(BaseCallback):
         self.logger.record("eval/success_rate", result["success_rate"])
         self.logger.record("eval/mean_steps", result["mean_steps"])
         if self.csv_path is not None:
-            new_file = not self.csv_path.exists()
-            self.csv_path.parent.mkdir(parents=True, exist_ok=True)
-            with self.csv_path.open("a", newline="") as handle:
-                writer = csv.DictWriter(handle, fieldnames=["timesteps", "success_rate", "episodes", "mean_steps"])
-                if new_file:
-                    writer.writeheader()
-                writer.writerow(row)
+            previous = self.csv_path.read_text() if self.csv_path.exists() else _csv_text([])
+            atomic_write_text(self.csv_path, previous + _csv_text([row]).split("\n", 1)[1])
         if self.verbose:
             print(f"eval at {row['timesteps']}: success_rate={result['success_rate']:.3f}")
         return row

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -141,8 +142,18 @@ def train_low_level(
     remaining = total_timesteps - model.num_timesteps
     if remaining > 0:
         model.learn(remaining, callback=callbacks, reset_num_timesteps=False, progress_bar=progress_bar)
-    model.save(out_dir / "policy.zip", exclude=["replay_buffer", "env"])
+    save_policy(model, out_dir / "policy.zip")
     return model
+
+
+def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
+    """Saves the model without replay buffer or env, atomically (temp file in the same folder + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    staging = path.with_name(f".{path.stem}.tmp.zip")
+    model.save(staging, exclude=["replay_buffer", "env"])
+    os.replace(staging, path)
+    return path
 
 
 def set_torch_threads(threads: int) -> None:
