@@ -37,6 +37,7 @@ def test_summary_over_seeds():
     assert summary["a"]["cost_to_60_percent"] == {"median": 5.0, "seeds_reached": 1}
     assert summary["b"]["mean_attempts_per_episode"] == 9
     assert summary["b"]["cost_to_60_percent"]["median"] is None
+    assert summarise(rows, ["c"]) == {"c": {"seeds": 0}}
 
 
 def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):

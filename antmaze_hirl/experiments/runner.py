@@ -189,12 +189,19 @@ def run_experiment(
             seconds = round(time.perf_counter() - start, 1)
             atomic_write_json(_trial_path(out_dir, method, seed).with_suffix(".json"), {"seconds": seconds})
             atomic_write_text(_trial_path(out_dir, method, seed), rows_to_csv(rows))
-    rows = [row for m in methods for s in range(seeds) for row in read_rows(_trial_path(out_dir, m, s))]
+            write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
+    return write_reports(out_dir, methods, seeds, config)
+
+
+def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: ExperimentConfig) -> dict[str, Any]:
+    """Writes ``episodes.csv``, ``summary.json`` and ``panels.png`` from the finished trials on disk."""
+    done = [(m, s) for m in methods for s in range(seeds) if _trial_path(out_dir, m, s).exists()]
+    rows = [row for m, s in done for row in read_rows(_trial_path(out_dir, m, s))]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
     seconds = {
         path.stem: json.loads(path.read_text())["seconds"] for path in sorted((out_dir / "trials").glob("*.json"))
     }
-    summary = {"config": settings, "methods": summarise(rows, methods), "trial_seconds": seconds}
+    summary = {"config": asdict(config), "methods": summarise(rows, methods), "trial_seconds": seconds}
     atomic_write_json(out_dir / "summary.json", summary)
     plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
     return summary

@@ -38,6 +38,9 @@ def summarise(rows: Sequence[dict[str, Any]], methods: Sequence[str]) -> dict[st
         for row in rows:
             if row["method"] == method:
                 trials.setdefault(row["seed"], []).append(row)
+        if not trials:
+            summary[method] = {"seeds": 0}
+            continue
         finals = [trial[-1]["eval_success"] for trial in trials.values()]
         costs = [cost for trial in trials.values() if (cost := cost_to_reach(trial)) is not None]
         method_rows = [row for trial in trials.values() for row in trial]
