@@ -7,10 +7,10 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.plotting import plot_episode
+from antmaze_hirl.rollout import play_episode
 
 
 @dataclass(frozen=True)
@@ -34,26 +34,18 @@ def run_demo(body: str = "point", seed: int = 0, out_dir: str | Path = "runs/dem
 
     """
     env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", **env_kwargs)
-    oracle = PathOracle.for_env(env)
-    obs, _ = env.reset(seed=seed)
-    inner = env.unwrapped
-    paths, subgoals = [], []
-    done = False
-    while not done:
-        obs, _, terminated, truncated, info = env.step(oracle.label(obs))
-        paths.append(info["agent_path"])
-        subgoals.append(info["subgoal"])
-        done = terminated or truncated
+    episode = play_episode(env, PathOracle.for_env(env), seed=seed)
     env.close()
-    success = bool(info["is_success"])
+    inner = env.unwrapped
+    steps = int(episode.info["total_low_level_steps"])
     picture = plot_episode(
         inner.layout.walls,
         inner.geometry,
-        np.concatenate(paths),
-        subgoals,
+        episode.path,
+        episode.subgoals,
         inner.goal_xy,
         Path(out_dir) / "demo.png",
-        title=f"{body}, seed {seed}: {'success' if success else 'failure'}, {len(subgoals)} subgoals, "
-        f"{info['total_low_level_steps']} steps",
+        title=f"{body}, seed {seed}: {'success' if episode.success else 'failure'}, "
+        f"{len(episode.subgoals)} subgoals, {steps} steps",
     )
-    return DemoResult(success, len(subgoals), int(info["total_low_level_steps"]), picture)
+    return DemoResult(episode.success, len(episode.subgoals), steps, picture)

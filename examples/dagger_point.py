@@ -15,6 +15,7 @@ import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, NoiseQuery, evaluate_high_level
 from antmaze_hirl.plotting import plot_episode
+from antmaze_hirl.rollout import play_episode
 
 parser = argparse.ArgumentParser()
 parser.add_argument("--episodes", type=int, default=30)
@@ -38,22 +39,15 @@ print("learner-only:", evaluate_high_level(policy, eval_env, episodes=50))
 policy.save("runs/examples/high_level_point.zip")
 
 # 4. One episode, drawn.
-obs, _ = eval_env.reset(seed=7)
-paths, subgoals, done = [], [], False
-while not done:
-    subgoal = np.clip(policy.predict(obs), eval_env.action_space.low, eval_env.action_space.high)
-    obs, _, terminated, truncated, info = eval_env.step(subgoal)
-    paths.append(info["agent_path"])
-    subgoals.append(info["subgoal"])
-    done = terminated or truncated
+episode = play_episode(eval_env, policy, seed=7)
 inner = eval_env.unwrapped
 picture = plot_episode(
     inner.layout.walls,
     inner.geometry,
-    np.concatenate(paths),
-    subgoals,
+    episode.path,
+    episode.subgoals,
     inner.goal_xy,
     "runs/examples/dagger_point.png",
-    title=f"learner alone: success={info['is_success']}",
+    title=f"learner alone: success={episode.success}",
 )
 print("picture:", picture)

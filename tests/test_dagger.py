@@ -196,6 +196,8 @@ def test_policy_save_load_round_trip_and_bad_files(tmp_path, planning_iterations
         HighLevelPolicy.load(tmp_path / "missing.zip")
     agent = HierarchicalAgent(loaded, PointGoToController())
     np.testing.assert_array_equal(agent.predict(obs)[0], loaded.predict(obs))
+    # SB3-style (subgoal, state) predictions evaluate like plain ones
+    assert evaluate_high_level(agent, env, episodes=2) == evaluate_high_level(loaded, env, episodes=2)
 
 
 def test_trainer_is_seeded():

@@ -6,6 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from antmaze_hirl.rollout import play_episode
+
 HELD_OUT_SEED = 1_000_000
 """Episode ``i`` of an evaluation resets with seed ``HELD_OUT_SEED + i``: mazes no training run draws."""
 
@@ -25,24 +27,10 @@ def evaluate_high_level(policy: Any, env: Any, *, episodes: int, seed: int = HEL
     """
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    act = policy.predict if hasattr(policy, "predict") else policy
-    space = env.unwrapped.action_space
-    successes, attempts, steps = 0, [], []
-    for episode in range(episodes):
-        obs, _ = env.reset(seed=seed + episode)
-        done, info = False, {}
-        while not done:
-            action = act(obs)
-            if isinstance(action, tuple):  # SB3-style predict: (action, state)
-                action = action[0]
-            obs, _, terminated, truncated, info = env.step(np.clip(action, space.low, space.high))
-            done = terminated or truncated
-        successes += int(info["is_success"])
-        attempts.append(info["attempts"])
-        steps.append(info["total_low_level_steps"])
+    played = [play_episode(env, policy, seed=seed + episode).info for episode in range(episodes)]
     return {
-        "success_rate": successes / episodes,
-        "mean_attempts": float(np.mean(attempts)),
-        "mean_low_level_steps": float(np.mean(steps)),
+        "success_rate": float(np.mean([info["is_success"] for info in played])),
+        "mean_attempts": float(np.mean([info["attempts"] for info in played])),
+        "mean_low_level_steps": float(np.mean([info["total_low_level_steps"] for info in played])),
         "episodes": episodes,
     }

@@ -1,0 +1,52 @@
+"""One high-level episode played to its end, with what a picture or a measure needs."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class HighLevelEpisode:
+    """What happened in one high-level episode.
+
+    Attributes:
+        path: Body xy after every low-level step, ``(steps + 1, 2)``.
+        subgoals: Executed subgoals, ``(attempts, 2)``.
+        info: The env's last ``info`` (``is_success``, ``attempts``, ``total_low_level_steps``, ...).
+    """
+
+    path: np.ndarray
+    subgoals: np.ndarray
+    info: dict[str, Any]
+
+    @property
+    def success(self) -> bool:
+        """Whether the goal was reached."""
+        return bool(self.info["is_success"])
+
+
+def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevelEpisode:
+    """Resets ``env`` with ``seed`` and lets ``policy`` choose subgoals (clipped to the maze) until the end.
+
+    Args:
+        env: A high-level maze env.
+        policy: Callable ``observation -> subgoal``, or an object with ``predict`` returning a subgoal or
+            SB3's ``(subgoal, state)`` tuple.
+        seed: Seed of the reset.
+    """
+    act = policy.predict if hasattr(policy, "predict") else policy
+    space = env.unwrapped.action_space
+    obs, _ = env.reset(seed=seed)
+    paths, subgoals, done, info = [], [], False, {}
+    while not done:
+        action = act(obs)
+        if isinstance(action, tuple):
+            action = action[0]
+        obs, _, terminated, truncated, info = env.step(np.clip(action, space.low, space.high))
+        paths.append(info["agent_path"])
+        subgoals.append(info["subgoal"])
+        done = terminated or truncated
+    return HighLevelEpisode(np.concatenate(paths), np.asarray(subgoals), info)
