@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 
 from antmaze_hirl.experts.oracle import PathOracle
-from antmaze_hirl.plotting import plot_episode
+from antmaze_hirl.plotting import plot_played_episode
 from antmaze_hirl.rollout import play_episode
 
 
@@ -36,16 +36,12 @@ def run_demo(body: str = "point", seed: int = 0, out_dir: str | Path = "runs/dem
     env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", **env_kwargs)
     episode = play_episode(env, PathOracle.for_env(env), seed=seed)
     env.close()
-    inner = env.unwrapped
     steps = int(episode.info["total_low_level_steps"])
-    picture = plot_episode(
-        inner.layout.walls,
-        inner.geometry,
-        episode.path,
-        episode.subgoals,
-        inner.goal_xy,
+    outcome = "success" if episode.success else "failure"
+    picture = plot_played_episode(
+        env,
+        episode,
         Path(out_dir) / "demo.png",
-        title=f"{body}, seed {seed}: {'success' if episode.success else 'failure'}, "
-        f"{len(episode.subgoals)} subgoals, {steps} steps",
+        title=f"{body}, seed {seed}: {outcome}, {len(episode.subgoals)} subgoals, {steps} steps",
     )
     return DemoResult(episode.success, len(episode.subgoals), steps, picture)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -12,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.rollout import HighLevelEpisode
 
 
 def plot_episode(
@@ -77,3 +79,11 @@ def plot_learning_curve(
     fig.savefig(out_file, dpi=120)
     plt.close(fig)
     return out_file
+
+
+def plot_played_episode(env: Any, episode: HighLevelEpisode, out_file: str | Path, *, title: str = "") -> Path:
+    """:func:`plot_episode` for an episode just played in ``env`` (its current layout and goal)."""
+    inner = env.unwrapped
+    return plot_episode(
+        inner.layout.walls, inner.geometry, episode.path, episode.subgoals, inner.goal_xy, out_file, title=title
+    )

@@ -14,7 +14,7 @@ import torch
 import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, NoiseQuery, evaluate_high_level
-from antmaze_hirl.plotting import plot_episode
+from antmaze_hirl.plotting import plot_played_episode
 from antmaze_hirl.rollout import play_episode
 
 parser = argparse.ArgumentParser()
@@ -40,14 +40,7 @@ policy.save("runs/examples/high_level_point.zip")
 
 # 4. One episode, drawn.
 episode = play_episode(eval_env, policy, seed=7)
-inner = eval_env.unwrapped
-picture = plot_episode(
-    inner.layout.walls,
-    inner.geometry,
-    episode.path,
-    episode.subgoals,
-    inner.goal_xy,
-    "runs/examples/dagger_point.png",
-    title=f"learner alone: success={episode.success}",
+picture = plot_played_episode(
+    eval_env, episode, "runs/examples/dagger_point.png", title=f"learner alone: success={episode.success}"
 )
 print("picture:", picture)
