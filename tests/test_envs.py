@@ -213,3 +213,15 @@ def test_no_temporary_maze_xml_is_left_behind(body):
     high.reset(seed=1)  # a new layout rebuilds the model
     for simulator in (env.sim, high.unwrapped.reach.sim):
         assert not os.path.exists(simulator._maze_env.tmp_xml_file_path)
+
+
+def test_terminate_on_flip_catches_an_ant_on_its_back():
+    env = ReachEnv("ant", terminate_on_flip=True)
+    env.reset(seed=0)
+    assert not env.step(np.zeros(8))[2]
+    data = env.sim.data
+    qpos, qvel = data.qpos.copy(), np.zeros_like(data.qvel)
+    qpos[2], qpos[3:7] = 0.27, [0.0, 1.0, 0.0, 0.0]  # rolled 180 degrees about x: on its back, torso above 0.2 m
+    env.sim._mujoco_env.set_state(qpos, qvel)
+    assert env.sim.is_flipped
+    assert env.step(np.zeros(8))[2]

@@ -62,7 +62,7 @@ class ReachEnv(GoalEnv, EzPickle):
         action_scale: Multiplier in ``(0, 1]`` on actions. The paper's rllab Ant used a (-30, 30)
             control range with gear 1; Gymnasium's Ant-v5, used here, has (-1, 1) with gear 150, so the
             full range (scale 1) is 150 N m peak torque and smaller scales mimic weaker motors.
-        terminate_on_flip: Ant only: end the episode when the torso drops below 0.2 m (fallen or flipped).
+        terminate_on_flip: Ant only: end the episode when the torso faces down or drops below 0.2 m.
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
 
@@ -236,7 +236,7 @@ class ReachEnv(GoalEnv, EzPickle):
         obs = self._get_obs()
         info = {"is_success": self._is_success()}
         reward = float(self.compute_reward(self._xy, self._goal, info))
-        terminated = self.terminate_on_flip and self.sim.torso_height < 0.2
+        terminated = self.terminate_on_flip and self.sim.is_flipped
         truncated = self._steps >= self.horizon
         return obs, reward, terminated, truncated, info
 

@@ -113,6 +113,19 @@ class MazeSimulator:
         """Height of the body's root above the floor, metres."""
         return float(self._mujoco_env.data.qpos[2]) if self.body == "ant" else 0.0
 
+    @property
+    def is_flipped(self) -> bool:
+        """Ant only: whether the torso faces down or lies on the floor.
+
+        An ant on its back rests at about 0.27 m, above any sensible height threshold, so the torso's
+        up axis is checked too: its world z component is ``1 - 2 (qx^2 + qy^2)`` for quaternion
+        ``(qw, qx, qy, qz)``.
+        """
+        if self.body != "ant":
+            return False
+        _, qx, qy, _ = self._mujoco_env.data.qpos[3:7]
+        return bool(1 - 2 * (qx * qx + qy * qy) < 0 or self.torso_height < 0.2)
+
     def close(self) -> None:
         """Frees the MuJoCo renderer, if one was opened."""
         self._mujoco_env.close()
