@@ -161,8 +161,7 @@ class DAggerTrainer:
         """Runs one training episode, aggregates its labels and updates the learner when due."""
         inner = self.env.unwrapped
         layout = inner.sample_layout(self.rng)
-        noise = self.rng.uniform(-inner.position_noise, inner.position_noise, size=2) * inner.geometry.scale
-        goal_xy = inner.geometry.cell_to_xy(layout.goal_cell) + noise  # as the env places goals
+        goal_xy = inner.noisy_cell_centre(layout.goal_cell, self.rng)
         options: dict[str, Any] = {"layout": layout, "goal_xy": goal_xy}
         if self._rest_body is not None:
             start = self.strategy.choose_start(self._start_query(layout.walls, goal_xy), self.rng)

@@ -13,7 +13,7 @@ from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import LowLevelController, PredictController, as_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
-from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector
+from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
 from antmaze_hirl.envs.simulator import Body, body_spec
 
 STATE_AGENT_XY = slice(0, 2)
@@ -180,9 +180,12 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.layout = layout
         start = options.get("start_xy")
         if start is None:
-            start = self._noisy_centre(layout.start_cell)
+            start = self.noisy_cell_centre(layout.start_cell, self.np_random)
         goal = options.get("goal_xy")
-        self.goal_xy = self._noisy_centre(layout.goal_cell) if goal is None else self._free_xy(goal, "goal_xy")
+        if goal is None:
+            self.goal_xy = self.noisy_cell_centre(layout.goal_cell, self.np_random)
+        else:
+            self.goal_xy = as_free_point(goal, self.geometry, layout.walls, "goal_xy")
         self.reach.reset(seed=int(self.np_random.integers(2**31)), options={"start_xy": start, "goal": self.goal_xy})
         self.attempts = 0
         self.total_low_level_steps = 0
@@ -253,15 +256,13 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             )
         return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_distance)
 
-    def _noisy_centre(self, cell: tuple[int, int]) -> np.ndarray:
-        noise = self.np_random.uniform(-self.position_noise, self.position_noise, size=2)
-        return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
+    def noisy_cell_centre(self, cell: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
+        """The centre of ``cell`` plus uniform ``±position_noise`` cells of noise from ``rng``.
 
-    def _free_xy(self, value: Any, name: str) -> np.ndarray:
-        point = as_finite_vector(value, 2, name)
-        if not self.geometry.is_free(self.layout.walls, point):
-            raise ValueError(f"{name} {point.tolist()} is not in a free cell of the maze")
-        return point
+        This is how :meth:`reset` places starts and goals; the DAgger trainer places its goals the same way.
+        """
+        noise = rng.uniform(-self.position_noise, self.position_noise, size=2)
+        return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
 
     def _goal_reached(self) -> bool:
         return bool(np.linalg.norm(self.reach.agent_xy - self.goal_xy) <= self.goal_threshold)

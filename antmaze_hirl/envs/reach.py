@@ -10,6 +10,7 @@ from gymnasium.utils.ezpickle import EzPickle
 from gymnasium_robotics.core import GoalEnv
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeMap, validate_maze_map
 from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
 
@@ -29,6 +30,18 @@ def as_finite_vector(value: Any, size: int, name: str) -> np.ndarray:
     if not np.all(np.isfinite(vector)):
         raise ValueError(f"{name} must be finite, got {vector.tolist()}")
     return vector
+
+
+def as_free_point(value: Any, geometry: MazeGeometry, walls: np.ndarray, name: str) -> np.ndarray:
+    """``value`` as a finite xy that lies in a free cell of ``walls``.
+
+    Raises:
+        ValueError: Naming ``name`` and the value if it is malformed, NaN/inf, or not in a free cell.
+    """
+    point = as_finite_vector(value, 2, name)
+    if not geometry.is_free(walls, point):
+        raise ValueError(f"{name} {point.tolist()} is not in a free cell of the maze")
+    return point
 
 
 class ReachEnv(GoalEnv, EzPickle):
@@ -187,14 +200,14 @@ class ReachEnv(GoalEnv, EzPickle):
         options = options or {}
         geometry = self.sim.geometry
         if options.get("start_xy") is not None:
-            start = self._free_point(options["start_xy"], "start_xy")
+            start = as_free_point(options["start_xy"], geometry, self.walls, "start_xy")
         else:
             free = np.argwhere(~self.walls)
             cell = free[self.np_random.integers(len(free))]
             start = geometry.cell_to_xy(cell) + self.np_random.uniform(-0.25, 0.25, size=2) * geometry.scale
         self._body_obs, self._xy = self.sim.reset(start, seed=int(self.np_random.integers(2**31)))
         goal = options.get("goal")
-        self.set_goal(self.sample_goal() if goal is None else self._free_point(goal, "goal"))
+        self.set_goal(self.sample_goal() if goal is None else as_free_point(goal, geometry, self.walls, "goal"))
         return self._get_obs(), {"is_success": self._is_success()}
 
     def set_goal(self, goal: np.ndarray) -> dict[str, np.ndarray]:
@@ -256,12 +269,6 @@ class ReachEnv(GoalEnv, EzPickle):
     def close(self) -> None:
         """Releases the simulator."""
         self.sim.close()
-
-    def _free_point(self, value: Any, name: str) -> np.ndarray:
-        point = as_finite_vector(value, 2, name)
-        if not self.sim.geometry.is_free(self.walls, point):
-            raise ValueError(f"{name} {point.tolist()} is not in a free cell of the maze")
-        return point
 
     def _is_success(self) -> bool:
         return bool(np.linalg.norm(self._xy - self._goal) <= self.distance_threshold)
