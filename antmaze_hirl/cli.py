@@ -38,6 +38,7 @@ def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", type=Path, required=True, help="run folder (checkpoints, curve, policy.zip)")
     parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--init-from", type=Path, default=None, help="warm start from this policy .zip's weights")
     parser.add_argument("--checkpoint-freq", type=int, default=50_000, help="env steps between checkpoints")
     parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=50)
@@ -57,6 +58,7 @@ def _run_train_low(args: argparse.Namespace) -> int:
         args.out,
         seed=args.seed,
         resume=args.resume,
+        init_from=args.init_from,
         checkpoint_freq=args.checkpoint_freq,
         eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes,

@@ -108,6 +108,16 @@ def test_multi_policy_picks_where_members_disagree():
     np.testing.assert_array_equal(strategy.choose_start(query, np.random.default_rng(0)), query.candidates[2])
 
 
+@pytest.mark.parametrize(("member_steps", "expected"), [(None, 4), (7, 7)])
+def test_multi_policy_members_share_the_learners_gradient_budget(member_steps, expected):
+    trainer, _ = make_trainer(strategy=MultiPolicyQuery(n_policies=3, member_steps=member_steps), gradient_steps=10)
+    trainer.train(2)
+    updates = 2
+    assert [member.gradient_steps for member in trainer.strategy.members] == [expected * updates] * 3
+    with pytest.raises(ValueError, match="member_steps must be >= 1, got 0"):
+        MultiPolicyQuery(member_steps=0)
+
+
 def test_beta_schedules_are_exact():
     schedule = ExponentialBetaSchedule(decay=2.0)
     assert [schedule(k) for k in range(4)] == [1.0, 0.5, 0.25, 0.125]

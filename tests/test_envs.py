@@ -144,6 +144,14 @@ def test_action_scale_reaches_the_actuators():
     np.testing.assert_allclose(env.sim.data.ctrl, np.full(8, 0.25))
 
 
+@pytest.mark.parametrize(("body", "scale"), [("ant", 0.5), ("point", 1.0)])
+def test_default_action_scale_is_the_bodys(body, scale):
+    env = ReachEnv(body)
+    env.reset(seed=0)
+    env.step(np.ones(env.action_space.shape))
+    np.testing.assert_allclose(env.sim.data.ctrl, scale)
+
+
 def test_high_level_step_info_and_subgoal_errors():
     env = gym.make("antmaze_hirl/PointMaze-v0")
     obs, info = env.reset(seed=0)

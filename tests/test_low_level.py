@@ -43,6 +43,19 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
         )
 
 
+def test_init_from_warm_starts_weights_with_an_empty_buffer(tmp_path):
+    config = tiny_config()
+    source = train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=10**9, **TINY)
+    warm = train_low_level(
+        "point", "td3", 0, tmp_path / "b", config=config, init_from=tmp_path / "a" / "policy.zip", **TINY
+    )
+    assert warm.num_timesteps == 0 and warm.replay_buffer.size() == 0
+    obs, _ = ReachEnv("point").reset(seed=3)
+    np.testing.assert_array_equal(source.predict(obs, deterministic=True)[0], warm.predict(obs, deterministic=True)[0])
+    cold = make_model("point", "td3", config, seed=0)
+    assert not np.array_equal(source.predict(obs, deterministic=True)[0], cold.predict(obs, deterministic=True)[0])
+
+
 def test_resume_continues_step_count_and_buffer(tmp_path):
     config = tiny_config()
     tiny = {**TINY, "eval_freq": 100, "eval_episodes": 2}

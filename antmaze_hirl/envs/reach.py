@@ -72,9 +72,10 @@ class ReachEnv(GoalEnv, EzPickle):
         min_goal_distance: Smallest subgoal distance, metres. Default: the distance threshold.
         distance_threshold: Reach radius, metres. Default per body: ant 0.45, point 0.2.
         reward_type: ``"sparse"`` or ``"dense"``.
-        action_scale: Multiplier in ``(0, 1]`` on actions. The paper's rllab Ant used a (-30, 30)
-            control range with gear 1; Gymnasium's Ant-v5, used here, has (-1, 1) with gear 150, so the
-            full range (scale 1) is 150 N m peak torque and smaller scales mimic weaker motors.
+        action_scale: Multiplier in ``(0, 1]`` on actions. Default per body: ant 0.5, point 1. The
+            paper's rllab Ant used a (-30, 30) control range with gear 1; Gymnasium's Ant-v5, used here,
+            has (-1, 1) with gear 150, so scale 1 is 150 N m peak torque and smaller scales mimic weaker
+            motors (at 0.5 the ant flips far less often).
         terminate_on_flip: Ant only: end the episode when the torso faces down or drops below 0.2 m.
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
@@ -93,7 +94,7 @@ class ReachEnv(GoalEnv, EzPickle):
         min_goal_distance: float | None = None,
         distance_threshold: float | None = None,
         reward_type: str = "sparse",
-        action_scale: float = 1.0,
+        action_scale: float | None = None,
         terminate_on_flip: bool = False,
         include_contact_forces: bool = False,
         render_mode: str | None = None,
@@ -130,12 +131,12 @@ class ReachEnv(GoalEnv, EzPickle):
             raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
         if reward_type not in REWARD_TYPES:
             raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
-        if not 0 < action_scale <= 1:
+        if action_scale is not None and not 0 < action_scale <= 1:
             raise ValueError(f"action_scale must lie in (0, 1], got {action_scale}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.reward_type = reward_type
-        self.action_scale = float(action_scale)
+        self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
         self.terminate_on_flip = terminate_on_flip and body == "ant"
         self.render_mode = render_mode
         self._include_contact_forces = include_contact_forces

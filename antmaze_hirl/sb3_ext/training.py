@@ -85,6 +85,7 @@ def train_low_level(
     seed: int = 0,
     resume: bool = False,
     config: LowLevelConfig | None = None,
+    init_from: str | Path | None = None,
     checkpoint_freq: int = 50_000,
     eval_freq: int = 25_000,
     eval_episodes: int = 50,
@@ -106,6 +107,9 @@ def train_low_level(
         resume: Continue from the latest checkpoint in ``out_dir`` (error if there is none or it was
             made with another body, algo, seed or config).
         config: Hyperparameters; default :func:`load_config` for ``body``.
+        init_from: Warm start: a TD3/DDPG ``.zip`` with the same networks whose weights and optimiser
+            states the new model starts from (its replay buffer starts empty). Ignored on resume,
+            where the checkpoint holds the weights.
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
@@ -120,7 +124,13 @@ def train_low_level(
     algo_class(algo)
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
-    run_state = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
+    run_state = {
+        "body": body,
+        "algo": algo,
+        "seed": seed,
+        "config": config.to_dict(),
+        "init_from": None if init_from is None else str(init_from),
+    }
     if resume:
         folder, _ = latest_checkpoint(checkpoint_dir, expected=run_state)
         model = algo_class(algo).load(folder / "model.zip", env=make_reach_env(body, config))
@@ -131,6 +141,8 @@ def train_low_level(
                 f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir"
             )
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
+        if init_from is not None:
+            model.set_parameters(str(init_from), exact_match=True, device=model.device)
     eval_callback = SuccessRateCallback(
         ReachEnv(body), eval_freq=eval_freq, episodes=eval_episodes, csv_path=out_dir / "learning_curve.csv"
     )
