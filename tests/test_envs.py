@@ -233,3 +233,17 @@ def test_terminate_on_flip_catches_an_ant_on_its_back():
     env.sim._mujoco_env.set_state(qpos, qvel)
     assert env.sim.is_flipped
     assert env.step(np.zeros(8))[2]
+
+
+@pytest.mark.parametrize("terminate_on_flip", [True, False])
+def test_high_level_episode_ends_when_the_ant_flips(terminate_on_flip):
+    env = gym.make("antmaze_hirl/AntMaze-v0", low_level=StillController(), terminate_on_flip=terminate_on_flip)
+    env.reset(seed=0)
+    inner = env.unwrapped
+    qpos = inner.reach.sim.data.qpos.copy()
+    qpos[2], qpos[3:7] = 0.27, [0.0, 1.0, 0.0, 0.0]  # on its back
+    inner.reach.sim._mujoco_env.set_state(qpos, np.zeros_like(inner.reach.sim.data.qvel))
+    _, reward, terminated, _, info = env.step(inner.agent_xy + np.array([2.0, 0.0]))
+    assert reward == 0.0 and not info["is_success"]
+    assert terminated == info["flipped"] == terminate_on_flip
+    assert info["low_level_steps"] == (1 if terminate_on_flip else inner.reach.horizon)

@@ -43,7 +43,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
     in a corner and puts the goal in a free cell at least ``min_goal_distance`` grid steps away. Each
     :meth:`step` takes a subgoal and runs the low-level controller on the inner :class:`ReachEnv` for
     up to ``horizon`` steps, stopping early once the subgoal or the goal is reached. The episode ends
-    when the goal is reached (``terminated``, reward 1) or after ``max_steps`` low-level steps
+    when the goal is reached (``terminated``, reward 1), when the ant has flipped onto its back
+    (``terminated``, reward 0: it cannot get up again) or after ``max_steps`` low-level steps
     (``truncated``, reward 0).
 
     Observation ``Dict``:
@@ -52,7 +53,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
 
     Action: subgoal xy in metres, ``Box`` over the maze inside its border walls.
 
-    ``info``: ``low_level_steps`` (this step), ``total_low_level_steps``, ``subgoal_reached``,
+    ``info``: ``low_level_steps`` (this step), ``total_low_level_steps``, ``subgoal_reached``, ``flipped``,
     ``attempts`` (subgoals so far, the paper's measure), ``is_success``, ``subgoal`` (as executed),
     ``subgoal_clipped``, ``subgoal_in_wall`` and ``agent_path`` (xy after every low-level step).
 
@@ -71,6 +72,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         position_noise: Start and goal offsets, uniform in ``±position_noise`` cells.
         pixels_per_cell: Image resolution.
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
+        terminate_on_flip: Ant only: end the episode as a failure once the ant has flipped.
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a bird's-eye picture.
 
@@ -93,6 +95,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         position_noise: float = 0.25,
         pixels_per_cell: int = 8,
         clip_subgoals: bool = False,
+        terminate_on_flip: bool = True,
         reach_kwargs: dict[str, Any] | None = None,
         render_mode: str | None = None,
     ) -> None:
@@ -110,6 +113,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             position_noise=position_noise,
             pixels_per_cell=pixels_per_cell,
             clip_subgoals=clip_subgoals,
+            terminate_on_flip=terminate_on_flip,
             reach_kwargs=reach_kwargs,
             render_mode=render_mode,
         )
@@ -133,7 +137,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self._fixed_map = None if maze_map is None else maze_map
         first_layout = self.sample_layout(np.random.default_rng(0))
         self.controller = as_controller(low_level) if low_level is not None else default_low_level(body)
-        self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **(reach_kwargs or {}))
+        reach_kwargs = {"terminate_on_flip": terminate_on_flip, **(reach_kwargs or {})}
+        self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **reach_kwargs)
         self.layout = first_layout
         self.geometry: MazeGeometry = self.reach.sim.geometry
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
@@ -210,7 +215,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         low_obs = self.reach.set_goal(subgoal)
         self.attempts += 1
         path = [self.reach.agent_xy]
-        subgoal_reached = success = False
+        subgoal_reached = success = fell = False
         while self.total_low_level_steps < self.max_steps:
             low_obs, _, fell, horizon_over, low_info = self.reach.step(self.controller(low_obs))
             self.total_low_level_steps += 1
@@ -223,6 +228,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             "low_level_steps": len(path) - 1,
             "total_low_level_steps": self.total_low_level_steps,
             "subgoal_reached": bool(subgoal_reached),
+            "flipped": bool(fell),
             "attempts": self.attempts,
             "is_success": success,
             "subgoal": subgoal,
@@ -231,7 +237,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             "agent_path": np.asarray(path),
         }
         truncated = not success and self.total_low_level_steps >= self.max_steps
-        return self._get_obs(), float(success), success, truncated, info
+        return self._get_obs(), float(success), success or fell, truncated, info
 
     def render(self) -> np.ndarray | None:
         """Bird's-eye RGB picture when ``render_mode="rgb_array"``."""
