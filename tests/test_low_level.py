@@ -3,6 +3,7 @@ import json
 import gymnasium as gym
 import numpy as np
 import pytest
+import torch as th
 from stable_baselines3 import SAC, HerReplayBuffer
 
 from antmaze_hirl.envs.reach import ReachEnv
@@ -179,3 +180,22 @@ def test_relative_goal_extractor_uses_offsets_in_the_heading_frame():
     assert features.shape == (2, 27 + 2)
     with pytest.raises(ValueError, match="quaternion_index 30 does not fit"):
         RelativeGoalExtractor(env.observation_space, quaternion_index=30)
+
+
+def test_action_penalty_lowers_the_actors_objective_by_l2_of_the_actions(tmp_path):
+    config = tiny_config(action_l2=0.5)
+    model = make_model("point", "td3", config, seed=0)
+    critic = model.policy.critic
+    obs, _ = ReachEnv("point").reset(seed=0)
+    tensor_obs = model.policy.obs_to_tensor(obs)[0]
+    actions = th.tensor([[0.0, 0.0], [1.0, -1.0], [0.5, 0.0]])
+    batch = {key: value.repeat(3, 1) for key, value in tensor_obs.items()}
+    with th.no_grad():
+        plain = critic.q_networks[0](th.cat([critic.extract_features(batch, critic.features_extractor), actions], 1))
+        penalised = critic.q1_forward(batch, actions)
+    np.testing.assert_allclose((plain - penalised).squeeze(1).numpy(), [0.0, 0.5, 0.5 * 0.125], rtol=1e-6)
+    model.save(tmp_path / "penalty.zip")
+    assert load_low_level("point", tmp_path / "penalty.zip").policy.critic.action_l2 == 0.5
+    assert type(make_model("point", "td3", tiny_config(), seed=0).policy.critic).__name__ == "ContinuousCritic"
+    with pytest.raises(ValueError, match="action_l2 must be >= 0, got -1"):
+        make_model("point", "td3", tiny_config(action_l2=-1.0), seed=0)

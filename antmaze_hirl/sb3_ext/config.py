@@ -14,7 +14,16 @@ ALGOS = ("td3", "ddpg")
 
 @dataclass(frozen=True)
 class LowLevelConfig:
-    """Hyperparameters of an SB3 TD3/DDPG + HER run on a reach env (SB3 constructor keywords)."""
+    """Hyperparameters of an SB3 TD3/DDPG + HER run on a reach env (SB3 constructor keywords).
+
+    Besides SB3's keywords: ``net_arch`` and ``action_noise_std`` (Gaussian exploration noise),
+    ``n_sampled_goal`` (HER), ``relative_goal``/``quaternion_index`` (:class:`RelativeGoalExtractor`),
+    ``action_l2`` (HER's actor action penalty, :class:`ActionPenaltyPolicy`; 0 = SB3's own policy)
+    and ``env_kwargs`` for :class:`~antmaze_hirl.envs.reach.ReachEnv`.
+
+    Raises:
+        ValueError: If ``action_l2`` is negative.
+    """
 
     learning_rate: float = 1e-3
     buffer_size: int = 1_000_000
@@ -29,7 +38,12 @@ class LowLevelConfig:
     n_sampled_goal: int = 4
     relative_goal: bool = True
     quaternion_index: int | None = None
+    action_l2: float = 0.0
     env_kwargs: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.action_l2 < 0:
+            raise ValueError(f"action_l2 must be >= 0, got {self.action_l2}")
 
     def replace(self, **changes: Any) -> LowLevelConfig:
         """A copy with ``changes`` applied (unknown keys raise ``TypeError``)."""

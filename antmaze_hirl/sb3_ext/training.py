@@ -15,6 +15,7 @@ from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.sb3_ext.action_penalty import ActionPenaltyPolicy
 from antmaze_hirl.sb3_ext.checkpoint import CheckpointCallback, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
@@ -41,11 +42,13 @@ def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
 
 
 def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
-    """SB3 ``policy_kwargs`` for ``config``: network sizes and, if asked, the relative-goal extractor."""
+    """SB3 ``policy_kwargs`` for ``config``: network sizes and, if asked, the relative-goal extractor and action penalty."""
     kwargs: dict[str, Any] = {"net_arch": list(config.net_arch)}
     if config.relative_goal:
         kwargs["features_extractor_class"] = RelativeGoalExtractor
         kwargs["features_extractor_kwargs"] = {"quaternion_index": config.quaternion_index}
+    if config.action_l2 > 0:
+        kwargs["action_l2"] = config.action_l2
     return kwargs
 
 
@@ -56,7 +59,7 @@ def make_model(
     env = make_reach_env(body, config)
     n_actions = env.action_space.shape[0]
     return algo_class(algo)(
-        "MultiInputPolicy",
+        ActionPenaltyPolicy if config.action_l2 > 0 else "MultiInputPolicy",
         env,
         learning_rate=config.learning_rate,
         buffer_size=config.buffer_size,
