@@ -42,7 +42,7 @@ def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
 
 
 def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
-    """SB3 ``policy_kwargs`` for ``config``: network sizes and, if asked, the relative-goal extractor and action penalty."""
+    """SB3 ``policy_kwargs`` for ``config``: network sizes, optional relative-goal extractor and action penalty."""
     kwargs: dict[str, Any] = {"net_arch": list(config.net_arch)}
     if config.relative_goal:
         kwargs["features_extractor_class"] = RelativeGoalExtractor
