@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -58,22 +58,29 @@ def plot_episode(
     return out_file
 
 
-def plot_learning_curve(
-    timesteps: Sequence[int], success_rate: Sequence[float], out_file: str | Path, *, title: str = ""
+def plot_learning_curves(
+    curves: Mapping[str, tuple[Sequence[int], Sequence[float]]], out_file: str | Path, *, title: str = ""
 ) -> Path:
-    """Saves a PNG of held-out success rate against environment steps.
+    """Saves a PNG of held-out success rate against environment steps, one line per labelled run.
+
+    Args:
+        curves: ``label -> (timesteps, success_rate)``.
+        out_file: PNG path (folders are created).
+        title: Figure title.
 
     Returns:
         The path of the written file.
     """
     out_file = Path(out_file)
     out_file.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(6, 3.5))
-    ax.plot(timesteps, success_rate, marker="o", markersize=3)
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for label, (timesteps, success_rate) in curves.items():
+        ax.plot(timesteps, success_rate, marker="o", markersize=3, label=label)
     ax.set_xlabel("environment steps")
     ax.set_ylabel("held-out success rate")
     ax.set_ylim(-0.02, 1.02)
     ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
     ax.set_title(title)
     fig.tight_layout()
     fig.savefig(out_file, dpi=120)

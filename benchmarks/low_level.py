@@ -8,7 +8,8 @@
    its share; the ratio is reported both as measured and with the measured save time amortised over
    the default 50k steps between checkpoints.
 2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies.
-3. The learning curve of the shipped ant run (``benchmarks/results/ant_learning_curve.csv``) as a PNG.
+3. The learning curve of the shipped ant run (``benchmarks/results/ant_learning_curve.csv``) as a PNG,
+   beside the curves of the runs that chose its settings.
 
 Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 2] [--episodes 200]
 Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
@@ -28,7 +29,7 @@ import torch
 import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.plotting import plot_learning_curve
+from antmaze_hirl.plotting import plot_learning_curves
 from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
 from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
 
@@ -96,15 +97,28 @@ def shipped_figures(episodes: int) -> dict[str, dict]:
     return figures
 
 
-def learning_curve_png() -> str | None:
-    source = RESULTS / "ant_learning_curve.csv"
-    if not source.exists():
-        return None
-    with source.open() as handle:
+# The shipped ant run first, then the runs that chose its settings (README, "Shipped low-level policies").
+ANT_CURVES = {
+    "shipped: scale 0.5, gamma 0.98, action_l2 1": "ant_learning_curve.csv",
+    "scale 0.5, gamma 0.98, no action penalty": "ant_learning_curve_scale05_gamma098_no_penalty.csv",
+    "scale 0.5, gamma 0.95": "ant_learning_curve_scale05_gamma095.csv",
+    "scale 0.5, warm start from the scale-1 run": "ant_learning_curve_scale05_warm_start.csv",
+    "scale 1 (full torque), gamma 0.95": "ant_learning_curve_scale1.csv",
+    "scale 1, absolute goal (no RelativeGoalExtractor)": "ant_learning_curve_absolute_goal.csv",
+}
+
+
+def read_curve(path: Path) -> tuple[list[int], list[float]]:
+    with path.open() as handle:
         rows = list(csv.DictReader(handle))
-    steps = [int(row["timesteps"]) for row in rows]
-    success = [float(row["success_rate"]) for row in rows]
-    return str(plot_learning_curve(steps, success, RESULTS / "ant_learning_curve.png", title="Ant TD3 + HER"))
+    return [int(row["timesteps"]) for row in rows], [float(row["success_rate"]) for row in rows]
+
+
+def learning_curve_png() -> str:
+    curves = {label: read_curve(RESULTS / name) for label, name in ANT_CURVES.items() if (RESULTS / name).exists()}
+    return str(
+        plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title="Ant TD3 + HER, held-out 4 m subgoals")
+    )
 
 
 def main() -> None:
