@@ -114,6 +114,9 @@ def _add_experiment(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--maze-size", type=int, default=defaults.maze_size)
     parser.add_argument("--gradient-steps", type=int, default=defaults.gradient_steps, help="N per update")
     parser.add_argument("--decay", type=float, default=defaults.decay, help="d in beta <- beta / d")
+    parser.add_argument(
+        "--expert-max-distance", type=float, default=None, help="oracle's farthest subgoal, metres (default: 1 cell)"
+    )
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=_run_experiment)
@@ -134,6 +137,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         maze_size=args.maze_size,
         gradient_steps=args.gradient_steps,
         decay=args.decay,
+        expert_max_distance=args.expert_max_distance,
     )
     methods = [method.strip() for method in args.methods.split(",") if method.strip()]
     summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress)

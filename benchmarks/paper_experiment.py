@@ -10,7 +10,12 @@ CSV per finished trial, so an interrupted run resumes), then prints the figures 
 
 It also reports the oracle ceiling: the oracle driving the same low level on the same held-out mazes.
 
-Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100] [--maze-size 5]
+Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) oracle subgoals; the ant
+runs 3x3 mazes with 2 m oracle subgoals. At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps
+(25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
+
+Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100] [--maze-size N]
+           [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
        python benchmarks/paper_experiment.py --body ant --ceiling-only [--maze-size 3]
 """
 
@@ -28,6 +33,10 @@ from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.experts import PathOracle
 
 METHODS = ("dagger", "noise", "multi_policy", "reward")
+BODY_DEFAULTS = {
+    "point": {"maze_size": 5, "expert_max_distance": None},
+    "ant": {"maze_size": 3, "expert_max_distance": 2.0},
+}
 RESULTS = Path(__file__).parent / "results"
 
 
@@ -58,7 +67,10 @@ def oracle_ceiling(config: ExperimentConfig) -> dict:
     env = make_env(config)
     return {
         "maze_size": config.maze_size,
-        **evaluate_high_level(PathOracle.for_env(env), env, episodes=config.final_eval_episodes),
+        "expert_max_distance": config.expert_max_distance,
+        **evaluate_high_level(
+            PathOracle.for_env(env, max_distance=config.expert_max_distance), env, episodes=config.final_eval_episodes
+        ),
     }
 
 
@@ -68,7 +80,8 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(METHODS))
-    parser.add_argument("--maze-size", type=int, default=ExperimentConfig.maze_size)
+    parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")
+    parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
     parser.add_argument(
         "--ceiling-only",
         action="store_true",
@@ -76,7 +89,15 @@ def main() -> None:
     )
     args = parser.parse_args()
     torch.set_num_threads(1)
-    config = ExperimentConfig(body=args.body, episodes=args.episodes, maze_size=args.maze_size)
+    settings = {
+        **BODY_DEFAULTS[args.body],
+        **{
+            key: value
+            for key, value in (("maze_size", args.maze_size), ("expert_max_distance", args.expert_max_distance))
+            if value is not None
+        },
+    }
+    config = ExperimentConfig(body=args.body, episodes=args.episodes, **settings)
     if args.ceiling_only:
         ceiling = oracle_ceiling(config)
         atomic_write_json(RESULTS / f"oracle_ceiling_{args.body}_{args.maze_size}.json", ceiling)

@@ -1,3 +1,4 @@
+import dataclasses
 import json
 import math
 
@@ -63,6 +64,36 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
         run_experiment(["dagger"], 1, ExperimentConfig(body="point", episodes=4), tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="unknown method 'aggrevate'"):
         run_experiment(["aggrevate"], 1, TINY, tmp_path / "other", progress_bar=False)
+    with pytest.raises(ValueError, match="expert_max_distance must be > 0 metres, got -1"):
+        ExperimentConfig(expert_max_distance=-1.0)
+
+
+def test_results_written_before_a_setting_existed_still_resume(tmp_path):
+    run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
+    config_file = tmp_path / "config.json"
+    saved = json.loads(config_file.read_text())
+    del saved["expert_max_distance"]  # as written by an older version
+    config_file.write_text(json.dumps(saved))
+    run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)  # the new setting at its default matches
+    with pytest.raises(ValueError, match="holds results made with"):
+        run_experiment(["dagger"], 1, dataclasses.replace(TINY, expert_max_distance=0.5), tmp_path, progress_bar=False)
+
+
+def test_expert_max_distance_reaches_the_oracle(monkeypatch):
+    from antmaze_hirl.experiments import runner
+
+    seen = []
+    for_env = runner.PathOracle.for_env
+
+    def recording_for_env(env, **kwargs):
+        oracle = for_env(env, **kwargs)
+        seen.append(oracle.max_distance)
+        return oracle
+
+    monkeypatch.setattr(runner.PathOracle, "for_env", recording_for_env)
+    runner.run_trial("dagger", 0, dataclasses.replace(TINY, episodes=1, expert_max_distance=0.5))
+    runner.run_trial("dagger", 0, dataclasses.replace(TINY, episodes=1))
+    assert seen == [0.5, 1.0]  # the point's cell is 1 m
 
 
 def test_experiment_cli(tmp_path, capsys):
