@@ -116,9 +116,8 @@ def read_curve(path: Path) -> tuple[list[int], list[float]]:
 
 def learning_curve_png() -> str:
     curves = {label: read_curve(RESULTS / name) for label, name in ANT_CURVES.items() if (RESULTS / name).exists()}
-    return str(
-        plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title="Ant TD3 + HER, held-out 4 m subgoals")
-    )
+    title = "Ant TD3 + HER, held-out subgoals up to 4 m"
+    return str(plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title=title))
 
 
 def main() -> None:
