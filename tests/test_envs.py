@@ -126,6 +126,7 @@ def test_reach_env_bad_input(call, message):
         ({"reward_type": "shaped"}, "reward_type must be one of"),
         ({"action_scale": 2.0}, r"action_scale must lie in \(0, 1\]"),
         ({"horizon": 0}, "horizon must be >= 1"),
+        ({"chain_probability": 1.5}, r"chain_probability must lie in \[0, 1\]"),
         ({"maze_map": [[1, 1, 1], [1, 0, 0], [1, 1, 1]]}, "border must be all walls"),
     ],
 )
@@ -153,7 +154,7 @@ def test_default_action_scale_is_the_bodys(body, scale):
 
 
 def test_high_level_step_info_and_subgoal_errors():
-    env = gym.make("antmaze_hirl/PointMaze-v0")
+    env = gym.make("antmaze_hirl/PointMaze-v0", min_subgoal_distance=0.0)
     obs, info = env.reset(seed=0)
     inner = env.unwrapped
     assert obs["image"].shape == (3, 7 * 8, 7 * 8) and obs["image"].dtype == np.uint8
@@ -170,6 +171,24 @@ def test_high_level_step_info_and_subgoal_errors():
         env.step(np.array([np.nan, 0.0]))
     with pytest.raises(ValueError, match=r"subgoal \[50.0, 0.0\] is outside the maze bounds"):
         env.step(np.array([50.0, 0.0]))
+
+
+def test_subgoals_inside_the_reach_radius_are_pushed_out_along_their_heading(still_controller):
+    env = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller)
+    env.reset(seed=0)
+    agent = env.unwrapped.agent_xy
+    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.distance_threshold == 0.9
+    info = env.step(agent + np.array([0.0, 0.1]))[4]
+    assert info["subgoal_extended"] and not info["subgoal_reached"]
+    np.testing.assert_allclose(info["subgoal"] - env.unwrapped.agent_xy, [0.0, 0.9], atol=0.02)
+    far = env.step(env.unwrapped.agent_xy + np.array([0.0, 2.0]))[4]
+    assert not far["subgoal_extended"]
+    off = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance=0.0)
+    off.reset(seed=0)
+    info = off.step(off.unwrapped.agent_xy + np.array([0.0, 0.1]))[4]
+    assert not info["subgoal_extended"] and info["subgoal_reached"] and info["low_level_steps"] == 1
+    with pytest.raises(ValueError, match=r"min_subgoal_distance must lie in \[0, 4.0\) metres \(one cell\), got 5.0"):
+        gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance=5.0)
 
 
 def test_high_level_clips_when_asked_and_flags_it():
@@ -233,6 +252,32 @@ def test_terminate_on_flip_catches_an_ant_on_its_back():
     env.sim._mujoco_env.set_state(qpos, qvel)
     assert env.sim.is_flipped
     assert env.step(np.zeros(8))[2]
+
+
+def test_chained_reset_keeps_the_moving_body_and_draws_a_new_goal():
+    env = ReachEnv("ant", chain_probability=1.0)
+    env.reset(seed=0)
+    for _ in range(20):
+        env.step(env.action_space.sample())
+    qpos, qvel, old_goal = env.sim.data.qpos.copy(), env.sim.data.qvel.copy(), env.goal
+    obs, _ = env.reset()
+    np.testing.assert_array_equal(env.sim.data.qpos, qpos)
+    np.testing.assert_array_equal(env.sim.data.qvel, qvel)
+    assert not np.array_equal(obs["desired_goal"], old_goal)
+    truncations = [env.step(np.zeros(8))[3] for _ in range(env.horizon)]
+    assert truncations.index(True) == env.horizon - 1  # a full H-step sub-episode again
+    env.reset(seed=0)  # a seed (or options) always starts afresh
+    assert not np.array_equal(env.sim.data.qpos, qpos)
+
+
+def test_chaining_never_continues_a_flipped_ant():
+    env = ReachEnv("ant", chain_probability=1.0, terminate_on_flip=True)
+    env.reset(seed=0)
+    qpos = env.sim.data.qpos.copy()
+    qpos[2], qpos[3:7] = 0.27, [0.0, 1.0, 0.0, 0.0]
+    env.sim._mujoco_env.set_state(qpos, np.zeros_like(env.sim.data.qvel))
+    env.reset()
+    assert not env.sim.is_flipped
 
 
 @pytest.mark.parametrize("terminate_on_flip", [True, False])

@@ -55,7 +55,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
 
     ``info``: ``low_level_steps`` (this step), ``total_low_level_steps``, ``subgoal_reached``, ``flipped``,
     ``attempts`` (subgoals so far, the paper's measure), ``is_success``, ``subgoal`` (as executed),
-    ``subgoal_clipped``, ``subgoal_in_wall`` and ``agent_path`` (xy after every low-level step).
+    ``subgoal_clipped``, ``subgoal_extended``, ``subgoal_in_wall`` and ``agent_path`` (xy after every low-level step).
 
     Args:
         body: ``"point"`` or ``"ant"``.
@@ -72,6 +72,11 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         position_noise: Start and goal offsets, uniform in ``±position_noise`` cells.
         pixels_per_cell: Image resolution.
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
+        min_subgoal_distance: Subgoals nearer the body than this, metres, are pushed out to it along
+            the same heading (flagged in ``info``). A subgoal inside the low level's reach radius is
+            "reached" in one step, so a learner (or a beta-blend of opposite proposals) that keeps
+            proposing one would burn an expert label per low-level step. Default twice the low level's
+            ``distance_threshold`` (ant 0.9 m, point 0.4 m); 0 turns it off.
         terminate_on_flip: Ant only: end the episode as a failure once the ant has flipped.
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a bird's-eye picture.
@@ -95,6 +100,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         position_noise: float = 0.25,
         pixels_per_cell: int = 8,
         clip_subgoals: bool = False,
+        min_subgoal_distance: float | None = None,
         terminate_on_flip: bool = True,
         reach_kwargs: dict[str, Any] | None = None,
         render_mode: str | None = None,
@@ -113,6 +119,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             position_noise=position_noise,
             pixels_per_cell=pixels_per_cell,
             clip_subgoals=clip_subgoals,
+            min_subgoal_distance=min_subgoal_distance,
             terminate_on_flip=terminate_on_flip,
             reach_kwargs=reach_kwargs,
             render_mode=render_mode,
@@ -141,6 +148,14 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **reach_kwargs)
         self.layout = first_layout
         self.geometry: MazeGeometry = self.reach.sim.geometry
+        self.min_subgoal_distance = float(
+            min_subgoal_distance if min_subgoal_distance is not None else 2 * self.reach.distance_threshold
+        )
+        if not 0 <= self.min_subgoal_distance < self.geometry.scale:
+            raise ValueError(
+                f"min_subgoal_distance must lie in [0, {self.geometry.scale}) metres (one cell), "
+                f"got {min_subgoal_distance}"
+            )
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
         scale = self.geometry.scale
         self.action_space = spaces.Box(
@@ -211,7 +226,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 f"subgoal {subgoal.tolist()} is outside the maze bounds x in [{low[0]}, {high[0]}], "
                 f"y in [{low[1]}, {high[1]}]; pass clip_subgoals=True to clip instead"
             )
-        subgoal = np.clip(subgoal, low, high)
+        subgoal, extended = self._push_out(np.clip(subgoal, low, high))
         low_obs = self.reach.set_goal(subgoal)
         self.attempts += 1
         path = [self.reach.agent_xy]
@@ -233,11 +248,20 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             "is_success": success,
             "subgoal": subgoal,
             "subgoal_clipped": clipped,
+            "subgoal_extended": extended,
             "subgoal_in_wall": not self.geometry.is_free(self.layout.walls, subgoal),
             "agent_path": np.asarray(path),
         }
         truncated = not success and self.total_low_level_steps >= self.max_steps
         return self._get_obs(), float(success), success or fell, truncated, info
+
+    def _push_out(self, subgoal: np.ndarray) -> tuple[np.ndarray, bool]:
+        offset = subgoal - self.agent_xy
+        distance = float(np.linalg.norm(offset))
+        if distance >= self.min_subgoal_distance or distance == 0.0:
+            return subgoal, False
+        pushed = self.agent_xy + offset * (self.min_subgoal_distance / distance)
+        return np.clip(pushed, self.action_space.low, self.action_space.high), True
 
     def render(self) -> np.ndarray | None:
         """Bird's-eye RGB picture when ``render_mode="rgb_array"``."""

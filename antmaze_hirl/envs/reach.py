@@ -77,6 +77,10 @@ class ReachEnv(GoalEnv, EzPickle):
             has (-1, 1) with gear 150, so scale 1 is 150 N m peak torque and smaller scales mimic weaker
             motors (at 0.5 the ant flips far less often).
         terminate_on_flip: Ant only: end the episode when the torso faces down or drops below 0.2 m.
+        chain_probability: Chance that a ``reset()`` without seed or options keeps the body as it is
+            (moving, wherever the last episode left it) and only draws a new subgoal. The high level
+            switches subgoals while the body is in motion; training from rest only never shows that.
+            Never after a flip. Default 0: every episode starts from rest.
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
 
@@ -96,6 +100,7 @@ class ReachEnv(GoalEnv, EzPickle):
         reward_type: str = "sparse",
         action_scale: float | None = None,
         terminate_on_flip: bool = False,
+        chain_probability: float = 0.0,
         include_contact_forces: bool = False,
         render_mode: str | None = None,
     ) -> None:
@@ -110,6 +115,7 @@ class ReachEnv(GoalEnv, EzPickle):
             reward_type=reward_type,
             action_scale=action_scale,
             terminate_on_flip=terminate_on_flip,
+            chain_probability=chain_probability,
             include_contact_forces=include_contact_forces,
             render_mode=render_mode,
         )
@@ -133,11 +139,14 @@ class ReachEnv(GoalEnv, EzPickle):
             raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
         if action_scale is not None and not 0 < action_scale <= 1:
             raise ValueError(f"action_scale must lie in (0, 1], got {action_scale}")
+        if not 0 <= chain_probability <= 1:
+            raise ValueError(f"chain_probability must lie in [0, 1], got {chain_probability}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.reward_type = reward_type
         self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
         self.terminate_on_flip = terminate_on_flip and body == "ant"
+        self.chain_probability = float(chain_probability)
         self.render_mode = render_mode
         self._include_contact_forces = include_contact_forces
         self.sim = MazeSimulator(body, validate_maze_map(maze_map), include_contact_forces=include_contact_forces)
@@ -155,6 +164,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self._xy = np.zeros(2)
         self._goal = np.zeros(2)
         self._steps = 0
+        self._started = False
 
     @property
     def walls(self) -> np.ndarray:
@@ -186,7 +196,7 @@ class ReachEnv(GoalEnv, EzPickle):
             self.sim = MazeSimulator(self.body, walls, include_contact_forces=self._include_contact_forces)
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
-        """Starts an episode.
+        """Starts an episode: a new start and subgoal, or, when it chains, only a new subgoal.
 
         Args:
             seed: Seeds ``self.np_random`` (the only source of randomness).
@@ -198,6 +208,9 @@ class ReachEnv(GoalEnv, EzPickle):
 
         """
         super().reset(seed=seed)
+        if self._chains(seed, options):
+            return self.set_goal(self.sample_goal()), {"is_success": self._is_success()}
+        self._started = True
         options = options or {}
         geometry = self.sim.geometry
         if options.get("start_xy") is not None:
@@ -210,6 +223,12 @@ class ReachEnv(GoalEnv, EzPickle):
         goal = options.get("goal")
         self.set_goal(self.sample_goal() if goal is None else as_free_point(goal, geometry, self.walls, "goal"))
         return self._get_obs(), {"is_success": self._is_success()}
+
+    def _chains(self, seed: int | None, options: dict[str, Any] | None) -> bool:
+        if seed is not None or options or not self._started or self.sim.is_flipped:
+            return False
+        # Draw only when chaining is on, so chain_probability=0 keeps the random stream unchanged.
+        return self.chain_probability > 0 and bool(self.np_random.random() < self.chain_probability)
 
     def set_goal(self, goal: np.ndarray) -> dict[str, np.ndarray]:
         """Gives the body a new subgoal and restarts the step count (one new sub-episode of H steps).
