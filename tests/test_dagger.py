@@ -167,9 +167,39 @@ def test_blend_executes_the_beta_mix_and_counts_labels():
     record = trainer.run_episode()
     assert record.expert_cost == len(executed) == len(labels) == record.attempts
     for action, (expert, learner) in zip(executed, labels, strict=True):
-        np.testing.assert_allclose(
-            action, np.clip(0.25 * expert + 0.75 * learner, env.action_space.low, env.action_space.high)
-        )
+        mix = np.clip(0.25 * expert + 0.75 * learner, env.action_space.low, env.action_space.high)
+        np.testing.assert_allclose(action, mix if not np.allclose(action, expert) else expert)
+    assert not all(np.allclose(action, expert) for action, (expert, _) in zip(executed, labels, strict=True))
+
+
+class CornerSeeker:
+    """A learner that always points past the maze's top-right border: clipped, its subgoal is a no-op there."""
+
+    def __init__(self, encoder):
+        self.encoder = encoder
+
+    def predict(self, observation):
+        return np.array([50.0, 50.0])
+
+    def fit_dataset(self, dataset, steps):
+        return 0.0
+
+
+def test_a_mix_the_agent_already_reaches_is_replaced_by_the_experts_subgoal():
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
+    rng = np.random.default_rng(0)
+    policy = HighLevelPolicy.for_env(env, rng=rng)
+    trainer = DAggerTrainer(
+        env=env,
+        expert=PathOracle.for_env(env),
+        policy=CornerSeeker(policy.encoder),
+        rng=rng,
+        beta_schedule=ExponentialBetaSchedule(decay=1.0, beta0=0.0),
+        gradient_steps=0,
+    )
+    records = [trainer.run_episode() for _ in range(3)]
+    # Without the fallback the agent parks in the top-right corner and pays a label per low-level step.
+    assert max(record.attempts for record in records) < 60
 
 
 def test_switch_mixing_and_per_step_updates_run():

@@ -71,7 +71,10 @@ class DAggerTrainer:
     run ``gradient_steps`` of regression on D and advance beta (``beta <- beta / d`` by default).
 
     Beta is the *expert's* weight, as in Ross et al. and ``imitation``: beta = 1 executes the expert's
-    subgoal, beta = 0 the learner's.
+    subgoal, beta = 0 the learner's. A mix that lands within the env's ``min_subgoal_distance`` of the
+    agent (after clipping to the maze: a learner pointing into a border corner, or two opposite
+    proposals blended) is replaced by the expert's subgoal: it would be "reached" without moving, so
+    every low-level step would cost a label and add the same sample to D.
 
     Args:
         env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
@@ -181,7 +184,8 @@ class DAggerTrainer:
             )
             if self.per_step_gradient_steps:
                 self._fit(self.per_step_gradient_steps)
-            obs, _, terminated, truncated, info = self.env.step(self._mix(expert_subgoal, learner_subgoal, beta))
+            executed = self._mix(expert_subgoal, learner_subgoal, beta, agent_xy=obs["state"][:2])
+            obs, _, terminated, truncated, info = self.env.step(executed)
             done = terminated or truncated
         removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
         self.episodes_done += 1
@@ -201,13 +205,18 @@ class DAggerTrainer:
             removed=len(removed),
         )
 
-    def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
+    def _mix(
+        self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float, *, agent_xy: np.ndarray
+    ) -> np.ndarray:
         if self.mixing == "switch":
             chosen = expert_subgoal if self.rng.random() < beta else learner_subgoal
         else:
             chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
-        space = self.env.unwrapped.action_space
-        return np.clip(chosen, space.low, space.high)
+        inner = self.env.unwrapped
+        chosen = np.clip(chosen, inner.action_space.low, inner.action_space.high)
+        if np.linalg.norm(chosen - agent_xy) < inner.min_subgoal_distance:
+            return np.clip(expert_subgoal, inner.action_space.low, inner.action_space.high)
+        return chosen
 
     def _fit(self, steps: int) -> None:
         self.policy.fit_dataset(self.dataset, steps)
