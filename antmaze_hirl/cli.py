@@ -39,6 +39,9 @@ def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--init-from", type=Path, default=None, help="warm start from this policy .zip's weights")
+    parser.add_argument(
+        "--hyperparams", type=Path, default=None, help="YAML whose body section overrides the shipped hyperparams.yml"
+    )
     parser.add_argument("--checkpoint-freq", type=int, default=50_000, help="env steps between checkpoints")
     parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=50)
@@ -48,6 +51,7 @@ def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _run_train_low(args: argparse.Namespace) -> int:
+    from antmaze_hirl.sb3_ext.config import load_config
     from antmaze_hirl.sb3_ext.training import set_torch_threads, train_low_level
 
     set_torch_threads(args.threads)
@@ -58,6 +62,7 @@ def _run_train_low(args: argparse.Namespace) -> int:
         args.out,
         seed=args.seed,
         resume=args.resume,
+        config=load_config(args.body, args.hyperparams),
         init_from=args.init_from,
         checkpoint_freq=args.checkpoint_freq,
         eval_freq=args.eval_freq,

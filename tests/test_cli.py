@@ -4,6 +4,7 @@ from pathlib import Path
 
 import pytest
 
+from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import build_parser, main
 
 
@@ -33,3 +34,12 @@ def test_unknown_body_is_rejected(capsys):
     with pytest.raises(SystemExit):
         build_parser().parse_args(["demo", "--body", "spider"])
     assert "invalid choice: 'spider'" in capsys.readouterr().err
+
+
+def test_train_low_reads_a_hyperparams_override(tmp_path, capsys):
+    overrides = tmp_path / "tiny.yml"
+    overrides.write_text("point:\n  gamma: 0.9\n  learning_starts: 100\n  buffer_size: 5000\n")
+    args = ["train-low", "--body", "point", "--timesteps", "200", "--out", str(tmp_path / "run"), "--no-progress"]
+    assert main([*args, "--hyperparams", str(overrides), "--eval-freq", "1000", "--eval-episodes", "2"]) == 0
+    assert "trained 200 steps" in capsys.readouterr().out
+    assert load_low_level("point", tmp_path / "run" / "policy.zip").gamma == 0.9

@@ -213,3 +213,15 @@ def test_learning_curves_plot_one_line_per_run(tmp_path, monkeypatch):
     out = plotting.plot_learning_curves({"a": ([1, 2], [0.1, 0.5]), "b": ([1], [0.2])}, tmp_path / "deep" / "c.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert lines == [([1, 2], [0.1, 0.5], "a"), ([1], [0.2], "b")]
+
+
+def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):
+    overrides = tmp_path / "mine.yml"
+    overrides.write_text("ant:\n  gamma: 0.9\n  env_kwargs: {chain_probability: 0.5}\n")
+    shipped, mine = load_config("ant"), load_config("ant", overrides)
+    assert mine == shipped.replace(gamma=0.9, env_kwargs={"chain_probability": 0.5})
+    with pytest.raises(ValueError, match=r"mine.yml has no section for body 'point'; it has \['ant'\]"):
+        load_config("point", overrides)
+    overrides.write_text("ant:\n  gama: 0.9\n")
+    with pytest.raises(ValueError, match=r"mine.yml section 'ant' has unknown keys \['gama'\]"):
+        load_config("ant", overrides)

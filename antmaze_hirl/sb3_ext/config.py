@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -56,21 +57,34 @@ class LowLevelConfig:
         return data
 
 
-def load_config(body: str) -> LowLevelConfig:
-    """The shipped hyperparameters for ``body`` (``"ant"`` or ``"point"``).
+def load_config(body: str, overrides: str | Path | None = None) -> LowLevelConfig:
+    """The shipped hyperparameters for ``body`` (``"ant"`` or ``"point"``), optionally overridden.
+
+    Args:
+        body: Section to read.
+        overrides: A YAML file in the same format (a section per body); the keys its ``body`` section
+            sets replace the shipped ones, whole values (``env_kwargs`` too), the rest stay.
 
     Raises:
-        ValueError: If the file has no section for ``body`` or a section has an unknown key.
+        ValueError: If a file has no section for ``body`` or a section has an unknown key.
 
     """
-    text = resources.files("antmaze_hirl.sb3_ext").joinpath("hyperparams.yml").read_text()
-    sections = yaml.safe_load(text)
-    if body not in sections:
-        raise ValueError(f"hyperparams.yml has no section for body {body!r}; it has {sorted(sections)}")
-    values = dict(sections[body])
-    known = {f.name for f in dataclasses.fields(LowLevelConfig)}
-    unknown = sorted(set(values) - known)
-    if unknown:
-        raise ValueError(f"hyperparams.yml section {body!r} has unknown keys {unknown}")
+    values = _section(
+        resources.files("antmaze_hirl.sb3_ext").joinpath("hyperparams.yml").read_text(), body, "hyperparams.yml"
+    )
+    if overrides is not None:
+        values.update(_section(Path(overrides).read_text(), body, str(overrides)))
     values["net_arch"] = tuple(values.get("net_arch", LowLevelConfig.net_arch))
     return LowLevelConfig(**values)
+
+
+def _section(text: str, body: str, source: str) -> dict[str, Any]:
+    sections = yaml.safe_load(text) or {}
+    if not isinstance(sections, dict) or body not in sections:
+        found = sorted(sections) if isinstance(sections, dict) else type(sections).__name__
+        raise ValueError(f"{source} has no section for body {body!r}; it has {found}")
+    values = dict(sections[body])
+    unknown = sorted(set(values) - {f.name for f in dataclasses.fields(LowLevelConfig)})
+    if unknown:
+        raise ValueError(f"{source} section {body!r} has unknown keys {unknown}")
+    return values
