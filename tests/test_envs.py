@@ -276,8 +276,28 @@ def test_chaining_never_continues_a_flipped_ant():
     qpos = env.sim.data.qpos.copy()
     qpos[2], qpos[3:7] = 0.27, [0.0, 1.0, 0.0, 0.0]
     env.sim._mujoco_env.set_state(qpos, np.zeros_like(env.sim.data.qvel))
+    assert env.sim.is_flipped
     env.reset()
     assert not env.sim.is_flipped
+
+
+def test_chaining_off_keeps_the_random_stream_and_a_new_layout_starts_afresh():
+    plain, off = ReachEnv("point"), ReachEnv("point", chain_probability=0.0)
+    plain.reset(seed=3)
+    off.reset(seed=3)
+    for _ in range(3):
+        np.testing.assert_array_equal(plain.reset()[0]["desired_goal"], off.reset()[0]["desired_goal"])
+    chained = ReachEnv("point", "u", chain_probability=1.0)
+    chained.reset(seed=0)
+    for _ in range(10):
+        chained.step(np.ones(2))
+    moved_to = chained.agent_xy
+    other = validate_maze_map("u").copy()
+    other[2, 2] = False  # open the U's middle wall: a new MuJoCo model with no body state to chain from
+    chained.set_walls(other)
+    start = chained.reset()[0]["achieved_goal"]
+    assert not np.array_equal(start, moved_to)
+    np.testing.assert_array_equal(chained.reset()[0]["achieved_goal"], start)  # and chains again from there
 
 
 @pytest.mark.parametrize("terminate_on_flip", [True, False])

@@ -73,10 +73,12 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         pixels_per_cell: Image resolution.
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
         min_subgoal_distance: Subgoals nearer the body than this, metres, are pushed out to it along
-            the same heading (flagged in ``info``). A subgoal inside the low level's reach radius is
-            "reached" in one step, so a learner (or a beta-blend of opposite proposals) that keeps
-            proposing one would burn an expert label per low-level step. Default twice the low level's
-            ``distance_threshold`` (ant 0.9 m, point 0.4 m); 0 turns it off.
+            the same heading, then clipped to the maze bounds (flagged in ``info``; near a border the
+            clip can leave them nearer, which :class:`~antmaze_hirl.dagger.DAggerTrainer` catches).
+            A subgoal inside the low level's reach radius is "reached" in one step, so a learner (or a
+            beta-blend of opposite proposals) that keeps proposing one would burn an expert label per
+            low-level step. Default twice the low level's ``distance_threshold`` (ant 0.9 m, point
+            0.4 m); 0 turns it off.
         terminate_on_flip: Ant only: end the episode as a failure once the ant has flipped.
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a bird's-eye picture.
@@ -154,7 +156,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         if not 0 <= self.min_subgoal_distance < self.geometry.scale:
             raise ValueError(
                 f"min_subgoal_distance must lie in [0, {self.geometry.scale}) metres (one cell), "
-                f"got {min_subgoal_distance}"
+                f"got {self.min_subgoal_distance}"
             )
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
         scale = self.geometry.scale

@@ -194,6 +194,7 @@ class ReachEnv(GoalEnv, EzPickle):
         if not np.array_equal(walls, self.sim.walls):
             self.sim.close()
             self.sim = MazeSimulator(self.body, walls, include_contact_forces=self._include_contact_forces)
+            self._started = False  # the new simulator holds no body to chain from
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
         """Starts an episode: a new start and subgoal, or, when it chains, only a new subgoal.

@@ -83,6 +83,8 @@ def _section(text: str, body: str, source: str) -> dict[str, Any]:
     if not isinstance(sections, dict) or body not in sections:
         found = sorted(sections) if isinstance(sections, dict) else type(sections).__name__
         raise ValueError(f"{source} has no section for body {body!r}; it has {found}")
+    if not isinstance(sections[body], dict):
+        raise ValueError(f"{source} section {body!r} must map keys to values, got {sections[body]!r}")
     values = dict(sections[body])
     unknown = sorted(set(values) - {f.name for f in dataclasses.fields(LowLevelConfig)})
     if unknown:
