@@ -34,7 +34,7 @@ def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
         action_space=env.action_space,
         rng=rng,
         demonstrations=transitions,
-        batch_size=8,
+        batch_size=4,  # two short point episodes give ~6 labels
     )
     cloner.train(n_batches=3, progress_bar=False)
 
