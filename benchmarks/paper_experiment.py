@@ -16,7 +16,7 @@ runs 3x3 mazes with 2 m oracle subgoals. At half torque the shipped ant walks ~0
 
 Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100] [--maze-size N]
            [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
-       python benchmarks/paper_experiment.py --body ant --ceiling-only [--maze-size 3]
+       python benchmarks/paper_experiment.py --body ant --ceiling-only [--maze-size 3] [--low-level candidate.zip]
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.sb3_ext.policies import load_low_level
 
 METHODS = ("dagger", "noise", "multi_policy", "reward")
 BODY_DEFAULTS = {
@@ -62,10 +63,11 @@ def goals(summary: dict, body: str) -> dict:
     }
 
 
-def oracle_ceiling(config: ExperimentConfig) -> dict:
+def oracle_ceiling(config: ExperimentConfig, low_level_path: Path | None = None) -> dict:
     """The oracle itself driving the same low level on the same held-out mazes: what any learner can reach."""
-    env = make_env(config)
+    env = make_env(config, None if low_level_path is None else load_low_level(config.body, low_level_path))
     return {
+        "low_level": "shipped" if low_level_path is None else str(low_level_path),
         "maze_size": config.maze_size,
         "expert_max_distance": config.expert_max_distance,
         **evaluate_high_level(
@@ -87,6 +89,12 @@ def main() -> None:
         action="store_true",
         help="only measure the oracle ceiling (writes oracle_ceiling_<body>_<size>.json)",
     )
+    parser.add_argument(
+        "--low-level",
+        type=Path,
+        default=None,
+        help="with --ceiling-only: a candidate low-level policy .zip instead of the shipped one",
+    )
     args = parser.parse_args()
     torch.set_num_threads(1)
     settings = {
@@ -98,9 +106,11 @@ def main() -> None:
         },
     }
     config = ExperimentConfig(body=args.body, episodes=args.episodes, **settings)
+    if args.low_level is not None and not args.ceiling_only:
+        parser.error("--low-level only goes with --ceiling-only: trials always use the shipped policy")
     if args.ceiling_only:
-        ceiling = oracle_ceiling(config)
-        atomic_write_json(RESULTS / f"oracle_ceiling_{args.body}_{args.maze_size}.json", ceiling)
+        ceiling = oracle_ceiling(config, args.low_level)
+        atomic_write_json(RESULTS / f"oracle_ceiling_{args.body}_{config.maze_size}.json", ceiling)
         print("oracle ceiling:", ceiling)
         return
     out = RESULTS / f"paper_experiment_{args.body}"
