@@ -184,8 +184,7 @@ class DAggerTrainer:
             )
             if self.per_step_gradient_steps:
                 self._fit(self.per_step_gradient_steps)
-            executed = self._mix(expert_subgoal, learner_subgoal, beta, agent_xy=obs["state"][:2])
-            obs, _, terminated, truncated, info = self.env.step(executed)
+            obs, _, terminated, truncated, info = self.env.step(self._mix(expert_subgoal, learner_subgoal, beta))
             done = terminated or truncated
         removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
         self.episodes_done += 1
@@ -205,17 +204,17 @@ class DAggerTrainer:
             removed=len(removed),
         )
 
-    def _mix(
-        self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float, *, agent_xy: np.ndarray
-    ) -> np.ndarray:
+    def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
         if self.mixing == "switch":
             chosen = expert_subgoal if self.rng.random() < beta else learner_subgoal
         else:
             chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
         inner = self.env.unwrapped
-        chosen = np.clip(chosen, inner.action_space.low, inner.action_space.high)
-        if np.linalg.norm(chosen - agent_xy) < inner.min_subgoal_distance:
-            return np.clip(expert_subgoal, inner.action_space.low, inner.action_space.high)
+        low, high = inner.action_space.low, inner.action_space.high
+        chosen = np.clip(chosen, low, high)
+        # Measured as the env measures its push-out: from the body's exact position.
+        if np.linalg.norm(chosen - inner.agent_xy) < inner.min_subgoal_distance:
+            return np.clip(expert_subgoal, low, high)
         return chosen
 
     def _fit(self, steps: int) -> None:
