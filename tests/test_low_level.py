@@ -1,3 +1,5 @@
+import csv
+import io
 import json
 
 import gymnasium as gym
@@ -144,7 +146,7 @@ def test_user_brings_sac_with_her_and_no_glue():
     assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
 
 
-def test_learning_curve_and_tensorboard_are_written(tmp_path):
+def test_learning_curve_snapshots_and_tensorboard_are_written(tmp_path):
     train_low_level(
         "point",
         "td3",
@@ -161,6 +163,12 @@ def test_learning_curve_and_tensorboard_are_written(tmp_path):
     assert any((tmp_path / "tb").rglob("events.out.tfevents.*"))
     (state_file,) = (tmp_path / "checkpoints").glob("ckpt-*/state.json")  # the end-of-training checkpoint
     assert json.loads(state_file.read_text())["num_timesteps"] == 300
+    # One policy snapshot per evaluation: the very policy that scored that row of the curve.
+    assert sorted(p.name for p in (tmp_path / "snapshots").iterdir()) == ["step_150.zip", "step_300.zip"]
+    for row in csv.DictReader(io.StringIO("\n".join(rows))):
+        snapshot = load_low_level("point", tmp_path / "snapshots" / f"step_{row['timesteps']}.zip")
+        rescored = evaluate_reach(snapshot, ReachEnv("point"), episodes=3, seed=10_000)
+        assert rescored["mean_steps"] == float(row["mean_steps"]), row
 
 
 def test_relative_goal_extractor_uses_offsets_in_the_heading_frame():

@@ -13,6 +13,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from antmaze_hirl.atomic_io import atomic_write_text
 from antmaze_hirl.envs.controllers import as_controller
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.sb3_ext.policies import save_policy
 
 
 def evaluate_reach(
@@ -73,6 +74,9 @@ class SuccessRateCallback(BaseCallback):
         episodes: Attempts per evaluation.
         seed: Base seed of the held-out subgoals (the same set at every evaluation).
         csv_path: Learning-curve file (``timesteps,success_rate,mean_steps``), appended across resumes.
+        snapshot_dir: If set, the policy evaluated at step ``n`` is also saved as ``snapshot_dir/step_<n>.zip``
+            (model only, like ``policy.zip``): TD3's success rate swings between evaluations, so the best
+            point of a run is picked afterwards, on another seed than the one it is reported on.
 
     """
 
@@ -84,6 +88,7 @@ class SuccessRateCallback(BaseCallback):
         episodes: int,
         seed: int = 10_000,
         csv_path: str | Path | None = None,
+        snapshot_dir: str | Path | None = None,
         verbose: int = 0,
     ) -> None:
         super().__init__(verbose)
@@ -92,6 +97,7 @@ class SuccessRateCallback(BaseCallback):
         self.episodes = episodes
         self.seed = seed
         self.csv_path = Path(csv_path) if csv_path is not None else None
+        self.snapshot_dir = Path(snapshot_dir) if snapshot_dir is not None else None
         self._last_eval = 0
         self.history: list[dict[str, float | int]] = []
 
@@ -119,6 +125,8 @@ class SuccessRateCallback(BaseCallback):
         if self.csv_path is not None:
             previous = self.csv_path.read_text() if self.csv_path.exists() else _csv_text([])
             atomic_write_text(self.csv_path, previous + _csv_text([row]).split("\n", 1)[1])
+        if self.snapshot_dir is not None:
+            save_policy(self.model, self.snapshot_dir / f"step_{self.model.num_timesteps}.zip")
         if self.verbose:
             print(f"eval at {row['timesteps']}: success_rate={result['success_rate']:.3f}")
         return row

@@ -1,8 +1,9 @@
-"""Loading low-level policies: the ones shipped inside the package, or any TD3/DDPG ``.zip``."""
+"""Saving and loading low-level policies: the ones shipped inside the package, or any TD3/DDPG ``.zip``."""
 
 from __future__ import annotations
 
 import functools
+import os
 import zipfile
 from importlib import resources
 from pathlib import Path
@@ -59,3 +60,13 @@ def load_low_level(body: str, path: str | Path | None = None, *, device: str = "
             f"gives {expected}: wrong checkpoint for this body?"
         )
     return model
+
+
+def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
+    """Saves the model without replay buffer or env, atomically (temp file in the same folder + rename)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    staging = path.with_name(f".{path.stem}.tmp.zip")
+    model.save(staging, exclude=["replay_buffer", "env"])
+    os.replace(staging, path)
+    return path

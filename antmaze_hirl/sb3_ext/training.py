@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,7 @@ from antmaze_hirl.sb3_ext.checkpoint import CheckpointCallback, latest_checkpoin
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
+from antmaze_hirl.sb3_ext.policies import save_policy
 
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG}
 
@@ -98,8 +98,9 @@ def train_low_level(
     """Trains (or resumes) a low-level policy until ``total_timesteps`` environment steps in all.
 
     Writes ``out_dir/checkpoints/`` (see :mod:`antmaze_hirl.sb3_ext.checkpoint`),
-    ``out_dir/learning_curve.csv``, TensorBoard logs in ``out_dir/tb`` and the final policy
-    ``out_dir/policy.zip`` (model only, no replay buffer: what ships and what ``eval-low`` loads).
+    ``out_dir/learning_curve.csv``, the policy at every evaluation as ``out_dir/snapshots/step_<n>.zip``,
+    TensorBoard logs in ``out_dir/tb`` and the final policy ``out_dir/policy.zip`` (model only, no replay
+    buffer: what ships and what ``eval-low`` loads).
 
     Args:
         body: ``"ant"`` or ``"point"``.
@@ -147,7 +148,11 @@ def train_low_level(
         if init_from is not None:
             model.set_parameters(str(init_from), exact_match=True, device=model.device)
     eval_callback = SuccessRateCallback(
-        ReachEnv(body), eval_freq=eval_freq, episodes=eval_episodes, csv_path=out_dir / "learning_curve.csv"
+        ReachEnv(body),
+        eval_freq=eval_freq,
+        episodes=eval_episodes,
+        csv_path=out_dir / "learning_curve.csv",
+        snapshot_dir=out_dir / "snapshots",
     )
     callbacks: list[BaseCallback] = [
         CheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
@@ -159,16 +164,6 @@ def train_low_level(
         model.learn(remaining, callback=callbacks, reset_num_timesteps=False, progress_bar=progress_bar)
     save_policy(model, out_dir / "policy.zip")
     return model
-
-
-def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
-    """Saves the model without replay buffer or env, atomically (temp file in the same folder + rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    staging = path.with_name(f".{path.stem}.tmp.zip")
-    model.save(staging, exclude=["replay_buffer", "env"])
-    os.replace(staging, path)
-    return path
 
 
 def set_torch_threads(threads: int) -> None:
