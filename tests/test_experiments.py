@@ -3,6 +3,7 @@ import json
 import math
 
 import pytest
+import torch as th
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments import ExperimentConfig, cost_to_reach, run_experiment, summarise
@@ -66,6 +67,23 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
         run_experiment(["aggrevate"], 1, TINY, tmp_path / "other", progress_bar=False)
     with pytest.raises(ValueError, match="expert_max_distance must be > 0 metres, got -1"):
         ExperimentConfig(expert_max_distance=-1.0)
+
+
+def test_experiment_refuses_results_made_with_another_low_level(tmp_path):
+    from antmaze_hirl.envs.controllers import PointGoToController
+    from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+
+    summary = run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
+    shipped = summary["config"]["low_level"]
+    assert shipped.startswith("sha256:") and json.loads((tmp_path / "config.json").read_text())["low_level"] == shipped
+    # The same weights loaded again are the same low level; other weights or a scripted controller are not.
+    run_experiment(["dagger"], 1, TINY, tmp_path, low_level=load_low_level("point"), progress_bar=False)
+    retrained = load_low_level("point", shipped_policy_path("point"))
+    with th.no_grad():
+        next(retrained.policy.parameters()).add_(1e-3)
+    for other in (retrained, PointGoToController()):
+        with pytest.raises(ValueError, match=f"made with low-level policy {shipped}, not"):
+            run_experiment(["dagger"], 1, TINY, tmp_path, low_level=other, progress_bar=False)
 
 
 def test_results_written_before_a_setting_existed_still_resume(tmp_path):

@@ -23,6 +23,7 @@ from antmaze_hirl.envs.simulator import body_spec
 from antmaze_hirl.experiments.plots import plot_panels
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experts.oracle import PathOracle
+from antmaze_hirl.sb3_ext.policies import load_shipped_policy, policy_fingerprint
 
 COLUMNS = (
     "method",
@@ -88,6 +89,17 @@ class ExperimentConfig:
             raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
         if self.mixing not in ("blend", "switch"):
             raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
+
+
+def low_level_identity(body: str, low_level: Any = None) -> str:
+    """What a results folder records of the low level: the weights' fingerprint, or the callable's name.
+
+    ``None`` stands for the policy shipped for ``body`` (what the high-level env loads by default).
+    """
+    model = load_shipped_policy(body) if low_level is None else low_level
+    if hasattr(model, "policy") and hasattr(model.policy, "state_dict"):
+        return f"sha256:{policy_fingerprint(model)}"
+    return f"callable:{type(model).__qualname__}"  # weights unknown: only the kind is checked
 
 
 def make_env(config: ExperimentConfig, low_level: Any = None) -> gym.Env:
@@ -171,20 +183,31 @@ def run_experiment(
 
     Writes ``out_dir/episodes.csv``, ``out_dir/summary.json`` and ``out_dir/panels.png``.
 
+    ``out_dir/config.json`` records the settings and the low level's identity
+    (:func:`low_level_identity`); a folder made with either different is refused, not resumed.
+
     Raises:
-        ValueError: On an unknown method, or a results folder made with other settings.
+        ValueError: On an unknown method, or a results folder made with other settings or low level.
     """
     for method in methods:
         make_strategy(method)
     out_dir = Path(out_dir)
     config_path = out_dir / "config.json"
     settings = asdict(config)
+    low_level_id = low_level_identity(config.body, low_level)
     if config_path.exists():
+        saved = json.loads(config_path.read_text())
+        saved_low_level = saved.pop("low_level", None)
         # Settings added since the folder was written count at their defaults.
-        saved = {**asdict(ExperimentConfig(body=config.body)), **json.loads(config_path.read_text())}
+        saved = {**asdict(ExperimentConfig(body=config.body)), **saved}
         if saved != settings:
             raise ValueError(f"{out_dir} holds results made with {saved}, not {settings}; use another --out")
-    atomic_write_json(config_path, settings)
+        if saved_low_level != low_level_id:
+            raise ValueError(
+                f"{out_dir} holds results made with low-level policy {saved_low_level}, not {low_level_id}: "
+                "use another --out, or delete its trials/ to rerun them with this low level"
+            )
+    atomic_write_json(config_path, {**settings, "low_level": low_level_id})
     # Seed-major order: an interrupted run still has every method on its first seeds.
     pending = [(m, s) for s in range(seeds) for m in methods if not _trial_path(out_dir, m, s).exists()]
     with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
@@ -207,7 +230,8 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
     seconds = {
         path.stem: json.loads(path.read_text())["seconds"] for path in sorted((out_dir / "trials").glob("*.json"))
     }
-    summary = {"config": asdict(config), "methods": summarise(rows, methods), "trial_seconds": seconds}
+    recorded = json.loads((out_dir / "config.json").read_text())  # the settings and the low level's identity
+    summary = {"config": recorded, "methods": summarise(rows, methods), "trial_seconds": seconds}
     atomic_write_json(out_dir / "summary.json", summary)
     plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
     return summary

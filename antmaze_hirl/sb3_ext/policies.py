@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
 import zipfile
 from importlib import resources
@@ -70,3 +71,16 @@ def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
     model.save(staging, exclude=["replay_buffer", "env"])
     os.replace(staging, path)
     return path
+
+
+def policy_fingerprint(model: OffPolicyAlgorithm) -> str:
+    """A short SHA-256 of the policy's weights: the same networks give the same fingerprint.
+
+    Results folders record it, so that results made with one low-level policy are never resumed
+    with another (a new shipped policy changes every ant figure).
+    """
+    digest = hashlib.sha256()
+    for name, tensor in sorted(model.policy.state_dict().items()):
+        digest.update(name.encode())
+        digest.update(tensor.detach().cpu().contiguous().numpy().tobytes())
+    return digest.hexdigest()[:16]
