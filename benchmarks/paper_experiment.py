@@ -28,8 +28,9 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
-from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.sb3_ext.policies import load_low_level
 
@@ -63,16 +64,27 @@ def goals(summary: dict, body: str) -> dict:
     }
 
 
-def oracle_ceiling(config: ExperimentConfig, low_level_path: Path | None = None) -> dict:
-    """The oracle itself driving the same low level on the same held-out mazes: what any learner can reach."""
-    env = make_env(config, None if low_level_path is None else load_low_level(config.body, low_level_path))
+def oracle_ceiling(
+    config: ExperimentConfig,
+    low_level_path: Path | None = None,
+    *,
+    seed: int = HELD_OUT_SEED,
+    episodes: int | None = None,
+) -> dict:
+    """The oracle itself driving the same low level on the same held-out mazes: what any learner can reach.
+
+    ``seed`` and ``episodes`` default to the learners' final evaluation (``config.final_eval_episodes`` mazes).
+    """
+    low_level = load_low_level(config.body, low_level_path) if low_level_path is not None else None
+    env = make_env(config, low_level)
+    oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
     return {
         "low_level": "shipped" if low_level_path is None else str(low_level_path),
+        "low_level_id": low_level_identity(config.body, low_level),
         "maze_size": config.maze_size,
         "expert_max_distance": config.expert_max_distance,
-        **evaluate_high_level(
-            PathOracle.for_env(env, max_distance=config.expert_max_distance), env, episodes=config.final_eval_episodes
-        ),
+        "maze_seed": seed,
+        **evaluate_high_level(oracle, env, episodes=episodes or config.final_eval_episodes, seed=seed),
     }
 
 
