@@ -54,7 +54,7 @@ def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int) -> dic
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders (with snapshots/) or policy .zip files")
+    parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
     parser.add_argument("--body", choices=["point", "ant"], default="ant")
     parser.add_argument("--seed", type=int, default=1, help="subgoal seed of the selection eval-low (not 0)")
     parser.add_argument("--episodes", type=int, default=200)
