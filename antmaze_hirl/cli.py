@@ -122,7 +122,8 @@ def _add_experiment(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--expert-max-distance", type=float, default=None, help="oracle's farthest subgoal, metres (default: 1 cell)"
     )
-    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial (default: 1)")
+    parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes (default: 1)")
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=_run_experiment)
 
@@ -145,7 +146,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         expert_max_distance=args.expert_max_distance,
     )
     methods = [method.strip() for method in args.methods.split(",") if method.strip()]
-    summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress)
+    summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress, jobs=args.jobs)
     for method, figures in summary["methods"].items():
         final = figures["final_success"]
         print(

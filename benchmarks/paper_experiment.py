@@ -14,7 +14,7 @@ Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) 
 runs 3x3 mazes with 2 m oracle subgoals. At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps
 (25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
 
-Usage: python benchmarks/paper_experiment.py --body point|ant [--seeds 5] [--episodes 100] [--maze-size N]
+Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--seeds 5] [--episodes 100] [--maze-size N]
            [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
        python benchmarks/paper_experiment.py --body ant --ceiling-only [--maze-size 3] [--low-level candidate.zip]
 """
@@ -94,6 +94,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(METHODS))
+    parser.add_argument("--jobs", type=int, default=1, help="trials in parallel processes (2 on 2 cores)")
     parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")
     parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
     parser.add_argument(
@@ -126,7 +127,7 @@ def main() -> None:
         print("oracle ceiling:", ceiling)
         return
     out = RESULTS / f"paper_experiment_{args.body}"
-    summary = run_experiment(args.methods.split(","), args.seeds, config, out)
+    summary = run_experiment(args.methods.split(","), args.seeds, config, out, jobs=args.jobs)
     summary["goals"] = goals(summary, args.body)
     summary["oracle_ceiling"] = oracle_ceiling(config)
     atomic_write_json(out / "summary.json", summary)

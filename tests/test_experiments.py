@@ -59,6 +59,15 @@ def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     assert (tmp_path / "trials" / "reward_seed1.csv").exists()
 
 
+def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path):
+    serial = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "serial", progress_bar=False)
+    parallel = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "parallel", progress_bar=False, jobs=2)
+    assert parallel["methods"] == serial["methods"]
+    assert (tmp_path / "parallel" / "episodes.csv").read_text() == (tmp_path / "serial" / "episodes.csv").read_text()
+    with pytest.raises(ValueError, match="jobs must be >= 1, got 0"):
+        run_experiment(["dagger"], 1, TINY, tmp_path / "other", progress_bar=False, jobs=0)
+
+
 def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="holds results made with"):

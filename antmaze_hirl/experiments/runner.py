@@ -6,14 +6,17 @@ import csv
 import io
 import json
 import math
+import multiprocessing
 import time
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import torch
 from tqdm.auto import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
@@ -145,6 +148,25 @@ def run_trial(
     return rows
 
 
+def run_and_save_trial(
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    out_dir: Path,
+    *,
+    low_level: Any = None,
+    progress: tqdm | None = None,
+) -> Path:
+    """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``."""
+    start = time.perf_counter()
+    rows = run_trial(method, seed, config, low_level=low_level, progress=progress)
+    seconds = round(time.perf_counter() - start, 1)
+    path = _trial_path(out_dir, method, seed)
+    atomic_write_json(path.with_suffix(".json"), {"seconds": seconds})
+    atomic_write_text(path, rows_to_csv(rows))  # last: its existence marks the trial done
+    return path
+
+
 def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
     """The rows as CSV text with :data:`COLUMNS`."""
     buffer = io.StringIO()
@@ -174,8 +196,13 @@ def run_experiment(
     *,
     low_level: Any = None,
     progress_bar: bool = True,
+    jobs: int = 1,
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
+
+    With ``jobs > 1`` the trials run in that many worker processes (each with this process's torch
+    thread count); the numbers are the same as with one job, the recorded trial wall times are
+    those of the busy machine. ``low_level`` must then be picklable (``None``, the shipped policy, is).
 
     Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv`` (its wall time
     beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
@@ -191,6 +218,8 @@ def run_experiment(
     """
     for method in methods:
         make_strategy(method)
+    if jobs < 1:
+        raise ValueError(f"jobs must be >= 1, got {jobs}")
     out_dir = Path(out_dir)
     config_path = out_dir / "config.json"
     settings = asdict(config)
@@ -211,14 +240,28 @@ def run_experiment(
     # Seed-major order: an interrupted run still has every method on its first seeds.
     pending = [(m, s) for s in range(seeds) for m in methods if not _trial_path(out_dir, m, s).exists()]
     with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
-        for method, seed in pending:
-            bar.set_postfix_str(f"{method} seed {seed}")
-            start = time.perf_counter()
-            rows = run_trial(method, seed, config, low_level=low_level, progress=bar)
-            seconds = round(time.perf_counter() - start, 1)
-            atomic_write_json(_trial_path(out_dir, method, seed).with_suffix(".json"), {"seconds": seconds})
-            atomic_write_text(_trial_path(out_dir, method, seed), rows_to_csv(rows))
-            write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
+        if jobs == 1:
+            for method, seed in pending:
+                bar.set_postfix_str(f"{method} seed {seed}")
+                run_and_save_trial(method, seed, config, out_dir, low_level=low_level, progress=bar)
+                write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
+        else:
+            # Trials are independent and seeded by their own rng, so a pool gives the same numbers;
+            # spawn: a fresh interpreter per worker (no forked MuJoCo or torch thread state).
+            context = multiprocessing.get_context("spawn")
+            initargs = (torch.get_num_threads(),)
+            pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=torch.set_num_threads, initargs=initargs)
+            try:
+                futures = [
+                    pool.submit(run_and_save_trial, method, seed, config, out_dir, low_level=low_level)
+                    for method, seed in pending
+                ]
+                for future in as_completed(futures):
+                    future.result()  # re-raises a worker's error here
+                    bar.update(config.episodes)
+                    write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
+            finally:
+                pool.shutdown(cancel_futures=True)  # on an error, trials not started are dropped
     return write_reports(out_dir, methods, seeds, config)
 
 
