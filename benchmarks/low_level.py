@@ -117,7 +117,8 @@ def read_curve(path: Path) -> tuple[list[int], list[float]]:
 def learning_curve_png() -> str:
     curves = {label: read_curve(RESULTS / name) for label, name in ANT_CURVES.items() if (RESULTS / name).exists()}
     title = "Ant TD3 + HER, held-out subgoals up to 4 m"
-    return str(plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title=title))
+    path = plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title=title)
+    return str(Path(path).resolve().relative_to(RESULTS.resolve().parent.parent))  # repo-relative: JSON is committed
 
 
 def main() -> None:
