@@ -45,6 +45,7 @@ def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--checkpoint-freq", type=int, default=50_000, help="env steps between checkpoints")
     parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=50)
+    parser.add_argument("--no-snapshots", action="store_true", help="do not keep the policy of every evaluation")
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.set_defaults(handler=_run_train_low)
@@ -67,6 +68,7 @@ def _run_train_low(args: argparse.Namespace) -> int:
         checkpoint_freq=args.checkpoint_freq,
         eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes,
+        snapshots=not args.no_snapshots,
         progress_bar=not args.no_progress,
     )
     print(f"trained {model.num_timesteps} steps; policy: {args.out / 'policy.zip'}")

@@ -78,13 +78,14 @@ def oracle_ceiling(
     low_level = load_low_level(config.body, low_level_path) if low_level_path is not None else None
     env = make_env(config, low_level)
     oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    episodes = config.final_eval_episodes if episodes is None else episodes
     return {
         "low_level": "shipped" if low_level_path is None else str(low_level_path),
         "low_level_id": low_level_identity(config.body, low_level),
         "maze_size": config.maze_size,
         "expert_max_distance": config.expert_max_distance,
         "maze_seed": seed,
-        **evaluate_high_level(oracle, env, episodes=episodes or config.final_eval_episodes, seed=seed),
+        **evaluate_high_level(oracle, env, episodes=episodes, seed=seed),
     }
 
 

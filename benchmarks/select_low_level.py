@@ -4,8 +4,9 @@ TD3's success rate swings by +-10 points between evaluations of one run, so the 
 Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored on *selection* sets that the
 reported figures never use:
 
-* ``eval_low``: free-space reaching as ``antmaze-hirl eval-low`` measures it, but on subgoal seed ``--seed``
-  (default 1; the README and ``benchmarks/low_level.py`` report seed 0);
+* ``eval_low``: free-space reaching as ``antmaze-hirl eval-low`` measures it, but on subgoal seeds
+  ``--seed`` .. ``--seed + episodes - 1`` (default from 100,000), disjoint from the reported ones
+  (seeds 0-199: the README and ``benchmarks/low_level.py``) and from train-low's held-out curve (10,000-);
 * ``ceiling``: the scripted oracle driving the snapshot through ``--mazes`` random mazes of the ant protocol
   (3x3, 2 m subgoals) drawn from maze seed 2,000,000 (the experiment's held-out mazes start at 1,000,000).
 
@@ -33,6 +34,8 @@ from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
 from antmaze_hirl.sb3_ext.policies import load_low_level
 
 SELECTION_MAZE_SEED = 2_000_000
+# Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.
+RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
 
 
 def snapshot_step(path: Path) -> int:
@@ -56,14 +59,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
     parser.add_argument("--body", choices=["point", "ant"], default="ant")
-    parser.add_argument("--seed", type=int, default=1, help="subgoal seed of the selection eval-low (not 0)")
+    parser.add_argument("--seed", type=int, default=100_000, help="first subgoal seed of the selection eval-low")
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--mazes", type=int, default=50)
     parser.add_argument("--min-step", type=int, default=0, help="skip snapshots before this step")
     parser.add_argument("--out", type=Path, default=RESULTS / "low_level_selection.json")
     args = parser.parse_args()
-    if args.seed == 0:
-        parser.error("--seed 0 is the reported eval-low set: select on another seed")
+    chosen = range(args.seed, args.seed + args.episodes)
+    for reserved in RESERVED_SUBGOAL_SEEDS:
+        if chosen.start < reserved.stop and reserved.start < chosen.stop:
+            parser.error(f"subgoal seeds {chosen} overlap {reserved}, which reported figures use: pick another --seed")
+    missing = [str(run) for run in args.runs if run.suffix != ".zip" and not (run / "snapshots").is_dir()]
+    if missing:
+        parser.error(f"no snapshots/ folder in {missing}")
     torch.set_num_threads(1)
     settings = {"body": args.body, "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes}
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}

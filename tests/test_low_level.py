@@ -67,6 +67,8 @@ def test_resume_continues_step_count_and_buffer(tmp_path):
     assert state["num_timesteps"] == 400 and state["buffer_size"] == first.replay_buffer.size() == 400
     curve_file = tmp_path / "learning_curve.csv"
     curve_file.write_text(curve_file.read_text() + "500,0.5,2,10.0\n")  # logged after the checkpoint, then killed
+    snapshots = tmp_path / "snapshots"
+    (snapshots / "step_450.zip").write_bytes((snapshots / "step_400.zip").read_bytes())  # ... with its snapshot
     resumed = train_low_level("point", "td3", 700, tmp_path, config=config, resume=True, checkpoint_freq=150, **tiny)
     assert resumed.num_timesteps == 700
     assert resumed.replay_buffer.size() == 700
@@ -74,6 +76,7 @@ def test_resume_continues_step_count_and_buffer(tmp_path):
     assert not folder.exists(), "older checkpoints are removed once a newer one is complete"
     curve = [int(line.split(",")[0]) for line in curve_file.read_text().splitlines()[1:]]
     assert curve == [100, 200, 300, 400, 500, 600, 700], "steps re-run after a resume are logged once"
+    assert sorted(int(p.stem[5:]) for p in snapshots.glob("step_*.zip")) == curve, "abandoned snapshots are dropped"
 
 
 def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):

@@ -100,9 +100,10 @@ def low_level_identity(body: str, low_level: Any = None) -> str:
     ``None`` stands for the policy shipped for ``body`` (what the high-level env loads by default).
     """
     model = load_shipped_policy(body) if low_level is None else low_level
-    if hasattr(model, "policy") and hasattr(model.policy, "state_dict"):
+    if isinstance(getattr(model, "policy", None), torch.nn.Module) or isinstance(model, torch.nn.Module):
         return f"sha256:{policy_fingerprint(model)}"
-    return f"callable:{type(model).__qualname__}"  # weights unknown: only the kind is checked
+    named = model if hasattr(model, "__qualname__") else type(model)
+    return f"callable:{named.__module__}.{named.__qualname__}"  # weights unknown: only what it is is checked
 
 
 def make_env(config: ExperimentConfig, low_level: Any = None) -> gym.Env:
@@ -203,6 +204,7 @@ def run_experiment(
     With ``jobs > 1`` the trials run in that many worker processes (each with this process's torch
     thread count); the numbers are the same as with one job, the recorded trial wall times are
     those of the busy machine. ``low_level`` must then be picklable (``None``, the shipped policy, is).
+    A worker's error is raised once the trials already running have finished (each is saved).
 
     Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv`` (its wall time
     beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
@@ -211,7 +213,8 @@ def run_experiment(
     Writes ``out_dir/episodes.csv``, ``out_dir/summary.json`` and ``out_dir/panels.png``.
 
     ``out_dir/config.json`` records the settings and the low level's identity
-    (:func:`low_level_identity`); a folder made with either different is refused, not resumed.
+    (:func:`low_level_identity`); a folder holding finished trials made with either different is
+    refused, not resumed.
 
     Raises:
         ValueError: On an unknown method, or a results folder made with other settings or low level.
@@ -224,9 +227,9 @@ def run_experiment(
     config_path = out_dir / "config.json"
     settings = asdict(config)
     low_level_id = low_level_identity(config.body, low_level)
-    if config_path.exists():
+    if config_path.exists() and any((out_dir / "trials").glob("*.csv")):
         saved = json.loads(config_path.read_text())
-        saved_low_level = saved.pop("low_level", None)
+        saved_low_level = saved.pop("low_level", "not recorded (a folder from before low levels were recorded)")
         # Settings added since the folder was written count at their defaults.
         saved = {**asdict(ExperimentConfig(body=config.body)), **saved}
         if saved != settings:
@@ -270,9 +273,9 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
     done = [(m, s) for m in methods for s in range(seeds) if _trial_path(out_dir, m, s).exists()]
     rows = [row for m, s in done for row in read_rows(_trial_path(out_dir, m, s))]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
-    seconds = {
-        path.stem: json.loads(path.read_text())["seconds"] for path in sorted((out_dir / "trials").glob("*.json"))
-    }
+    timed = sorted(_trial_path(out_dir, m, s).with_suffix(".json") for m, s in done)
+    # Finished trials only (a parallel worker writes its .json just before its .csv); older folders lack some.
+    seconds = {path.stem: json.loads(path.read_text())["seconds"] for path in timed if path.exists()}
     recorded = json.loads((out_dir / "config.json").read_text())  # the settings and the low level's identity
     summary = {"config": recorded, "methods": summarise(rows, methods), "trial_seconds": seconds}
     atomic_write_json(out_dir / "summary.json", summary)

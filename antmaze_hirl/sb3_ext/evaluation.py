@@ -103,6 +103,11 @@ class SuccessRateCallback(BaseCallback):
 
     def _init_callback(self) -> None:
         self._last_eval = self.model.num_timesteps
+        if self.snapshot_dir is not None:
+            # A resumed run retrains the steps after its checkpoint: later snapshots are of abandoned policies.
+            for stale in self.snapshot_dir.glob("step_*.zip"):
+                if int(stale.stem.removeprefix("step_")) > self._last_eval:
+                    stale.unlink()
         if self.csv_path is not None and self.csv_path.exists():
             # A resumed run repeats the steps after its checkpoint: drop the rows it will write again.
             with self.csv_path.open() as handle:

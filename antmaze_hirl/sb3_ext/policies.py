@@ -9,6 +9,7 @@ import zipfile
 from importlib import resources
 from pathlib import Path
 
+import torch as th
 from stable_baselines3 import TD3
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
@@ -73,14 +74,15 @@ def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
     return path
 
 
-def policy_fingerprint(model: OffPolicyAlgorithm) -> str:
-    """A short SHA-256 of the policy's weights: the same networks give the same fingerprint.
+def policy_fingerprint(model: OffPolicyAlgorithm | th.nn.Module) -> str:
+    """A short SHA-256 of the policy's weights (of an SB3 model or a torch module): same weights, same fingerprint.
 
     Results folders record it, so that results made with one low-level policy are never resumed
     with another (a new shipped policy changes every ant figure).
     """
     digest = hashlib.sha256()
-    for name, tensor in sorted(model.policy.state_dict().items()):
+    module = model if isinstance(model, th.nn.Module) else model.policy
+    for name, tensor in sorted(module.state_dict().items()):
         digest.update(name.encode())
-        digest.update(tensor.detach().cpu().contiguous().numpy().tobytes())
+        digest.update(tensor.detach().cpu().contiguous().reshape(-1).view(th.uint8).numpy().tobytes())
     return digest.hexdigest()[:16]

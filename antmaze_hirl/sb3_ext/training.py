@@ -92,13 +92,14 @@ def train_low_level(
     checkpoint_freq: int = 50_000,
     eval_freq: int = 25_000,
     eval_episodes: int = 50,
+    snapshots: bool = True,
     progress_bar: bool = True,
     extra_callbacks: list[BaseCallback] | None = None,
 ) -> OffPolicyAlgorithm:
     """Trains (or resumes) a low-level policy until ``total_timesteps`` environment steps in all.
 
     Writes ``out_dir/checkpoints/`` (see :mod:`antmaze_hirl.sb3_ext.checkpoint`),
-    ``out_dir/learning_curve.csv``, the policy at every evaluation as ``out_dir/snapshots/step_<n>.zip``,
+    ``out_dir/learning_curve.csv``, the policy of every evaluation as ``out_dir/snapshots/step_<n>.zip``,
     TensorBoard logs in ``out_dir/tb`` and the final policy ``out_dir/policy.zip`` (model only, no replay
     buffer: what ships and what ``eval-low`` loads).
 
@@ -117,6 +118,7 @@ def train_low_level(
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
+        snapshots: Keep the policy of every evaluation in ``out_dir/snapshots/`` (~4 MB each for the ant).
         progress_bar: Show SB3's progress bar.
         extra_callbacks: More SB3 callbacks to run.
 
@@ -152,7 +154,7 @@ def train_low_level(
         eval_freq=eval_freq,
         episodes=eval_episodes,
         csv_path=out_dir / "learning_curve.csv",
-        snapshot_dir=out_dir / "snapshots",
+        snapshot_dir=out_dir / "snapshots" if snapshots else None,
     )
     callbacks: list[BaseCallback] = [
         CheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
