@@ -8,8 +8,8 @@
    its share; the ratio is reported both as measured and with the measured save time amortised over
    the default 50k steps between checkpoints.
 2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies.
-3. The learning curve of the shipped ant run (``benchmarks/results/ant_learning_curve.csv``) as a PNG,
-   beside the curves of the runs that chose its settings.
+3. The learning curves of the shipped ant's two training stages (``benchmarks/results/ant_learning_curve*.csv``)
+   as a PNG, beside the curves of the runs that chose its settings.
 
 Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 2] [--episodes 200]
 Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
@@ -97,25 +97,33 @@ def shipped_figures(episodes: int) -> dict[str, dict]:
     return figures
 
 
-# The shipped ant run first, then the runs that chose its settings (README, "Shipped low-level policies").
+# The shipped ant's two stages first (stage 2 warm-starts from stage 1's 500k policy, so its steps are
+# plotted after 500k), then the runs that chose the settings (README, "Shipped low-level policies").
+# label -> (CSV in benchmarks/results, steps before the run started)
 ANT_CURVES = {
-    "shipped: scale 0.5, gamma 0.98, action_l2 1": "ant_learning_curve.csv",
-    "scale 0.5, gamma 0.98, no action penalty": "ant_learning_curve_scale05_gamma098_no_penalty.csv",
-    "scale 0.5, gamma 0.95": "ant_learning_curve_scale05_gamma095.csv",
-    "scale 0.5, warm start from the scale-1 run": "ant_learning_curve_scale05_warm_start.csv",
-    "scale 1 (full torque), gamma 0.95": "ant_learning_curve_scale1.csv",
-    "scale 1, absolute goal (no RelativeGoalExtractor)": "ant_learning_curve_absolute_goal.csv",
+    "stage 1: scale 0.5, gamma 0.98, action_l2 1": ("ant_learning_curve.csv", 0),
+    "stage 2: chained subgoals 0.75 (ant_chain.yml)": ("ant_learning_curve_chain.csv", 500_000),
+    "stage 2: chained 0.5, lr 3e-4 (ant_chain_finetune.yml)": ("ant_learning_curve_chain_finetune.csv", 500_000),
+    "scale 0.5, gamma 0.98, no action penalty": ("ant_learning_curve_scale05_gamma098_no_penalty.csv", 0),
+    "scale 0.5, gamma 0.95": ("ant_learning_curve_scale05_gamma095.csv", 0),
+    "scale 0.5, warm start from the scale-1 run": ("ant_learning_curve_scale05_warm_start.csv", 0),
+    "scale 1 (full torque), gamma 0.95": ("ant_learning_curve_scale1.csv", 0),
+    "scale 1, absolute goal (no RelativeGoalExtractor)": ("ant_learning_curve_absolute_goal.csv", 0),
 }
 
 
-def read_curve(path: Path) -> tuple[list[int], list[float]]:
+def read_curve(path: Path, offset: int = 0) -> tuple[list[int], list[float]]:
     with path.open() as handle:
         rows = list(csv.DictReader(handle))
-    return [int(row["timesteps"]) for row in rows], [float(row["success_rate"]) for row in rows]
+    return [offset + int(row["timesteps"]) for row in rows], [float(row["success_rate"]) for row in rows]
 
 
 def learning_curve_png() -> str:
-    curves = {label: read_curve(RESULTS / name) for label, name in ANT_CURVES.items() if (RESULTS / name).exists()}
+    curves = {
+        label: read_curve(RESULTS / name, offset)
+        for label, (name, offset) in ANT_CURVES.items()
+        if (RESULTS / name).exists()
+    }
     title = "Ant TD3 + HER, held-out subgoals up to 4 m"
     path = plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title=title)
     return str(Path(path).resolve().relative_to(RESULTS.resolve().parent.parent))  # repo-relative: JSON is committed
