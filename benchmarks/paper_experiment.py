@@ -1,7 +1,7 @@
 """The paper's protocol: 100 training episodes x 5 seeds x every method, scripted oracle as the expert.
 
 Runs ``antmaze-hirl experiment`` for the point body and/or the ant (with its shipped low-level policy)
-into ``benchmarks/results/paper_experiment_<body>/`` (summary.json, episodes.csv, panels.png, and one
+into ``benchmarks/results/paper_experiment_<body>/`` (or ``--out``) (summary.json, episodes.csv, panels.png, and one
 CSV per finished trial, so an interrupted run resumes), then prints the figures against the goals:
 
 * ant, best method: final learner-only success >= 0.80 on 100 held-out mazes (the paper: > 0.60);
@@ -96,6 +96,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(METHODS))
     parser.add_argument("--jobs", type=int, default=1, help="trials in parallel processes (2 on 2 cores)")
+    parser.add_argument("--out", type=Path, default=None, help="results folder (default: results/paper_experiment_BODY)")
     parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")
     parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
     parser.add_argument(
@@ -127,7 +128,7 @@ def main() -> None:
         atomic_write_json(RESULTS / f"oracle_ceiling_{args.body}_{config.maze_size}.json", ceiling)
         print("oracle ceiling:", ceiling)
         return
-    out = RESULTS / f"paper_experiment_{args.body}"
+    out = args.out if args.out is not None else RESULTS / f"paper_experiment_{args.body}"
     summary = run_experiment(args.methods.split(","), args.seeds, config, out, jobs=args.jobs)
     summary["goals"] = goals(summary, args.body)
     summary["oracle_ceiling"] = oracle_ceiling(config)
