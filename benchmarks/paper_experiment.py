@@ -96,7 +96,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(METHODS))
     parser.add_argument("--jobs", type=int, default=1, help="trials in parallel processes (2 on 2 cores)")
-    parser.add_argument("--out", type=Path, default=None, help="results folder (default: results/paper_experiment_BODY)")
+    parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment_BODY")
     parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")
     parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
     parser.add_argument(
