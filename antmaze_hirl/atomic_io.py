@@ -5,26 +5,46 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
-    """Writes ``data`` to ``path`` so that readers see the old file or the new one, never a partial one."""
+def atomic_write_with(path: str | Path, write: Callable[[Path], object]) -> Path:
+    """Lets ``write(tmp)`` fill a temp file beside ``path``, then renames it over ``path`` atomically.
+
+    Readers see the old file or the new one, never a partial one; the temp file is fsynced before the
+    rename (durable across a power cut) and removed if ``write`` fails. Each call gets its own temp
+    name, so concurrent writers of one path never clobber each other's half-written files.
+
+    Args:
+        path: The file to (re)place.
+        write: Writes the whole new content to the path it is given (e.g. ``model.save``).
+
+    Returns:
+        ``path``.
+
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")
+    os.close(fd)
+    tmp = Path(tmp_name)
     try:
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files; give the usual permissions
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(data)
-            handle.flush()
+        write(tmp)
+        with tmp.open("rb") as handle:
             os.fsync(handle.fileno())
         os.replace(tmp, path)
     except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Writes ``data`` to ``path`` atomically (see :func:`atomic_write_with`)."""
+    return atomic_write_with(path, lambda tmp: tmp.write_bytes(data))
 
 
 def _umask() -> int:
@@ -34,10 +54,10 @@ def _umask() -> int:
 
 
 def atomic_write_text(path: str | Path, text: str) -> Path:
-    """Writes ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_write_bytes`)."""
+    """Writes ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_write_with`)."""
     return atomic_write_bytes(path, text.encode())
 
 
 def atomic_write_json(path: str | Path, data: Any) -> Path:
-    """Writes ``data`` as indented JSON, atomically (see :func:`atomic_write_bytes`)."""
+    """Writes ``data`` as indented JSON, atomically (see :func:`atomic_write_with`)."""
     return atomic_write_text(path, json.dumps(data, indent=2) + "\n")

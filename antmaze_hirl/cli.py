@@ -9,6 +9,7 @@ from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.simulator import BODY_SPECS
+from antmaze_hirl.sb3_ext.config import ALGOS
 
 
 def _add_demo(subparsers: argparse._SubParsersAction) -> None:
@@ -33,7 +34,7 @@ def _run_demo(args: argparse.Namespace) -> int:
 def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser("train-low", help="train a low-level reach policy with SB3 TD3/DDPG + HER")
     parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
-    parser.add_argument("--algo", choices=["td3", "ddpg"], default="td3")
+    parser.add_argument("--algo", choices=list(ALGOS), default="td3")
     parser.add_argument("--timesteps", type=int, required=True, help="total env steps, counting resumed ones")
     parser.add_argument("--out", type=Path, required=True, help="run folder (checkpoints, curve, policy.zip)")
     parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
@@ -80,7 +81,12 @@ def _add_eval_low(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
     parser.add_argument("--policy", type=Path, default=None, help="policy .zip (default: the shipped one)")
     parser.add_argument("--episodes", type=int, default=200)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="subgoal i uses seed SEED+i, so disjoint sets need seeds at least --episodes apart (default: 0)",
+    )
     parser.add_argument(
         "--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)"
     )
@@ -94,7 +100,10 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.sb3_ext.policies import load_low_level
 
     policy = load_low_level(args.body, path=args.policy)
-    env = ReachEnv(args.body, goal_radius=args.max_distance)
+    try:
+        env = ReachEnv(args.body, goal_radius=args.max_distance)
+    except ValueError as error:
+        raise ValueError(f"--max-distance {args.max_distance}: {error}") from error
     result = evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed)
     print(json.dumps(result))
     if args.json is not None:
@@ -172,8 +181,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``antmaze-hirl`` console script."""
-    args = build_parser().parse_args(argv)
-    return args.handler(args)
+    from antmaze_hirl.sb3_ext.checkpoint import CheckpointError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.handler(args)
+    except (CheckpointError, OSError, ValueError) as error:
+        # Bad input (a value, a file, a checkpoint) gets one line naming it, not a traceback.
+        parser.exit(2, f"antmaze-hirl {args.command}: error: {error}\n")
 
 
 if __name__ == "__main__":

@@ -129,9 +129,12 @@ class ReachEnv(GoalEnv, EzPickle):
         self.min_goal_distance = float(min_goal_distance if min_goal_distance is not None else self.distance_threshold)
         if self.horizon < 1:
             raise ValueError(f"horizon must be >= 1, got {horizon}")
-        if not 0 <= self.min_goal_distance < self.goal_radius:
+        if self.min_goal_distance < 0:
+            raise ValueError(f"min_goal_distance must be >= 0 metres, got {self.min_goal_distance}")
+        if not self.min_goal_distance < self.goal_radius:
             raise ValueError(
-                f"need 0 <= min_goal_distance < goal_radius, got {self.min_goal_distance} and {self.goal_radius}"
+                f"goal_radius {self.goal_radius} m leaves no room for subgoals: it must exceed "
+                f"min_goal_distance {self.min_goal_distance} m (default: the success threshold)"
             )
         if self.distance_threshold <= 0:
             raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")

@@ -32,7 +32,9 @@ def evaluate_reach(
         policy: SB3 model or callable goal observation -> action (acting deterministically).
         env: The reach env; its ``goal_radius`` is the largest subgoal distance tested.
         episodes: Number of attempts (>= 1).
-        seed: Base seed; the same seed gives the same subgoals.
+        seed: Base seed; the same seed gives the same subgoals. Sets overlap by construction
+            (``seed=1`` shares episodes 1..n-1 of ``seed=0``), so disjoint test sets need base seeds at
+            least ``episodes`` apart; a prefix is a subset (100 episodes are the first 100 of 200).
 
     Returns:
         ``{"success_rate", "episodes", "mean_steps"}``, steps counted to first success (H on failure).
@@ -73,7 +75,7 @@ class SuccessRateCallback(BaseCallback):
         eval_freq: Environment steps between evaluations.
         episodes: Attempts per evaluation.
         seed: Base seed of the held-out subgoals (the same set at every evaluation).
-        csv_path: Learning-curve file (``timesteps,success_rate,mean_steps``), appended across resumes.
+        csv_path: Learning-curve file (``timesteps,success_rate,episodes,mean_steps``), appended across resumes.
         snapshot_dir: If set, the policy evaluated at step ``n`` is also saved as ``snapshot_dir/step_<n>.zip``
             (model only, like ``policy.zip``): TD3's success rate swings between evaluations, so the best
             point of a run is picked afterwards, on another seed than the one it is reported on.
@@ -92,6 +94,9 @@ class SuccessRateCallback(BaseCallback):
         verbose: int = 0,
     ) -> None:
         super().__init__(verbose)
+        for name, value in (("eval_freq", eval_freq), ("episodes", episodes)):
+            if value < 1:
+                raise ValueError(f"{name} must be >= 1, got {value}")
         self.eval_env = eval_env
         self.eval_freq = eval_freq
         self.episodes = episodes
@@ -99,14 +104,14 @@ class SuccessRateCallback(BaseCallback):
         self.csv_path = Path(csv_path) if csv_path is not None else None
         self.snapshot_dir = Path(snapshot_dir) if snapshot_dir is not None else None
         self._last_eval = 0
-        self.history: list[dict[str, float | int]] = []
 
     def _init_callback(self) -> None:
         self._last_eval = self.model.num_timesteps
         if self.snapshot_dir is not None:
             # A resumed run retrains the steps after its checkpoint: later snapshots are of abandoned policies.
             for stale in self.snapshot_dir.glob("step_*.zip"):
-                if int(stale.stem.removeprefix("step_")) > self._last_eval:
+                step = stale.stem.removeprefix("step_")
+                if step.isdigit() and int(step) > self._last_eval:  # other files there are the user's
                     stale.unlink()
         if self.csv_path is not None and self.csv_path.exists():
             # A resumed run repeats the steps after its checkpoint: drop the rows it will write again.
@@ -124,9 +129,12 @@ class SuccessRateCallback(BaseCallback):
         self._last_eval = self.model.num_timesteps
         result = evaluate_reach(self.model, self.eval_env, episodes=self.episodes, seed=self.seed)
         row = {"timesteps": self.model.num_timesteps, **result}
-        self.history.append(row)
         self.logger.record("eval/success_rate", result["success_rate"])
         self.logger.record("eval/mean_steps", result["mean_steps"])
+        # Written now, at this step (as SB3's EvalCallback does): otherwise the values wait for the next
+        # episode-end dump, which labels them with a later step and never comes after the last evaluation.
+        self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
+        self.logger.dump(self.num_timesteps)
         if self.csv_path is not None:
             previous = self.csv_path.read_text() if self.csv_path.exists() else _csv_text([])
             atomic_write_text(self.csv_path, previous + _csv_text([row]).split("\n", 1)[1])

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import os
 import zipfile
 from importlib import resources
 from pathlib import Path
@@ -13,6 +12,7 @@ import torch as th
 from stable_baselines3 import TD3
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
+from antmaze_hirl.atomic_io import atomic_write_with
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.envs.simulator import body_spec
 
@@ -65,13 +65,8 @@ def load_low_level(body: str, path: str | Path | None = None, *, device: str = "
 
 
 def save_policy(model: OffPolicyAlgorithm, path: str | Path) -> Path:
-    """Saves the model without replay buffer or env, atomically (temp file in the same folder + rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    staging = path.with_name(f".{path.stem}.tmp.zip")
-    model.save(staging, exclude=["replay_buffer", "env"])
-    os.replace(staging, path)
-    return path
+    """Saves the model without replay buffer or env, atomically (temp file beside ``path``, fsync, rename)."""
+    return atomic_write_with(path, lambda tmp: model.save(tmp, exclude=["replay_buffer", "env"]))
 
 
 def policy_fingerprint(model: OffPolicyAlgorithm | th.nn.Module) -> str:

@@ -41,6 +41,14 @@ def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
     return Monitor(ReachEnv(body, **config.env_kwargs))
 
 
+def make_eval_env(body: str, config: LowLevelConfig) -> ReachEnv:
+    """The held-out evaluation env: the training env's body and settings, every subgoal from rest.
+
+    Only ``chain_probability`` is dropped: evaluation starts every subgoal from rest, as ``eval-low`` does.
+    """
+    return ReachEnv(body, **{key: value for key, value in config.env_kwargs.items() if key != "chain_probability"})
+
+
 def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
     """SB3 ``policy_kwargs`` for ``config``: network sizes, optional relative-goal extractor and action penalty."""
     kwargs: dict[str, Any] = {"net_arch": list(config.net_arch)}
@@ -113,8 +121,8 @@ def train_low_level(
             made with another body, algo, seed or config).
         config: Hyperparameters; default :func:`load_config` for ``body``.
         init_from: Warm start: a TD3/DDPG ``.zip`` with the same networks whose weights and optimiser
-            states the new model starts from (its replay buffer starts empty). Ignored on resume,
-            where the checkpoint holds the weights.
+            states the new model starts from (its replay buffer starts empty). On resume it may be left
+            out (the checkpoint holds the weights); if given, it must be the one the run started from.
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
@@ -124,21 +132,21 @@ def train_low_level(
 
     Raises:
         antmaze_hirl.sb3_ext.checkpoint.CheckpointError: On a missing, corrupt or mismatched checkpoint.
+        FileExistsError: If a fresh run (``resume=False``) would overwrite a run in ``out_dir``.
+        ValueError: On a negative ``total_timesteps``, or a frequency or episode count below 1.
 
     """
+    if total_timesteps < 0:
+        raise ValueError(f"total_timesteps must be >= 0, got {total_timesteps}")
     config = config if config is not None else load_config(body)
     algo_class(algo)
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
-    run_state = {
-        "body": body,
-        "algo": algo,
-        "seed": seed,
-        "config": config.to_dict(),
-        "init_from": None if init_from is None else str(init_from),
-    }
+    identity = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
+    run_state = {**identity, "init_from": None if init_from is None else str(init_from)}
     if resume:
-        folder, _ = latest_checkpoint(checkpoint_dir, expected=run_state)
+        folder, state = latest_checkpoint(checkpoint_dir, expected=run_state if init_from is not None else identity)
+        run_state["init_from"] = state.get("init_from")  # later checkpoints keep where the run started from
         model = algo_class(algo).load(folder / "model.zip", env=make_reach_env(body, config))
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     else:
@@ -149,16 +157,16 @@ def train_low_level(
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
         if init_from is not None:
             model.set_parameters(str(init_from), exact_match=True, device=model.device)
-    eval_callback = SuccessRateCallback(
-        ReachEnv(body),
-        eval_freq=eval_freq,
-        episodes=eval_episodes,
-        csv_path=out_dir / "learning_curve.csv",
-        snapshot_dir=out_dir / "snapshots" if snapshots else None,
-    )
+    # The callbacks check their frequencies and episode counts here, before any training step.
     callbacks: list[BaseCallback] = [
         CheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
-        eval_callback,
+        SuccessRateCallback(
+            make_eval_env(body, config),
+            eval_freq=eval_freq,
+            episodes=eval_episodes,
+            csv_path=out_dir / "learning_curve.csv",
+            snapshot_dir=out_dir / "snapshots" if snapshots else None,
+        ),
         *(extra_callbacks or []),
     ]
     remaining = total_timesteps - model.num_timesteps
@@ -173,4 +181,4 @@ def set_torch_threads(threads: int) -> None:
     torch.set_num_threads(threads)
 
 
-__all__ = ["algo_class", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
+__all__ = ["algo_class", "make_eval_env", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]

@@ -1,0 +1,32 @@
+import os
+
+import pytest
+
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_with
+
+
+def test_a_failed_write_keeps_the_old_file_and_leaves_no_temp_file(tmp_path):
+    target = atomic_write_json(tmp_path / "study.json", {"participants": 3})
+
+    def crash_half_way(tmp):
+        tmp.write_text('{"participa')
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write_with(target, crash_half_way)
+    assert target.read_text() == '{\n  "participants": 3\n}\n'
+    assert os.listdir(tmp_path) == ["study.json"]
+
+
+def test_writers_get_their_own_temp_file_beside_the_target(tmp_path):
+    seen = []
+    for _ in range(2):
+        atomic_write_with(tmp_path / "policy.zip", lambda tmp: seen.append(tmp) or tmp.write_bytes(b"PK"))
+    assert seen[0] != seen[1] and all(tmp.parent == tmp_path and tmp.suffix == ".zip" for tmp in seen)
+    assert oct((tmp_path / "policy.zip").stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
