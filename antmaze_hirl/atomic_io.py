@@ -33,13 +33,22 @@ def atomic_write_with(path: str | Path, write: Callable[[Path], object]) -> Path
     try:
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600 files; give the usual permissions
         write(tmp)
-        with tmp.open("rb") as handle:
-            os.fsync(handle.fileno())
+        fsync_path(tmp)
         os.replace(tmp, path)
+        fsync_path(path.parent)  # the rename itself is durable only once the folder's entry is on disk
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+def fsync_path(path: str | Path) -> None:
+    """Flushes a file's content, or a folder's entries (renames, new files), to disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
 
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:

@@ -99,11 +99,11 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
     from antmaze_hirl.sb3_ext.policies import load_low_level
 
-    policy = load_low_level(args.body, path=args.policy)
     try:
         env = ReachEnv(args.body, goal_radius=args.max_distance)
     except ValueError as error:
         raise ValueError(f"--max-distance {args.max_distance}: {error}") from error
+    policy = load_low_level(args.body, path=args.policy)
     result = evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed)
     print(json.dumps(result))
     if args.json is not None:
@@ -173,6 +173,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``antmaze-hirl`` with all subcommands."""
     parser = argparse.ArgumentParser(prog="antmaze-hirl", description=__doc__)
+    parser.add_argument("--traceback", action="store_true", help="show the full traceback of an error")
     subparsers = parser.add_subparsers(dest="command", required=True)
     for add in (_add_demo, _add_train_low, _add_eval_low, _add_experiment):
         add(subparsers)
@@ -187,9 +188,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.handler(args)
-    except (CheckpointError, OSError, ValueError) as error:
-        # Bad input (a value, a file, a checkpoint) gets one line naming it, not a traceback.
-        parser.exit(2, f"antmaze-hirl {args.command}: error: {error}\n")
+    except (CheckpointError, FileExistsError, FileNotFoundError, ValueError) as error:
+        # What bad input raises (a value, a file, a checkpoint): one line naming it, not a traceback.
+        if args.traceback:
+            raise
+        parser.exit(2, f"antmaze-hirl {args.command}: error: {error} (--traceback shows where)\n")
 
 
 if __name__ == "__main__":

@@ -30,16 +30,12 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments import ExperimentConfig
 from antmaze_hirl.experiments.runner import low_level_identity
-from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
+from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.policies import load_low_level
 
 SELECTION_MAZE_SEED = 2_000_000
 # Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.
 RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
-
-
-def snapshot_step(path: Path) -> int:
-    return int(path.stem.removeprefix("step_"))
 
 
 def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int) -> dict:
@@ -76,9 +72,10 @@ def main() -> None:
     settings = {"body": args.body, "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes}
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}
     scores = cached.get("scores", {}) if cached.get("settings") == settings else {}
+    steps = {p: snapshot_step(p) for run in args.runs for p in (run / "snapshots").glob("step_*.zip")}
     snapshots = [run for run in args.runs if run.suffix == ".zip"] + sorted(
-        (p for run in args.runs for p in (run / "snapshots").glob("step_*.zip") if snapshot_step(p) >= args.min_step),
-        key=lambda p: (str(p.parent), snapshot_step(p)),
+        (p for p, step in steps.items() if step is not None and step >= args.min_step),
+        key=lambda p: (str(p.parent), steps[p]),
     )
     if not snapshots:
         parser.error(f"no snapshots at or after step {args.min_step} in {[str(r) for r in args.runs]}")

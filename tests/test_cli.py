@@ -7,6 +7,7 @@ import pytest
 
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import build_parser, main
+from antmaze_hirl.sb3_ext import CheckpointError
 
 
 @pytest.mark.parametrize("command", ["demo", "train-low", "eval-low", "experiment"])
@@ -67,3 +68,5 @@ def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
     assert "train-low: error: no checkpoint to resume in" in capsys.readouterr().err
+    with pytest.raises(CheckpointError, match="no checkpoint to resume"):
+        main(["--traceback", "train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])

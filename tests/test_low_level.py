@@ -12,6 +12,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext import CheckpointError, evaluate_reach, load_config, make_model, train_low_level
 from antmaze_hirl.sb3_ext.checkpoint import latest_checkpoint, save_checkpoint
+from antmaze_hirl.sb3_ext.evaluation import snapshot_step
 from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
 
 TINY = {"eval_freq": 10**9, "eval_episodes": 5, "progress_bar": False}
@@ -137,10 +138,26 @@ def test_bad_budgets_fail_before_any_training(tmp_path):
 
 
 def test_evaluation_runs_on_the_training_envs_settings(tmp_path):
-    config = tiny_config(env_kwargs={"horizon": 7, "chain_probability": 0.5})
+    config = tiny_config(env_kwargs={"horizon": 7})
     train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=10**9, **{**TINY, "eval_freq": 200})
     (row,) = csv.DictReader((tmp_path / "learning_curve.csv").open())
     assert float(row["mean_steps"]) <= 7  # the default point horizon is 50
+
+
+def test_the_final_checkpoint_has_every_update_of_the_run(tmp_path):
+    # 300 steps, a checkpoint every 150: the last periodic save and the end of training fall on one step.
+    model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=150, **TINY)
+    folder, _ = latest_checkpoint(tmp_path / "checkpoints")
+    saved = load_low_level("point", folder / "model.zip")
+    assert saved._n_updates == model._n_updates == 200  # one update per step after learning_starts=100
+    obs, _ = ReachEnv("point").reset(seed=1)
+    np.testing.assert_array_equal(saved.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
+
+
+def test_snapshot_step_reads_only_snapshot_names(tmp_path):
+    assert snapshot_step(tmp_path / "step_25000.zip") == 25000
+    assert snapshot_step(tmp_path / "step_best.zip") is None
+    assert snapshot_step(tmp_path / "step_25000.csv") is None
 
 
 def test_crashed_saves_leave_nothing_behind(tmp_path):
@@ -149,8 +166,9 @@ def test_crashed_saves_leave_nothing_behind(tmp_path):
     directory.mkdir()
     (directory / ".staging-dead").mkdir()  # a save killed while writing
     (directory / "ckpt-99").mkdir()  # a save killed after its rename, before the pointer moved
+    (directory / "ckpt-good-one").mkdir()  # not a name save_checkpoint writes: the user's
     final = save_checkpoint(model, directory, {})
-    assert sorted(p.name for p in directory.iterdir()) == sorted([final.name, "latest.json"])
+    assert sorted(p.name for p in directory.iterdir()) == sorted([final.name, "ckpt-good-one", "latest.json"])
 
 
 def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):
@@ -318,3 +336,12 @@ def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):
     overrides.write_text("ant:\n  gama: 0.9\n")
     with pytest.raises(ValueError, match=r"mine.yml section 'ant' has unknown keys \['gama'\]"):
         load_config("ant", overrides)
+    overrides.write_text("ant:\n  learning_rate: 3e-4\n")
+    with pytest.raises(ValueError, match=r"learning_rate must be float, got '3e-4' \(YAML 1.1 reads"):
+        load_config("ant", overrides)
+    overrides.write_text("ant: [gamma: 0.9\n")
+    with pytest.raises(ValueError, match=r"mine.yml is not valid YAML"):
+        load_config("ant", overrides)
+    with pytest.raises(ValueError, match="batch_size must be int, got True"):
+        shipped.replace(batch_size=True)
+    assert shipped.replace(learning_rate=1, batch_size=np.int64(64)).learning_rate == 1

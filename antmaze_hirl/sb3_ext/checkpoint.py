@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -18,12 +19,13 @@ from typing import Any
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
-from antmaze_hirl.atomic_io import atomic_write_text
+from antmaze_hirl.atomic_io import atomic_write_text, fsync_path
 
 POINTER = "latest.json"
 MODEL_FILE = "model.zip"
 BUFFER_FILE = "replay_buffer.pkl"
 STATE_FILE = "state.json"
+_SAVED_NAME = re.compile(r"ckpt-\d+(-\w+)?|\.staging-\w+")  # what save_checkpoint names its folders
 
 
 class CheckpointError(RuntimeError):
@@ -56,29 +58,20 @@ def save_checkpoint(model: OffPolicyAlgorithm, directory: str | Path, run_state:
         "sha256": {name: _sha256(staging / name) for name in (MODEL_FILE, BUFFER_FILE)},
     }
     (staging / STATE_FILE).write_text(json.dumps(state, indent=2))
-    for name in (MODEL_FILE, BUFFER_FILE, STATE_FILE):
-        _fsync(staging / name)
+    for name in (MODEL_FILE, BUFFER_FILE, STATE_FILE):  # durable before the pointer can name them
+        fsync_path(staging / name)
     final = directory / f"ckpt-{model.num_timesteps}"
     if final.exists():  # a second save at the same step count: never touch the folder the pointer may name
         final = directory / f"ckpt-{model.num_timesteps}-{staging.name.removeprefix('.staging-')}"
     os.replace(staging, final)
-    _fsync(directory)
+    fsync_path(directory)
     atomic_write_text(directory / POINTER, json.dumps({"checkpoint": final.name}))
     # Everything else is superseded: the previous checkpoint and what crashed saves left behind (a staging
     # folder, or a checkpoint renamed into place before its pointer moved), ~0.5 GB each for the ant.
-    for leftover in (*directory.glob("ckpt-*"), *directory.glob(".staging-*")):
-        if leftover != final and leftover.is_dir():
+    for leftover in directory.iterdir():
+        if leftover != final and leftover.is_dir() and _SAVED_NAME.fullmatch(leftover.name):
             shutil.rmtree(leftover)
     return final
-
-
-def _fsync(path: Path) -> None:
-    # Durable before the pointer moves: a power cut must not leave the pointer naming unwritten files.
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 def _pointed_dir(directory: Path) -> Path | None:
@@ -132,12 +125,14 @@ def latest_checkpoint(directory: str | Path, expected: dict[str, Any] | None = N
 class CheckpointCallback(BaseCallback):
     """Saves a :func:`save_checkpoint` every ``save_freq`` environment steps and at the end of training.
 
-    Saves fall at the end of a rollout (every ``train_freq`` steps for SB3's off-policy algorithms), so the
-    checkpoint's replay buffer holds exactly its step count of transitions.
+    Saves fall between rollouts (every ``train_freq`` steps for SB3's off-policy algorithms), after the
+    gradient updates of the last one, so a checkpoint's replay buffer holds exactly its step count of
+    transitions and its weights have had every update of those steps.
 
     Args:
         directory: Checkpoint folder.
-        save_freq: Environment steps between checkpoints; an interrupted run loses at most this many.
+        save_freq: Environment steps between checkpoints; an interrupted run loses at most this many plus
+            one rollout.
         run_state: Identity of the run (body, algo, seed, config), checked on resume.
 
     """
@@ -149,27 +144,30 @@ class CheckpointCallback(BaseCallback):
         self.directory = Path(directory)
         self.save_freq = save_freq
         self.run_state = run_state
-        self._last_saved = 0
+        self._last_saved = (0, 0)
 
     def _init_callback(self) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
-        self._last_saved = self.model.num_timesteps
+        self._last_saved = self._progress()
+
+    def _progress(self) -> tuple[int, int]:
+        return self.model.num_timesteps, self.model._n_updates
 
     def _on_step(self) -> bool:
         return True
 
-    def _on_rollout_end(self) -> None:
-        # Not in _on_step: SB3 calls that before it stores the step's transition, so a checkpoint saved
-        # there would hold one transition fewer than its step count. At a rollout's end both agree.
-        if self.model.num_timesteps - self._last_saved >= self.save_freq:
+    def _on_rollout_start(self) -> None:
+        # Not in _on_step, which SB3 calls before storing the step's transition, nor in _on_rollout_end,
+        # which comes before the rollout's gradient updates: when the next rollout starts, both are done.
+        if self.model.num_timesteps - self._last_saved[0] >= self.save_freq:
             self._save()
 
     def _on_training_end(self) -> None:
-        if self.model.num_timesteps != self._last_saved:
+        if self._progress() != self._last_saved:  # the last rollout's updates come after its last save
             self._save()
 
     def _save(self) -> None:
         folder = save_checkpoint(self.model, self.directory, self.run_state)
-        self._last_saved = self.model.num_timesteps
+        self._last_saved = self._progress()
         if self.verbose:
             print(f"checkpoint saved: {folder}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import numbers
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -11,6 +12,8 @@ from typing import Any
 import yaml
 
 ALGOS = ("td3", "ddpg")
+# Checked at construction: a YAML typo (``3e-4`` is a string in YAML 1.1) would otherwise fail deep inside SB3.
+_SCALAR_TYPES: dict[str, tuple[type, ...]] = {"float": (numbers.Real,), "int": (numbers.Integral,), "bool": (bool,)}
 
 
 @dataclass(frozen=True)
@@ -23,7 +26,7 @@ class LowLevelConfig:
     and ``env_kwargs`` for :class:`~antmaze_hirl.envs.reach.ReachEnv`.
 
     Raises:
-        ValueError: If ``action_l2`` is negative.
+        ValueError: If a number or flag has the wrong type, or ``action_l2`` is negative.
     """
 
     learning_rate: float = 1e-3
@@ -43,6 +46,12 @@ class LowLevelConfig:
     env_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for spec in dataclasses.fields(self):
+            value, accepted = getattr(self, spec.name), _SCALAR_TYPES.get(str(spec.type))
+            if accepted is None:
+                continue
+            if not isinstance(value, accepted) or isinstance(value, bool) != (bool in accepted):
+                raise ValueError(f"{spec.name} must be {spec.type}, got {value!r}{_yaml_hint(value)}")
         if self.action_l2 < 0:
             raise ValueError(f"action_l2 must be >= 0, got {self.action_l2}")
 
@@ -55,6 +64,14 @@ class LowLevelConfig:
         data = dataclasses.asdict(self)
         data["net_arch"] = list(self.net_arch)
         return data
+
+
+def _yaml_hint(value: Any) -> str:
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return ""
+    return " (YAML 1.1 reads 3e-4 as a string: write 3.0e-4)" if isinstance(value, str) else ""
 
 
 def load_config(body: str, overrides: str | Path | None = None) -> LowLevelConfig:
@@ -79,7 +96,10 @@ def load_config(body: str, overrides: str | Path | None = None) -> LowLevelConfi
 
 
 def _section(text: str, body: str, source: str) -> dict[str, Any]:
-    sections = yaml.safe_load(text) or {}
+    try:
+        sections = yaml.safe_load(text) or {}
+    except yaml.YAMLError as error:
+        raise ValueError(f"{source} is not valid YAML: {error}") from error
     if not isinstance(sections, dict) or body not in sections:
         found = sorted(sections) if isinstance(sections, dict) else type(sections).__name__
         raise ValueError(f"{source} has no section for body {body!r}; it has {found}")

@@ -56,6 +56,12 @@ def evaluate_reach(
     return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": float(np.mean(steps_used))}
 
 
+def snapshot_step(path: Path) -> int | None:
+    """The training step of a ``snapshots/step_<n>.zip`` policy, or ``None`` for any other file."""
+    step = path.stem.removeprefix("step_")
+    return int(step) if path.suffix == ".zip" and path.stem.startswith("step_") and step.isdigit() else None
+
+
 CURVE_COLUMNS = ["timesteps", "success_rate", "episodes", "mean_steps"]
 
 
@@ -110,8 +116,8 @@ class SuccessRateCallback(BaseCallback):
         if self.snapshot_dir is not None:
             # A resumed run retrains the steps after its checkpoint: later snapshots are of abandoned policies.
             for stale in self.snapshot_dir.glob("step_*.zip"):
-                step = stale.stem.removeprefix("step_")
-                if step.isdigit() and int(step) > self._last_eval:  # other files there are the user's
+                step = snapshot_step(stale)
+                if step is not None and step > self._last_eval:  # other files there are the user's
                     stale.unlink()
         if self.csv_path is not None and self.csv_path.exists():
             # A resumed run repeats the steps after its checkpoint: drop the rows it will write again.
@@ -133,8 +139,8 @@ class SuccessRateCallback(BaseCallback):
         self.logger.record("eval/mean_steps", result["mean_steps"])
         # Written now, at this step (as SB3's EvalCallback does): otherwise the values wait for the next
         # episode-end dump, which labels them with a later step and never comes after the last evaluation.
-        self.logger.record("time/total_timesteps", self.num_timesteps, exclude="tensorboard")
-        self.logger.dump(self.num_timesteps)
+        self.logger.record("time/total_timesteps", row["timesteps"], exclude="tensorboard")
+        self.logger.dump(row["timesteps"])
         if self.csv_path is not None:
             previous = self.csv_path.read_text() if self.csv_path.exists() else _csv_text([])
             atomic_write_text(self.csv_path, previous + _csv_text([row]).split("\n", 1)[1])

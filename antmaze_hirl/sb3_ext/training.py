@@ -41,14 +41,6 @@ def make_reach_env(body: str, config: LowLevelConfig) -> Monitor:
     return Monitor(ReachEnv(body, **config.env_kwargs))
 
 
-def make_eval_env(body: str, config: LowLevelConfig) -> ReachEnv:
-    """The held-out evaluation env: the training env's body and settings, every subgoal from rest.
-
-    Only ``chain_probability`` is dropped: evaluation starts every subgoal from rest, as ``eval-low`` does.
-    """
-    return ReachEnv(body, **{key: value for key, value in config.env_kwargs.items() if key != "chain_probability"})
-
-
 def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
     """SB3 ``policy_kwargs`` for ``config``: network sizes, optional relative-goal extractor and action penalty."""
     kwargs: dict[str, Any] = {"net_arch": list(config.net_arch)}
@@ -161,7 +153,9 @@ def train_low_level(
     callbacks: list[BaseCallback] = [
         CheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
         SuccessRateCallback(
-            make_eval_env(body, config),
+            # The training env's settings (observation size, horizon, ...) on a simulator of its own; its
+            # seeded resets never chain, so every held-out subgoal starts from rest, as in eval-low.
+            ReachEnv(body, **config.env_kwargs),
             eval_freq=eval_freq,
             episodes=eval_episodes,
             csv_path=out_dir / "learning_curve.csv",
@@ -181,4 +175,4 @@ def set_torch_threads(threads: int) -> None:
     torch.set_num_threads(threads)
 
 
-__all__ = ["algo_class", "make_eval_env", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
+__all__ = ["algo_class", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
