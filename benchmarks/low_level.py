@@ -12,7 +12,7 @@
 3. The learning curves of the shipped ant's two training stages (``benchmarks/results/ant_learning_curve*.csv``)
    as a PNG, beside the curves of the runs that chose its settings.
 
-Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 2] [--episodes 200] [--sets 4]
+Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
 Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
 """
 
@@ -144,7 +144,7 @@ def learning_curve_png() -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
-    parser.add_argument("--blocks", type=int, default=2)
+    parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--episodes", type=int, default=200, help="eval-low subgoals per set")
     parser.add_argument("--sets", type=int, default=4, help="disjoint eval-low sets per shipped policy (seed 0 first)")
     args = parser.parse_args()

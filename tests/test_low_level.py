@@ -345,3 +345,12 @@ def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):
     with pytest.raises(ValueError, match="batch_size must be int, got True"):
         shipped.replace(batch_size=True)
     assert shipped.replace(learning_rate=1, batch_size=np.int64(64)).learning_rate == 1
+
+
+@pytest.mark.parametrize("name", ["ant_chain.yml", "ant_chain_finetune.yml"])
+def test_the_committed_training_configs_load(name):
+    from pathlib import Path
+
+    config = load_config("ant", Path(__file__).parents[1] / "benchmarks" / "configs" / name)
+    assert config.env_kwargs["chain_probability"] in (0.5, 0.75)
+    ReachEnv("ant", **config.env_kwargs).close()

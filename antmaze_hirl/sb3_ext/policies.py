@@ -55,7 +55,9 @@ def load_low_level(body: str, path: str | Path | None = None, *, device: str = "
         model = TD3.load(path, device=device, custom_objects=_ACTING_ONLY)
     except (zipfile.BadZipFile, KeyError, ValueError, EOFError) as error:
         raise ValueError(f"{path} is not an SB3 TD3/DDPG policy zip: {error}") from error
-    expected = ReachEnv(body).observation_space
+    probe = ReachEnv(body)  # the body's observation space; the simulator is released right away
+    expected = probe.observation_space
+    probe.close()
     if model.observation_space != expected:
         raise ValueError(
             f"policy {path} was trained on observations {model.observation_space}, but body {body!r} "
