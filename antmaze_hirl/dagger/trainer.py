@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+from collections.abc import Callable, Generator
 from dataclasses import asdict, dataclass
 from typing import Any, Literal, Protocol
 
@@ -14,6 +15,7 @@ from antmaze_hirl.dagger.features import ObservationEncoder
 from antmaze_hirl.dagger.policy import HighLevelPolicy
 from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule
 from antmaze_hirl.dagger.strategies import MultiPolicyQuery, NoiseQuery, QueryStrategy, StartQuery
+from antmaze_hirl.envs.reach import as_finite_vector
 from antmaze_hirl.experts.base import Expert
 
 Mixing = Literal["blend", "switch"]
@@ -60,6 +62,86 @@ class EpisodeRecord:
     def to_dict(self) -> dict[str, Any]:
         """Plain dict, for CSV rows."""
         return asdict(self)
+
+
+@dataclass(frozen=True)
+class LabelRequest:
+    """A high-level state where the trainer waits for the expert's subgoal.
+
+    Attributes:
+        observation: The high-level observation to label.
+        learner_subgoal: What the learner proposes here (a page may show it).
+        episode: Training episode index, from 0.
+        step: Label index within the episode, from 0.
+        beta: The expert's weight in the executed mix this episode.
+    """
+
+    observation: dict[str, np.ndarray]
+    learner_subgoal: np.ndarray
+    episode: int
+    step: int
+    beta: float
+
+
+@dataclass(frozen=True)
+class ExecutedStep:
+    """One high-level step the env executed after a label.
+
+    Attributes:
+        subgoal: The subgoal sent to the env (the mix of expert and learner).
+        expert_subgoal: The expert's label it came from.
+        info: The env's step ``info`` (``agent_path``, ``subgoal_reached``, ``flipped``, ...).
+        done: Whether the episode ended with this step.
+    """
+
+    subgoal: np.ndarray
+    expert_subgoal: np.ndarray
+    info: dict[str, Any]
+    done: bool
+
+
+class EpisodeRun:
+    """A training episode in progress, driven by ask/tell: read :attr:`request`, call :meth:`answer`.
+
+    Made by :meth:`DAggerTrainer.start_episode`. Between two answers the trainer is idle, so the label
+    may come from anywhere, at any time (a click over HTTP). An unanswered run can be dropped: the
+    trainer's aggregated data and learner then hold the labels of its answered steps.
+    """
+
+    def __init__(self, steps: Callable[[list[ExecutedStep]], Generator[LabelRequest, Any, EpisodeRecord]]) -> None:
+        self._executed: list[ExecutedStep] = []
+        self._steps = steps(self._executed)
+        self.request: LabelRequest | None = None
+        self.record: EpisodeRecord | None = None
+        self._advance(None)
+
+    @property
+    def done(self) -> bool:
+        """Whether the episode has ended (then :attr:`record` holds its measures)."""
+        return self.record is not None
+
+    def answer(self, subgoal: np.ndarray) -> list[ExecutedStep]:
+        """Gives the expert's subgoal for :attr:`request`; runs the env to the next request or the end.
+
+        Returns:
+            The steps executed since the label, in order.
+
+        Raises:
+            RuntimeError: If the episode has already ended.
+            ValueError: If ``subgoal`` is not two finite numbers (nothing is executed then).
+        """
+        if self.done:
+            raise RuntimeError("the episode has ended; start another with DAggerTrainer.start_episode()")
+        as_finite_vector(subgoal, 2, "expert subgoal")  # checked here too, so a bad label leaves the run as it was
+        self._executed.clear()
+        self._advance(subgoal)
+        return list(self._executed)
+
+    def _advance(self, value: Any) -> None:
+        try:
+            self.request = self._steps.send(value)
+        except StopIteration as stop:
+            self.request, self.record = None, stop.value
 
 
 class DAggerTrainer:
@@ -161,7 +243,24 @@ class DAggerTrainer:
         return records
 
     def run_episode(self) -> EpisodeRecord:
-        """Runs one training episode, aggregates its labels and updates the learner when due."""
+        """Runs one training episode with :attr:`expert`, aggregates its labels and updates the learner when due."""
+        run = self.start_episode()
+        while not run.done:
+            run.answer(self.expert.label(run.request.observation))
+        return run.record
+
+    def start_episode(self) -> EpisodeRun:
+        """Starts a training episode that its expert drives by ask/tell (a person answering over HTTP).
+
+        The trainer does not call :attr:`expert` here: the caller answers each
+        :attr:`EpisodeRun.request` with :meth:`EpisodeRun.answer`, whenever the label arrives.
+        :meth:`run_episode` is this loop with :attr:`expert` answering at once, so both paths run the
+        same code and give the same numbers.
+        """
+        return EpisodeRun(self._episode_steps)
+
+    def _episode_steps(self, executed: list[ExecutedStep]) -> Generator[LabelRequest, Any, EpisodeRecord]:
+        # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
         inner = self.env.unwrapped
         layout = inner.sample_layout(self.rng)
         goal_xy = inner.noisy_cell_centre(layout.goal_cell, self.rng)
@@ -175,17 +274,22 @@ class DAggerTrainer:
             self._rest_body = np.asarray(obs["state"][4:], dtype=np.float64)
         beta, episode, cost, done, info = self.beta, self.episodes_done, 0, False, {}
         while not done:
-            expert_subgoal = np.asarray(self.expert.label(obs), dtype=np.float64)
+            # The learner's proposal is computed before the label so a person can be shown it; it is
+            # deterministic and draws no randomness, so the order leaves the numbers unchanged.
+            learner_subgoal = np.asarray(self.policy.predict(obs), dtype=np.float64)
+            answer = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)
+            expert_subgoal = as_finite_vector(answer, 2, "expert subgoal")
             cost += 1
-            learner_subgoal = self.policy.predict(obs)
             self.dataset.add(
                 Demonstration(obs["image"], obs["state"], expert_subgoal, episode, cost - 1),
                 self.policy.encoder.encode_observations([obs]),
             )
             if self.per_step_gradient_steps:
                 self._fit(self.per_step_gradient_steps)
-            obs, _, terminated, truncated, info = self.env.step(self._mix(expert_subgoal, learner_subgoal, beta))
+            subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
+            obs, _, terminated, truncated, info = self.env.step(subgoal)
             done = terminated or truncated
+            executed.append(ExecutedStep(subgoal, expert_subgoal, info, done))
         removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
         self.episodes_done += 1
         self.total_expert_cost += cost
@@ -230,4 +334,9 @@ class DAggerTrainer:
     def _member_factory(self) -> Callable[[np.random.Generator], HighLevelPolicy]:
         settings = self.policy.config()
         settings.pop("geometry")
-        return lambda rng: HighLevelPolicy(self.policy.geometry, rng=rng, **settings)
+        return functools.partial(_make_member, self.policy.geometry, settings)
+
+
+def _make_member(geometry: Any, settings: dict[str, Any], rng: np.random.Generator) -> HighLevelPolicy:
+    # Module level (not a lambda) so a trainer pickles: the study server checkpoints it between episodes.
+    return HighLevelPolicy(geometry, rng=rng, **settings)

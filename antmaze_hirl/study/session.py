@@ -1,0 +1,619 @@
+"""One participant working through a study plan: trials, episodes, labels, questionnaires, all saved as they happen.
+
+A :class:`ParticipantSession` is the protocol's state machine, independent of HTTP: the server and the
+tests drive it with :meth:`~ParticipantSession.start_trial`, :meth:`~ParticipantSession.label` and
+:meth:`~ParticipantSession.submit_questionnaire`. Each trial is a :class:`~antmaze_hirl.dagger.DAggerTrainer`
+driven by ask/tell (:meth:`~antmaze_hirl.dagger.DAggerTrainer.start_episode`), so a person's click
+takes the oracle's place in the very loop the experiments run.
+
+On disk, per participant (``DIR/participants/<id>/``), everything is written when it happens:
+
+* ``clicks.jsonl``: every accepted click (appended and fsynced before the step runs);
+* ``episodes.csv``: one row per finished episode (:data:`EPISODE_COLUMNS`);
+* ``answers.jsonl``: one questionnaire per analysed trial;
+* ``events.jsonl``: trial starts and ends, pauses, resumptions after a restart;
+* ``progress.json``: where the participant is (atomically replaced);
+* ``trial<k>/checkpoint.pkl``: the trainer after the last finished episode (atomically replaced);
+* ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
+* ``trial<k>/learner.zip``: the learner's weights after the trial.
+
+A server killed mid-episode (even ``kill -9``) restarts the participant from the checkpoint: only the
+episode in progress is lost, and it is replayed on the same maze (the trainer's random state is saved).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import pickle
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
+from antmaze_hirl.study.questionnaire import validate_answers
+
+from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
+from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
+from antmaze_hirl.dagger.strategies import make_strategy
+from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
+from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
+from antmaze_hirl.study.settings import StudySettings
+
+EPISODE_COLUMNS = (
+    "participant",
+    "trial",
+    "method",
+    "label",
+    "practice",
+    "seed",
+    "episode",
+    "success",
+    "expert_cost",
+    "cumulative_expert_cost",
+    "attempts",
+    "low_level_steps",
+    "beta",
+    "dataset_size",
+    "removed",
+    "eval_success",
+    "eval_attempts",
+    "seconds_per_label",
+    "time_on_task",
+)
+"""Columns of a participant's ``episodes.csv``: the experiment's, plus who, which trial and the person's time."""
+
+
+class ProtocolError(Exception):
+    """A request that the study protocol does not allow now (answered with HTTP 409)."""
+
+
+class BadInput(ValueError):
+    """A malformed or out-of-range value from a participant's page (answered with HTTP 400)."""
+
+
+class PageExpert:
+    """The trainer's expert while a person answers through the page: never called directly.
+
+    The session answers each :class:`~antmaze_hirl.dagger.trainer.LabelRequest` with the person's
+    click via :meth:`~antmaze_hirl.dagger.trainer.EpisodeRun.answer`; a call here would be a bug.
+    """
+
+    def label(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """Refuses: the page's clicks are the labels."""
+        raise RuntimeError("a study trial is labelled by its participant through EpisodeRun.answer, not label()")
+
+
+@dataclass
+class DemonstrationLog:
+    """Every labelled step of a trial, in order (what ``study export`` turns into a Minari dataset)."""
+
+    images: list[np.ndarray] = field(default_factory=list)
+    states: list[np.ndarray] = field(default_factory=list)
+    executed: list[np.ndarray] = field(default_factory=list)
+    labels: list[np.ndarray] = field(default_factory=list)
+    labelled: list[bool] = field(default_factory=list)
+    episode: list[int] = field(default_factory=list)
+    step: list[int] = field(default_factory=list)
+    terminal_success: list[bool] = field(default_factory=list)
+    success: list[bool] = field(default_factory=list)
+
+    def add(self, observation: dict[str, np.ndarray], executed: ExecutedStep, episode: int, step: int) -> None:
+        """Records one step: the state the expert saw, their label and what the env executed."""
+        self.images.append(np.asarray(observation["image"], dtype=np.uint8))
+        self.states.append(np.asarray(observation["state"], dtype=np.float32))
+        self.executed.append(np.asarray(executed.subgoal, dtype=np.float32))
+        self.labels.append(np.asarray(executed.expert_subgoal, dtype=np.float32))
+        self.labelled.append(True)
+        self.episode.append(episode)
+        self.step.append(step)
+        self.terminal_success.append(bool(executed.done and executed.info["is_success"]))
+
+    def save(self, path: Path) -> None:
+        """Writes the log as ``.npz`` atomically."""
+        arrays = {
+            "images": np.stack(self.images) if self.images else np.zeros((0, 3, 1, 1), np.uint8),
+            "states": np.stack(self.states) if self.states else np.zeros((0, 1), np.float32),
+            "executed": np.asarray(self.executed, dtype=np.float32).reshape(-1, 2),
+            "labels": np.asarray(self.labels, dtype=np.float32).reshape(-1, 2),
+            "labelled": np.asarray(self.labelled, dtype=bool),
+            "episode": np.asarray(self.episode, dtype=np.int64),
+            "step": np.asarray(self.step, dtype=np.int64),
+            "terminal_success": np.asarray(self.terminal_success, dtype=bool),
+            "success": np.asarray(self.success, dtype=bool),
+        }
+        atomic_write_with(path, lambda tmp: tmp.write_bytes(_npz_bytes(arrays)))
+
+
+def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
+    buffer = io.BytesIO()
+    np.savez(buffer, **arrays)
+    return buffer.getvalue()
+
+
+@dataclass
+class TrialState:
+    """What a trial's checkpoint holds: the trainer (env and expert detached) and the trial's records."""
+
+    trainer: DAggerTrainer
+    rows: list[dict[str, Any]]
+    demonstrations: DemonstrationLog
+    successes: int = 0
+
+
+class ParticipantSession:
+    """The study protocol for one participant: practice, counterbalanced trials, questionnaires.
+
+    Phases: ``"intro"`` (a trial is about to start), ``"label"`` (a query waits for a click),
+    ``"questionnaire"`` (a trial ended; its questionnaire is due), ``"done"``.
+
+    Args:
+        study_dir: The study folder.
+        plan: The study plan.
+        participant: This participant's part of it.
+        settings: The study's trial settings.
+        clock: Wall-clock seconds (injected by tests).
+
+    """
+
+    def __init__(
+        self,
+        study_dir: Path,
+        plan: StudyPlan,
+        participant: ParticipantPlan,
+        settings: StudySettings,
+        *,
+        clock: Any = time.time,
+    ) -> None:
+        self.plan = plan
+        self.participant = participant
+        self.settings = settings
+        self.clock = clock
+        self.folder = Path(study_dir) / "participants" / participant.id
+        self.lock = threading.RLock()  # one request at a time per participant; the server has many threads
+        self.trial_index = 0
+        self.phase = "intro"
+        self.paused_since: float | None = None
+        self._trial: TrialState | None = None
+        self._env: Any = None
+        self._eval_env: Any = None
+        self._run: EpisodeRun | None = None
+        self._query_id = 0
+        self._query_shown_at = 0.0
+        self._episode_started_at = 0.0
+        self._episode_paused = 0.0
+        self._episode_label_seconds: list[float] = []
+        self._trail: list[list[float]] = []
+        self._camera: AntCamera | None = None
+        self._restore()
+
+    # ----------------------------------------------------------------------------------- queries
+    @property
+    def trial(self) -> TrialPlan | None:
+        """The current trial's plan (``None`` once every trial is done)."""
+        trials = self.participant.trials
+        return trials[self.trial_index] if self.trial_index < len(trials) else None
+
+    @property
+    def query_id(self) -> int | None:
+        """Id of the query waiting for a click, if any (a click must name it: no double answers)."""
+        return self._query_id if self.phase == "label" and self._run is not None else None
+
+    def state(self) -> dict[str, Any]:
+        """Everything the page shows, as JSON-ready data."""
+        with self.lock:
+            trial = self.trial
+            state: dict[str, Any] = {
+                "participant": self.participant.id,
+                "phase": self.phase,
+                "paused": self.paused_since is not None,
+                "trials": len(self.participant.trials),
+                "trial": None,
+                "camera": self.settings.body == "ant" and bool(os.environ.get("MUJOCO_GL")),
+            }
+            if trial is None:
+                return state
+            state["trial"] = {
+                "number": self.trial_index + 1,
+                "label": trial.label,
+                "practice": trial.practice,
+                "episodes": trial.episodes,
+            }
+            if self._trial is not None:
+                state["episode"] = {"number": len(self._trial.rows) + 1, "of": trial.episodes}
+                state["successes"] = self._trial.successes
+                state["labels"] = int(self._trial.trainer.total_expert_cost + self._labels_this_episode())
+            if self.phase == "label" and self._run is not None and self._run.request is not None:
+                state.update(self._scene(self._run.request))
+            return state
+
+    def _labels_this_episode(self) -> int:
+        return 0 if self._run is None or self._run.request is None else self._run.request.step
+
+    def _scene(self, request: Any) -> dict[str, Any]:
+        inner = self._env.unwrapped
+        observation = request.observation
+        geometry = inner.geometry
+        return {
+            "query": {"id": self._query_id, "step": request.step},
+            "maze": {
+                "rows": geometry.n_rows,
+                "cols": geometry.n_cols,
+                "scale": geometry.scale,
+                "low": geometry.low.tolist(),
+                "high": geometry.high.tolist(),
+                "walls": inner.layout.walls.astype(int).tolist(),
+                "bounds": [inner.action_space.low.tolist(), inner.action_space.high.tolist()],
+            },
+            "agent": [float(v) for v in observation["state"][:2]],
+            "goal": [float(v) for v in observation["state"][2:4]],
+            "trail": self._trail,
+            "max_distance": self.max_distance,
+            "goal_radius": float(inner.goal_threshold),
+            "learner_subgoal": (
+                [float(v) for v in request.learner_subgoal] if self.settings.show_learner_subgoal else None
+            ),
+        }
+
+    @property
+    def max_distance(self) -> float:
+        """The circle around the agent: the farthest subgoal the expert is asked to click, metres."""
+        distance = self.settings.expert_max_distance
+        return float(distance if distance is not None else self._env.unwrapped.geometry.scale)
+
+    # ---------------------------------------------------------------------------------- actions
+    def start_trial(self) -> dict[str, Any]:
+        """Starts the current trial (phase ``intro`` -> ``label``)."""
+        with self.lock:
+            if self.phase != "intro":
+                raise ProtocolError(f"no trial to start: participant {self.participant.id} is at {self.phase!r}")
+            trial = self.trial
+            assert trial is not None  # "intro" is only set while a trial remains
+            self._log_event("trial_start", trial=trial.index)
+            self.phase = "label"
+            self._save_progress()
+            self._open_trial(resume=False)
+            return self.state()
+
+    def label(self, query_id: Any, x: Any, y: Any, response_seconds: Any = None) -> dict[str, Any]:
+        """A click: the subgoal ``(x, y)`` for query ``query_id``.
+
+        Returns:
+            ``{"walked": [...], "episode_end": {...} | None, "state": ...}``: what the low level did
+            (paths to animate), how the episode ended if it did, and the next state.
+
+        Raises:
+            ProtocolError: If no label is asked now, or ``query_id`` is not the open query (a repeat).
+            BadInput: If the click is not two finite numbers inside the maze.
+        """
+        with self.lock:
+            if self.paused_since is not None:
+                raise ProtocolError("the study is paused: resume before clicking")
+            if self.query_id is None:
+                raise ProtocolError(f"no label is asked now (participant {self.participant.id} is at {self.phase!r})")
+            if isinstance(query_id, bool) or not isinstance(query_id, int):
+                raise BadInput(f"query must be an integer id, got {query_id!r}")
+            if query_id != self._query_id:
+                raise ProtocolError(
+                    f"query {query_id} is not open (the open query is {self._query_id}): already answered?"
+                )
+            subgoal = self._check_click(x, y)
+            seconds = self._check_response_seconds(response_seconds)
+            now = self.clock()
+            server_seconds = max(now - self._query_shown_at, 0.0)
+            assert self._run is not None and self._run.request is not None and self._trial is not None
+            request = self._run.request
+            durable_append(
+                self.folder / "clicks.jsonl",
+                json.dumps(
+                    {
+                        "participant": self.participant.id,
+                        "trial": self.trial.index,
+                        "episode": request.episode,
+                        "step": request.step,
+                        "query": query_id,
+                        "time": now,
+                        "x": subgoal[0],
+                        "y": subgoal[1],
+                        "response_seconds": seconds,
+                        "server_seconds": server_seconds,
+                    }
+                )
+                + "\n",
+            )
+            self._episode_label_seconds.append(seconds if seconds is not None else server_seconds)
+            executed = self._run.answer(np.asarray(subgoal))
+            observation = request.observation
+            walked = []
+            for step in executed:
+                self._trial.demonstrations.add(observation, step, request.episode, request.step)
+                path = np.asarray(step.info["agent_path"], dtype=float)
+                self._trail.extend(path[1:].round(3).tolist())
+                walked.append(
+                    {
+                        "subgoal": [float(v) for v in step.subgoal],
+                        "path": path.round(3).tolist(),
+                        "reached": bool(step.info["subgoal_reached"]),
+                        "flipped": bool(step.info["flipped"]),
+                    }
+                )
+            episode_end = self._finish_episode() if self._run.done else None
+            if self.phase == "label":
+                self._show_query()
+            return {"walked": walked, "episode_end": episode_end, "state": self.state()}
+
+    def submit_questionnaire(self, trial_number: Any, payload: Any) -> dict[str, Any]:
+        """The questionnaire of trial ``trial_number`` (1-based, as the page shows it).
+
+        Raises:
+            ProtocolError: If no questionnaire is due, or it is for another trial.
+            BadInput: If the answers are incomplete or out of range.
+        """
+        with self.lock:
+            if self.phase != "questionnaire":
+                raise ProtocolError(f"no questionnaire is due (participant {self.participant.id} is at {self.phase!r})")
+            if isinstance(trial_number, bool) or trial_number != self.trial_index + 1:
+                raise ProtocolError(
+                    f"the questionnaire due is trial {self.trial_index + 1}'s, got trial {trial_number!r}"
+                )
+            if not isinstance(payload, dict):
+                raise BadInput(f"answers must be a JSON object, got {type(payload).__name__}")
+            try:
+                answers = validate_answers(payload)
+            except ValueError as error:
+                raise BadInput(str(error)) from error
+            trial = self.trial
+            assert trial is not None
+            record = {
+                "participant": self.participant.id,
+                "trial": trial.index,
+                "method": trial.method,
+                "label": trial.label,
+                "ratings": dict(answers.ratings),
+                "comment": answers.comment,
+                "time": self.clock(),
+            }
+            durable_append(self.folder / "answers.jsonl", json.dumps(record) + "\n")
+            self._next_trial()
+            return self.state()
+
+    def set_paused(self, paused: Any) -> dict[str, Any]:
+        """Pauses or resumes (a key on the page): no clicks meanwhile, and paused time is not time on task."""
+        with self.lock:
+            if not isinstance(paused, bool):
+                raise BadInput(f"paused must be true or false, got {paused!r}")
+            now = self.clock()
+            if paused and self.paused_since is None:
+                self.paused_since = now
+                self._log_event("pause")
+            elif not paused and self.paused_since is not None:
+                self._episode_paused += now - self.paused_since
+                self._query_shown_at += now - self.paused_since  # a pause is not thinking time
+                self.paused_since = None
+                self._log_event("resume")
+            return self.state()
+
+    def camera_frame(self) -> bytes:
+        """The ant's camera view now, as PNG.
+
+        Raises:
+            CameraUnavailable: For the point, outside a trial, or where OpenGL rendering does not work.
+        """
+        with self.lock:
+            if self.settings.body != "ant":
+                raise CameraUnavailable("the camera view is for the ant; the point is shown from above only")
+            if self._env is None:
+                raise CameraUnavailable("no trial is running")
+            if self._camera is None:
+                self._camera = AntCamera()
+            return self._camera.frame(self._env.unwrapped.reach.sim.data)
+
+    def close(self) -> None:
+        """Releases the trial's simulators and the camera."""
+        with self.lock:
+            for env in (self._env, self._eval_env):
+                if env is not None:
+                    env.close()
+            self._env = self._eval_env = None
+            if self._camera is not None:
+                self._camera.close()
+                self._camera = None
+
+    # -------------------------------------------------------------------------------- internals
+    def _check_click(self, x: Any, y: Any) -> tuple[float, float]:
+        values = []
+        for name, value in (("x", x), ("y", y)):
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise BadInput(f"click {name} must be a finite number, got {value!r}")
+            values.append(float(value))
+        low, high = self._env.unwrapped.action_space.low, self._env.unwrapped.action_space.high
+        if not (low[0] <= values[0] <= high[0] and low[1] <= values[1] <= high[1]):
+            raise BadInput(
+                f"click ({values[0]:.3f}, {values[1]:.3f}) is outside the maze: x in [{low[0]:.2f}, {high[0]:.2f}], "
+                f"y in [{low[1]:.2f}, {high[1]:.2f}]"
+            )
+        return values[0], values[1]
+
+    @staticmethod
+    def _check_response_seconds(value: Any) -> float | None:
+        if value is None:
+            return None
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
+            raise BadInput(f"response_seconds must be a finite number >= 0, got {value!r}")
+        return float(value)
+
+    def _make_trainer(self, trial: TrialPlan) -> DAggerTrainer:
+        config = self.settings.experiment_config(trial.episodes)
+        rng = np.random.default_rng(trial.seed)
+        return DAggerTrainer(
+            env=self._env,
+            expert=PageExpert(),
+            policy=HighLevelPolicy.for_env(self._env, rng=rng),
+            rng=rng,
+            strategy=make_strategy(trial.method),
+            beta_schedule=ExponentialBetaSchedule(config.decay),
+            mixing=config.mixing,  # type: ignore[arg-type]
+            episodes_per_update=config.episodes_per_update,
+            gradient_steps=config.gradient_steps,
+        )
+
+    def _open_trial(self, *, resume: bool) -> None:
+        trial = self.trial
+        assert trial is not None
+        config = self.settings.experiment_config(trial.episodes)
+        if self._env is None:
+            self._env, self._eval_env = make_env(config), make_env(config)
+        checkpoint = self._trial_folder / "checkpoint.pkl"
+        if resume and checkpoint.is_file():
+            self._trial = _load_checkpoint(checkpoint, self._env)
+            self._repair_rows()
+            self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
+        else:
+            self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
+        if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
+            self._close_trial()
+        else:
+            self._start_episode()
+
+    @property
+    def _trial_folder(self) -> Path:
+        assert self.trial is not None
+        return self.folder / f"trial{self.trial.index}"
+
+    def _start_episode(self) -> None:
+        assert self._trial is not None
+        self._run = self._trial.trainer.start_episode()
+        self._trail = (
+            [[round(float(v), 3) for v in self._run.request.observation["state"][:2]]] if self._run.request else []
+        )
+        self._episode_started_at = self.clock()
+        self._episode_paused = 0.0
+        self._episode_label_seconds = []
+        self._show_query()
+
+    def _show_query(self) -> None:
+        self._query_id += 1
+        self._query_shown_at = self.clock()
+
+    def _finish_episode(self) -> dict[str, Any]:
+        trial, state, run = self.trial, self._trial, self._run
+        assert trial is not None and state is not None and run is not None and run.record is not None
+        record = run.record
+        episode = len(state.rows)
+        row: dict[str, Any] = {
+            "participant": self.participant.id,
+            "trial": trial.index,
+            "method": trial.method,
+            "label": trial.label,
+            "practice": trial.practice,
+            "seed": trial.seed,
+            **record.to_dict(),
+            "cumulative_expert_cost": state.trainer.total_expert_cost,
+            "seconds_per_label": round(float(np.mean(self._episode_label_seconds)), 4),
+            "time_on_task": round(self.clock() - self._episode_started_at - self._episode_paused, 3),
+        }
+        final = episode == trial.episodes - 1
+        if final or (episode + 1) % self.settings.eval_every == 0:
+            episodes = self.settings.final_eval_episodes if final else self.settings.eval_episodes
+            result = evaluate_high_level(state.trainer.policy, self._eval_env, episodes=episodes)
+            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"])
+        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+        state.successes += int(record.success)
+        state.demonstrations.success.append(bool(record.success))
+        # Checkpoint first, then the row: a crash between them is repaired from the checkpoint on restart.
+        _save_checkpoint(state, self._trial_folder / "checkpoint.pkl")
+        state.demonstrations.save(self._trial_folder / "demonstrations.npz")
+        self._append_row(state.rows[-1])
+        self._run = None
+        if final:
+            self._close_trial()
+        else:
+            self._start_episode()
+        return {"number": episode + 1, "success": bool(record.success), "evaluated": "eval_success" in row}
+
+    def _close_trial(self) -> None:
+        state, trial = self._trial, self.trial
+        assert state is not None and trial is not None
+        state.trainer.policy.save(self._trial_folder / "learner.zip")
+        self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
+        self._run = None
+        if trial.practice:
+            self._next_trial()  # the practice trial is recorded, not rated
+        else:
+            self.phase = "questionnaire"
+            self._save_progress()
+
+    def _next_trial(self) -> None:
+        self.trial_index += 1
+        self._trial = None
+        self.close()
+        self.phase = "intro" if self.trial is not None else "done"
+        self._save_progress()
+
+    def _append_row(self, row: dict[str, Any]) -> None:
+        path = self.folder / "episodes.csv"
+        buffer = io.StringIO()
+        writer = csv.DictWriter(buffer, fieldnames=EPISODE_COLUMNS)
+        if not path.exists():
+            writer.writeheader()
+        writer.writerow(row)
+        durable_append(path, buffer.getvalue())
+
+    def _repair_rows(self) -> None:
+        # Rows the checkpoint has but the CSV lacks (killed between the two writes) are appended again.
+        assert self._trial is not None
+        path = self.folder / "episodes.csv"
+        written = 0
+        if path.exists():
+            with path.open() as handle:
+                written = sum(1 for row in csv.DictReader(handle) if row.get("trial") == str(self.trial.index))
+        for row in self._trial.rows[written:]:
+            self._append_row(row)
+
+    def _save_progress(self) -> None:
+        atomic_write_json(self.folder / "progress.json", {"trial_index": self.trial_index, "phase": self.phase})
+
+    def _log_event(self, kind: str, **details: Any) -> None:
+        event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}
+        durable_append(self.folder / "events.jsonl", json.dumps(event) + "\n")
+
+    def _restore(self) -> None:
+        progress = self.folder / "progress.json"
+        if not progress.is_file():
+            return
+        try:
+            saved = json.loads(progress.read_text())
+            self.trial_index, self.phase = int(saved["trial_index"]), str(saved["phase"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+            raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
+        if self.phase == "label":
+            self._open_trial(resume=True)
+
+
+def _save_checkpoint(state: TrialState, path: Path) -> None:
+    trainer = state.trainer
+    env, expert = trainer.env, trainer.expert
+    trainer.env = trainer.expert = None  # simulators are rebuilt on load; the expert is the page
+    try:
+        data = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    finally:
+        trainer.env, trainer.expert = env, expert
+    atomic_write_bytes(path, data)
+
+
+def _load_checkpoint(path: Path, env: Any) -> TrialState:
+    try:
+        state = pickle.loads(path.read_bytes())
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError) as error:
+        raise ValueError(f"{path} is not a readable trial checkpoint: {error}") from error
+    if not isinstance(state, TrialState):
+        raise ValueError(f"{path} holds {type(state).__name__}, not a trial checkpoint")
+    state.trainer.env, state.trainer.expert = env, PageExpert()
+    return state

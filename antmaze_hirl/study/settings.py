@@ -1,0 +1,103 @@
+"""What every trial of a study runs with: maze family, expert reach, evaluation and update settings."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.experiments.runner import ExperimentConfig
+
+SETTINGS_FILE = "settings.json"
+
+# The paper experiment's families (benchmarks/paper_experiment.py): the shipped ant walks 3x3 mazes
+# with 2 m subgoals reliably; the point walks 5x5 mazes with one-cell (1 m) subgoals.
+_BODY_DEFAULTS: dict[str, dict[str, Any]] = {
+    "point": {"maze_size": 5, "expert_max_distance": None},
+    "ant": {"maze_size": 3, "expert_max_distance": 2.0},
+}
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """Settings shared by every trial of a study (the method and seed come from the plan).
+
+    Attributes:
+        body: ``"point"`` or ``"ant"``.
+        maze_size: Free cells per side of the random mazes.
+        expert_max_distance: Farthest subgoal a participant may click from the agent, metres (the
+            circle on the page); ``None``: one cell.
+        eval_every: Learner-only evaluation every this many episodes (the paper's M).
+        eval_episodes: Held-out mazes per intermediate evaluation.
+        final_eval_episodes: Held-out mazes after a trial's last episode.
+        gradient_steps: Gradient steps per learner update (N).
+        decay: ``d`` in ``beta <- beta / d``.
+        show_learner_subgoal: Draw the learner's proposed subgoal on the page.
+    """
+
+    body: str = "point"
+    maze_size: int = 5
+    expert_max_distance: float | None = None
+    eval_every: int = 10
+    eval_episodes: int = 20
+    final_eval_episodes: int = 100
+    gradient_steps: int = 200
+    decay: float = 2.0
+    show_learner_subgoal: bool = True
+
+    def __post_init__(self) -> None:
+        self.experiment_config(1)  # the experiment's checks name any bad value
+        if not isinstance(self.show_learner_subgoal, bool):
+            raise ValueError(f"show_learner_subgoal must be true or false, got {self.show_learner_subgoal!r}")
+
+    @classmethod
+    def for_body(cls, body: str, **overrides: Any) -> StudySettings:
+        """The paper experiment's settings for ``body``, with ``overrides``.
+
+        Raises:
+            ValueError: For an unknown body or setting.
+        """
+        if body not in _BODY_DEFAULTS:
+            raise ValueError(f"unknown body {body!r}; choose from {sorted(_BODY_DEFAULTS)}")
+        known = {field.name for field in fields(cls)}
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown study setting(s) {unknown}; known: {sorted(known)}")
+        return cls(body=body, **{**_BODY_DEFAULTS[body], **overrides})
+
+    def experiment_config(self, episodes: int) -> ExperimentConfig:
+        """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
+        return ExperimentConfig(
+            body=self.body,
+            episodes=episodes,
+            eval_every=self.eval_every,
+            eval_episodes=self.eval_episodes,
+            final_eval_episodes=self.final_eval_episodes,
+            maze_size=self.maze_size,
+            gradient_steps=self.gradient_steps,
+            decay=self.decay,
+            expert_max_distance=self.expert_max_distance,
+        )
+
+
+def save_settings(settings: StudySettings, study_dir: str | Path) -> Path:
+    """Writes ``DIR/settings.json`` atomically."""
+    return atomic_write_json(Path(study_dir) / SETTINGS_FILE, asdict(settings))
+
+
+def load_settings(study_dir: str | Path) -> StudySettings:
+    """Reads ``DIR/settings.json``.
+
+    Raises:
+        FileNotFoundError: If the study has no settings file (not made by ``antmaze-hirl study init``).
+        ValueError: If the file is not valid settings (names the file).
+    """
+    path = Path(study_dir) / SETTINGS_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} not found: create the study with 'antmaze-hirl study init {study_dir}'")
+    try:
+        return StudySettings(**json.loads(path.read_text()))
+    except (json.JSONDecodeError, TypeError, ValueError) as error:
+        raise ValueError(f"{path} holds no valid study settings: {error}") from error

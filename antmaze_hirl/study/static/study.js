@@ -1,0 +1,381 @@
+// The study page: draws the maze from above, sends clicks as subgoals, animates the walk, asks the questionnaire.
+// Plain browser JavaScript (no build step). Every request carries the token from the page's URL.
+"use strict";
+
+const params = new URLSearchParams(window.location.search);
+const token = params.get("token") || "";
+let participant = params.get("participant");
+
+const $ = (id) => document.getElementById(id);
+const sections = ["picker", "intro", "task", "questionnaire", "done"];
+const canvas = $("maze");
+const ctx = canvas.getContext("2d");
+
+let state = null;         // the server's last state
+let busy = false;         // a request or an animation is running: clicks wait
+let queryVisibleAt = 0;   // when the open query became clickable (after the animation), ms
+let hover = null;         // mouse position in world metres
+let questionnaireItems = null;
+
+async function api(path, body) {
+  const options = { headers: { "X-Study-Token": token } };
+  if (body !== undefined) {
+    options.method = "POST";
+    options.headers["Content-Type"] = "application/json";
+    options.body = JSON.stringify(body);
+  }
+  const response = await fetch(path, options);
+  const data = await response.json().catch(() => ({ error: `HTTP ${response.status}` }));
+  if (!response.ok) {
+    throw new Error(data.error || `HTTP ${response.status}`);
+  }
+  return data;
+}
+
+function participantPath(suffix) {
+  return `/api/participants/${encodeURIComponent(participant)}/${suffix}`;
+}
+
+function show(name) {
+  for (const section of sections) {
+    $(section).hidden = section !== name;
+  }
+}
+
+function setError(message) {
+  $("error").textContent = message || "";
+}
+
+// ---------------------------------------------------------------------------------- geometry
+function scaleOf(maze) {
+  const width = maze.high[0] - maze.low[0];
+  const height = maze.high[1] - maze.low[1];
+  return Math.min(canvas.width / width, canvas.height / height);
+}
+
+function toCanvas(maze, xy) {
+  const s = scaleOf(maze);
+  return [(xy[0] - maze.low[0]) * s, (maze.high[1] - xy[1]) * s];
+}
+
+function toWorld(maze, px, py) {
+  const s = scaleOf(maze);
+  return [maze.low[0] + px / s, maze.high[1] - py / s];
+}
+
+function insideBounds(maze, xy) {
+  const [low, high] = maze.bounds;
+  return xy[0] >= low[0] && xy[0] <= high[0] && xy[1] >= low[1] && xy[1] <= high[1];
+}
+
+// ----------------------------------------------------------------------------------- drawing
+function drawDisc(maze, xy, radiusMetres, colour, minPixels) {
+  const [x, y] = toCanvas(maze, xy);
+  ctx.beginPath();
+  ctx.arc(x, y, Math.max(radiusMetres * scaleOf(maze), minPixels), 0, 2 * Math.PI);
+  ctx.fillStyle = colour;
+  ctx.fill();
+}
+
+function drawScene(trail, agent) {
+  const maze = state.maze;
+  const s = scaleOf(maze);
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  ctx.fillStyle = "#5a5a5a";
+  maze.walls.forEach((row, r) => row.forEach((wall, c) => {
+    if (wall) {
+      ctx.fillRect(c * maze.scale * s, r * maze.scale * s, maze.scale * s + 0.5, maze.scale * s + 0.5);
+    }
+  }));
+  // goal: its reach radius, at least a visible dot
+  drawDisc(maze, state.goal, state.goal_radius, "rgba(220,40,40,0.85)", 6);
+  // trail
+  if (trail.length > 1) {
+    ctx.beginPath();
+    trail.forEach((p, i) => {
+      const [x, y] = toCanvas(maze, p);
+      if (i === 0) { ctx.moveTo(x, y); } else { ctx.lineTo(x, y); }
+    });
+    ctx.strokeStyle = "rgba(40,80,220,0.45)";
+    ctx.lineWidth = 3;
+    ctx.stroke();
+  }
+  // reach circle: "towards the target but not too far"
+  const [ax, ay] = toCanvas(maze, agent);
+  ctx.beginPath();
+  ctx.setLineDash([8, 6]);
+  ctx.arc(ax, ay, state.max_distance * s, 0, 2 * Math.PI);
+  ctx.strokeStyle = "#2850dc";
+  ctx.lineWidth = 2;
+  ctx.stroke();
+  ctx.setLineDash([]);
+  drawDisc(maze, agent, 0.12 * maze.scale, "#2850dc", 7);
+  if (state.learner_subgoal) {
+    const [lx, ly] = toCanvas(maze, state.learner_subgoal);
+    ctx.save();
+    ctx.translate(lx, ly);
+    ctx.rotate(Math.PI / 4);
+    ctx.strokeStyle = "#f08c00";
+    ctx.lineWidth = 3;
+    ctx.strokeRect(-7, -7, 14, 14);
+    ctx.restore();
+  }
+  if (hover && !busy && insideBounds(maze, hover)) {
+    const [hx, hy] = toCanvas(maze, hover);
+    ctx.beginPath();
+    ctx.moveTo(ax, ay);
+    ctx.lineTo(hx, hy);
+    ctx.strokeStyle = "rgba(0,0,0,0.35)";
+    ctx.lineWidth = 1;
+    ctx.stroke();
+    drawDisc(maze, hover, 0, "rgba(0,0,0,0.5)", 4);
+  }
+}
+
+function draw() {
+  if (state && state.phase === "label" && state.maze) {
+    drawScene(state.trail, state.agent);
+  }
+}
+
+// Replays what the low level did after a click: each walked path, point by point.
+function animate(walked, startTrail) {
+  return new Promise((resolve) => {
+    const points = walked.flatMap((w) => w.path);
+    if (points.length === 0) { resolve(); return; }
+    const duration = Math.min(2000, 12 * points.length);
+    const trail = startTrail.slice();
+    const started = performance.now();
+    let shown = 0;
+    function frame(now) {
+      const upTo = Math.min(points.length, Math.ceil(((now - started) / duration) * points.length));
+      while (shown < upTo) { trail.push(points[shown]); shown += 1; }
+      drawScene(trail, trail[trail.length - 1]);
+      if (shown < points.length) { requestAnimationFrame(frame); } else { resolve(); }
+    }
+    requestAnimationFrame(frame);
+  });
+}
+
+// ------------------------------------------------------------------------------------ render
+function renderProgress() {
+  const parts = [`Participant ${state.participant}`];
+  if (state.trial) {
+    parts.push(`${state.trial.label}: part ${state.trial.number} of ${state.trials}`);
+    if (state.episode) {
+      parts.push(`Maze ${Math.min(state.episode.number, state.episode.of)} of ${state.episode.of}`);
+      parts.push(`Goals reached: ${state.successes}`);
+      parts.push(`Points given: ${state.labels}`);
+    }
+  }
+  $("progress").innerHTML = "";
+  for (const text of parts) {
+    const span = document.createElement("span");
+    span.textContent = text;
+    $("progress").appendChild(span);
+  }
+}
+
+async function render() {
+  renderProgress();
+  $("paused").hidden = !state.paused;
+  if (state.phase === "intro") {
+    $("intro-title").textContent = state.trial.practice
+      ? "Practice: get to know the task"
+      : `${state.trial.label} (part ${state.trial.number} of ${state.trials})`;
+    show("intro");
+  } else if (state.phase === "label") {
+    show("task");
+    $("legend-learner").hidden = !state.learner_subgoal;
+    draw();
+    queryVisibleAt = performance.now();
+    refreshCamera();
+  } else if (state.phase === "questionnaire") {
+    await renderQuestionnaire();
+    show("questionnaire");
+  } else if (state.phase === "done") {
+    show("done");
+  }
+}
+
+function refreshCamera() {
+  const img = $("camera");
+  img.hidden = !state.camera;
+  if (state.camera) {
+    img.src = `${participantPath("frame.png")}?token=${encodeURIComponent(token)}&t=${Date.now()}`;
+  }
+}
+
+async function renderQuestionnaire() {
+  if (!questionnaireItems) {
+    questionnaireItems = (await api("/api/questionnaire")).items;
+  }
+  $("questionnaire-title").textContent = `How was ${state.trial.label}?`;
+  const container = $("items");
+  container.innerHTML = "";
+  for (const item of questionnaireItems) {
+    const box = document.createElement("fieldset");
+    box.className = "item";
+    const legend = document.createElement("legend");
+    legend.innerHTML = "";
+    const title = document.createElement("h3");
+    title.textContent = item.title;
+    legend.appendChild(title);
+    box.appendChild(legend);
+    const question = document.createElement("p");
+    question.textContent = item.question;
+    box.appendChild(question);
+    const scale = document.createElement("div");
+    scale.className = "scale";
+    const low = document.createElement("span");
+    low.className = "anchor";
+    low.textContent = item.low;
+    scale.appendChild(low);
+    for (let value = 1; value <= item.points; value += 1) {
+      const label = document.createElement("label");
+      const input = document.createElement("input");
+      input.type = "radio";
+      input.name = item.key;
+      input.value = String(value);
+      label.appendChild(input);
+      label.appendChild(document.createTextNode(` ${value}`));
+      scale.appendChild(label);
+    }
+    const high = document.createElement("span");
+    high.className = "anchor";
+    high.textContent = item.high;
+    scale.appendChild(high);
+    box.appendChild(scale);
+    container.appendChild(box);
+  }
+  $("comment").value = "";
+  $("form-error").textContent = "";
+}
+
+// ------------------------------------------------------------------------------------ events
+canvas.addEventListener("mousemove", (event) => {
+  if (!state || !state.maze) { return; }
+  const rect = canvas.getBoundingClientRect();
+  const px = (event.clientX - rect.left) * (canvas.width / rect.width);
+  const py = (event.clientY - rect.top) * (canvas.height / rect.height);
+  hover = toWorld(state.maze, px, py);
+  if (!busy) { draw(); }
+});
+
+canvas.addEventListener("mouseleave", () => { hover = null; if (!busy) { draw(); } });
+
+canvas.addEventListener("click", async (event) => {
+  if (busy || !state || state.phase !== "label" || !state.query || state.paused) { return; }
+  const rect = canvas.getBoundingClientRect();
+  const px = (event.clientX - rect.left) * (canvas.width / rect.width);
+  const py = (event.clientY - rect.top) * (canvas.height / rect.height);
+  const xy = toWorld(state.maze, px, py);
+  if (!insideBounds(state.maze, xy)) {
+    $("status").textContent = "That point is outside the maze: click inside it.";
+    return;
+  }
+  busy = true;
+  setError("");
+  const responseSeconds = (performance.now() - queryVisibleAt) / 1000;
+  const before = state;
+  try {
+    $("status").textContent = "Walking...";
+    const result = await api(participantPath("label"), {
+      query: state.query.id, x: xy[0], y: xy[1], response_seconds: responseSeconds,
+    });
+    await animate(result.walked, before.trail);
+    if (result.episode_end) {
+      $("status").textContent = result.episode_end.success
+        ? `Maze ${result.episode_end.number}: goal reached!`
+        : `Maze ${result.episode_end.number}: the robot did not make it this time.`;
+    } else {
+      $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
+    }
+    state = result.state;
+    await render();
+  } catch (error) {
+    setError(error.message);
+  } finally {
+    busy = false;
+  }
+});
+
+$("start").addEventListener("click", async () => {
+  setError("");
+  try {
+    state = await api(participantPath("start"), {});
+    $("status").textContent = "Click a point inside the dashed circle.";
+    await render();
+  } catch (error) {
+    setError(error.message);
+  }
+});
+
+$("tlx").addEventListener("submit", async (event) => {
+  event.preventDefault();
+  const ratings = {};
+  const missing = [];
+  for (const item of questionnaireItems) {
+    const chosen = document.querySelector(`input[name="${item.key}"]:checked`);
+    if (chosen) { ratings[item.key] = Number(chosen.value); } else { missing.push(item.title); }
+  }
+  if (missing.length) {
+    $("form-error").textContent = `Please answer: ${missing.join(", ")}.`;
+    return;
+  }
+  try {
+    state = await api(participantPath("questionnaire"), {
+      trial: state.trial.number, ratings, comment: $("comment").value,
+    });
+    await render();
+  } catch (error) {
+    $("form-error").textContent = error.message;
+  }
+});
+
+document.addEventListener("keydown", async (event) => {
+  if (!state || !participant || event.target.tagName === "TEXTAREA") { return; }
+  if (event.key === "p" || event.key === "P") {
+    event.preventDefault();
+    try {
+      const wasPaused = state.paused;
+      state = await api(participantPath("pause"), { paused: !wasPaused });
+      $("paused").hidden = !state.paused;
+      if (wasPaused && state.phase === "label") { queryVisibleAt = performance.now(); }
+    } catch (error) {
+      setError(error.message);
+    }
+  }
+});
+
+// ------------------------------------------------------------------------------------- start
+async function choose() {
+  const study = await api("/api/study");
+  const list = $("participants");
+  list.innerHTML = "";
+  for (const p of study.participants) {
+    const button = document.createElement("button");
+    button.type = "button";
+    button.textContent = p.id;
+    button.addEventListener("click", () => {
+      participant = p.id;
+      params.set("participant", p.id);
+      window.history.replaceState(null, "", `?${params.toString()}`);
+      load();
+    });
+    list.appendChild(button);
+  }
+  show("picker");
+}
+
+async function load() {
+  try {
+    if (!participant) { await choose(); return; }
+    state = await api(participantPath("state"));
+    await render();
+  } catch (error) {
+    setError(error.message);
+  }
+}
+
+load();
