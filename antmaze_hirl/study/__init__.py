@@ -1,0 +1,1 @@
+"""The user study kit: plan, questionnaire, statistics report and Minari export."""

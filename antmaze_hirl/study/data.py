@@ -1,0 +1,203 @@
+"""Reads what the study server wrote for each participant into tables checked against the plan.
+
+The files (one folder per participant, ``DIR/participants/<pid>/``) are described in
+:mod:`antmaze_hirl.study.analysis`. Missing folders and files mean a participant has not started
+(or not reached) that part; a file that contradicts the plan or cannot be parsed is an error.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from antmaze_hirl.study.plan import StudyPlan, TrialPlan
+from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
+
+EPISODE_COLUMNS: tuple[str, ...] = (
+    "participant",
+    "trial",
+    "method",
+    "label",
+    "practice",
+    "episode",
+    "success",
+    "expert_cost",
+    "cumulative_expert_cost",
+    "attempts",
+    "low_level_steps",
+    "beta",
+    "dataset_size",
+    "removed",
+    "eval_success",
+    "eval_attempts",
+    "seconds_per_label",
+    "time_on_task",
+)
+"""Columns of ``episodes.csv``, in order."""
+
+_BOOLEAN_COLUMNS = ("practice", "success")
+_TEXT_COLUMNS = ("participant", "method", "label")
+_OPTIONAL_COLUMNS = ("eval_success", "eval_attempts", "seconds_per_label")
+_NUMBER_COLUMNS = tuple(c for c in EPISODE_COLUMNS if c not in _BOOLEAN_COLUMNS + _TEXT_COLUMNS)
+
+
+def participant_dir(study_dir: str | Path, participant: str) -> Path:
+    """The folder of one participant's files."""
+    return Path(study_dir) / "participants" / participant
+
+
+def _trial(plan: StudyPlan, participant: str, index: object, where: str) -> TrialPlan:
+    """The planned trial ``index`` of ``participant``; an error naming ``where`` if there is none."""
+    for candidate in plan.participants:
+        if candidate.id == participant:
+            for trial in candidate.trials:
+                if trial.index == index:
+                    return trial
+            raise ValueError(f"{where}: {participant} has no trial {index!r} in the plan")
+    raise ValueError(f"{where}: participant {participant!r} is not in the plan")
+
+
+def _check_matches_plan(
+    plan: StudyPlan, participant: str, trial: object, method: object, label: object, where: str
+) -> TrialPlan:
+    planned = _trial(plan, participant, trial, where)
+    if (method, label) != (planned.method, planned.label):
+        raise ValueError(
+            f"{where}: trial {trial} is {method!r} / {label!r} but the plan has {planned.method!r} / {planned.label!r}"
+        )
+    return planned
+
+
+def load_episodes(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:
+    """All participants' ``episodes.csv`` rows (practice included), checked against the plan.
+
+    Args:
+        study_dir: The study folder.
+        plan: Its plan.
+
+    Returns:
+        One row per finished episode with :data:`EPISODE_COLUMNS`; ``practice`` and ``success`` are
+        bools, the ``eval_*`` columns NaN where the episode was not evaluated.
+
+    Raises:
+        ValueError: If a file has other columns, unparsable values, repeated episodes, or trials
+            that contradict the plan (the message names the file).
+    """
+    frames = [_read_episodes(path, plan) for p in plan.participants if (path := _episodes_file(study_dir, p.id))]
+    frames = [frame for frame in frames if not frame.empty]
+    if not frames:
+        return pd.DataFrame({column: pd.Series(dtype=object) for column in EPISODE_COLUMNS})
+    return pd.concat(frames, ignore_index=True)
+
+
+def _episodes_file(study_dir: str | Path, participant: str) -> Path | None:
+    path = participant_dir(study_dir, participant) / "episodes.csv"
+    return path if path.exists() else None
+
+
+def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
+    try:
+        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except pd.errors.EmptyDataError:
+        return pd.DataFrame()  # created but nothing written yet
+    except (OSError, UnicodeDecodeError, pd.errors.ParserError) as error:
+        raise ValueError(f"{path} is not a readable CSV: {' '.join(str(error).split())}") from None
+    if tuple(frame.columns) != EPISODE_COLUMNS:
+        raise ValueError(f"{path} has columns {list(frame.columns)}; expected {list(EPISODE_COLUMNS)}")
+    for column in _BOOLEAN_COLUMNS:
+        bad = frame.loc[~frame[column].isin(["True", "False"]), column]
+        if len(bad):
+            raise ValueError(f"{path}: {column} must be True or False, got {bad.iloc[0]!r}")
+        frame[column] = frame[column] == "True"
+    for column in _NUMBER_COLUMNS:
+        values = pd.to_numeric(frame[column], errors="coerce")
+        # Empty cells may only be optional ones (eval_* between evaluations, no label in an episode).
+        bad = frame.loc[values.isna() & ((frame[column] != "") | (column not in _OPTIONAL_COLUMNS)), column]
+        if len(bad):
+            raise ValueError(f"{path}: {column} must be a number, got {bad.iloc[0]!r}")
+        frame[column] = values.astype(float)
+    participant = path.parent.name
+    for key, rows in frame.groupby(["participant", "trial", "method", "label", "practice"], sort=False):
+        pid, trial, method, label, practice = key
+        if pid != participant:
+            raise ValueError(f"{path}: rows of participant {pid!r} in {participant}'s file")
+        planned = _check_matches_plan(plan, pid, int(trial), method, label, str(path))
+        if practice != planned.practice:
+            raise ValueError(f"{path}: trial {int(trial)} has practice={practice} but the plan says {planned.practice}")
+        repeated = rows["episode"][rows["episode"].duplicated()]
+        if len(repeated):
+            raise ValueError(f"{path}: trial {int(trial)} has episode {int(repeated.iloc[0])} more than once")
+    frame["trial"] = frame["trial"].astype(int)
+    frame["episode"] = frame["episode"].astype(int)
+    return frame
+
+
+def finished_trials(episodes: pd.DataFrame, plan: StudyPlan) -> pd.DataFrame:
+    """The rows of the trials whose every planned episode is present, sorted by episode."""
+    planned = {(p.id, t.index): t.episodes for p in plan.participants for t in p.trials}
+    counts = episodes.groupby(["participant", "trial"])["episode"].transform("size")
+    keys = zip(episodes["participant"], episodes["trial"], strict=True)
+    done = [count == planned[key] for key, count in zip(keys, counts, strict=True)]
+    return episodes[done].sort_values(["participant", "trial", "episode"], ignore_index=True)
+
+
+def load_answers(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:
+    """All participants' questionnaires, validated and checked against the plan.
+
+    A trial answered twice keeps its last answer (a resubmission replaces the first).
+
+    Args:
+        study_dir: The study folder.
+        plan: Its plan.
+
+    Returns:
+        One row per answered trial: ``participant, trial, method, label, practice``, one column per
+        TLX item, ``comment``.
+
+    Raises:
+        ValueError: If a line is not JSON, fails :func:`validate_answers`, or contradicts the plan
+            (the message names the file and line).
+    """
+    records = []
+    for participant in plan.participants:
+        path = participant_dir(study_dir, participant.id) / "answers.jsonl"
+        if path.exists():
+            records.extend(_read_answers(path, plan, participant.id))
+    columns = ["participant", "trial", "method", "label", "practice", *ITEM_KEYS, "comment"]
+    frame = pd.DataFrame(records, columns=columns)
+    return frame.drop_duplicates(["participant", "trial"], keep="last", ignore_index=True)
+
+
+def _read_answers(path: Path, plan: StudyPlan, participant: str) -> list[dict[str, object]]:
+    records = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        where = f"{path}:{number}"
+        try:
+            entry = json.loads(line)
+            if not isinstance(entry, dict):
+                raise ValueError(f"expected a JSON object, got {entry!r}")
+            answers = validate_answers({key: entry[key] for key in ("ratings", "comment") if key in entry})
+            if entry.get("participant") != participant:
+                raise ValueError(f"participant {entry.get('participant')!r} in {participant}'s file")
+            planned = _check_matches_plan(
+                plan, participant, entry.get("trial"), entry.get("method"), entry.get("label"), where
+            )
+        except ValueError as error:
+            message = str(error)
+            raise ValueError(message if message.startswith(where) else f"{where}: {message}") from None
+        records.append(
+            {
+                "participant": participant,
+                "trial": planned.index,
+                "method": planned.method,
+                "label": planned.label,
+                "practice": planned.practice,
+                **answers.ratings,
+                "comment": answers.comment,
+            }
+        )
+    return records
