@@ -177,6 +177,9 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True)
     for add in (_add_demo, _add_train_low, _add_eval_low, _add_experiment):
         add(subparsers)
+    from antmaze_hirl.study.cli import add_study_parser
+
+    add_study_parser(subparsers)
     return parser
 
 
@@ -188,7 +191,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.handler(args)
-    except (CheckpointError, FileExistsError, FileNotFoundError, ValueError) as error:
+    except (CheckpointError, FileExistsError, FileNotFoundError, ValueError, OSError) as error:
         # What bad input raises (a value, a file, a checkpoint): one line naming it, not a traceback.
         if args.traceback:
             raise

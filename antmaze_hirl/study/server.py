@@ -32,9 +32,13 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from antmaze_hirl.study.questionnaire import SCALE_MAX, TLX_ITEMS
+from fastapi import FastAPI, Request
+from fastapi.responses import HTMLResponse, JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+from starlette.concurrency import run_in_threadpool
 
 from antmaze_hirl.study.camera import CameraUnavailable
+from antmaze_hirl.study.questionnaire import SCALE_MAX, TLX_ITEMS
 from antmaze_hirl.study.session import BadInput, ProtocolError
 from antmaze_hirl.study.store import Study, UnknownParticipant
 
@@ -79,11 +83,6 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         token: Secret every request to the page or the API must carry.
         allowed_hosts: Host names accepted in the ``Host`` header (and as same-site ``Origin``).
     """
-    from fastapi import FastAPI, Request
-    from fastapi.responses import HTMLResponse, JSONResponse, Response
-    from fastapi.staticfiles import StaticFiles
-    from starlette.concurrency import run_in_threadpool
-
     if not token:
         raise ValueError("the study server needs a non-empty token")
     hosts = {host.lower().strip("[]") for host in allowed_hosts}

@@ -36,8 +36,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
-from antmaze_hirl.study.questionnaire import validate_answers
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
 from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
@@ -45,6 +43,8 @@ from antmaze_hirl.dagger.strategies import make_strategy
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
+from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
+from antmaze_hirl.study.questionnaire import validate_answers
 from antmaze_hirl.study.settings import StudySettings
 
 EPISODE_COLUMNS = (

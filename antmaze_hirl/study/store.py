@@ -6,7 +6,6 @@ import threading
 from pathlib import Path
 
 from antmaze_hirl.study.plan import StudyPlan, load_plan
-
 from antmaze_hirl.study.session import ParticipantSession
 from antmaze_hirl.study.settings import StudySettings, load_settings
 

@@ -1,0 +1,191 @@
+"""Simulated participants: the scripted oracle plays a study through the page's HTTP API.
+
+A simulated participant reads exactly what the page gets (``GET .../state``: walls, agent, goal, the
+reach circle), plans its click with the oracle's planner (:func:`~antmaze_hirl.experts.oracle.plan_subgoal`),
+adds Gaussian click noise, waits a reaction delay, and posts the click as the page does. After each
+trial it answers the questionnaire from a seeded model. With no noise its clicks are the oracle's
+labels, so a simulated study reproduces the experiment runner's numbers for the same trial seeds.
+
+The questionnaire model (a stand-in, not a claim about people): each rating is
+``round(3 + participant_offset + effect + N(0, 0.6))`` clipped to 1..5, where the effect grows with the
+labels the trial cost per episode (workload items) or with its share of failed episodes (performance,
+frustration), centred on the study's typical values.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import urllib.error
+import urllib.request
+from dataclasses import dataclass
+from typing import Any
+from urllib.parse import parse_qs, quote, urlsplit
+
+import numpy as np
+
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.experts.oracle import plan_subgoal
+from antmaze_hirl.study.questionnaire import ITEM_KEYS, SCALE_MAX, SCALE_MIN
+
+WORKLOAD_ITEMS = ("mental_demand", "physical_demand", "temporal_demand", "effort")
+
+
+class StudyClientError(RuntimeError):
+    """The server refused a request (its status and JSON error message)."""
+
+
+class StudyClient:
+    """A minimal JSON client of the study API (standard library only).
+
+    Args:
+        url: The study URL with its token, as the server prints it (``http://127.0.0.1:8765/?token=...``).
+        timeout: Seconds per request.
+
+    Raises:
+        ValueError: If the URL has no token.
+    """
+
+    def __init__(self, url: str, *, timeout: float = 600.0) -> None:
+        parts = urlsplit(url)
+        tokens = parse_qs(parts.query).get("token")
+        if not tokens:
+            raise ValueError(f"study URL {url!r} has no ?token=: use the URL the server printed")
+        self.base = f"{parts.scheme}://{parts.netloc}"
+        self.token = tokens[0]
+        self.timeout = timeout
+
+    def request(self, path: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
+        """``GET`` (no body) or ``POST`` (JSON body) ``path``; returns the JSON answer.
+
+        Raises:
+            StudyClientError: On an HTTP error status, with the server's message.
+        """
+        data = None if body is None else json.dumps(body).encode()
+        headers = {"X-Study-Token": self.token}
+        if data is not None:
+            headers["Content-Type"] = "application/json"
+        request = urllib.request.Request(self.base + path, data=data, headers=headers)
+        try:
+            with urllib.request.urlopen(request, timeout=self.timeout) as response:
+                return json.loads(response.read())
+        except urllib.error.HTTPError as error:
+            message = error.read().decode(errors="replace")
+            raise StudyClientError(f"{error.code} from {path}: {message}") from error
+
+    def participant(self, participant_id: str, action: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
+        """A participant's endpoint (``state``, ``start``, ``label``, ``questionnaire``, ``pause``)."""
+        return self.request(f"/api/participants/{quote(participant_id)}/{action}", body)
+
+
+@dataclass(frozen=True)
+class SimulatedParticipant:
+    """How a simulated participant clicks and rates.
+
+    Attributes:
+        noise: Std of the Gaussian click noise, metres.
+        delay: Mean reaction delay before each click, seconds (exponentially distributed; 0: none).
+        seed: Seeds the noise, delays and questionnaire answers.
+    """
+
+    noise: float = 0.0
+    delay: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("noise", "delay"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0:
+                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+
+
+def oracle_click(state: dict[str, Any]) -> np.ndarray:
+    """The oracle's subgoal for a page state (what the page shows: walls, agent, goal, reach circle)."""
+    maze = state["maze"]
+    geometry = MazeGeometry(maze["rows"], maze["cols"], maze["scale"])
+    subgoal = plan_subgoal(
+        np.asarray(maze["walls"], dtype=bool),
+        geometry,
+        np.asarray(state["agent"], dtype=np.float64),
+        np.asarray(state["goal"], dtype=np.float64),
+        max_distance=state["max_distance"],
+        clearance=0.2 * geometry.scale,  # the oracle's default, as in the experiments
+    )
+    inner_low = geometry.low + geometry.scale
+    return np.clip(subgoal, inner_low, -inner_low)
+
+
+def play_participant(
+    client: StudyClient, participant_id: str, behaviour: SimulatedParticipant, *, rng: np.random.Generator
+) -> dict[str, Any]:
+    """Plays one participant's whole session (every trial and questionnaire) through the API.
+
+    Returns:
+        ``{"participant", "clicks", "trials"}`` and the response times of the label requests (seconds).
+    """
+    state = client.participant(participant_id, "state")
+    clicks, latencies, trial_clicks, trial_failures, trial_episodes = 0, [], 0, 0, 0
+    offset = rng.normal(0.0, 0.5)  # how this participant tends to rate
+    trials = 0
+    while state["phase"] != "done":
+        if state["phase"] == "intro":
+            state = client.participant(participant_id, "start", {})
+            trial_clicks = trial_failures = trial_episodes = 0
+        elif state["phase"] == "label":
+            click = oracle_click(state)
+            if behaviour.noise > 0:
+                low, high = (np.asarray(bound) for bound in state["maze"]["bounds"])
+                click = np.clip(click + rng.normal(0.0, behaviour.noise, size=2), low, high)
+            wait = float(rng.exponential(behaviour.delay)) if behaviour.delay > 0 else 0.0
+            time.sleep(wait)
+            started = time.perf_counter()
+            result = client.participant(
+                participant_id,
+                "label",
+                {"query": state["query"]["id"], "x": float(click[0]), "y": float(click[1]), "response_seconds": wait},
+            )
+            latencies.append(time.perf_counter() - started)
+            clicks += 1
+            trial_clicks += 1
+            if result["episode_end"] is not None:
+                trial_episodes += 1
+                trial_failures += int(not result["episode_end"]["success"])
+            state = result["state"]
+        elif state["phase"] == "questionnaire":
+            ratings = _ratings(
+                rng, offset, trial_clicks / max(trial_episodes, 1), trial_failures / max(trial_episodes, 1)
+            )
+            state = client.participant(
+                participant_id, "questionnaire", {"trial": state["trial"]["number"], "ratings": ratings, "comment": ""}
+            )
+            trials += 1
+        else:
+            raise StudyClientError(f"participant {participant_id} is in unknown phase {state['phase']!r}")
+    return {"participant": participant_id, "clicks": clicks, "trials": trials, "latencies": latencies}
+
+
+def _ratings(
+    rng: np.random.Generator, offset: float, labels_per_episode: float, failure_share: float
+) -> dict[str, int]:
+    # Centred on ~10 labels per episode and ~30% failures, the point experiment's typical values.
+    workload = 0.15 * (labels_per_episode - 10.0)
+    failing = 3.0 * (failure_share - 0.3)
+    ratings = {}
+    for key in ITEM_KEYS:
+        effect = workload if key in WORKLOAD_ITEMS else failing
+        value = round(3 + offset + effect + rng.normal(0.0, 0.6))
+        ratings[key] = int(np.clip(value, SCALE_MIN, SCALE_MAX))
+    return ratings
+
+
+def simulate_study(url: str, participant_ids: list[str], behaviour: SimulatedParticipant) -> list[dict[str, Any]]:
+    """Plays ``participant_ids`` one after another on the study served at ``url``.
+
+    Each participant's randomness is seeded by ``behaviour.seed`` and their position in the list.
+    """
+    client = StudyClient(url)
+    results = []
+    for position, participant_id in enumerate(participant_ids):
+        rng = np.random.default_rng([behaviour.seed, position])
+        results.append(play_participant(client, participant_id, behaviour, rng=rng))
+    return results
