@@ -1,0 +1,92 @@
+"""The trainer's ask/tell interface: an expert that answers later drives the same DAgger loop."""
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from antmaze_hirl import PathOracle
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, MultiPolicyQuery, RewardBasedQuery
+from antmaze_hirl.envs import PointGoToController
+
+
+def make_trainer(seed=0, strategy=None):
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    rng = np.random.default_rng(seed)
+    policy = HighLevelPolicy.for_env(env, rng=rng)
+    return DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, gradient_steps=5
+    )
+
+
+def drive_by_hand(trainer, episodes):
+    """The study server's way: read each request, answer it later with the oracle's label."""
+    oracle = trainer.expert
+    records, requests = [], []
+    for _ in range(episodes):
+        run = trainer.start_episode()
+        while not run.done:
+            requests.append(run.request)
+            executed = run.answer(oracle.label(run.request.observation))
+            assert len(executed) == 1
+            assert run.done or executed[0].info["attempts"] == run.request.step  # the next request's index
+        records.append(run.record)
+    return records, requests
+
+
+@pytest.mark.parametrize("strategy", [None, RewardBasedQuery(), MultiPolicyQuery(n_policies=2)])
+def test_ask_tell_gives_the_same_episodes_as_run_episode(strategy):
+    synchronous = make_trainer(strategy=strategy)
+    by_hand = make_trainer(strategy=type(strategy)(**({"n_policies": 2} if strategy else {})) if strategy else None)
+    expected = [r.to_dict() for r in synchronous.train(2)]
+    records, requests = drive_by_hand(by_hand, 2)
+    assert [r.to_dict() for r in records] == expected
+    assert sum(r.expert_cost for r in records) == len(requests) == len(by_hand.dataset) + sum(r.removed for r in records)
+    np.testing.assert_array_equal(by_hand.dataset.subgoals(), synchronous.dataset.subgoals())
+
+
+def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
+    trainer = make_trainer()
+    run = trainer.start_episode()
+    request = run.request
+    np.testing.assert_array_equal(request.learner_subgoal, trainer.policy.predict(request.observation))
+    assert (request.episode, request.step, request.beta) == (0, 0, 1.0)
+    label = trainer.expert.label(request.observation)
+    (step,) = run.answer(label)
+    np.testing.assert_array_equal(step.expert_subgoal, label)
+    np.testing.assert_allclose(step.subgoal, np.clip(label, *trainer.env.unwrapped.action_space.bounds()))
+    np.testing.assert_array_equal(step.info["agent_path"][0], request.observation["state"][:2])
+    assert run.request is None or run.request.step == 1
+
+
+def test_a_bad_label_is_refused_and_leaves_the_episode_as_it_was():
+    trainer = make_trainer()
+    run = trainer.start_episode()
+    request = run.request
+    for bad in ([np.nan, 0.0], [1.0], "left", [np.inf, 1.0]):
+        with pytest.raises(ValueError, match="expert subgoal"):
+            run.answer(bad)
+    assert run.request is request and len(trainer.dataset) == 0
+    run.answer(trainer.expert.label(request.observation))
+    assert len(trainer.dataset) == 1
+
+
+def test_answering_an_ended_episode_raises():
+    trainer = make_trainer()
+    run = trainer.start_episode()
+    while not run.done:
+        run.answer(trainer.expert.label(run.request.observation))
+    with pytest.raises(RuntimeError, match="has ended"):
+        run.answer([0.0, 0.0])
+
+
+def test_a_trainer_pickles_between_episodes_and_goes_on_identically():
+    trainer = make_trainer(strategy=MultiPolicyQuery(n_policies=2))
+    trainer.train(2)
+    env, expert = trainer.env, trainer.expert
+    trainer.env = trainer.expert = None
+    copy = pickle.loads(pickle.dumps(trainer))
+    trainer.env, trainer.expert = env, expert
+    copy.env, copy.expert = make_trainer().env, expert
+    assert copy.train(1)[0].to_dict() == trainer.train(1)[0].to_dict()
