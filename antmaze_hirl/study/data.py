@@ -137,10 +137,10 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
 def finished_trials(episodes: pd.DataFrame, plan: StudyPlan) -> pd.DataFrame:
     """The rows of the trials whose every planned episode is present, sorted by episode."""
     planned = {(p.id, t.index): t.episodes for p in plan.participants for t in p.trials}
-    counts = episodes.groupby(["participant", "trial"])["episode"].transform("size")
     keys = zip(episodes["participant"], episodes["trial"], strict=True)
-    done = [count == planned[key] for key, count in zip(keys, counts, strict=True)]
-    return episodes[done].sort_values(["participant", "trial", "episode"], ignore_index=True)
+    expected = pd.Series([planned[key] for key in keys], index=episodes.index, dtype=float)
+    done = episodes.groupby(["participant", "trial"])["episode"].transform("size") == expected
+    return episodes.loc[done.astype(bool)].sort_values(["participant", "trial", "episode"], ignore_index=True)
 
 
 def load_answers(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:
