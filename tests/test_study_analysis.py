@@ -169,3 +169,14 @@ def test_analyze_rejects_a_bad_answer_line(study):
     path.write_text("\n".join([lines[0], json.dumps(entry), *lines[2:]]) + "\n")
     with pytest.raises(ValueError, match=r"answers\.jsonl:2: rating of 'effort' must be from 1 to 5, got 7"):
         analyze(study_dir)
+
+
+def test_episode_columns_are_the_documented_server_format():
+    documented = (
+        "participant trial method label practice episode success expert_cost cumulative_expert_cost attempts "
+        "low_level_steps beta dataset_size removed eval_success eval_attempts seconds_per_label time_on_task"
+    )
+    assert EPISODE_COLUMNS == tuple(documented.split())
+    import antmaze_hirl.study.analysis as analysis
+
+    assert ", ".join(EPISODE_COLUMNS) in " ".join(analysis.__doc__.split()).replace("``", "")

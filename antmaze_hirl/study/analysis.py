@@ -123,60 +123,63 @@ def analyze(study_dir: str | Path) -> Path:
     answers = load_answers(study_dir, plan)
     answered = answers.loc[~answers["practice"].astype(bool)]
     outcomes = trial_outcomes(finished)
-    measures: dict[str, Any] = {}
-    for key, title, description in OUTCOMES:
-        measures[key] = {
-            "title": title,
-            "description": description,
-            **compare_methods(_values(outcomes, key), plan.methods),
-        }
-    for item in TLX_ITEMS:
-        description = (
-            f"NASA-TLX rating, 1 = {item.low_anchor.lower()} ... 5 = {item.high_anchor.lower()}: {item.question}"
-        )
-        measures[item.key] = {
-            "title": item.title,
-            "description": description,
-            **compare_methods(_values(answered, item.key), plan.methods),
-        }
+    measures = _measures(outcomes, answered, plan.methods)
     out = study_dir / "report"
-    names = {m: f"{plan.label_of(m)} ({m})" for m in plan.methods}
-    panel_names = [names[m] for m in plan.methods]
-    atomic_write_with(
-        out / "panels.png",
-        lambda tmp: plot_panels(_panel_rows(finished, names), panel_names, tmp, title=f"User study ({plan.body})"),
-    )
-    likert = [(item.title, measures[item.key]["methods"]) for item in TLX_ITEMS]
-    save_likert(likert, plan.methods, names, out / "likert.png")
-    seconds = _values(outcomes, "seconds_per_label")
-    save_per_participant([("median seconds per label", seconds)], plan.methods, names, out / "seconds_per_label.png")
-    save_per_participant(
-        [
-            ("final learner success", _values(outcomes, "final_success")),
-            ("total labels", _values(outcomes, "total_labels")),
-        ],
-        plan.methods,
-        names,
-        out / "outcomes.png",
-    )
     results = {
         "design": _design(plan),
-        "figures": {
-            "panels.png": _contributors(
-                finished, plan.methods, "success, cumulative expert cost and attempts per episode (finished trials)"
-            ),
-            "likert.png": _contributors(
-                answered, plan.methods, "NASA-TLX ratings, mean and standard error (answered trials)"
-            ),
-            "seconds_per_label.png": _contributors(
-                seconds.dropna(), plan.methods, "each participant's median seconds per label"
-            ),
-            "outcomes.png": _contributors(
-                outcomes, plan.methods, "each participant's final learner success and total labels"
-            ),
-        },
+        "figures": _write_figures(out, plan, finished, outcomes, answered, measures),
         "measures": measures,
     }
     atomic_write_json(out / "stats.json", results)
     atomic_write_text(out / "report.md", render_report(results))
     return out
+
+
+def _measures(outcomes: pd.DataFrame, answered: pd.DataFrame, methods: tuple[str, ...]) -> dict[str, Any]:
+    """Every measure's descriptives and tests, keyed by measure (OUTCOMES, then the TLX items)."""
+    measures = {}
+    for key, title, description in OUTCOMES:
+        measures[key] = {"title": title, "description": description, **compare_methods(_values(outcomes, key), methods)}
+    for item in TLX_ITEMS:
+        anchors = f"1 = {item.low_anchor.lower()} ... 5 = {item.high_anchor.lower()}"
+        measures[item.key] = {
+            "title": item.title,
+            "description": f"NASA-TLX rating, {anchors}: {item.question}",
+            **compare_methods(_values(answered, item.key), methods),
+        }
+    return measures
+
+
+def _write_figures(
+    out: Path,
+    plan: StudyPlan,
+    finished: pd.DataFrame,
+    outcomes: pd.DataFrame,
+    answered: pd.DataFrame,
+    measures: dict[str, Any],
+) -> dict[str, Any]:
+    """Writes the PNGs; returns, per file, what it shows and how many participants it rests on."""
+    names = {m: f"{plan.label_of(m)} ({m})" for m in plan.methods}
+    panel_rows = _panel_rows(finished, names)
+    panel_names = [names[m] for m in plan.methods]
+    title = f"User study ({plan.body})"
+    atomic_write_with(out / "panels.png", lambda tmp: plot_panels(panel_rows, panel_names, tmp, title=title))
+    likert = [(item.title, measures[item.key]["methods"]) for item in TLX_ITEMS]
+    save_likert(likert, plan.methods, names, out / "likert.png")
+    seconds = _values(outcomes, "seconds_per_label").dropna()
+    save_per_participant([("median seconds per label", seconds)], plan.methods, names, out / "seconds_per_label.png")
+    final, labels = _values(outcomes, "final_success"), _values(outcomes, "total_labels")
+    panels = [("final learner success", final), ("total labels", labels)]
+    save_per_participant(panels, plan.methods, names, out / "outcomes.png")
+    return {
+        "panels.png": _contributors(
+            finished, plan.methods, "success, expert cost and attempts per episode (finished trials)"
+        ),
+        "likert.png": _contributors(
+            answered, plan.methods, "NASA-TLX ratings, mean and standard error (answered trials)"
+        ),
+        "seconds_per_label.png": _contributors(seconds, plan.methods, "each participant's median seconds per label"),
+        "outcomes.png": _contributors(
+            outcomes, plan.methods, "each participant's final learner success and total labels"
+        ),
+    }

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from antmaze_hirl.experiments.runner import COLUMNS
 from antmaze_hirl.study.plan import StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
 
@@ -21,17 +22,8 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
     "label",
     "practice",
-    "episode",
-    "success",
-    "expert_cost",
-    "cumulative_expert_cost",
-    "attempts",
-    "low_level_steps",
-    "beta",
-    "dataset_size",
-    "removed",
-    "eval_success",
-    "eval_attempts",
+    # The trainer's own episode record (as the experiment's tables have it), then the human's timing.
+    *(column for column in COLUMNS if column not in ("method", "seed")),
     "seconds_per_label",
     "time_on_task",
 )
