@@ -130,6 +130,11 @@ def test_bad_demonstrations_are_named(study):
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match=r"trial1/demonstrations\.npz: labels has shape \(5, 1\)"):
         export_minari(study_dir, "antmaze-hirl/study-v0")
+    arrays = dict(saved[1])
+    arrays["labels"] = np.where(arrays["labelled"][:, None], np.nan, np.zeros((5, 2))).astype(np.float32)
+    np.savez(path, **arrays)
+    with pytest.raises(ValueError, match=r"is marked labelled but its label is \[nan, nan\]"):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
     del arrays["labels"]
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match=r"lacks the arrays \['labels'\]"):

@@ -93,6 +93,11 @@ def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
     outside = arrays["episode"][(arrays["episode"] < 0) | (arrays["episode"] >= len(arrays["success"]))]
     if outside.size:
         raise ValueError(f"{path}: episode index {int(outside[0])} outside success's {len(arrays['success'])} episodes")
+    labelled_steps = np.flatnonzero(arrays["labelled"])
+    unlabelled = labelled_steps[~np.isfinite(arrays["labels"][labelled_steps]).all(axis=1)]
+    if unlabelled.size:
+        step = int(unlabelled[0])
+        raise ValueError(f"{path}: step {step} is marked labelled but its label is {arrays['labels'][step].tolist()}")
     pairs = np.stack([arrays["episode"], arrays["step"]], axis=1)
     if len(np.unique(pairs, axis=0)) != steps:
         raise ValueError(f"{path}: an (episode, step) pair repeats")
@@ -132,7 +137,7 @@ def _episode_buffers(arrays: dict[str, np.ndarray], participant: int, trial: int
 
 
 @contextmanager
-def _datasets_path(data_path: Path | None) -> Iterator[None]:
+def _datasets_path(data_path: str | Path | None) -> Iterator[None]:
     """Points Minari at ``data_path`` for the duration (Minari reads only the environment variable)."""
     if data_path is None:
         yield
@@ -149,7 +154,7 @@ def _datasets_path(data_path: Path | None) -> Iterator[None]:
 
 
 def export_minari(
-    study_dir: str | Path, dataset_id: str, *, include_practice: bool = False, data_path: Path | None = None
+    study_dir: str | Path, dataset_id: str, *, include_practice: bool = False, data_path: str | Path | None = None
 ) -> Path:
     """Writes every saved trial's demonstrations as one Minari dataset.
 
