@@ -1,4 +1,5 @@
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -192,3 +193,24 @@ def test_plot_panels_marks_a_one_point_curve():
     _band(ax, np.array([1.0]), np.array([[0.5], [0.7]]), "one evaluation")
     _band(ax, np.array([1.0, 2.0]), np.array([[0.5, 0.6]]), "two evaluations")
     assert [line.get_marker() for line in ax.lines] == ["o", "None"]
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [
+        ("episode", 1.5, "episode must be a whole number, got 1.5"),
+        ("episode", 7, "has episode 7 of 4"),
+        ("episode", 0, "has episode 0 more than once"),
+        ("success", "yes", "success must be True or False, got 'yes'"),
+        ("attempts", "", "attempts must be a number, got ''"),
+        ("attempts", "many", "attempts must be a number, got 'many'"),
+    ],
+)
+def test_analyze_rejects_bad_episode_rows(study, column, value, message):
+    study_dir, _, _ = study
+    path = participant_dir(study_dir, "P03") / "episodes.csv"
+    frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+    frame.loc[5, column] = str(value)
+    frame.to_csv(path, index=False)
+    with pytest.raises(ValueError, match=re.escape("P03/episodes.csv: ") + ".*" + re.escape(message)):
+        analyze(study_dir)

@@ -110,6 +110,10 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
         if len(bad):
             raise ValueError(f"{path}: {column} must be a number, got {bad.iloc[0]!r}")
         frame[column] = values.astype(float)
+    for column in ("trial", "episode"):
+        fractional = frame.loc[frame[column] % 1 != 0, column]
+        if len(fractional):
+            raise ValueError(f"{path}: {column} must be a whole number, got {float(fractional.iloc[0])}")
     participant = path.parent.name
     for key, rows in frame.groupby(["participant", "trial", "method", "label", "practice"], sort=False):
         pid, trial, method, label, practice = key
@@ -118,6 +122,9 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
         planned = _check_matches_plan(plan, pid, int(trial), method, label, str(path))
         if practice != planned.practice:
             raise ValueError(f"{path}: trial {int(trial)} has practice={practice} but the plan says {planned.practice}")
+        outside = rows["episode"][(rows["episode"] < 0) | (rows["episode"] >= planned.episodes)]
+        if len(outside):
+            raise ValueError(f"{path}: trial {int(trial)} has episode {int(outside.iloc[0])} of {planned.episodes}")
         repeated = rows["episode"][rows["episode"].duplicated()]
         if len(repeated):
             raise ValueError(f"{path}: trial {int(trial)} has episode {int(repeated.iloc[0])} more than once")

@@ -234,7 +234,7 @@ def make_plan(
 
 
 def save_plan(plan: StudyPlan, directory: str | Path) -> Path:
-    """Writes ``directory/plan.json`` atomically; rewriting the same plan is a no-op.
+    """Writes ``directory/plan.json`` atomically; saving the same plan again is allowed.
 
     Args:
         plan: The plan.
