@@ -135,6 +135,21 @@ def test_bad_demonstrations_are_named(study):
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match=r"is marked labelled but its label is \[nan, nan\]"):
         export_minari(study_dir, "antmaze-hirl/study-v0")
+    arrays = dict(saved[1])
+    arrays["images"] = arrays["images"].astype(np.float32)
+    np.savez(path, **arrays)
+    with pytest.raises(ValueError, match="images has dtype float32, expected uint8"):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
+    arrays = dict(saved[1])
+    arrays["episode"] = np.int64(0)
+    np.savez(path, **arrays)
+    with pytest.raises(ValueError, match=r"episode has shape \(\)"):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
+    arrays = dict(saved[1])
+    arrays["episode"] = arrays["episode"] + 1  # episode 2 of a trial with 2 episodes
+    np.savez(path, **arrays)
+    with pytest.raises(ValueError, match="episode index 2 outside success's 2 episodes"):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
     del arrays["labels"]
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match=r"lacks the arrays \['labels'\]"):

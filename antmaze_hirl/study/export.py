@@ -34,16 +34,16 @@ DATASET_ID_PATTERN = re.compile(r"[\w-]+(/[\w-]+)*/[\w.-]+?-v(0|[1-9][0-9]*)", r
 """Minari ids with a namespace and a version: ``namespace/name-v0``."""
 
 _ARRAYS = {
-    # name: (dtype kind, trailing shape or None for any, per-step)
-    "images": ("u", None, True),
-    "states": ("f", None, True),
-    "executed": ("f", (2,), True),
-    "labels": ("f", (2,), True),
-    "labelled": ("b", (), True),
-    "episode": ("i", (), True),
-    "step": ("i", (), True),
-    "success": ("b", (), False),
-    "terminal_success": ("b", (), True),
+    # name: (allowed dtype kinds, what they are called, trailing shape or None for any, one per step?)
+    "images": ("u", "uint8", None, True),
+    "states": ("f", "float", None, True),
+    "executed": ("f", "float", (2,), True),
+    "labels": ("f", "float", (2,), True),
+    "labelled": ("b", "bool", (), True),
+    "episode": ("iu", "int", (), True),
+    "step": ("iu", "int", (), True),
+    "success": ("b", "bool", (), False),
+    "terminal_success": ("b", "bool", (), True),
 }
 
 
@@ -79,12 +79,15 @@ def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
     missing = sorted(set(_ARRAYS) - set(arrays))
     if missing:
         raise ValueError(f"{path} lacks the arrays {missing}")
+    if arrays["episode"].ndim != 1:
+        raise ValueError(f"{path}: episode has shape {arrays['episode'].shape}, expected one index per step (N,)")
     steps = len(arrays["episode"])
-    for name, (kind, trailing, per_step) in _ARRAYS.items():
+    for name, (kinds, dtype, trailing, per_step) in _ARRAYS.items():
         array = arrays[name]
-        if array.dtype.kind != kind and not (kind == "i" and array.dtype.kind == "u"):
-            raise ValueError(f"{path}: {name} has dtype {array.dtype}, expected kind {kind!r}")
-        if (per_step and len(array) != steps) or (trailing is not None and array.shape[1:] != trailing):
+        if array.dtype.kind not in kinds or (name == "images" and array.dtype != np.uint8):
+            raise ValueError(f"{path}: {name} has dtype {array.dtype}, expected {dtype}")
+        wrong_length = array.ndim == 0 or (per_step and len(array) != steps)
+        if wrong_length or (trailing is not None and array.shape[1:] != trailing):
             raise ValueError(f"{path}: {name} has shape {array.shape}, which does not fit {steps} steps")
     if arrays["images"].ndim != 4 or arrays["images"].shape[1] != 3 or arrays["states"].ndim != 2:
         raise ValueError(
