@@ -126,6 +126,19 @@ def test_save_and_load_round_trip(tmp_path):
     with pytest.raises(ValueError, match="already holds a different plan"):
         save_plan(other, tmp_path)
     assert load_plan(tmp_path) == plan
+    (tmp_path / "plan.json").write_text("{broken")
+    with pytest.raises(ValueError, match="already holds a different plan"):
+        save_plan(plan, tmp_path)
+
+
+def test_save_plan_with_custom_method_names(tmp_path):
+    names = ["m0", "m1"]
+    plan = make_plan("point", names, participants=2, known_methods=names)
+    save_plan(plan, tmp_path)
+    save_plan(plan, tmp_path)
+    assert load_plan(tmp_path, known_methods=names) == plan
+    with pytest.raises(ValueError, match="unknown method 'm0'"):
+        load_plan(tmp_path)
 
 
 def test_load_plan_errors_name_the_file(tmp_path):

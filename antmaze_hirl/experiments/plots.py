@@ -25,7 +25,8 @@ def _per_seed(rows: Sequence[dict[str, Any]], method: str, key: str, evaluated_o
 
 
 def _band(ax: Any, x: np.ndarray, values: np.ndarray, label: str) -> None:
-    line = ax.plot(x, np.median(values, axis=0), label=label)[0]
+    # A line through one point draws nothing: a lone point (e.g. a single evaluation) gets a marker.
+    line = ax.plot(x, np.median(values, axis=0), label=label, marker="o" if len(x) == 1 else None)[0]
     ax.fill_between(x, values.min(axis=0), values.max(axis=0), color=line.get_color(), alpha=0.2)
 
 

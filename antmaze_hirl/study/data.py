@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from antmaze_hirl.experiments.runner import COLUMNS
 from antmaze_hirl.study.plan import StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
 
@@ -21,17 +22,8 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
     "label",
     "practice",
-    "episode",
-    "success",
-    "expert_cost",
-    "cumulative_expert_cost",
-    "attempts",
-    "low_level_steps",
-    "beta",
-    "dataset_size",
-    "removed",
-    "eval_success",
-    "eval_attempts",
+    # The trainer's own episode record (as the experiment's tables have it), then the human's timing.
+    *(column for column in COLUMNS if column not in ("method", "seed")),
     "seconds_per_label",
     "time_on_task",
 )
@@ -118,6 +110,10 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
         if len(bad):
             raise ValueError(f"{path}: {column} must be a number, got {bad.iloc[0]!r}")
         frame[column] = values.astype(float)
+    for column in ("trial", "episode"):
+        fractional = frame.loc[frame[column] % 1 != 0, column]
+        if len(fractional):
+            raise ValueError(f"{path}: {column} must be a whole number, got {float(fractional.iloc[0])}")
     participant = path.parent.name
     for key, rows in frame.groupby(["participant", "trial", "method", "label", "practice"], sort=False):
         pid, trial, method, label, practice = key
@@ -126,6 +122,9 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
         planned = _check_matches_plan(plan, pid, int(trial), method, label, str(path))
         if practice != planned.practice:
             raise ValueError(f"{path}: trial {int(trial)} has practice={practice} but the plan says {planned.practice}")
+        outside = rows["episode"][(rows["episode"] < 0) | (rows["episode"] >= planned.episodes)]
+        if len(outside):
+            raise ValueError(f"{path}: trial {int(trial)} has episode {int(outside.iloc[0])} of {planned.episodes}")
         repeated = rows["episode"][rows["episode"].duplicated()]
         if len(repeated):
             raise ValueError(f"{path}: trial {int(trial)} has episode {int(repeated.iloc[0])} more than once")
@@ -137,10 +136,10 @@ def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
 def finished_trials(episodes: pd.DataFrame, plan: StudyPlan) -> pd.DataFrame:
     """The rows of the trials whose every planned episode is present, sorted by episode."""
     planned = {(p.id, t.index): t.episodes for p in plan.participants for t in p.trials}
-    counts = episodes.groupby(["participant", "trial"])["episode"].transform("size")
     keys = zip(episodes["participant"], episodes["trial"], strict=True)
-    done = [count == planned[key] for key, count in zip(keys, counts, strict=True)]
-    return episodes[done].sort_values(["participant", "trial", "episode"], ignore_index=True)
+    expected = pd.Series([planned[key] for key in keys], index=episodes.index, dtype=float)
+    done = episodes.groupby(["participant", "trial"])["episode"].transform("size") == expected
+    return episodes.loc[done.astype(bool)].sort_values(["participant", "trial", "episode"], ignore_index=True)
 
 
 def load_answers(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:

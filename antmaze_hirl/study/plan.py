@@ -234,7 +234,7 @@ def make_plan(
 
 
 def save_plan(plan: StudyPlan, directory: str | Path) -> Path:
-    """Writes ``directory/plan.json`` atomically; rewriting the same plan is a no-op.
+    """Writes ``directory/plan.json`` atomically; saving the same plan again is allowed.
 
     Args:
         plan: The plan.
@@ -247,9 +247,15 @@ def save_plan(plan: StudyPlan, directory: str | Path) -> Path:
         ValueError: If ``plan.json`` already exists with a different plan (a study's plan never changes).
     """
     path = Path(directory) / PLAN_FILE
-    if path.exists() and load_plan(directory) != plan:
-        raise ValueError(f"{path} already holds a different plan; a study's plan never changes (use a new folder)")
-    return atomic_write_json(path, plan.to_dict())
+    content = json.loads(json.dumps(plan.to_dict()))  # as it reads back: tuples become lists
+    if path.exists():
+        try:
+            same = json.loads(path.read_text()) == content
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            same = False
+        if not same:
+            raise ValueError(f"{path} already holds a different plan; a study's plan never changes (use a new folder)")
+    return atomic_write_json(path, content)
 
 
 def load_plan(directory: str | Path, known_methods: Collection[str] | None = None) -> StudyPlan:
