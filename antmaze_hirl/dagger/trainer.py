@@ -132,7 +132,10 @@ class EpisodeRun:
         """
         if self.done:
             raise RuntimeError("the episode has ended; start another with DAggerTrainer.start_episode()")
-        as_finite_vector(subgoal, 2, "expert subgoal")  # checked here too, so a bad label leaves the run as it was
+        try:  # checked before the coroutine runs, so a bad label leaves the run as it was
+            as_finite_vector(subgoal, 2, "expert subgoal")
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"expert subgoal must be two finite numbers (x, y metres), got {subgoal!r}") from error
         self._executed.clear()
         self._advance(subgoal)
         return list(self._executed)
