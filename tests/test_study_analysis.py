@@ -26,6 +26,7 @@ def _episode_rows(participant, trial, episodes):
                 "method": trial.method,
                 "label": trial.label,
                 "practice": trial.practice,
+                "seed": trial.seed,
                 "episode": episode,
                 "success": episode % 3 == 0,
                 "expert_cost": 2,
@@ -175,7 +176,7 @@ def test_analyze_rejects_a_bad_answer_line(study):
 
 def test_episode_columns_are_the_documented_server_format():
     documented = (
-        "participant trial method label practice episode success expert_cost cumulative_expert_cost attempts "
+        "participant trial method label practice seed episode success expert_cost cumulative_expert_cost attempts "
         "low_level_steps beta dataset_size removed eval_success eval_attempts seconds_per_label time_on_task"
     )
     assert EPISODE_COLUMNS == tuple(documented.split())

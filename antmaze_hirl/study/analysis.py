@@ -4,7 +4,7 @@ Data format (what the study server writes; ``DIR`` is the study folder):
 
 - ``DIR/plan.json``: the plan (:mod:`antmaze_hirl.study.plan`).
 - ``DIR/participants/<pid>/episodes.csv``: one row per finished episode, columns
-  ``participant, trial, method, label, practice, episode, success, expert_cost,
+  ``participant, trial, method, label, practice, seed, episode, success, expert_cost,
   cumulative_expert_cost, attempts, low_level_steps, beta, dataset_size, removed, eval_success,
   eval_attempts, seconds_per_label, time_on_task``. ``practice`` and ``success`` are ``True``/``False``;
   ``episode`` counts from 0 within the trial (as the trainer's records do); ``eval_*`` are empty except
@@ -95,7 +95,7 @@ def _contributors(frame: pd.DataFrame, methods: tuple[str, ...], description: st
 
 def _panel_rows(finished: pd.DataFrame, names: dict[str, str]) -> list[dict[str, Any]]:
     # plot_panels draws one curve per method over "seeds"; here the participants play the seeds.
-    rows = finished.rename(columns={"participant": "seed"}).to_dict("records")
+    rows = finished.drop(columns=["seed"]).rename(columns={"participant": "seed"}).to_dict("records")
     return [{**row, "method": names[row["method"]]} for row in rows]
 
 

@@ -22,6 +22,7 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     "method",
     "label",
     "practice",
+    "seed",
     # The trainer's own episode record (as the experiment's tables have it), then the human's timing.
     *(column for column in COLUMNS if column not in ("method", "seed")),
     "seconds_per_label",

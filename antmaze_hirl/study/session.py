@@ -43,32 +43,10 @@ from antmaze_hirl.dagger.strategies import make_strategy
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
+from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
 from antmaze_hirl.study.settings import StudySettings
-
-EPISODE_COLUMNS = (
-    "participant",
-    "trial",
-    "method",
-    "label",
-    "practice",
-    "seed",
-    "episode",
-    "success",
-    "expert_cost",
-    "cumulative_expert_cost",
-    "attempts",
-    "low_level_steps",
-    "beta",
-    "dataset_size",
-    "removed",
-    "eval_success",
-    "eval_attempts",
-    "seconds_per_label",
-    "time_on_task",
-)
-"""Columns of a participant's ``episodes.csv``: the experiment's, plus who, which trial and the person's time."""
 
 
 class ProtocolError(Exception):
@@ -516,7 +494,9 @@ class ParticipantSession:
             "seed": trial.seed,
             **record.to_dict(),
             "cumulative_expert_cost": state.trainer.total_expert_cost,
-            "seconds_per_label": round(float(np.mean(self._episode_label_seconds)), 4),
+            "seconds_per_label": (
+                round(float(np.mean(self._episode_label_seconds)), 4) if self._episode_label_seconds else ""
+            ),
             "time_on_task": round(self.clock() - self._episode_started_at - self._episode_paused, 3),
         }
         final = episode == trial.episodes - 1

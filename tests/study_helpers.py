@@ -1,0 +1,22 @@
+"""Tiny point-body studies for the study tests (a few episodes, so a whole study runs in seconds)."""
+
+from pathlib import Path
+
+from antmaze_hirl.study.plan import make_plan, save_plan
+from antmaze_hirl.study.settings import StudySettings, save_settings
+
+TINY_SETTINGS = {"maze_size": 3, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
+
+
+def make_tiny_study(
+    folder: Path, *, participants: int = 1, methods=("dagger", "reward"), episodes: int = 2, practice: int = 1
+) -> Path:
+    """A study folder: point body, 3x3 mazes, ``episodes`` per trial, tiny evaluations."""
+    save_plan(make_plan("point", list(methods), participants, episodes=episodes, practice=practice, seed=0), folder)
+    save_settings(StudySettings.for_body("point", **TINY_SETTINGS), folder)
+    return folder
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` with its bytes (to show a refused request changed nothing)."""
+    return {str(path.relative_to(folder)): path.read_bytes() for path in sorted(folder.rglob("*")) if path.is_file()}

@@ -1,0 +1,142 @@
+"""Whole studies: simulated participants over HTTP, the report, the oracle's numbers, and a kill -9 mid-trial."""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import httpx
+import pytest
+from study_helpers import TINY_SETTINGS, make_tiny_study
+
+from antmaze_hirl.experiments.runner import run_trial
+from antmaze_hirl.study.analysis import analyze
+from antmaze_hirl.study.plan import load_plan
+from antmaze_hirl.study.server import StudyServer, bind_socket
+from antmaze_hirl.study.settings import load_settings
+from antmaze_hirl.study.simulate import SimulatedParticipant, StudyClient, oracle_click, simulate_study
+
+COMPARED = ("episode", "success", "expert_cost", "cumulative_expert_cost", "attempts", "low_level_steps", "beta")
+
+
+def read_csv(path):
+    with path.open() as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_a_simulated_three_participant_study_runs_over_http_and_is_analysed(tmp_path):
+    folder = make_tiny_study(tmp_path / "study", participants=3)
+    with StudyServer(folder).running() as server:
+        results = simulate_study(server.url, ["P01", "P02", "P03"], SimulatedParticipant(noise=0.1, delay=0.01, seed=3))
+    assert [r["trials"] for r in results] == [2, 2, 2]  # practice is not rated
+    plan = load_plan(folder)
+    for participant in plan.participants:
+        rows = read_csv(folder / "participants" / participant.id / "episodes.csv")
+        assert [(int(r["trial"]), int(r["episode"])) for r in rows] == [(0, 0), (1, 0), (1, 1), (2, 0), (2, 1)]
+        assert [r["method"] for r in rows[1:]] == [m for m in participant.order for _ in range(2)]
+        assert all(r["label"] != r["method"] for r in rows)  # the page shows neutral labels only
+        assert all(float(r["seconds_per_label"]) >= 0 for r in rows)
+        clicks = (folder / "participants" / participant.id / "clicks.jsonl").read_text().splitlines()
+        assert len(clicks) == sum(int(r["expert_cost"]) for r in rows)
+        answers = [json.loads(line) for line in (folder / "participants" / participant.id / "answers.jsonl").open()]
+        assert [a["method"] for a in answers] == list(participant.order)
+        for trial in participant.trials:
+            assert (folder / "participants" / participant.id / f"trial{trial.index}" / "learner.zip").is_file()
+    report = analyze(folder)
+    text = (report / "report.md").read_text()
+    for method, label in plan.labels:
+        assert label in text and method in text
+    assert "ANOVA" in text
+    for name in ("panels.png", "likert.png", "seconds_per_label.png", "stats.json"):
+        assert (report / name).stat().st_size > 0
+
+
+def test_a_noise_free_simulated_participant_gives_the_oracle_experiments_numbers(tmp_path):
+    # One trainer, any expert: clicks planned from the page's state equal the oracle's labels, so the
+    # study trial reproduces the experiment runner's trial with the same seed, episode for episode.
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger", "reward"), episodes=3, practice=0)
+    with StudyServer(folder).running() as server:
+        simulate_study(server.url, ["P01"], SimulatedParticipant())
+    plan, settings = load_plan(folder), load_settings(folder)
+    rows = read_csv(folder / "participants" / "P01" / "episodes.csv")
+    for trial in plan.participants[0].trials:
+        expected = run_trial(trial.method, trial.seed, settings.experiment_config(trial.episodes))
+        got = [r for r in rows if int(r["trial"]) == trial.index]
+        assert [[str(e[c]) for c in COMPARED] for e in expected] == [[g[c] for c in COMPARED] for g in got]
+        assert expected[-1]["eval_success"] == float(got[-1]["eval_success"])  # the final evaluation too
+
+
+def _serve(folder, port, token):
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "antmaze_hirl.cli", "study", "serve", str(folder), "--port", str(port)]
+    process = subprocess.Popen([*command, "--token", token], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        try:
+            httpx.get(f"http://127.0.0.1:{port}/api/study", headers={"X-Study-Token": token}, timeout=2)
+            return process
+        except httpx.TransportError:
+            if process.poll() is not None:
+                raise RuntimeError(process.stdout.read().decode()) from None
+            time.sleep(0.2)
+    process.kill()
+    raise TimeoutError("study server did not start")
+
+
+def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger", "reward"), episodes=3, practice=0)
+    probe = bind_socket("127.0.0.1", 0)
+    port = probe.getsockname()[1]
+    probe.close()
+    token = "kill-test-token"
+    client = StudyClient(f"http://127.0.0.1:{port}/?token={token}")
+    server = _serve(folder, port, token)
+    try:
+        state = client.participant("P01", "start", {})
+        finished = 0
+        while finished < 1 or state["query"]["step"] < 2:  # one whole episode, then two clicks into the next
+            click = oracle_click(state)
+            result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
+            finished += result["episode_end"] is not None
+            state = result["state"]
+        participant = folder / "participants" / "P01"
+        saved = {name: (participant / name).read_bytes() for name in ("episodes.csv", "clicks.jsonl", "events.jsonl")}
+        trial_folder = participant / "trial1"  # without a practice trial the first compared trial is 1
+        checkpoint = (trial_folder / "checkpoint.pkl").read_bytes()
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+    server = _serve(folder, port, token)
+    try:
+        resumed = client.participant("P01", "state")
+        assert resumed["phase"] == "label" and resumed["episode"]["number"] == 2 and resumed["query"]["step"] == 0
+        assert resumed["labels"] == int(read_csv(participant / "episodes.csv")[0]["expert_cost"])
+        for name, content in saved.items():
+            assert (participant / name).read_bytes().startswith(content), name  # earlier data intact
+        assert (trial_folder / "checkpoint.pkl").read_bytes() == checkpoint
+        events = [json.loads(line)["event"] for line in (participant / "events.jsonl").open()]
+        assert events[-1] == "restored"
+        while resumed["phase"] == "label":  # the participant goes on to the end of the trial
+            click = oracle_click(resumed)
+            query = {"query": resumed["query"]["id"], "x": click[0], "y": click[1]}
+            resumed = client.participant("P01", "label", query)["state"]
+        assert resumed["phase"] == "questionnaire"
+        rows = read_csv(participant / "episodes.csv")
+        assert [int(r["episode"]) for r in rows] == [0, 1, 2]
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+
+
+@pytest.mark.parametrize("episodes", [TINY_SETTINGS["eval_every"]])
+def test_evaluations_land_on_the_paper_schedule(tmp_path, episodes):
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger", "noise"), episodes=episodes + 1)
+    with StudyServer(folder).running() as server:
+        simulate_study(server.url, ["P01"], SimulatedParticipant(seed=1))
+    rows = [r for r in read_csv(folder / "participants" / "P01" / "episodes.csv") if r["practice"] == "False"]
+    evaluated = [int(r["episode"]) for r in rows if r["eval_success"] != ""]
+    # every eval_every-th episode, and the last one (with the final evaluation's mazes)
+    assert evaluated == [1, 2, 1, 2]

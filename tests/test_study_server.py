@@ -1,0 +1,101 @@
+"""The study server over real HTTP: token, Host and Origin checks, and every bad input refused without a trace."""
+
+import httpx
+import pytest
+from study_helpers import make_tiny_study, snapshot
+
+from antmaze_hirl.study.server import MAX_BODY_BYTES, StudyServer, parse_json_object
+from antmaze_hirl.study.session import BadInput
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    folder = make_tiny_study(tmp_path_factory.mktemp("study"), participants=2)
+    server = StudyServer(folder, token="secret-token")
+    with server.running():
+        yield server, folder
+
+
+@pytest.fixture
+def client(served):
+    server, _ = served
+    with httpx.Client(base_url=server.base_url, headers={"X-Study-Token": server.token}, timeout=120) as client:
+        yield client
+
+
+def test_the_page_and_the_api_need_the_token(served):
+    server, _ = served
+    with httpx.Client(base_url=server.base_url, timeout=30) as anonymous:
+        assert anonymous.get("/").status_code == 403
+        assert anonymous.get("/api/study").status_code == 403
+        assert anonymous.get("/api/study", params={"token": "wrong"}).status_code == 403
+        assert anonymous.get("/api/study", headers={"X-Study-Token": "secret-token-but-longer"}).status_code == 403
+        page = anonymous.get("/", params={"token": server.token})
+        assert page.status_code == 200 and "<canvas" in page.text
+        study = anonymous.get("/api/study", params={"token": server.token}).json()
+        assert [p["id"] for p in study["participants"]] == ["P01", "P02"]
+        assert anonymous.get("/static/study.js").status_code == 200  # code, no data: served without the token
+
+
+def test_foreign_host_and_cross_site_origin_are_refused(served, client):
+    server, _ = served
+    rebinding = client.get("/api/study", headers={"Host": f"attacker.example:{server.port}"})
+    assert rebinding.status_code == 403 and "Host" in rebinding.json()["error"]
+    cross_site = client.post(
+        "/api/participants/P01/pause", json={"paused": True}, headers={"Origin": "http://attacker.example"}
+    )
+    assert cross_site.status_code == 403 and "Origin" in cross_site.json()["error"]
+    same_site = client.get("/api/study", headers={"Origin": server.base_url, "Host": f"localhost:{server.port}"})
+    assert same_site.status_code == 403  # Origin 127.0.0.1 vs Host localhost: not the same origin
+    assert client.get("/api/study", headers={"Origin": server.base_url}).status_code == 200
+
+
+def test_bad_requests_get_a_4xx_with_a_message_and_change_nothing(served, client):
+    _, folder = served
+    assert client.post("/api/participants/P02/start", json={}).status_code == 200
+    query = client.get("/api/participants/P02/state").json()["query"]["id"]
+    before = snapshot(folder)
+    bad = [
+        ("/api/participants/P99/state", None, None, 404, "unknown participant"),
+        ("/api/participants/P02/label", {"query": query, "x": 1e6, "y": 0.0}, None, 400, "outside the maze"),
+        ("/api/participants/P02/label", None, b'{"query": 1, "x": NaN, "y": 0}', 400, "not valid JSON"),
+        ("/api/participants/P02/label", None, b'{"query": 1, "x": 1e999, "y": 0}', 400, "finite"),
+        ("/api/participants/P02/label", {"query": query, "x": "left", "y": 0.0}, None, 400, "finite number"),
+        ("/api/participants/P02/label", {"query": query, "x": 0.0, "y": 0.0, "z": 1}, None, 400, "unknown field"),
+        ("/api/participants/P02/label", None, b"not json", 400, "not valid JSON"),
+        ("/api/participants/P02/label", None, b"[1, 2]", 400, "JSON object"),
+        ("/api/participants/P02/label", None, b"{" + b" " * MAX_BODY_BYTES + b"}", 413, "larger than"),
+        ("/api/participants/P02/label", {"query": query + 7, "x": 0.0, "y": 0.0}, None, 409, "not open"),
+        ("/api/participants/P02/label", {"query": True, "x": 0.0, "y": 0.0}, None, 400, "integer id"),
+        ("/api/participants/P02/questionnaire", {"trial": 1, "ratings": {}}, None, 409, "no questionnaire"),
+        ("/api/participants/P02/start", {}, None, 409, "no trial to start"),
+        ("/api/participants/P01/label", {"query": 1, "x": 0.0, "y": 0.0}, None, 409, "no label is asked"),
+        ("/api/participants/P02/pause", {"paused": "yes"}, None, 400, "true or false"),
+    ]
+    for path, payload, raw, status, message in bad:
+        if payload is None and raw is None:
+            response = client.get(path)
+        elif raw is not None:
+            response = client.post(path, content=raw, headers={"Content-Type": "application/json"})
+        else:
+            response = client.post(path, json=payload)
+        assert response.status_code == status, (path, payload, raw, response.text)
+        assert message in response.json()["error"], (path, response.json())
+    assert snapshot(folder) == before
+
+
+def test_a_label_is_taken_once(served, client):
+    state = client.get("/api/participants/P02/state").json()
+    query = state["query"]["id"]
+    x, y = state["agent"]
+    first = client.post("/api/participants/P02/label", json={"query": query, "x": x + 0.3, "y": y})
+    assert first.status_code == 200 and first.json()["walked"]
+    again = client.post("/api/participants/P02/label", json={"query": query, "x": x + 0.3, "y": y})
+    assert again.status_code == 409 and "already answered" in again.json()["error"]
+
+
+def test_json_parsing_refuses_non_finite_constants():
+    for text in (b"NaN", b'{"x": -Infinity}', b"\xff"):
+        with pytest.raises(BadInput):
+            parse_json_object(text)
+    assert parse_json_object(b'{"x": 1.5}') == {"x": 1.5}
