@@ -1,0 +1,106 @@
+"""End to end in a real browser: Debian's chromium, driven by Playwright, clicks through a tiny study."""
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from study_helpers import make_tiny_study
+
+from antmaze_hirl.study.simulate import oracle_click
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+SCREENSHOT = Path(__file__).resolve().parent.parent / "docs" / "images" / "study_page.png"
+
+playwright_api = pytest.importorskip("playwright.sync_api", reason="playwright is a test dependency (.[dev])")
+if not Path(CHROMIUM).exists():
+    pytest.skip("Debian's chromium is not installed (.ci/setup installs it with apt-get)", allow_module_level=True)
+
+
+def canvas_point(page, state, xy):
+    """Page pixels of world point ``xy`` on the maze canvas (the page's own transform, read back)."""
+    return page.evaluate(
+        """([xy]) => {
+            const canvas = document.getElementById('maze');
+            const rect = canvas.getBoundingClientRect();
+            const [px, py] = toCanvas(state.maze, xy);
+            return [rect.left + px * rect.width / canvas.width, rect.top + py * rect.height / canvas.height];
+        }""",
+        [list(map(float, xy))],
+    )
+
+
+def click_until(page, phases, save_screenshot=False):
+    """Clicks the oracle's subgoal on the canvas until the page's phase is one of ``phases``."""
+    shot = False
+    while True:
+        state = page.evaluate("() => state")
+        if state["phase"] in phases:
+            return state
+        assert state["phase"] == "label", state
+        if save_screenshot and not shot and state["query"]["step"] == 2:
+            SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
+            page.screenshot(path=str(SCREENSHOT))
+            shot = True
+        x, y = canvas_point(page, state, oracle_click(state))
+        query = state["query"]["id"]
+        page.mouse.click(x, y)
+        page.wait_for_function(
+            "([q]) => !busy && state && (state.phase !== 'label' || state.query.id !== q)", arg=[query], timeout=120_000
+        )
+
+
+def test_a_participant_clicks_through_practice_and_a_trial_in_chromium(tmp_path):
+    from antmaze_hirl.study.server import StudyServer
+
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger", "noise"), episodes=1, practice=1)
+    with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1100, "height": 800})
+        errors = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        page.goto(server.url)
+        page.get_by_role("button", name="P01").click()
+        page.get_by_role("button", name="Start").wait_for()
+        assert "Practice" in page.locator("#intro-title").inner_text()
+        page.get_by_role("button", name="Start").click()
+        page.wait_for_function("() => state && state.phase === 'label'")
+        progress = page.locator("#progress").inner_text()
+        assert "Participant P01" in progress and "Maze 1 of 1" in progress
+        # P pauses: clicks are ignored meanwhile
+        page.keyboard.press("p")
+        page.wait_for_function("() => state.paused")
+        assert page.locator("#paused").is_visible()
+        page.keyboard.press("p")
+        page.wait_for_function("() => !state.paused")
+        state = click_until(page, ("intro",), save_screenshot=True)  # the practice ends: the first trial's intro
+        assert state["trial"]["label"].startswith("Method ")
+        assert "dagger" not in page.content() and "noise" not in page.locator("body").inner_text()
+        page.get_by_role("button", name="Start").click()
+        page.wait_for_function("() => state && state.phase === 'label'")
+        click_until(page, ("questionnaire",))
+        page.locator("#items input").first.wait_for()
+        page.get_by_role("button", name="Submit").click()
+        assert "Please answer" in page.locator("#form-error").inner_text()  # nothing sent while items are missing
+        for item, value in zip(
+            ("mental_demand", "physical_demand", "temporal_demand", "performance", "effort", "frustration"),
+            (4, 1, 3, 2, 4, 2),
+            strict=True,
+        ):
+            page.locator(f"input[name='{item}'][value='{value}']").check()
+        page.locator("#comment").fill("the robot was slow")
+        page.get_by_role("button", name="Submit").click()
+        page.wait_for_function("() => state && state.phase === 'intro'")
+        browser.close()
+    assert errors == []
+    participant = folder / "participants" / "P01"
+    with (participant / "episodes.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(r["trial"], r["practice"]) for r in rows] == [("0", "True"), ("1", "False")]
+    assert all(float(r["seconds_per_label"]) > 0 for r in rows)  # measured by the page
+    (answer,) = [json.loads(line) for line in (participant / "answers.jsonl").open()]
+    assert answer["ratings"]["mental_demand"] == 4 and answer["comment"] == "the robot was slow"
+    events = [json.loads(line)["event"] for line in (participant / "events.jsonl").open()]
+    assert events.count("pause") == events.count("resume") == 1
+    assert SCREENSHOT.stat().st_size > 10_000
