@@ -26,6 +26,7 @@ import secrets
 import socket
 import sys
 import threading
+import time
 from collections.abc import Awaitable, Callable, Iterator, Sequence
 from importlib import resources
 from pathlib import Path
@@ -114,14 +115,18 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         length = request.headers.get("content-length")
         if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
             return error(413, f"request body of {length} bytes is larger than {MAX_BODY_BYTES}")
+        started = time.perf_counter()
         try:
-            return await call_next(request)
+            response = await call_next(request)
         except BadInput as bad:
             return error(400, str(bad))
         except ProtocolError as conflict:
             return error(409, str(conflict))
         except UnknownParticipant as unknown:
             return error(404, str(unknown))
+        # The server's own time, apart from the network and the browser (benchmarks/study_latency.py reads it).
+        response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - started) * 1000:.1f}"
+        return response
 
     async def body_of(request: Request) -> dict[str, Any]:
         return parse_json_object(await request.body())

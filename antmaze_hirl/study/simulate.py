@@ -54,6 +54,7 @@ class StudyClient:
         self.base = f"{parts.scheme}://{parts.netloc}"
         self.token = tokens[0]
         self.timeout = timeout
+        self.last_server_seconds: float | None = None  # the server's own time for the last request
 
     def request(self, path: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
         """``GET`` (no body) or ``POST`` (JSON body) ``path``; returns the JSON answer.
@@ -68,6 +69,7 @@ class StudyClient:
         request = urllib.request.Request(self.base + path, data=data, headers=headers)
         try:
             with urllib.request.urlopen(request, timeout=self.timeout) as response:
+                self.last_server_seconds = _server_seconds(response.headers.get("Server-Timing", ""))
                 return json.loads(response.read())
         except urllib.error.HTTPError as error:
             message = error.read().decode(errors="replace")
@@ -76,6 +78,14 @@ class StudyClient:
     def participant(self, participant_id: str, action: str, body: dict[str, Any] | None = None) -> dict[str, Any]:
         """A participant's endpoint (``state``, ``start``, ``label``, ``questionnaire``, ``pause``)."""
         return self.request(f"/api/participants/{quote(participant_id)}/{action}", body)
+
+
+def _server_seconds(header: str) -> float | None:
+    # "app;dur=12.3" (milliseconds), as the study server writes it
+    for part in header.split(";"):
+        if part.strip().startswith("dur="):
+            return float(part.strip()[4:]) / 1000
+    return None
 
 
 @dataclass(frozen=True)
@@ -121,7 +131,8 @@ def play_participant(
     """Plays one participant's whole session (every trial and questionnaire) through the API.
 
     Returns:
-        ``{"participant", "clicks", "trials"}`` and the response times of the label requests (seconds).
+        ``{"participant", "clicks", "trials", "latencies"}``; each latency is a click's
+        ``{"round_trip", "server", "episode_end"}`` (seconds; whether the click ended an episode).
     """
     state = client.participant(participant_id, "state")
     clicks, latencies, trial_clicks, trial_failures, trial_episodes = 0, [], 0, 0, 0
@@ -144,7 +155,13 @@ def play_participant(
                 "label",
                 {"query": state["query"]["id"], "x": float(click[0]), "y": float(click[1]), "response_seconds": wait},
             )
-            latencies.append(time.perf_counter() - started)
+            latencies.append(
+                {
+                    "round_trip": time.perf_counter() - started,
+                    "server": client.last_server_seconds,
+                    "episode_end": result["episode_end"] is not None,
+                }
+            )
             clicks += 1
             trial_clicks += 1
             if result["episode_end"] is not None:
