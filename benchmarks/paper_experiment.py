@@ -32,7 +32,7 @@ from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl.sb3_ext.loading import load_low_level
 
 METHODS = ("dagger", "noise", "multi_policy", "reward")
 BODY_DEFAULTS = {

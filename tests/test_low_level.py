@@ -13,7 +13,8 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext import CheckpointError, evaluate_reach, load_config, make_model, train_low_level
 from antmaze_hirl.sb3_ext.checkpoint import latest_checkpoint, save_checkpoint
 from antmaze_hirl.sb3_ext.evaluation import snapshot_step
-from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+from antmaze_hirl.sb3_ext.loading import load_low_level
+from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
 TINY = {"eval_freq": 10**9, "eval_episodes": 5, "progress_bar": False}
 
@@ -222,7 +223,7 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
         load_low_level("ant", shipped_policy_path("point"))
     junk = tmp_path / "junk.zip"
     junk.write_text("not a zip")
-    with pytest.raises(ValueError, match="is not an SB3 TD3/DDPG policy zip"):
+    with pytest.raises(ValueError, match="is not an SB3 policy zip"):
         load_low_level("point", junk)
     with pytest.raises(FileNotFoundError, match="no low-level policy at"):
         load_low_level("point", tmp_path / "missing.zip")

@@ -1,5 +1,11 @@
-"""Maze layouts, the low-level goal-reaching env and the high-level subgoal-selection env."""
+"""Maze layouts, the low-level goal-reaching env and the high-level subgoal-selection env.
 
+The bottom layer of the package: it imports nothing from ``experts``, ``sb3_ext``, ``dagger``,
+``experiments`` or the CLI, and any controller (an SB3 model or a callable) can drive its high-level env.
+"""
+
+# First, before any module below imports gymnasium-robotics (see _notices).
+from antmaze_hirl.envs import _notices  # noqa: F401
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import LowLevelController, PointGoToController, PredictController, as_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -13,10 +19,8 @@ from antmaze_hirl.envs.layouts import (
     validate_maze_map,
 )
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.envs.registration import ENV_IDS, register_envs
 
 __all__ = [
-    "ENV_IDS",
     "STANDARD_MAPS",
     "BirdseyeRenderer",
     "HighLevelMazeEnv",
@@ -29,7 +33,6 @@ __all__ = [
     "as_controller",
     "generate_layout",
     "layout_from_map",
-    "register_envs",
     "shortest_path",
     "validate_maze_map",
 ]

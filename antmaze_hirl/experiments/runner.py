@@ -26,7 +26,8 @@ from antmaze_hirl.envs.simulator import body_spec
 from antmaze_hirl.experiments.plots import plot_panels
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experts.oracle import PathOracle
-from antmaze_hirl.sb3_ext.policies import load_shipped_policy, policy_fingerprint
+from antmaze_hirl.sb3_ext.loading import policy_fingerprint
+from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
 COLUMNS = (
     "method",
