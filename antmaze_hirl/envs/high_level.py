@@ -11,7 +11,7 @@ from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
-from antmaze_hirl.envs.controllers import LowLevelController, as_controller
+from antmaze_hirl.envs.controllers import as_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
