@@ -355,3 +355,18 @@ def test_the_committed_training_configs_load(name):
     config = load_config("ant", Path(__file__).parents[1] / "benchmarks" / "configs" / name)
     assert config.env_kwargs["chain_probability"] in (0.5, 0.75)
     ReachEnv("ant", **config.env_kwargs).close()
+
+
+def test_renamed_sb3_ext_names_still_work_with_a_warning():
+    import importlib
+    import sys
+
+    from antmaze_hirl.sb3_ext import checkpoint, loading, shipped
+
+    with pytest.warns(DeprecationWarning, match="renamed RunCheckpointCallback"):
+        assert checkpoint.CheckpointCallback is checkpoint.RunCheckpointCallback
+    sys.modules.pop("antmaze_hirl.sb3_ext.policies", None)
+    with pytest.warns(DeprecationWarning, match="sb3_ext.policies is deprecated"):
+        policies = importlib.import_module("antmaze_hirl.sb3_ext.policies")
+    assert policies.load_low_level is loading.load_low_level
+    assert policies.shipped_policy_path is shipped.shipped_policy_path
