@@ -23,13 +23,4 @@ _EXPORTS = {
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = [
-    "ENV_IDS",
-    "HierarchicalAgent",
-    "HighLevelMazeEnv",
-    "PathOracle",
-    "ReachEnv",
-    "__version__",
-    "load_low_level",
-    "register_envs",
-]
+__all__ = ["ENV_IDS", "__version__", "register_envs", *_EXPORTS]

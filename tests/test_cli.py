@@ -4,7 +4,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from stable_baselines3 import PPO, SAC, HerReplayBuffer
+from conftest import tiny_sac_her
+from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
@@ -110,15 +111,7 @@ def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
 
 
 def test_eval_low_loads_a_sac_with_her_zip(tmp_path, capsys):
-    model = SAC(
-        "MultiInputPolicy",
-        ReachEnv("point"),
-        replay_buffer_class=HerReplayBuffer,
-        learning_starts=100,
-        batch_size=32,
-        policy_kwargs={"net_arch": [32, 32]},
-        seed=0,
-    )
+    model = tiny_sac_her(ReachEnv("point"))
     model.learn(300)
     path = tmp_path / "sac.zip"
     model.save(path)

@@ -6,7 +6,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-from stable_baselines3 import DDPG, SAC, HerReplayBuffer
+from conftest import tiny_sac_her
+from stable_baselines3 import DDPG
 from stable_baselines3.common.callbacks import BaseCallback
 
 from antmaze_hirl.envs.reach import ReachEnv
@@ -231,15 +232,7 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
 
 def test_user_brings_sac_with_her_and_no_glue():
     env = gym.make("antmaze_hirl/AntReach-v0")
-    model = SAC(
-        "MultiInputPolicy",
-        env,
-        replay_buffer_class=HerReplayBuffer,
-        learning_starts=120,
-        batch_size=32,
-        policy_kwargs={"net_arch": [32, 32]},
-        seed=0,
-    )
+    model = tiny_sac_her(env, learning_starts=120)
     model.learn(150)
     assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
 

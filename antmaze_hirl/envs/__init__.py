@@ -29,19 +29,4 @@ _EXPORTS = {
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = [
-    "STANDARD_MAPS",
-    "BirdseyeRenderer",
-    "HighLevelMazeEnv",
-    "LowLevelController",
-    "MazeGeometry",
-    "MazeLayout",
-    "PointGoToController",
-    "PredictController",
-    "ReachEnv",
-    "as_controller",
-    "generate_layout",
-    "layout_from_map",
-    "shortest_path",
-    "validate_maze_map",
-]
+__all__ = list(_EXPORTS)

@@ -16,4 +16,4 @@ _EXPORTS = {
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = ["ExperimentConfig", "cost_to_reach", "run_experiment", "run_trial", "summarise"]
+__all__ = list(_EXPORTS)

@@ -26,18 +26,4 @@ _EXPORTS = {
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = [
-    "CheckpointError",
-    "LowLevelConfig",
-    "RunCheckpointCallback",
-    "SuccessRateCallback",
-    "evaluate_reach",
-    "latest_checkpoint",
-    "load_config",
-    "load_low_level",
-    "load_shipped_policy",
-    "make_model",
-    "save_checkpoint",
-    "save_policy",
-    "train_low_level",
-]
+__all__ = [name for name in _EXPORTS if name != "CheckpointCallback"]
