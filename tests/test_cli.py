@@ -3,6 +3,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import tiny_sac_her
 from stable_baselines3 import PPO, SAC
@@ -138,3 +139,27 @@ def test_eval_low_rejects_an_on_policy_zip_or_a_non_zip_in_one_line(tmp_path, ca
 def test_ant_demo_succeeds_on_its_default_seed(tmp_path, capsys):
     assert main(["demo", "--body", "ant", "--out", str(tmp_path)]) == 0
     assert capsys.readouterr().out.startswith("success:")
+
+
+def test_a_failed_demo_says_why(tmp_path, monkeypatch):
+    from antmaze_hirl import demo
+
+    titles = []
+    monkeypatch.setattr(demo, "plot_played_episode", lambda env, episode, out, title: titles.append(title) or out)
+    result = demo.run_demo("point", seed=0, out_dir=tmp_path, max_steps=5)
+    assert (result.success, result.outcome, result.low_level_steps) == (False, "timed out", 5)
+    assert titles == ["point, seed 0: timed out, 1 subgoals, 5 steps"]
+
+
+@pytest.mark.parametrize(
+    ("info", "truncated", "outcome"),
+    [
+        ({"is_success": True, "flipped": False}, False, "success"),
+        ({"is_success": False, "flipped": True}, False, "flipped"),
+        ({"is_success": False, "flipped": False}, True, "timed out"),
+    ],
+)
+def test_episode_outcome_names_why_it_ended(info, truncated, outcome):
+    from antmaze_hirl.rollout import HighLevelEpisode
+
+    assert HighLevelEpisode(np.zeros((1, 2)), np.zeros((0, 2)), info, truncated=truncated).outcome == outcome
