@@ -1,6 +1,9 @@
+import base64
+import importlib.util
 import json
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -133,6 +136,21 @@ def test_eval_low_rejects_an_on_policy_zip_or_a_non_zip_in_one_line(tmp_path, ca
         assert exit_info.value.code == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and err.startswith("antmaze-hirl eval-low: error: ") and message in err
+
+
+def test_eval_low_says_when_a_zips_policy_needs_a_package_that_is_missing(tmp_path, capsys):
+    if importlib.util.find_spec("sb3_contrib") is not None:
+        pytest.skip("sb3-contrib is installed: a TQC zip loads")
+    # What an SB3 TQC zip's "data" holds for its policy class: a pickled reference to sb3_contrib's class.
+    reference = base64.b64encode(b"csb3_contrib.tqc.policies\nMultiInputPolicy\n.").decode()
+    entry = {":type:": "<class 'abc.ABCMeta'>", ":serialized:": reference, "__module__": "sb3_contrib.tqc.policies"}
+    path = tmp_path / "tqc.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("data", json.dumps({"policy_class": entry}))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["eval-low", "--body", "point", "--policy", str(path)])
+    assert exit_info.value.code == 2
+    assert "holds a policy from sb3_contrib.tqc.policies, which this Python cannot import" in capsys.readouterr().err
 
 
 @pytest.mark.slow

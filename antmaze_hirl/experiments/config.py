@@ -3,13 +3,27 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
 
 DEFAULT_METHODS = ("dagger", "noise", "multi_policy", "reward")
 """Every query strategy of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`, the paper's four methods."""
 
-BODY_DEFAULTS: dict[str, dict[str, int | float | None]] = {
+
+class BodyDefaults(TypedDict):
+    """What a body can do in the maze (see :data:`BODY_DEFAULTS`).
+
+    Attributes:
+        maze_size: Free cells per side of the random layouts.
+        expert_max_distance: The oracle's farthest subgoal, metres; ``None``: one cell.
+    """
+
+    maze_size: int
+    expert_max_distance: float | None
+
+
+BODY_DEFAULTS: dict[str, BodyDefaults] = {
     # The point walks one-cell (1 m) oracle subgoals through 5x5 mazes.
     "point": {"maze_size": 5, "expert_max_distance": None},
     # At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps (25 s) cover about 20 m: too short for

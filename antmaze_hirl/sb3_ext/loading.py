@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -46,11 +47,20 @@ def algorithm_of(path: str | Path) -> type[OffPolicyAlgorithm]:
     try:
         with zipfile.ZipFile(path) as archive:
             entry = json.loads(archive.read("data"))["policy_class"]
+        module = entry["__module__"]
     except (zipfile.BadZipFile, KeyError, ValueError, TypeError) as error:
-        raise ValueError(f"{path} is not an SB3 policy zip: {error}") from error
-    policy_class = json_to_data(json.dumps({"policy_class": entry})).get("policy_class")
+        raise ValueError(f"{path} is not an SB3 policy zip: {error!r}") from error
+    try:
+        with warnings.catch_warnings():  # SB3 warns and skips what it cannot unpickle: that is the error below
+            warnings.simplefilter("ignore")
+            policy_class = json_to_data(json.dumps({"policy_class": entry})).get("policy_class")
+    except ImportError as error:
+        raise ValueError(
+            f"{path} holds a policy from {module}, which this Python cannot import ({error}); "
+            f"a TQC zip needs sb3-contrib installed"
+        ) from error
     if not isinstance(policy_class, type):
-        raise ValueError(f"{path} names no policy class this Python can import: {entry.get('__module__')!r}")
+        raise ValueError(f"{path} holds a policy class from {module} that cannot be unpickled here")
     algorithms = off_policy_algorithms()
     for algorithm in algorithms:
         if issubclass(policy_class, algorithm.policy_aliases["MlpPolicy"]):
