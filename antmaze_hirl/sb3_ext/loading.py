@@ -55,10 +55,8 @@ def algorithm_of(path: str | Path) -> type[OffPolicyAlgorithm]:
             warnings.simplefilter("ignore")
             policy_class = json_to_data(json.dumps({"policy_class": entry})).get("policy_class")
     except ImportError as error:
-        raise ValueError(
-            f"{path} holds a policy from {module}, which this Python cannot import ({error}); "
-            f"a TQC zip needs sb3-contrib installed"
-        ) from error
+        hint = "; pip install sb3-contrib to load its TQC" if str(module).startswith("sb3_contrib") else ""
+        raise ValueError(f"{path} holds a policy from {module}, which this Python cannot import{hint}") from error
     if not isinstance(policy_class, type):
         raise ValueError(f"{path} holds a policy class from {module} that cannot be unpickled here")
     algorithms = off_policy_algorithms()
