@@ -1,15 +1,26 @@
 """antmaze_hirl: active hierarchical imitation and reinforcement learning on the MuJoCo Ant maze.
 
-Importing the package registers its Gymnasium ids (``antmaze_hirl/AntReach-v0``,
-``antmaze_hirl/PointReach-v0``, ``antmaze_hirl/AntMaze-v0``, ``antmaze_hirl/PointMaze-v0``).
+Importing the package registers its Gymnasium ids (antmaze_hirl/AntReach-v0, antmaze_hirl/PointReach-v0,
+antmaze_hirl/AntMaze-v0, antmaze_hirl/PointMaze-v0) and nothing more: the exports below are imported on
+first use (PEP 562), so that registration, ``gym.make`` of a reach id and ``antmaze-hirl --help`` load
+neither torch nor Stable-Baselines3.
 """
 
-from antmaze_hirl.envs import HighLevelMazeEnv, ReachEnv, register_envs
-from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl._lazy import lazy_exports
+from antmaze_hirl.registration import ENV_IDS, register_envs
 
 __version__ = "0.1.0"
 
 register_envs()
 
-__all__ = ["HighLevelMazeEnv", "PathOracle", "ReachEnv", "__version__", "load_low_level", "register_envs"]
+_EXPORTS = {
+    "HierarchicalAgent": "antmaze_hirl.dagger.agent",
+    "HighLevelMazeEnv": "antmaze_hirl.envs.high_level",
+    "PathOracle": "antmaze_hirl.experts.oracle",
+    "ReachEnv": "antmaze_hirl.envs.reach",
+    "load_low_level": "antmaze_hirl.sb3_ext.loading",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
+
+__all__ = ["ENV_IDS", "__version__", "register_envs", *_EXPORTS]

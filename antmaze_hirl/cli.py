@@ -1,53 +1,131 @@
-"""The ``antmaze-hirl`` command line: ``demo``, ``train-low``, ``eval-low``, ``experiment``."""
+"""The antmaze-hirl command line: demo, train-low, eval-low, experiment.
+
+Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
+neither torch nor Stable-Baselines3.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.envs.simulator import BODY_SPECS
+from antmaze_hirl.envs.bodies import BODY_SPECS
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, DEFAULT_METHODS, ExperimentConfig
 from antmaze_hirl.sb3_ext.config import ALGOS
 
+DESCRIPTION = "Active hierarchical imitation learning on the MuJoCo Ant maze."
+EPILOG = """\
+Run 'antmaze-hirl COMMAND --help' for a command's options and an example.
 
-def _add_demo(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("demo", help="let the oracle drive the hierarchy through a random maze")
-    parser.add_argument("--body", choices=sorted(BODY_SPECS), default="point", help="body to walk (default: point)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the maze, start and goal (default: 0)")
-    parser.add_argument("--out", type=Path, default=Path("runs/demo"), help="folder for demo.png (default: runs/demo)")
+example:
+  antmaze-hirl demo --body ant"""
+
+_Subparsers = argparse._SubParsersAction
+_BODIES = sorted(BODY_SPECS)
+
+
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """Shows defaults, and keeps the line breaks of descriptions and examples.
+
+    An option whose default is ``None`` or that is required says what it means in its own help
+    instead of a bare "(default: None)".
+    """
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        help_text = action.help or ""
+        if action.default is None or action.required or "(default:" in help_text:
+            return help_text
+        return super()._get_help_string(action)
+
+
+def _add_parser(subparsers: _Subparsers, name: str, help_text: str, example: str) -> argparse.ArgumentParser:
+    return subparsers.add_parser(
+        name,
+        help=help_text,
+        description=help_text[0].upper() + help_text[1:] + ".",
+        epilog=f"example:\n  {example}",
+        formatter_class=_HelpFormatter,
+    )
+
+
+def _add_demo(subparsers: _Subparsers) -> None:
+    parser = _add_parser(
+        subparsers,
+        "demo",
+        "let the scripted oracle drive the hierarchy through a random maze and draw the path",
+        "antmaze-hirl demo --body ant --seed 3 --out runs/demo_ant",
+    )
+    parser.add_argument("--body", choices=_BODIES, default="point", help="body to walk")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the maze, start, goal and simulation")
+    parser.add_argument("--out", type=Path, default=Path("runs/demo"), help="folder for demo.png")
+    parser.add_argument(
+        "--maze-size",
+        type=int,
+        default=None,
+        help="free cells per side (default: per body, "
+        + ", ".join(f"{body} {settings['maze_size']}" for body, settings in sorted(BODY_DEFAULTS.items()))
+        + ")",
+    )
+    parser.add_argument(
+        "--max-subgoal-distance",
+        type=float,
+        default=None,
+        help="the oracle's farthest subgoal, metres (default: per body, ant 2 m, point one cell)",
+    )
     parser.set_defaults(handler=_run_demo)
 
 
 def _run_demo(args: argparse.Namespace) -> int:
     from antmaze_hirl.demo import run_demo
 
-    result = run_demo(body=args.body, seed=args.seed, out_dir=args.out)
+    result = run_demo(
+        body=args.body,
+        seed=args.seed,
+        out_dir=args.out,
+        maze_size=args.maze_size,
+        max_subgoal_distance=args.max_subgoal_distance,
+    )
     print(
-        f"{'success' if result.success else 'failure'}: {result.subgoals} subgoals, "
-        f"{result.low_level_steps} low-level steps; picture: {result.picture}"
+        f"{result.outcome}: {result.subgoals} subgoals, {result.low_level_steps} low-level steps; "
+        f"picture: {result.picture}"
     )
     return 0 if result.success else 1
 
 
-def _add_train_low(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("train-low", help="train a low-level reach policy with SB3 TD3/DDPG + HER")
-    parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
-    parser.add_argument("--algo", choices=list(ALGOS), default="td3")
-    parser.add_argument("--timesteps", type=int, required=True, help="total env steps, counting resumed ones")
-    parser.add_argument("--out", type=Path, required=True, help="run folder (checkpoints, curve, policy.zip)")
-    parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--init-from", type=Path, default=None, help="warm start from this policy .zip's weights")
+def _add_train_low(subparsers: _Subparsers) -> None:
+    parser = _add_parser(
+        subparsers,
+        "train-low",
+        "train a low-level reach policy with SB3 TD3/DDPG + HER",
+        "antmaze-hirl train-low --body point --timesteps 20000 --out runs/point_td3",
+    )
+    parser.add_argument("--body", choices=_BODIES, required=True, help="body to train (required)")
+    parser.add_argument("--algo", choices=list(ALGOS), default="td3", help="SB3 algorithm")
     parser.add_argument(
-        "--hyperparams", type=Path, default=None, help="YAML whose body section overrides the shipped hyperparams.yml"
+        "--timesteps", type=int, required=True, help="total env steps, counting resumed ones (required)"
+    )
+    parser.add_argument(
+        "--out", type=Path, required=True, help="run folder: checkpoints, learning curve, policy.zip (required)"
+    )
+    parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the model and envs")
+    parser.add_argument(
+        "--init-from", type=Path, default=None, help="warm start from this policy .zip's weights (default: none)"
+    )
+    parser.add_argument(
+        "--hyperparams",
+        type=Path,
+        default=None,
+        help="YAML whose body section overrides the shipped hyperparams.yml (default: the shipped values)",
     )
     parser.add_argument("--checkpoint-freq", type=int, default=50_000, help="env steps between checkpoints")
-    parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between evaluations")
-    parser.add_argument("--eval-episodes", type=int, default=50)
+    parser.add_argument("--eval-freq", type=int, default=25_000, help="env steps between success-rate evaluations")
+    parser.add_argument("--eval-episodes", type=int, default=50, help="held-out subgoals per evaluation")
     parser.add_argument("--no-snapshots", action="store_true", help="do not keep the policy of every evaluation")
-    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads (default: 1)")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads")
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.set_defaults(handler=_run_train_low)
 
@@ -76,28 +154,37 @@ def _run_train_low(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_eval_low(subparsers: argparse._SubParsersAction) -> None:
-    parser = subparsers.add_parser("eval-low", help="success rate of a low-level policy on seeded random subgoals")
-    parser.add_argument("--body", choices=sorted(BODY_SPECS), required=True)
-    parser.add_argument("--policy", type=Path, default=None, help="policy .zip (default: the shipped one)")
-    parser.add_argument("--episodes", type=int, default=200)
+def _add_eval_low(subparsers: _Subparsers) -> None:
+    parser = _add_parser(
+        subparsers,
+        "eval-low",
+        "success rate of a low-level policy on seeded random subgoals",
+        "antmaze-hirl eval-low --body point --policy runs/point_sac/policy.zip --episodes 100",
+    )
+    parser.add_argument("--body", choices=_BODIES, required=True, help="body the policy walks (required)")
     parser.add_argument(
-        "--seed",
-        type=int,
-        default=0,
-        help="subgoal i uses seed SEED+i, so disjoint sets need seeds at least --episodes apart (default: 0)",
+        "--policy",
+        type=Path,
+        default=None,
+        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed (default: the shipped one)",
+    )
+    parser.add_argument("--episodes", type=int, default=200, help="subgoals to try")
+    parser.add_argument(
+        "--seed", type=int, default=0, help="subgoal i uses seed SEED+i, so disjoint sets need seeds --episodes apart"
     )
     parser.add_argument(
         "--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)"
     )
-    parser.add_argument("--json", type=Path, default=None, help="also write the figures to this JSON file")
+    parser.add_argument(
+        "--json", type=Path, default=None, help="also write the figures to this JSON file (default: print only)"
+    )
     parser.set_defaults(handler=_run_eval_low)
 
 
 def _run_eval_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.envs.reach import ReachEnv
     from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
-    from antmaze_hirl.sb3_ext.policies import load_low_level
+    from antmaze_hirl.sb3_ext.loading import load_low_level
 
     try:
         env = ReachEnv(args.body, goal_radius=args.max_distance)
@@ -111,38 +198,51 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_experiment(subparsers: argparse._SubParsersAction) -> None:
-    from antmaze_hirl.dagger.strategies import STRATEGIES
-    from antmaze_hirl.experiments import ExperimentConfig
-
+def _add_experiment(subparsers: _Subparsers) -> None:
     defaults = ExperimentConfig()
-    parser = subparsers.add_parser("experiment", help="DAgger with active learning: the paper's protocol")
-    parser.add_argument("--body", choices=sorted(BODY_SPECS), default=defaults.body)
-    parser.add_argument(
-        "--methods", default="dagger,noise,multi_policy,reward", help=f"comma-separated, from {sorted(STRATEGIES)}"
+    parser = _add_parser(
+        subparsers,
+        "experiment",
+        "DAgger with active learning: the paper's protocol over methods and seeds",
+        "antmaze-hirl experiment --body ant --maze-size 3 --expert-max-distance 2 --out runs/ant --jobs 2",
     )
-    parser.add_argument("--seeds", type=int, default=5, help="trials per method, seeds 0..N-1 (default: 5)")
+    parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
+    parser.add_argument(
+        "--methods", default=",".join(DEFAULT_METHODS), help="comma-separated query strategies, any of the default's"
+    )
+    parser.add_argument("--seeds", type=int, default=5, help="trials per method, seeds 0..N-1")
     parser.add_argument("--episodes", type=int, default=defaults.episodes, help="training episodes per trial")
-    parser.add_argument("--out", type=Path, required=True, help="results folder (resumes trials already there)")
+    parser.add_argument(
+        "--out", type=Path, required=True, help="results folder; resumes trials already there (required)"
+    )
     parser.add_argument("--eval-every", type=int, default=defaults.eval_every, help="M: evaluate every M episodes")
-    parser.add_argument("--eval-episodes", type=int, default=defaults.eval_episodes)
-    parser.add_argument("--final-eval-episodes", type=int, default=defaults.final_eval_episodes)
-    parser.add_argument("--maze-size", type=int, default=defaults.maze_size)
-    parser.add_argument("--gradient-steps", type=int, default=defaults.gradient_steps, help="N per update")
+    parser.add_argument(
+        "--eval-episodes", type=int, default=defaults.eval_episodes, help="held-out mazes per intermediate evaluation"
+    )
+    parser.add_argument(
+        "--final-eval-episodes", type=int, default=defaults.final_eval_episodes, help="held-out mazes at the end"
+    )
+    parser.add_argument("--maze-size", type=int, default=defaults.maze_size, help="free cells per side")
+    parser.add_argument(
+        "--gradient-steps", type=int, default=defaults.gradient_steps, help="N: gradient steps per update"
+    )
     parser.add_argument("--decay", type=float, default=defaults.decay, help="d in beta <- beta / d")
     parser.add_argument(
-        "--expert-max-distance", type=float, default=None, help="oracle's farthest subgoal, metres (default: 1 cell)"
+        "--expert-max-distance",
+        type=float,
+        default=defaults.expert_max_distance,
+        help="the oracle's farthest subgoal, metres (default: one cell)",
     )
-    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial (default: 1)")
-    parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes (default: 1)")
-    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial")
+    parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes")
+    parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.set_defaults(handler=_run_experiment)
 
 
 def _run_experiment(args: argparse.Namespace) -> int:
     import torch
 
-    from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+    from antmaze_hirl.experiments.runner import run_experiment
 
     torch.set_num_threads(args.threads)
     config = ExperimentConfig(
@@ -170,12 +270,24 @@ def _run_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
+SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
+    _add_demo,
+    _add_train_low,
+    _add_eval_low,
+    _add_experiment,
+    # More subcommands (the user study's) go here: one _add_* function each, whose handler imports lazily.
+)
+"""The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``antmaze-hirl`` with all subcommands."""
-    parser = argparse.ArgumentParser(prog="antmaze-hirl", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="antmaze-hirl", description=DESCRIPTION, epilog=EPILOG, formatter_class=_HelpFormatter
+    )
     parser.add_argument("--traceback", action="store_true", help="show the full traceback of an error")
-    subparsers = parser.add_subparsers(dest="command", required=True)
-    for add in (_add_demo, _add_train_low, _add_eval_low, _add_experiment):
+    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in SUBCOMMANDS:
         add(subparsers)
     from antmaze_hirl.study.cli import add_study_parser
 
@@ -185,10 +297,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``antmaze-hirl`` console script."""
-    from antmaze_hirl.sb3_ext.checkpoint import CheckpointError
-
     parser = build_parser()
     args = parser.parse_args(argv)
+    # After parsing, so that --help and a usage error never load SB3 (which the checkpoint module imports).
+    from antmaze_hirl.sb3_ext.checkpoint import CheckpointError
+
     try:
         return args.handler(args)
     except (CheckpointError, FileExistsError, FileNotFoundError, ValueError, OSError) as error:

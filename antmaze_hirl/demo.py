@@ -8,6 +8,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.plotting import plot_played_episode
 from antmaze_hirl.rollout import play_episode
@@ -15,33 +16,60 @@ from antmaze_hirl.rollout import play_episode
 
 @dataclass(frozen=True)
 class DemoResult:
-    """Outcome of :func:`run_demo`."""
+    """Outcome of :func:`run_demo`.
+
+    Attributes:
+        success: Whether the body reached the goal.
+        outcome: ``"success"``, ``"flipped"`` or ``"timed out"`` (see :attr:`HighLevelEpisode.outcome`).
+        subgoals: Subgoals the oracle chose.
+        low_level_steps: Low-level steps in all.
+        picture: The written PNG.
+    """
 
     success: bool
+    outcome: str
     subgoals: int
     low_level_steps: int
     picture: Path
 
 
-def run_demo(body: str = "point", seed: int = 0, out_dir: str | Path = "runs/demo", **env_kwargs: Any) -> DemoResult:
+def run_demo(
+    body: str = "point",
+    seed: int = 0,
+    out_dir: str | Path = "runs/demo",
+    *,
+    maze_size: int | None = None,
+    max_subgoal_distance: float | None = None,
+    **env_kwargs: Any,
+) -> DemoResult:
     """Runs one oracle-driven episode on a random maze and writes ``out_dir/demo.png``.
 
     Args:
         body: ``"point"`` or ``"ant"``.
         seed: Seed of the maze, start, goal and simulation.
         out_dir: Folder for the picture.
-        **env_kwargs: Passed to ``gym.make`` (e.g. ``low_level=``, ``maze_size=``).
+        maze_size: Free cells per side. Default per body, as in the body's experiment
+            (:data:`~antmaze_hirl.experiments.config.BODY_DEFAULTS`): point 5, ant 3.
+        max_subgoal_distance: The oracle's farthest subgoal, metres. Default per body: point one cell
+            (1 m), ant 2 m (the shipped ant reaches 2 m subgoals far more reliably than 4 m ones).
+        **env_kwargs: Passed to ``gym.make`` (e.g. ``low_level=``, ``max_steps=``).
 
+    Raises:
+        ValueError: If ``body`` is unknown.
     """
-    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", **env_kwargs)
-    episode = play_episode(env, PathOracle.for_env(env), seed=seed)
+    if body not in BODY_DEFAULTS:
+        raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_DEFAULTS)}")
+    defaults = BODY_DEFAULTS[body]
+    maze_size = maze_size if maze_size is not None else defaults["maze_size"]
+    distance = max_subgoal_distance if max_subgoal_distance is not None else defaults["expert_max_distance"]
+    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, **env_kwargs)
+    episode = play_episode(env, PathOracle.for_env(env, max_distance=distance), seed=seed)
     env.close()
     steps = int(episode.info["total_low_level_steps"])
-    outcome = "success" if episode.success else "failure"
     picture = plot_played_episode(
         env,
         episode,
         Path(out_dir) / "demo.png",
-        title=f"{body}, seed {seed}: {outcome}, {len(episode.subgoals)} subgoals, {steps} steps",
+        title=f"{body}, seed {seed}: {episode.outcome}, {len(episode.subgoals)} subgoals, {steps} steps",
     )
-    return DemoResult(episode.success, len(episode.subgoals), steps, picture)
+    return DemoResult(episode.success, episode.outcome, len(episode.subgoals), steps, picture)

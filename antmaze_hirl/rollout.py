@@ -16,16 +16,27 @@ class HighLevelEpisode:
         path: Body xy after every low-level step, ``(steps + 1, 2)``.
         subgoals: Executed subgoals, ``(attempts, 2)``.
         info: The env's last ``info`` (``is_success``, ``attempts``, ``total_low_level_steps``, ...).
+        truncated: Whether the episode ran out of its low-level step budget.
     """
 
     path: np.ndarray
     subgoals: np.ndarray
     info: dict[str, Any]
+    truncated: bool = False
 
     @property
     def success(self) -> bool:
         """Whether the goal was reached."""
         return bool(self.info["is_success"])
+
+    @property
+    def outcome(self) -> str:
+        """Why the episode ended: ``"success"``, ``"flipped"`` (the ant on its back) or ``"timed out"``."""
+        if self.success:
+            return "success"
+        if self.info.get("flipped"):
+            return "flipped"
+        return "timed out" if self.truncated else "ended"
 
 
 def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevelEpisode:
@@ -40,7 +51,7 @@ def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevel
     act = policy.predict if hasattr(policy, "predict") else policy
     space = env.unwrapped.action_space
     obs, _ = env.reset(seed=seed)
-    paths, subgoals, done, info = [], [], False, {}
+    paths, subgoals, done, truncated, info = [], [], False, False, {}
     while not done:
         action = act(obs)
         if isinstance(action, tuple):
@@ -49,4 +60,4 @@ def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevel
         paths.append(info["agent_path"])
         subgoals.append(info["subgoal"])
         done = terminated or truncated
-    return HighLevelEpisode(np.concatenate(paths), np.asarray(subgoals), info)
+    return HighLevelEpisode(np.concatenate(paths), np.asarray(subgoals), info, truncated=bool(truncated))

@@ -32,7 +32,7 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.plotting import plot_learning_curves
 from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl.sb3_ext.loading import load_low_level
 
 RESULTS = Path(__file__).parent / "results"
 

@@ -30,15 +30,11 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, DEFAULT_METHODS
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl.sb3_ext.loading import load_low_level
 
-METHODS = ("dagger", "noise", "multi_policy", "reward")
-BODY_DEFAULTS = {
-    "point": {"maze_size": 5, "expert_max_distance": None},
-    "ant": {"maze_size": 3, "expert_max_distance": 2.0},
-}
 RESULTS = Path(__file__).parent / "results"
 
 
@@ -94,7 +90,7 @@ def main() -> None:
     parser.add_argument("--body", choices=["point", "ant"], required=True)
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=100)
-    parser.add_argument("--methods", default=",".join(METHODS))
+    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS))
     parser.add_argument("--jobs", type=int, default=1, help="trials in parallel processes (2 on 2 cores)")
     parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment_BODY")
     parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")

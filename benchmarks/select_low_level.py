@@ -31,7 +31,7 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments import ExperimentConfig
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl.sb3_ext.loading import load_low_level
 
 SELECTION_MAZE_SEED = 2_000_000
 # Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.

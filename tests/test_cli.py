@@ -1,21 +1,63 @@
+import base64
+import importlib.util
 import json
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
+import numpy as np
 import pytest
+from conftest import tiny_sac_her
+from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl import load_low_level
-from antmaze_hirl.cli import build_parser, main
+from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
+from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.config import DEFAULT_METHODS
 from antmaze_hirl.sb3_ext import CheckpointError
 
+COMMANDS = ["demo", "train-low", "eval-low", "experiment"]
 
-@pytest.mark.parametrize("command", ["demo", "train-low", "eval-low", "experiment"])
-def test_every_subcommand_has_help(command, capsys):
+
+def help_text(argv, capsys):
     with pytest.raises(SystemExit) as exit_info:
-        main([command, "--help"])
+        main([*argv, "--help"])
     assert exit_info.value.code == 0
-    assert f"antmaze-hirl {command}" in capsys.readouterr().out
+    return capsys.readouterr().out
+
+
+def test_the_subcommand_list_is_the_one_the_parser_builds():
+    assert len(SUBCOMMANDS) == len(COMMANDS)
+    assert set(build_parser()._subparsers._group_actions[0].choices) == set(COMMANDS)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_subcommand_help_shows_defaults_an_example_and_no_markup(command, capsys):
+    text = help_text([command], capsys)
+    assert f"usage: antmaze-hirl {command}" in text
+    assert "``" not in text
+    assert f"example:\n  antmaze-hirl {command} " in text
+    subparser = build_parser()._subparsers._group_actions[0].choices[command]
+    for action in subparser._actions:
+        if action.dest == "help":
+            continue
+        assert action.help, f"{command} {action.option_strings} has no help line"
+        # Every option says its default: argparse's "(default: X)", or "(required)" / its own "(default: ...)".
+        shown = subparser._get_formatter()._get_help_string(action)
+        assert "(default:" in shown or "(required)" in shown, f"{command} {action.option_strings}: {shown!r}"
+        assert " ".join((shown % {"default": action.default}).split()) in " ".join(text.split())
+
+
+def test_top_level_help_has_no_markup(capsys):
+    text = help_text([], capsys)
+    assert "``" not in text and "antmaze-hirl demo --body ant" in text
+
+
+def test_the_default_methods_are_every_query_strategy():
+    from antmaze_hirl.dagger.strategies import STRATEGIES
+
+    assert set(DEFAULT_METHODS) == set(STRATEGIES)
 
 
 def test_demo_writes_picture_and_reports(tmp_path, capsys):
@@ -70,3 +112,72 @@ def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
     assert "train-low: error: no checkpoint to resume in" in capsys.readouterr().err
     with pytest.raises(CheckpointError, match="no checkpoint to resume"):
         main(["--traceback", "train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
+
+
+def test_eval_low_loads_a_sac_with_her_zip(tmp_path, capsys):
+    model = tiny_sac_her(ReachEnv("point"))
+    model.learn(300)
+    path = tmp_path / "sac.zip"
+    model.save(path)
+    assert isinstance(load_low_level("point", path), SAC)
+    assert main(["eval-low", "--body", "point", "--policy", str(path), "--episodes", "3"]) == 0
+    printed = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert printed["episodes"] == 3 and 0.0 <= printed["success_rate"] <= 1.0
+
+
+def test_eval_low_rejects_an_on_policy_zip_or_a_non_zip_in_one_line(tmp_path, capsys):
+    ppo = tmp_path / "ppo.zip"
+    PPO("MultiInputPolicy", ReachEnv("point"), n_steps=16, batch_size=16, seed=0).save(ppo)
+    garbage = tmp_path / "garbage.zip"
+    garbage.write_text("not a zip")
+    for path, message in ((ppo, "MultiInputActorCriticPolicy, not a policy of an off-policy"), (garbage, "not an SB3")):
+        with pytest.raises(SystemExit) as exit_info:
+            main(["eval-low", "--body", "point", "--policy", str(path), "--episodes", "2"])
+        assert exit_info.value.code == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("antmaze-hirl eval-low: error: ") and message in err
+
+
+def test_eval_low_says_when_a_zips_policy_needs_a_package_that_is_missing(tmp_path, capsys):
+    if importlib.util.find_spec("sb3_contrib") is not None:
+        pytest.skip("sb3-contrib is installed: a TQC zip loads")
+    # What an SB3 TQC zip's "data" holds for its policy class: a pickled reference to sb3_contrib's class.
+    reference = base64.b64encode(b"csb3_contrib.tqc.policies\nMultiInputPolicy\n.").decode()
+    entry = {":type:": "<class 'abc.ABCMeta'>", ":serialized:": reference, "__module__": "sb3_contrib.tqc.policies"}
+    path = tmp_path / "tqc.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        archive.writestr("data", json.dumps({"policy_class": entry}))
+    with pytest.raises(SystemExit) as exit_info:
+        main(["eval-low", "--body", "point", "--policy", str(path)])
+    assert exit_info.value.code == 2
+    assert "holds a policy from sb3_contrib.tqc.policies, which this Python cannot import" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_ant_demo_succeeds_on_its_default_seed(tmp_path, capsys):
+    assert main(["demo", "--body", "ant", "--out", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.startswith("success:")
+
+
+def test_a_failed_demo_says_why(tmp_path, monkeypatch):
+    from antmaze_hirl import demo
+
+    titles = []
+    monkeypatch.setattr(demo, "plot_played_episode", lambda env, episode, out, title: titles.append(title) or out)
+    result = demo.run_demo("point", seed=0, out_dir=tmp_path, max_steps=5)
+    assert (result.success, result.outcome, result.low_level_steps) == (False, "timed out", 5)
+    assert titles == ["point, seed 0: timed out, 1 subgoals, 5 steps"]
+
+
+@pytest.mark.parametrize(
+    ("info", "truncated", "outcome"),
+    [
+        ({"is_success": True, "flipped": False}, False, "success"),
+        ({"is_success": False, "flipped": True}, False, "flipped"),
+        ({"is_success": False, "flipped": False}, True, "timed out"),
+    ],
+)
+def test_episode_outcome_names_why_it_ended(info, truncated, outcome):
+    from antmaze_hirl.rollout import HighLevelEpisode
+
+    assert HighLevelEpisode(np.zeros((1, 2)), np.zeros((0, 2)), info, truncated=truncated).outcome == outcome

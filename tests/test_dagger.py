@@ -145,7 +145,7 @@ def test_augmentation_keeps_grid_vector_and_label_consistent():
 
 
 def make_trainer(seed=0, **kwargs):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(seed)
     policy = HighLevelPolicy.for_env(env, rng=rng)
     return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, **kwargs), env
@@ -216,7 +216,7 @@ def test_switch_mixing_and_per_step_updates_run():
 
 def test_dagger_learns_small_mazes_end_to_end():
     trainer, _ = make_trainer(seed=0, gradient_steps=300)
-    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     untrained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
     trainer.train(20)
     trained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
@@ -225,7 +225,7 @@ def test_dagger_learns_small_mazes_end_to_end():
 
 @pytest.mark.parametrize("planning_iterations", [0, 4])
 def test_policy_save_load_round_trip_and_bad_files(tmp_path, planning_iterations):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
     policy = HighLevelPolicy.for_env(env, rng=rng, planning_iterations=planning_iterations)
     trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)

@@ -8,10 +8,11 @@ from conftest import StillController
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-from antmaze_hirl.envs import ENV_IDS, ReachEnv
+from antmaze_hirl.envs import HighLevelMazeEnv, PointGoToController, ReachEnv
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.sb3_ext import policies
+from antmaze_hirl.registration import ENV_IDS
+from antmaze_hirl.sb3_ext import shipped
 
 
 def make(env_id, **kwargs):
@@ -68,9 +69,45 @@ def test_pickle_round_trip(env_id):
 
 
 def test_maze_without_low_level_or_shipped_policy_says_what_to_pass(monkeypatch, tmp_path):
-    monkeypatch.setattr(policies, "shipped_policy_path", lambda body: tmp_path / f"{body}_td3.zip")
+    monkeypatch.setattr(shipped, "shipped_policy_path", lambda body: tmp_path / f"{body}_td3.zip")
     with pytest.raises(ValueError, match=r"AntMaze-v0 needs a low-level controller: pass low_level="):
         gym.make("antmaze_hirl/AntMaze-v0")
+
+
+def test_the_env_class_itself_requires_a_controller_and_names_what_to_pass():
+    with pytest.raises(ValueError, match=r"needs a low-level controller: pass low_level=.*PointMaze-v0"):
+        HighLevelMazeEnv("point")
+
+
+def test_a_maze_made_without_low_level_drives_the_shipped_policy_and_pickles_without_its_weights():
+    env = gym.make("antmaze_hirl/PointMaze-v0")
+    controller = env.unwrapped.controller
+    assert isinstance(controller, shipped.ShippedPolicyController)
+    assert controller.model is shipped.load_shipped_policy("point")
+    assert len(pickle.dumps(controller)) < 200  # the body name, not the networks
+    assert pickle.loads(pickle.dumps(controller)).model is controller.model
+
+
+def test_deprecated_names_still_work_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="renamed min_goal_cells"):
+        env = gym.make("antmaze_hirl/PointMaze-v0", min_goal_distance=4, low_level=PointGoToController())
+    assert env.unwrapped.min_goal_cells == 4
+    with pytest.warns(DeprecationWarning, match="renamed min_goal_cells"):
+        assert env.unwrapped.min_goal_distance == 4
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="min_goal_cells=5 and min_goal_distance=4"):
+        HighLevelMazeEnv("point", min_goal_cells=5, min_goal_distance=4, low_level=PointGoToController())
+    reach = ReachEnv("point", maze_map="u")
+    with pytest.warns(DeprecationWarning, match="'goal' is renamed 'goal_xy'"):
+        obs, _ = reach.reset(seed=0, options={"goal": [1.0, 1.0]})
+    np.testing.assert_array_equal(obs["desired_goal"], [1.0, 1.0])
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="not also its deprecated name 'goal'"):
+        reach.reset(seed=0, options={"goal": [1.0, 1.0], "goal_xy": [1.0, 1.0]})
+
+
+@pytest.mark.parametrize("env_class", [ReachEnv, HighLevelMazeEnv])
+def test_both_envs_default_to_the_point_body(env_class):
+    kwargs = {"low_level": PointGoToController()} if env_class is HighLevelMazeEnv else {}
+    assert env_class(**kwargs).body == "point"
 
 
 @pytest.mark.parametrize("body", ["ant", "point"])
@@ -87,7 +124,7 @@ def test_reach_env_spaces_reward_and_success(body):
     np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.distance_threshold).astype(float))
     dense = ReachEnv(body, reward_type="dense").compute_reward(achieved, desired, None)
     np.testing.assert_allclose(dense, np.exp(-np.linalg.norm(desired, axis=1)))
-    env.reset(seed=0, options={"goal": obs["achieved_goal"]})
+    env.reset(seed=0, options={"goal_xy": obs["achieved_goal"]})
     _, reward, _, _, info = env.step(np.zeros(env.action_space.shape))
     assert info["is_success"] and reward == 1.0
 
@@ -108,7 +145,7 @@ def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
     [
         (lambda env: env.step(np.array([np.nan, 0.0])), r"action must be finite, got \[nan, 0.0\]"),
         (lambda env: env.step(np.zeros(3)), r"action must have shape \(2,\), got shape \(3,\)"),
-        (lambda env: env.reset(options={"goal": [100.0, 0.0]}), r"goal \[100.0, 0.0\] is not in a free cell"),
+        (lambda env: env.reset(options={"goal_xy": [100.0, 0.0]}), r"goal_xy \[100.0, 0.0\] is not in a free cell"),
         (lambda env: env.reset(options={"start_xy": [0.0, -1.5]}), r"start_xy \[0.0, -1.5\] is not in a free cell"),
     ],
 )

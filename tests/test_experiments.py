@@ -80,7 +80,8 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
 
 def test_experiment_refuses_results_made_with_another_low_level(tmp_path):
     from antmaze_hirl.envs.controllers import PointGoToController
-    from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+    from antmaze_hirl.sb3_ext.loading import load_low_level
+    from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
     summary = run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     shipped = summary["config"]["low_level"]

@@ -13,7 +13,7 @@ from antmaze_hirl.envs import PointGoToController
 
 
 def point_env():
-    return gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    return gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
 
 
 def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():

@@ -6,14 +6,16 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-from stable_baselines3 import DDPG, SAC, HerReplayBuffer
+from conftest import tiny_sac_her
+from stable_baselines3 import DDPG
 from stable_baselines3.common.callbacks import BaseCallback
 
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext import CheckpointError, evaluate_reach, load_config, make_model, train_low_level
 from antmaze_hirl.sb3_ext.checkpoint import latest_checkpoint, save_checkpoint
 from antmaze_hirl.sb3_ext.evaluation import snapshot_step
-from antmaze_hirl.sb3_ext.policies import load_low_level, shipped_policy_path
+from antmaze_hirl.sb3_ext.loading import load_low_level
+from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
 TINY = {"eval_freq": 10**9, "eval_episodes": 5, "progress_bar": False}
 
@@ -222,7 +224,7 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
         load_low_level("ant", shipped_policy_path("point"))
     junk = tmp_path / "junk.zip"
     junk.write_text("not a zip")
-    with pytest.raises(ValueError, match="is not an SB3 TD3/DDPG policy zip"):
+    with pytest.raises(ValueError, match="is not an SB3 policy zip"):
         load_low_level("point", junk)
     with pytest.raises(FileNotFoundError, match="no low-level policy at"):
         load_low_level("point", tmp_path / "missing.zip")
@@ -230,15 +232,7 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
 
 def test_user_brings_sac_with_her_and_no_glue():
     env = gym.make("antmaze_hirl/AntReach-v0")
-    model = SAC(
-        "MultiInputPolicy",
-        env,
-        replay_buffer_class=HerReplayBuffer,
-        learning_starts=120,
-        batch_size=32,
-        policy_kwargs={"net_arch": [32, 32]},
-        seed=0,
-    )
+    model = tiny_sac_her(env, learning_starts=120)
     model.learn(150)
     assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
 
@@ -354,3 +348,18 @@ def test_the_committed_training_configs_load(name):
     config = load_config("ant", Path(__file__).parents[1] / "benchmarks" / "configs" / name)
     assert config.env_kwargs["chain_probability"] in (0.5, 0.75)
     ReachEnv("ant", **config.env_kwargs).close()
+
+
+def test_renamed_sb3_ext_names_still_work_with_a_warning():
+    import importlib
+    import sys
+
+    from antmaze_hirl.sb3_ext import checkpoint, loading, shipped
+
+    with pytest.warns(DeprecationWarning, match="renamed RunCheckpointCallback"):
+        assert checkpoint.CheckpointCallback is checkpoint.RunCheckpointCallback
+    sys.modules.pop("antmaze_hirl.sb3_ext.policies", None)
+    with pytest.warns(DeprecationWarning, match="sb3_ext.policies is deprecated"):
+        policies = importlib.import_module("antmaze_hirl.sb3_ext.policies")
+    assert policies.load_low_level is loading.load_low_level
+    assert policies.shipped_policy_path is shipped.shipped_policy_path

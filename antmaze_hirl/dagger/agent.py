@@ -29,7 +29,7 @@ class HierarchicalAgent:
         cls, high_level_path: str | Path, body: str, low_level_path: str | Path | None = None
     ) -> HierarchicalAgent:
         """A saved high-level policy over a saved (default: shipped) low-level policy for ``body``."""
-        from antmaze_hirl.sb3_ext.policies import load_low_level
+        from antmaze_hirl.sb3_ext.loading import load_low_level
 
         return cls(HighLevelPolicy.load(high_level_path), load_low_level(body, low_level_path))
 

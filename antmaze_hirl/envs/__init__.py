@@ -1,35 +1,32 @@
-"""Maze layouts, the low-level goal-reaching env and the high-level subgoal-selection env."""
+"""Maze layouts, the low-level goal-reaching env and the high-level subgoal-selection env.
 
-from antmaze_hirl.envs.birdseye import BirdseyeRenderer
-from antmaze_hirl.envs.controllers import LowLevelController, PointGoToController, PredictController, as_controller
-from antmaze_hirl.envs.geometry import MazeGeometry
-from antmaze_hirl.envs.high_level import HighLevelMazeEnv
-from antmaze_hirl.envs.layouts import (
-    STANDARD_MAPS,
-    MazeLayout,
-    generate_layout,
-    layout_from_map,
-    shortest_path,
-    validate_maze_map,
-)
-from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.envs.registration import ENV_IDS, register_envs
+The bottom layer of the package: it imports nothing from ``experts``, ``sb3_ext``, ``dagger``,
+``experiments`` or the CLI, and any controller (an SB3 model or a callable) can drive its high-level env.
+Exports are imported on first use (PEP 562), so that :mod:`antmaze_hirl.envs.bodies` (the CLI's body
+choices) is read without loading MuJoCo.
+"""
 
-__all__ = [
-    "ENV_IDS",
-    "STANDARD_MAPS",
-    "BirdseyeRenderer",
-    "HighLevelMazeEnv",
-    "LowLevelController",
-    "MazeGeometry",
-    "MazeLayout",
-    "PointGoToController",
-    "PredictController",
-    "ReachEnv",
-    "as_controller",
-    "generate_layout",
-    "layout_from_map",
-    "register_envs",
-    "shortest_path",
-    "validate_maze_map",
-]
+# _notices runs before any module of this package imports gymnasium-robotics.
+from antmaze_hirl._lazy import lazy_exports
+from antmaze_hirl.envs import _notices  # noqa: F401
+
+_EXPORTS = {
+    "STANDARD_MAPS": "antmaze_hirl.envs.layouts",
+    "BirdseyeRenderer": "antmaze_hirl.envs.birdseye",
+    "HighLevelMazeEnv": "antmaze_hirl.envs.high_level",
+    "LowLevelController": "antmaze_hirl.envs.controllers",
+    "MazeGeometry": "antmaze_hirl.envs.geometry",
+    "MazeLayout": "antmaze_hirl.envs.layouts",
+    "PointGoToController": "antmaze_hirl.envs.controllers",
+    "PredictController": "antmaze_hirl.envs.controllers",
+    "ReachEnv": "antmaze_hirl.envs.reach",
+    "as_controller": "antmaze_hirl.envs.controllers",
+    "generate_layout": "antmaze_hirl.envs.layouts",
+    "layout_from_map": "antmaze_hirl.envs.layouts",
+    "shortest_path": "antmaze_hirl.envs.layouts",
+    "validate_maze_map": "antmaze_hirl.envs.layouts",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
+
+__all__ = list(_EXPORTS)

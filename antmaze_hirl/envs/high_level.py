@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -10,7 +11,7 @@ from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
-from antmaze_hirl.envs.controllers import LowLevelController, PredictController, as_controller
+from antmaze_hirl.envs.controllers import as_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
@@ -18,29 +19,32 @@ from antmaze_hirl.envs.simulator import Body, body_spec
 
 STATE_AGENT_XY = slice(0, 2)
 STATE_GOAL_XY = slice(2, 4)
+DEFAULT_MIN_GOAL_CELLS = 3
+
+_MIN_GOAL_DISTANCE_RENAMED = (
+    "HighLevelMazeEnv's min_goal_distance is renamed min_goal_cells (it counts grid steps; ReachEnv's "
+    "min_goal_distance is metres); the old name will be removed"
+)
 
 
-def default_low_level(body: Body) -> LowLevelController:
-    """The controller a high-level env uses when none is given: the policy shipped for ``body``.
-
-    Raises:
-        ValueError: If no policy ships for ``body`` (pass ``low_level=`` then).
-    """
-    from antmaze_hirl.sb3_ext.policies import load_shipped_policy, shipped_policy_path
-
-    if not shipped_policy_path(body).exists():
+def _renamed_min_goal_cells(min_goal_cells: int, min_goal_distance: int | None) -> int:
+    """``min_goal_cells``, or the deprecated ``min_goal_distance`` when that is given (with a warning)."""
+    if min_goal_distance is None:
+        return min_goal_cells
+    warnings.warn(_MIN_GOAL_DISTANCE_RENAMED, DeprecationWarning, stacklevel=3)
+    if min_goal_cells != DEFAULT_MIN_GOAL_CELLS:
         raise ValueError(
-            f"antmaze_hirl/{body.capitalize()}Maze-v0 needs a low-level controller: pass low_level=<SB3 model or "
-            f"callable obs -> action>, e.g. gym.make('antmaze_hirl/{body.capitalize()}Maze-v0', low_level=model)"
+            f"pass min_goal_cells only, not also its deprecated name min_goal_distance: got min_goal_cells="
+            f"{min_goal_cells} and min_goal_distance={min_goal_distance}"
         )
-    return PredictController(load_shipped_policy(body))
+    return min_goal_distance
 
 
 class HighLevelMazeEnv(gym.Env, EzPickle):
     """Reach a random goal in a maze by choosing xy subgoals for a low-level controller.
 
     Each episode draws a layout (a random connected maze, or the fixed ``maze_map``), starts the body
-    in a corner and puts the goal in a free cell at least ``min_goal_distance`` grid steps away. Each
+    in a corner and puts the goal in a free cell at least ``min_goal_cells`` grid steps away. Each
     :meth:`step` takes a subgoal and runs the low-level controller on the inner :class:`ReachEnv` for
     up to ``horizon`` steps, stopping early once the subgoal or the goal is reached. The episode ends
     when the goal is reached (``terminated``, reward 1), when the ant has flipped onto its back
@@ -58,14 +62,18 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
     ``subgoal_clipped``, ``subgoal_extended``, ``subgoal_in_wall`` and ``agent_path`` (xy after every low-level step).
 
     Args:
-        body: ``"point"`` or ``"ant"``.
+        body: ``"point"`` (the default, as in :class:`ReachEnv`: the cheaper body) or ``"ant"``.
         maze_map: ``None`` for a new random layout every episode, else a fixed map (rows or a
             standard name ``"u"``, ``"open"``, ``"medium"``, ``"large"``) with random start corner and goal.
         maze_size: Free cells of random layouts, ``n`` or ``(rows, cols)``.
         wall_fraction: Share of interior cells that random layouts turn into walls.
-        min_goal_distance: Least grid steps from the start cell to the goal cell.
-        low_level: SB3 model or callable ``goal observation -> action``. Default: the policy shipped
-            for the body (:func:`antmaze_hirl.load_low_level`).
+        min_goal_cells: Least grid steps on the shortest path from the start cell to the goal cell.
+        min_goal_distance: Deprecated name of ``min_goal_cells`` (it counts grid steps, while
+            :class:`ReachEnv`'s ``min_goal_distance`` is metres); warns ``DeprecationWarning`` and is
+            used only while ``min_goal_cells`` keeps its default.
+        low_level: SB3 model or callable ``goal observation -> action`` (required). ``gym.make`` of
+            ``antmaze_hirl/AntMaze-v0`` or ``antmaze_hirl/PointMaze-v0`` without it plugs in the policy
+            shipped for the body (:func:`antmaze_hirl.sb3_ext.shipped.make_maze_env`).
         horizon: Low-level steps per subgoal, H. Default per body (ant 100, point 50).
         max_steps: Low-level step budget per episode.
         goal_threshold: Final-goal radius, metres. Default per body (ant 0.45, point 0.2).
@@ -83,6 +91,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a bird's-eye picture.
 
+    Raises:
+        ValueError: If ``low_level`` is missing, both ``min_goal_cells`` and ``min_goal_distance`` are
+            given, or a number is out of range.
+
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
@@ -94,7 +106,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         *,
         maze_size: int | tuple[int, int] = 5,
         wall_fraction: float = 0.3,
-        min_goal_distance: int = 3,
+        min_goal_cells: int = DEFAULT_MIN_GOAL_CELLS,
+        min_goal_distance: int | None = None,
         low_level: Any = None,
         horizon: int | None = None,
         max_steps: int = 500,
@@ -107,13 +120,20 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         reach_kwargs: dict[str, Any] | None = None,
         render_mode: str | None = None,
     ) -> None:
+        min_goal_cells = _renamed_min_goal_cells(min_goal_cells, min_goal_distance)
+        if low_level is None:
+            raise ValueError(
+                f"HighLevelMazeEnv needs a low-level controller: pass low_level=<SB3 model or callable obs -> "
+                f"action>, or make it with gym.make('antmaze_hirl/{str(body).capitalize()}Maze-v0') to use the "
+                f"shipped policy"
+            )
         EzPickle.__init__(
             self,
             body,
             maze_map,
             maze_size=maze_size,
             wall_fraction=wall_fraction,
-            min_goal_distance=min_goal_distance,
+            min_goal_cells=min_goal_cells,
             low_level=low_level,
             horizon=horizon,
             max_steps=max_steps,
@@ -139,13 +159,13 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.goal_threshold = float(goal_threshold if goal_threshold is not None else spec.distance_threshold)
         self.position_noise = float(position_noise)
         self.clip_subgoals = clip_subgoals
-        self.min_goal_distance = int(min_goal_distance)
+        self.min_goal_cells = int(min_goal_cells)
         self.wall_fraction = float(wall_fraction)
         n_rows, n_cols = (maze_size, maze_size) if isinstance(maze_size, int) else maze_size
         self.maze_size = (int(n_rows), int(n_cols))
         self._fixed_map = None if maze_map is None else maze_map
         first_layout = self.sample_layout(np.random.default_rng(0))
-        self.controller = as_controller(low_level) if low_level is not None else default_low_level(body)
+        self.controller = as_controller(low_level)
         reach_kwargs = {"terminate_on_flip": terminate_on_flip, **(reach_kwargs or {})}
         self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **reach_kwargs)
         self.layout = first_layout
@@ -175,6 +195,12 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.goal_xy = np.zeros(2)
         self.attempts = 0
         self.total_low_level_steps = 0
+
+    @property
+    def min_goal_distance(self) -> int:
+        """Deprecated name of :attr:`min_goal_cells` (grid steps, not metres)."""
+        warnings.warn(_MIN_GOAL_DISTANCE_RENAMED, DeprecationWarning, stacklevel=2)
+        return self.min_goal_cells
 
     @property
     def agent_xy(self) -> np.ndarray:
@@ -208,7 +234,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             self.goal_xy = self.noisy_cell_centre(layout.goal_cell, self.np_random)
         else:
             self.goal_xy = as_free_point(goal, self.geometry, layout.walls, "goal_xy")
-        self.reach.reset(seed=int(self.np_random.integers(2**31)), options={"start_xy": start, "goal": self.goal_xy})
+        self.reach.reset(seed=int(self.np_random.integers(2**31)), options={"start_xy": start, "goal_xy": self.goal_xy})
         self.attempts = 0
         self.total_low_level_steps = 0
         return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
@@ -284,9 +310,9 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 n_rows=n_rows,
                 n_cols=n_cols,
                 wall_fraction=self.wall_fraction,
-                min_goal_distance=self.min_goal_distance,
+                min_goal_distance=self.min_goal_cells,
             )
-        return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_distance)
+        return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_cells)
 
     def noisy_cell_centre(self, cell: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
         """The centre of ``cell`` plus uniform ``±position_noise`` cells of noise from ``rng``.

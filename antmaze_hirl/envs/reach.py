@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, ClassVar
 
 import numpy as np
@@ -44,6 +45,24 @@ def as_free_point(value: Any, geometry: MazeGeometry, walls: np.ndarray, name: s
     return point
 
 
+def _goal_option(options: dict[str, Any]) -> Any:
+    """The ``"goal_xy"`` reset option, or its deprecated name ``"goal"`` (with a warning); ``None`` if neither."""
+    if "goal" not in options:
+        return options.get("goal_xy")
+    warnings.warn(
+        "ReachEnv's reset option 'goal' is renamed 'goal_xy' (the key HighLevelMazeEnv reads); the old key "
+        "will be removed",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    if options.get("goal_xy") is not None:
+        raise ValueError(
+            f"pass options['goal_xy'] only, not also its deprecated name 'goal': got {options['goal_xy']!r} "
+            f"and {options['goal']!r}"
+        )
+    return options["goal"]
+
+
 class ReachEnv(GoalEnv, EzPickle):
     """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
 
@@ -65,7 +84,9 @@ class ReachEnv(GoalEnv, EzPickle):
     whether the body is within the threshold now.
 
     Args:
-        body: ``"ant"`` (Gymnasium Ant-v5 in 4 m cells) or ``"point"`` (PointMaze ball in 1 m cells).
+        body: ``"point"`` (PointMaze ball in 1 m cells; the default, as in :class:`HighLevelMazeEnv`:
+            the cheaper body) or ``"ant"`` (Gymnasium Ant-v5 in 4 m cells). The registered ids name
+            their body explicitly.
         maze_map: Layout, a list of rows or a standard map name. Default ``"open"`` (3x5 free cells).
         horizon: Steps per episode, H. Default per body: ant 100, point 50.
         goal_radius: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
@@ -90,7 +111,7 @@ class ReachEnv(GoalEnv, EzPickle):
 
     def __init__(
         self,
-        body: Body = "ant",
+        body: Body = "point",
         maze_map: str | MazeMap = "open",
         *,
         horizon: int | None = None,
@@ -205,10 +226,13 @@ class ReachEnv(GoalEnv, EzPickle):
         Args:
             seed: Seeds ``self.np_random`` (the only source of randomness).
             options: Optional ``"start_xy"`` (exact body xy; default a random free cell centre with
-                ±0.25 cell of noise) and ``"goal"`` (exact subgoal xy; default sampled near the body).
+                ±0.25 cell of noise) and ``"goal_xy"`` (exact subgoal xy; default sampled near the body),
+                the keys :class:`HighLevelMazeEnv` reads too. ``"goal"`` is a deprecated name of
+                ``"goal_xy"`` (warns ``DeprecationWarning``).
 
         Raises:
-            ValueError: If a given start or goal is NaN, or outside the maze's free space.
+            ValueError: If a given start or goal is NaN, or outside the maze's free space, or both
+                ``"goal_xy"`` and ``"goal"`` are given.
 
         """
         super().reset(seed=seed)
@@ -224,8 +248,8 @@ class ReachEnv(GoalEnv, EzPickle):
             cell = free[self.np_random.integers(len(free))]
             start = geometry.cell_to_xy(cell) + self.np_random.uniform(-0.25, 0.25, size=2) * geometry.scale
         self._body_obs, self._xy = self.sim.reset(start, seed=int(self.np_random.integers(2**31)))
-        goal = options.get("goal")
-        self.set_goal(self.sample_goal() if goal is None else as_free_point(goal, geometry, self.walls, "goal"))
+        goal = _goal_option(options)
+        self.set_goal(self.sample_goal() if goal is None else as_free_point(goal, geometry, self.walls, "goal_xy"))
         return self._get_obs(), {"is_success": self._is_success()}
 
     def _chains(self, seed: int | None, options: dict[str, Any] | None) -> bool:

@@ -1,6 +1,19 @@
-"""The paper's experiment protocol: trials over methods and seeds, summary and panels."""
+"""The paper's experiment protocol: trials over methods and seeds, summary and panels.
 
-from antmaze_hirl.experiments.runner import ExperimentConfig, run_experiment, run_trial
-from antmaze_hirl.experiments.summary import cost_to_reach, summarise
+Exports are imported on first use (PEP 562): the CLI reads :class:`ExperimentConfig`'s defaults for its
+help without loading torch.
+"""
 
-__all__ = ["ExperimentConfig", "cost_to_reach", "run_experiment", "run_trial", "summarise"]
+from antmaze_hirl._lazy import lazy_exports
+
+_EXPORTS = {
+    "ExperimentConfig": "antmaze_hirl.experiments.config",
+    "cost_to_reach": "antmaze_hirl.experiments.summary",
+    "run_experiment": "antmaze_hirl.experiments.runner",
+    "run_trial": "antmaze_hirl.experiments.runner",
+    "summarise": "antmaze_hirl.experiments.summary",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
+
+__all__ = list(_EXPORTS)

@@ -10,7 +10,7 @@ import multiprocessing
 import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -22,11 +22,12 @@ from tqdm.auto import tqdm
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
 from antmaze_hirl.dagger.strategies import make_strategy
-from antmaze_hirl.envs.simulator import body_spec
+from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.plots import plot_panels
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experts.oracle import PathOracle
-from antmaze_hirl.sb3_ext.policies import load_shipped_policy, policy_fingerprint
+from antmaze_hirl.sb3_ext.loading import policy_fingerprint
+from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
 COLUMNS = (
     "method",
@@ -43,55 +44,6 @@ COLUMNS = (
     "eval_success",
     "eval_attempts",
 )
-
-
-@dataclass(frozen=True)
-class ExperimentConfig:
-    """Settings shared by every (method, seed) trial.
-
-    Attributes:
-        body: ``"point"`` or ``"ant"`` (the ant uses its shipped low-level policy).
-        episodes: Training episodes per trial.
-        eval_every: M: learner-only evaluation every M episodes.
-        eval_episodes: Held-out mazes per intermediate evaluation.
-        final_eval_episodes: Held-out mazes at the end.
-        maze_size: Free cells per side of the random layouts.
-        gradient_steps: N per update.
-        episodes_per_update: K.
-        decay: d in ``beta <- beta / d``.
-        mixing: ``"blend"`` or ``"switch"``.
-        expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
-            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (README).
-    """
-
-    body: str = "point"
-    episodes: int = 100
-    eval_every: int = 10
-    eval_episodes: int = 20
-    final_eval_episodes: int = 100
-    maze_size: int = 5
-    gradient_steps: int = 200
-    episodes_per_update: int = 1
-    decay: float = 2.0
-    mixing: str = "blend"
-    expert_max_distance: float | None = None
-
-    def __post_init__(self) -> None:
-        body_spec(self.body)
-        for name in (
-            "episodes",
-            "eval_every",
-            "eval_episodes",
-            "final_eval_episodes",
-            "maze_size",
-            "episodes_per_update",
-        ):
-            if getattr(self, name) < 1:
-                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if self.expert_max_distance is not None and not self.expert_max_distance > 0:
-            raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
-        if self.mixing not in ("blend", "switch"):
-            raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
 
 
 def low_level_identity(body: str, low_level: Any = None) -> str:

@@ -13,6 +13,7 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -122,12 +123,15 @@ def latest_checkpoint(directory: str | Path, expected: dict[str, Any] | None = N
     return folder, state
 
 
-class CheckpointCallback(BaseCallback):
+class RunCheckpointCallback(BaseCallback):
     """Saves a :func:`save_checkpoint` every ``save_freq`` environment steps and at the end of training.
 
     Saves fall between rollouts (every ``train_freq`` steps for SB3's off-policy algorithms), after the
     gradient updates of the last one, so a checkpoint's replay buffer holds exactly its step count of
     transitions and its weights have had every update of those steps.
+
+    Named apart from SB3's ``CheckpointCallback(save_freq, save_path, ...)``, which writes model files in
+    place and keeps no replay buffer or run identity; ``CheckpointCallback`` here is a deprecated alias.
 
     Args:
         directory: Checkpoint folder.
@@ -171,3 +175,16 @@ class CheckpointCallback(BaseCallback):
         self._last_saved = self._progress()
         if self.verbose:
             print(f"checkpoint saved: {folder}")
+
+
+def __getattr__(name: str) -> type[RunCheckpointCallback]:
+    # PEP 562: the old name still works, with a warning, for code written before the rename.
+    if name == "CheckpointCallback":
+        warnings.warn(
+            "CheckpointCallback is renamed RunCheckpointCallback (SB3 has a CheckpointCallback with another "
+            "signature); the old name will be removed",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return RunCheckpointCallback
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

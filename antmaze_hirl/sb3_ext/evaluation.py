@@ -13,7 +13,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from antmaze_hirl.atomic_io import atomic_write_text
 from antmaze_hirl.envs.controllers import as_controller
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.sb3_ext.policies import save_policy
+from antmaze_hirl.sb3_ext.loading import save_policy
 
 
 def evaluate_reach(

@@ -15,11 +15,11 @@ from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext.action_penalty import ActionPenaltyPolicy
-from antmaze_hirl.sb3_ext.checkpoint import CheckpointCallback, latest_checkpoint
+from antmaze_hirl.sb3_ext.checkpoint import RunCheckpointCallback, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
-from antmaze_hirl.sb3_ext.policies import save_policy
+from antmaze_hirl.sb3_ext.loading import save_policy
 
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG}
 
@@ -151,7 +151,7 @@ def train_low_level(
             model.set_parameters(str(init_from), exact_match=True, device=model.device)
     # The callbacks check their frequencies and episode counts here, before any training step.
     callbacks: list[BaseCallback] = [
-        CheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
+        RunCheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
         SuccessRateCallback(
             # The training env's settings (observation size, horizon, ...) on a simulator of its own; its
             # seeded resets never chain, so every held-out subgoal starts from rest, as in eval-low.

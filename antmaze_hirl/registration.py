@@ -1,4 +1,10 @@
-"""Registers the ``antmaze_hirl/...`` ids with Gymnasium (called when ``antmaze_hirl`` is imported)."""
+"""Registers the ``antmaze_hirl/...`` ids with Gymnasium (done when ``antmaze_hirl`` is imported).
+
+This module sits above every layer its entry points name: the reach ids are plain
+:class:`~antmaze_hirl.envs.reach.ReachEnv`, the maze ids go through
+:func:`antmaze_hirl.sb3_ext.shipped.make_maze_env`, which plugs in the shipped low-level policy when no
+``low_level`` is given. The entry points are strings, so registering imports neither the envs nor torch.
+"""
 
 from __future__ import annotations
 
@@ -7,8 +13,8 @@ import gymnasium as gym
 ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
     "antmaze_hirl/AntReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "ant"}),
     "antmaze_hirl/PointReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "point"}),
-    "antmaze_hirl/AntMaze-v0": ("antmaze_hirl.envs.high_level:HighLevelMazeEnv", {"body": "ant"}),
-    "antmaze_hirl/PointMaze-v0": ("antmaze_hirl.envs.high_level:HighLevelMazeEnv", {"body": "point"}),
+    "antmaze_hirl/AntMaze-v0": ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": "ant"}),
+    "antmaze_hirl/PointMaze-v0": ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": "point"}),
 }
 """Registered ids: entry point and default keyword arguments."""
 

@@ -1,0 +1,83 @@
+"""The low-level policies shipped in ``antmaze_hirl/policies/``, and the maze ids' factory that plugs them in.
+
+This sits above :mod:`antmaze_hirl.envs`, so the env layer never imports the training stack: the
+high-level env takes any controller, and only ``gym.make`` of a maze id without ``low_level`` loads the
+shipped policy (torch and Stable-Baselines3 with it).
+"""
+
+from __future__ import annotations
+
+import functools
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from antmaze_hirl.envs.controllers import PredictController
+from antmaze_hirl.envs.high_level import HighLevelMazeEnv
+from antmaze_hirl.envs.layouts import MazeMap
+from antmaze_hirl.envs.simulator import Body, body_spec
+
+if TYPE_CHECKING:
+    from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
+
+
+def shipped_policy_path(body: str) -> Path:
+    """Path of the policy shipped for ``body`` (``antmaze_hirl/policies/<body>_td3.zip``).
+
+    Raises:
+        ValueError: If ``body`` is not a known body.
+    """
+    body_spec(body)
+    return Path(str(resources.files("antmaze_hirl").joinpath("policies", f"{body}_td3.zip")))
+
+
+@functools.cache
+def load_shipped_policy(body: str) -> OffPolicyAlgorithm:
+    """The shipped policy for ``body``, loaded once per process and shared (acting only reads it)."""
+    # Imported here, not at the top: a maze made with its own controller then never loads torch.
+    from antmaze_hirl.sb3_ext.loading import load_low_level
+
+    return load_low_level(body)
+
+
+class ShippedPolicyController(PredictController):
+    """The shipped policy of ``body`` as a controller; it pickles as its body name, not as the weights.
+
+    Args:
+        body: ``"ant"`` or ``"point"``.
+    """
+
+    def __init__(self, body: str) -> None:
+        super().__init__(load_shipped_policy(body))
+        self.body = body
+
+    def __reduce__(self) -> tuple[type[ShippedPolicyController], tuple[str]]:
+        # An unpickled env reloads the (cached) shipped policy instead of carrying a copy of its weights.
+        return type(self), (self.body,)
+
+
+def make_maze_env(
+    body: Body = "point", maze_map: str | MazeMap | None = None, *, low_level: Any = None, **kwargs: Any
+) -> HighLevelMazeEnv:
+    """Entry point of ``antmaze_hirl/AntMaze-v0`` and ``antmaze_hirl/PointMaze-v0``.
+
+    Args:
+        body: ``"point"`` or ``"ant"``.
+        maze_map: ``None`` for random layouts, else a fixed map (see
+            :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv`).
+        low_level: SB3 model or callable ``goal observation -> action``. Default: the policy shipped for
+            ``body`` (:func:`load_shipped_policy`).
+        **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
+
+    Raises:
+        ValueError: If ``low_level`` is left out and no policy ships for ``body``.
+    """
+    if low_level is None:
+        if not shipped_policy_path(body).exists():
+            name = f"antmaze_hirl/{body.capitalize()}Maze-v0"
+            raise ValueError(
+                f"{name} needs a low-level controller: pass low_level=<SB3 model or callable obs -> action>, "
+                f"e.g. gym.make('{name}', low_level=model)"
+            )
+        low_level = ShippedPolicyController(body)
+    return HighLevelMazeEnv(body, maze_map, low_level=low_level, **kwargs)

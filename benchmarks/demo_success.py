@@ -1,0 +1,77 @@
+"""How often ``antmaze-hirl demo`` succeeds on its defaults, and why it fails when it does.
+
+Runs the demo (the scripted oracle driving the shipped low level, per-body default maze size and subgoal
+distance) for seeds 0..N-1 and records each episode's outcome: success, flipped or timed out. Goal: the ant
+succeeds at least as often as the oracle ceiling of the ant experiment's maze family
+(``oracle_ceiling_ant_3.json``, 100 held-out 3x3 mazes), and on seed 0 (the demo's default).
+
+Usage: python benchmarks/demo_success.py [--bodies ant,point] [--seeds 20]
+Updates benchmarks/results/demo_success.json (one entry per body run; other bodies' entries are kept).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import tempfile
+import time
+from pathlib import Path
+
+import torch
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.demo import run_demo
+from antmaze_hirl.experiments.config import BODY_DEFAULTS
+
+RESULTS = Path(__file__).parent / "results"
+OUT = RESULTS / "demo_success.json"
+
+
+def oracle_ceiling(body: str) -> float | None:
+    path = RESULTS / f"oracle_ceiling_{body}_{BODY_DEFAULTS[body]['maze_size']}.json"
+    return json.loads(path.read_text())["success_rate"] if path.exists() else None
+
+
+def measure(body: str, seeds: int) -> dict:
+    outcomes = []
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as pictures:
+        for seed in range(seeds):
+            result = run_demo(body=body, seed=seed, out_dir=pictures)
+            outcomes.append(result.outcome)
+            print(f"{body} seed {seed}: {result.outcome}, {result.subgoals} subgoals, {result.low_level_steps} steps")
+    successes = outcomes.count("success")
+    ceiling = oracle_ceiling(body)
+    return {
+        "seeds": f"0-{seeds - 1}",
+        "settings": BODY_DEFAULTS[body],
+        "successes": successes,
+        "episodes": seeds,
+        "success_rate": successes / seeds,
+        "failures": dict(collections.Counter(outcome for outcome in outcomes if outcome != "success")),
+        "outcome_per_seed": outcomes,
+        "default_seed_succeeds": outcomes[0] == "success",
+        "oracle_ceiling_success_rate": ceiling,
+        "goal_met": None if ceiling is None else successes / seeds >= ceiling and outcomes[0] == "success",
+        "seconds": round(time.perf_counter() - start, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--bodies", default="ant,point", help="comma-separated bodies")
+    parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1 per body")
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    results = json.loads(OUT.read_text()) if OUT.exists() else {}
+    for body in args.bodies.split(","):
+        results[body] = measure(body, args.seeds)
+        summary = {key: results[body][key] for key in ("successes", "episodes", "failures", "goal_met")}
+        print(f"{body}: {summary}")
+        atomic_write_json(OUT, results)  # after each body, so a long run keeps what it has
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()
