@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, experiment.
+"""The antmaze-hirl command line: demo, train-low, eval-low, experiment, study.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.
@@ -270,12 +270,18 @@ def _run_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_study(subparsers: _Subparsers) -> None:
+    from antmaze_hirl.study.cli import add_study_parser  # light: its handlers import the server lazily
+
+    add_study_parser(subparsers, _HelpFormatter)
+
+
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
     _add_eval_low,
     _add_experiment,
-    # More subcommands (the user study's) go here: one _add_* function each, whose handler imports lazily.
+    _add_study,
 )
 """The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
 
@@ -289,9 +295,6 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in SUBCOMMANDS:
         add(subparsers)
-    from antmaze_hirl.study.cli import add_study_parser
-
-    add_study_parser(subparsers)
     return parser
 
 

@@ -8,16 +8,9 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.runner import ExperimentConfig
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, ExperimentConfig
 
 SETTINGS_FILE = "settings.json"
-
-# The paper experiment's families (benchmarks/paper_experiment.py): the shipped ant walks 3x3 mazes
-# with 2 m subgoals reliably; the point walks 5x5 mazes with one-cell (1 m) subgoals.
-_BODY_DEFAULTS: dict[str, dict[str, Any]] = {
-    "point": {"maze_size": 5, "expert_max_distance": None},
-    "ant": {"maze_size": 3, "expert_max_distance": 2.0},
-}
 
 
 @dataclass(frozen=True)
@@ -54,18 +47,18 @@ class StudySettings:
 
     @classmethod
     def for_body(cls, body: str, **overrides: Any) -> StudySettings:
-        """The paper experiment's settings for ``body``, with ``overrides``.
+        """The paper experiment's maze family and expert reach for ``body`` (``BODY_DEFAULTS``), with ``overrides``.
 
         Raises:
             ValueError: For an unknown body or setting.
         """
-        if body not in _BODY_DEFAULTS:
-            raise ValueError(f"unknown body {body!r}; choose from {sorted(_BODY_DEFAULTS)}")
+        if body not in BODY_DEFAULTS:
+            raise ValueError(f"unknown body {body!r}; choose from {sorted(BODY_DEFAULTS)}")
         known = {field.name for field in fields(cls)}
         unknown = sorted(set(overrides) - known)
         if unknown:
             raise ValueError(f"unknown study setting(s) {unknown}; known: {sorted(known)}")
-        return cls(body=body, **{**_BODY_DEFAULTS[body], **overrides})
+        return cls(body=body, **{**BODY_DEFAULTS[body], **overrides})
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
