@@ -12,7 +12,7 @@ from antmaze_hirl.envs import PointGoToController
 
 
 def make_trainer(seed=0, strategy=None):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_distance=2, low_level=PointGoToController())
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(seed)
     policy = HighLevelPolicy.for_env(env, rng=rng)
     return DAggerTrainer(
@@ -94,3 +94,21 @@ def test_a_trainer_pickles_between_episodes_and_goes_on_identically():
     trainer.env, trainer.expert = env, expert
     copy.env, copy.expert = make_trainer().env, expert
     assert copy.train(1)[0].to_dict() == trainer.train(1)[0].to_dict()
+
+
+def test_the_update_waits_for_finish_or_the_next_episode():
+    trainer = make_trainer()
+    run = trainer.start_episode()
+    with pytest.raises(RuntimeError, match="still running"):
+        run.finish()
+    while not run.done:
+        run.answer(trainer.expert.label(run.request.observation))
+    assert (trainer.updates, trainer.policy.gradient_steps) == (0, 0)  # the page shows the end before any training
+    run.finish()
+    run.finish()  # a second call has nothing left to do
+    assert (trainer.updates, trainer.policy.gradient_steps) == (1, 5)
+    second = trainer.start_episode()
+    while not second.done:
+        second.answer(trainer.expert.label(second.request.observation))
+    trainer.start_episode()  # an unfinished update runs before the next episode draws its maze
+    assert (trainer.updates, trainer.policy.gradient_steps) == (2, 10)

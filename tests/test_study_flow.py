@@ -100,8 +100,10 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
         while finished < 1 or state["query"]["step"] < 2:  # one whole episode, then two clicks into the next
             click = oracle_click(state)
             result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
-            finished += result["episode_end"] is not None
             state = result["state"]
+            if result["episode_end"] is not None:
+                finished += 1
+                state = client.participant("P01", "next", {})
         participant = folder / "participants" / "P01"
         saved = {name: (participant / name).read_bytes() for name in ("episodes.csv", "clicks.jsonl", "events.jsonl")}
         trial_folder = participant / "trial1"  # without a practice trial the first compared trial is 1
@@ -123,6 +125,8 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
             click = oracle_click(resumed)
             query = {"query": resumed["query"]["id"], "x": click[0], "y": click[1]}
             resumed = client.participant("P01", "label", query)["state"]
+            if resumed["phase"] == "episode_over":
+                resumed = client.participant("P01", "next", {})
         assert resumed["phase"] == "questionnaire"
         rows = read_csv(participant / "episodes.csv")
         assert [int(r["episode"]) for r in rows] == [0, 1, 2]

@@ -69,6 +69,7 @@ def test_bad_requests_get_a_4xx_with_a_message_and_change_nothing(served, client
         ("/api/participants/P02/label", {"query": True, "x": 0.0, "y": 0.0}, None, 400, "integer id"),
         ("/api/participants/P02/questionnaire", {"trial": 1, "ratings": {}}, None, 409, "no questionnaire"),
         ("/api/participants/P02/start", {}, None, 409, "no trial to start"),
+        ("/api/participants/P02/next", {}, None, 409, "no episode has just ended"),
         ("/api/participants/P01/label", {"query": 1, "x": 0.0, "y": 0.0}, None, 409, "no label is asked"),
         ("/api/participants/P02/pause", {"paused": "yes"}, None, 400, "true or false"),
     ]

@@ -104,11 +104,17 @@ class EpisodeRun:
     """A training episode in progress, driven by ask/tell: read :attr:`request`, call :meth:`answer`.
 
     Made by :meth:`DAggerTrainer.start_episode`. Between two answers the trainer is idle, so the label
-    may come from anywhere, at any time (a click over HTTP). An unanswered run can be dropped: the
-    trainer's aggregated data and learner then hold the labels of its answered steps.
+    may come from anywhere, at any time (a click over HTTP). Once :attr:`done`, :meth:`finish` runs the
+    learner update that is due. An unanswered run can be dropped: the trainer's aggregated data then
+    holds the labels of its answered steps.
     """
 
-    def __init__(self, steps: Callable[[list[ExecutedStep]], Generator[LabelRequest, Any, EpisodeRecord]]) -> None:
+    def __init__(
+        self,
+        steps: Callable[[list[ExecutedStep]], Generator[LabelRequest, Any, EpisodeRecord]],
+        update: Callable[[], None],
+    ) -> None:
+        self._update = update
         self._executed: list[ExecutedStep] = []
         self._steps = steps(self._executed)
         self.request: LabelRequest | None = None
@@ -139,6 +145,20 @@ class EpisodeRun:
         self._executed.clear()
         self._advance(subgoal)
         return list(self._executed)
+
+    def finish(self) -> None:
+        """Runs the learner update due after this episode (a no-op when none is due, or run already).
+
+        :meth:`answer` returns as soon as the env has run, so the expert sees the episode end at once;
+        the update (gradient steps, the strategy's ensemble) runs here, e.g. while a page animates the
+        last walk. :meth:`DAggerTrainer.start_episode` runs it too if it is still due.
+
+        Raises:
+            RuntimeError: If the episode has not ended.
+        """
+        if not self.done:
+            raise RuntimeError("the episode is still running: answer its requests first")
+        self._update()
 
     def _advance(self, value: Any) -> None:
         try:
@@ -217,6 +237,7 @@ class DAggerTrainer:
         self.episodes_done = 0
         self.total_expert_cost = 0
         self._rest_body: np.ndarray | None = None
+        self._update_due = False
 
     @property
     def beta(self) -> float:
@@ -250,6 +271,7 @@ class DAggerTrainer:
         run = self.start_episode()
         while not run.done:
             run.answer(self.expert.label(run.request.observation))
+        run.finish()
         return run.record
 
     def start_episode(self) -> EpisodeRun:
@@ -260,7 +282,16 @@ class DAggerTrainer:
         :meth:`run_episode` is this loop with :attr:`expert` answering at once, so both paths run the
         same code and give the same numbers.
         """
-        return EpisodeRun(self._episode_steps)
+        self._update_if_due()
+        return EpisodeRun(self._episode_steps, self._update_if_due)
+
+    def _update_if_due(self) -> None:
+        # Every episodes_per_update episodes: N gradient steps on D, the strategy's own models, beta's next step.
+        if self._update_due:
+            self._update_due = False
+            self._fit(self.gradient_steps)
+            self.strategy.on_update(self.dataset, self.gradient_steps, self.rng)
+            self.updates += 1
 
     def _episode_steps(self, executed: list[ExecutedStep]) -> Generator[LabelRequest, Any, EpisodeRecord]:
         # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
@@ -296,10 +327,9 @@ class DAggerTrainer:
         removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
         self.episodes_done += 1
         self.total_expert_cost += cost
-        if self.episodes_done % self.episodes_per_update == 0 and len(self.dataset):
-            self._fit(self.gradient_steps)
-            self.strategy.on_update(self.dataset, self.gradient_steps, self.rng)
-            self.updates += 1
+        # The update itself waits for EpisodeRun.finish() (or the next start_episode()), so a person sees the
+        # episode's end at once; it draws from self.rng before the next episode does, so the numbers stay the same.
+        self._update_due = self.episodes_done % self.episodes_per_update == 0 and len(self.dataset) > 0
         return EpisodeRecord(
             episode=episode,
             success=bool(info["is_success"]),

@@ -12,6 +12,8 @@ API (all under ``/api``, JSON in and out; errors are ``{"error": "..."}`` with a
 * ``GET /api/participants/{id}/state``: what the page shows;
 * ``POST /api/participants/{id}/start``: start the next trial;
 * ``POST /api/participants/{id}/label`` ``{"query", "x", "y", "response_seconds"}``: a click;
+* ``POST /api/participants/{id}/next``: after a click that ended an episode, close it (the learner's
+  update) and open the next maze; the page sends it while it animates the last walk;
 * ``POST /api/participants/{id}/questionnaire`` ``{"trial", "ratings", "comment"}``;
 * ``POST /api/participants/{id}/pause`` ``{"paused": true|false}``;
 * ``GET /api/participants/{id}/frame.png``: the ant's camera view, where OpenGL rendering works.
@@ -177,6 +179,11 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         return await run_in_threadpool(
             session.label, payload.get("query"), payload.get("x"), payload.get("y"), payload.get("response_seconds")
         )
+
+    @app.post("/api/participants/{participant_id}/next")
+    async def next_episode(participant_id: str, request: Request) -> Any:
+        await body_of(request)
+        return await run_in_threadpool(study.session(participant_id).next_episode)
 
     @app.post("/api/participants/{participant_id}/questionnaire")
     async def answers(participant_id: str, request: Request) -> Any:

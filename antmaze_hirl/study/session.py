@@ -130,6 +130,7 @@ class ParticipantSession:
     """The study protocol for one participant: practice, counterbalanced trials, questionnaires.
 
     Phases: ``"intro"`` (a trial is about to start), ``"label"`` (a query waits for a click),
+    ``"episode_over"`` (the last click ended an episode; :meth:`next_episode` closes it),
     ``"questionnaire"`` (a trial ended; its questionnaire is due), ``"done"``.
 
     Args:
@@ -322,10 +323,33 @@ class ParticipantSession:
                         "flipped": bool(step.info["flipped"]),
                     }
                 )
-            episode_end = self._finish_episode() if self._run.done else None
-            if self.phase == "label":
+            episode_end = None
+            if self._run.done:
+                assert self._run.record is not None
+                self.phase = "episode_over"  # the page calls next_episode() while it animates the last walk
+                episode_end = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
+            else:
                 self._show_query()
             return {"walked": walked, "episode_end": episode_end, "state": self.state()}
+
+    def next_episode(self) -> dict[str, Any]:
+        """Closes the finished episode (learner update, evaluation when due, saving) and opens the next maze.
+
+        Split from the click that ends an episode so that the page shows the end at once and this work
+        runs while it animates the last walk.
+
+        Raises:
+            ProtocolError: If no episode has just ended.
+        """
+        with self.lock:
+            if self.phase != "episode_over":
+                raise ProtocolError(
+                    f"no episode has just ended (participant {self.participant.id} is at {self.phase!r})"
+                )
+            self._finish_episode()
+            if self.phase == "label":
+                self._show_query()
+            return self.state()
 
     def submit_questionnaire(self, trial_number: Any, payload: Any) -> dict[str, Any]:
         """The questionnaire of trial ``trial_number`` (1-based, as the page shows it).
@@ -480,10 +504,11 @@ class ParticipantSession:
         self._query_id += 1
         self._query_shown_at = self.clock()
 
-    def _finish_episode(self) -> dict[str, Any]:
+    def _finish_episode(self) -> None:
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         record = run.record
+        run.finish()  # the learner update, before the evaluation (as the experiment runner evaluates)
         episode = len(state.rows)
         row: dict[str, Any] = {
             "participant": self.participant.id,
@@ -515,8 +540,8 @@ class ParticipantSession:
         if final:
             self._close_trial()
         else:
+            self.phase = "label"
             self._start_episode()
-        return {"number": episode + 1, "success": bool(record.success), "evaluated": "eval_success" in row}
 
     def _close_trial(self) -> None:
         state, trial = self._trial, self.trial
@@ -558,7 +583,9 @@ class ParticipantSession:
             self._append_row(row)
 
     def _save_progress(self) -> None:
-        atomic_write_json(self.folder / "progress.json", {"trial_index": self.trial_index, "phase": self.phase})
+        # An episode that ended but is not closed is not saved yet: after a restart it is replayed.
+        phase = "label" if self.phase == "episode_over" else self.phase
+        atomic_write_json(self.folder / "progress.json", {"trial_index": self.trial_index, "phase": phase})
 
     def _log_event(self, kind: str, **details: Any) -> None:
         event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}

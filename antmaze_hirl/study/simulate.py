@@ -131,11 +131,12 @@ def play_participant(
     """Plays one participant's whole session (every trial and questionnaire) through the API.
 
     Returns:
-        ``{"participant", "clicks", "trials", "latencies"}``; each latency is a click's
-        ``{"round_trip", "server", "episode_end"}`` (seconds; whether the click ended an episode).
+        ``{"participant", "clicks", "trials", "latencies", "between"}``: each latency is a click's
+        ``{"round_trip", "server", "episode_end"}`` (seconds; whether the click ended an episode), and
+        ``between`` the ``{"round_trip", "server"}`` of each ``next`` request that closed an episode.
     """
     state = client.participant(participant_id, "state")
-    clicks, latencies, trial_clicks, trial_failures, trial_episodes = 0, [], 0, 0, 0
+    clicks, latencies, between, trial_clicks, trial_failures, trial_episodes = 0, [], [], 0, 0, 0
     offset = rng.normal(0.0, 0.5)  # how this participant tends to rate
     trials = 0
     while state["phase"] != "done":
@@ -164,10 +165,13 @@ def play_participant(
             )
             clicks += 1
             trial_clicks += 1
+            state = result["state"]
             if result["episode_end"] is not None:
                 trial_episodes += 1
                 trial_failures += int(not result["episode_end"]["success"])
-            state = result["state"]
+                started = time.perf_counter()
+                state = client.participant(participant_id, "next", {})
+                between.append({"round_trip": time.perf_counter() - started, "server": client.last_server_seconds})
         elif state["phase"] == "questionnaire":
             ratings = _ratings(
                 rng, offset, trial_clicks / max(trial_episodes, 1), trial_failures / max(trial_episodes, 1)
@@ -178,7 +182,13 @@ def play_participant(
             trials += 1
         else:
             raise StudyClientError(f"participant {participant_id} is in unknown phase {state['phase']!r}")
-    return {"participant": participant_id, "clicks": clicks, "trials": trials, "latencies": latencies}
+    return {
+        "participant": participant_id,
+        "clicks": clicks,
+        "trials": trials,
+        "latencies": latencies,
+        "between": between,
+    }
 
 
 def _ratings(

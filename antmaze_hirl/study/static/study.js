@@ -177,6 +177,9 @@ function renderProgress() {
 }
 
 async function render() {
+  if (state.phase === "episode_over") {  // reloaded between a maze's end and the next: move on
+    state = await api(participantPath("next"), {});
+  }
   renderProgress();
   $("paused").hidden = !state.paused;
   if (state.phase === "intro") {
@@ -283,6 +286,8 @@ canvas.addEventListener("click", async (event) => {
     const result = await api(participantPath("label"), {
       query: state.query.id, x: xy[0], y: xy[1], response_seconds: responseSeconds,
     });
+    // An episode's last click: the server updates the learner while the page animates the walk.
+    const next = result.episode_end ? api(participantPath("next"), {}) : null;
     await animate(result.walked, before.trail);
     if (result.episode_end) {
       $("status").textContent = result.episode_end.success
@@ -291,7 +296,7 @@ canvas.addEventListener("click", async (event) => {
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
-    state = result.state;
+    state = next ? await next : result.state;
     await render();
   } catch (error) {
     setError(error.message);
