@@ -133,8 +133,19 @@ def _add_experiment(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--expert-max-distance", type=float, default=None, help="oracle's farthest subgoal, metres (default: 1 cell)"
     )
+    parser.add_argument(
+        "--held-out-layouts",
+        action="store_true",
+        help="draw training, periodic-evaluation and final-evaluation mazes from disjoint sets of wall grids "
+        "(antmaze_hirl.envs.layout_splits); default: held out by seed only, as the committed results",
+    )
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial (default: 1)")
     parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes (default: 1)")
+    parser.add_argument(
+        "--allow-code-change",
+        action="store_true",
+        help="resume a results folder written by other code (another commit or package versions)",
+    )
     parser.add_argument("--no-progress", action="store_true")
     parser.set_defaults(handler=_run_experiment)
 
@@ -144,6 +155,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
 
     from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 
+    methods = [method.strip() for method in args.methods.split(",") if method.strip()]
+    if not methods:
+        raise ValueError(f"--methods names no method, got {args.methods!r}; give a comma-separated list")
+    if args.seeds < 1:
+        raise ValueError(f"--seeds must be >= 1 (trials per method), got {args.seeds}")
     torch.set_num_threads(args.threads)
     config = ExperimentConfig(
         body=args.body,
@@ -155,9 +171,17 @@ def _run_experiment(args: argparse.Namespace) -> int:
         gradient_steps=args.gradient_steps,
         decay=args.decay,
         expert_max_distance=args.expert_max_distance,
+        held_out_layouts=args.held_out_layouts,
     )
-    methods = [method.strip() for method in args.methods.split(",") if method.strip()]
-    summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress, jobs=args.jobs)
+    summary = run_experiment(
+        methods,
+        args.seeds,
+        config,
+        args.out,
+        progress_bar=not args.no_progress,
+        jobs=args.jobs,
+        allow_code_change=args.allow_code_change,
+    )
     for method, figures in summary["methods"].items():
         final = figures["final_success"]
         print(

@@ -1,0 +1,87 @@
+"""The settings of an experiment and the evaluation sets they imply."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
+from antmaze_hirl.envs.layout_splits import LayoutSplit
+from antmaze_hirl.envs.simulator import body_spec
+
+SELECTION_SEED = 2_000_000
+"""With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
+range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`)."""
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Settings shared by every (method, seed) trial.
+
+    Attributes:
+        body: ``"point"`` or ``"ant"`` (the ant uses its shipped low-level policy).
+        episodes: Training episodes per trial.
+        eval_every: M: learner-only evaluation every M episodes.
+        eval_episodes: Held-out mazes per intermediate evaluation.
+        final_eval_episodes: Held-out mazes at the end.
+        maze_size: Free cells per side of the random layouts.
+        gradient_steps: N per update.
+        episodes_per_update: K.
+        decay: d in ``beta <- beta / d``.
+        mixing: ``"blend"`` or ``"switch"``.
+        expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
+            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (README).
+        held_out_layouts: Hold the evaluation mazes out by construction
+            (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
+            periodic evaluations from the ``"selection"`` part (seeds from :data:`SELECTION_SEED`: the
+            same ``eval_episodes`` mazes every time, a fixed set; about 50 is the intended size), the
+            final evaluation from the ``"eval"`` part (seeds from ``HELD_OUT_SEED``), so no evaluation
+            maze shares its wall grid with a training maze and the two evaluation sets share none
+            either. ``False`` (the default, kept so that the committed results folders, which lack this
+            setting, still read as what they are): every maze is drawn from the whole family, held out
+            by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+    """
+
+    body: str = "point"
+    episodes: int = 100
+    eval_every: int = 10
+    eval_episodes: int = 20
+    final_eval_episodes: int = 100
+    maze_size: int = 5
+    gradient_steps: int = 200
+    episodes_per_update: int = 1
+    decay: float = 2.0
+    mixing: str = "blend"
+    expert_max_distance: float | None = None
+    held_out_layouts: bool = False
+
+    def __post_init__(self) -> None:
+        body_spec(self.body)
+        for name in (
+            "episodes",
+            "eval_every",
+            "eval_episodes",
+            "final_eval_episodes",
+            "maze_size",
+            "episodes_per_update",
+        ):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if self.expert_max_distance is not None and not self.expert_max_distance > 0:
+            raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
+        if self.mixing not in ("blend", "switch"):
+            raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
+        if not isinstance(self.held_out_layouts, bool):
+            raise ValueError(f"held_out_layouts must be True or False, got {self.held_out_layouts!r}")
+
+
+def evaluation_sets(config: ExperimentConfig) -> dict[str, tuple[LayoutSplit, int, int]]:
+    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}``."""
+    if config.held_out_layouts:
+        return {
+            "periodic": ("selection", SELECTION_SEED, config.eval_episodes),
+            "final": ("eval", HELD_OUT_SEED, config.final_eval_episodes),
+        }
+    return {
+        "periodic": ("eval", HELD_OUT_SEED, config.eval_episodes),
+        "final": ("eval", HELD_OUT_SEED, config.final_eval_episodes),
+    }
