@@ -48,9 +48,7 @@ def test_split_is_the_documented_hash_of_the_wall_grid():
 def test_training_and_evaluation_mazes_share_no_wall_grid(body, maze_size):
     sample = family_sampler(body, maze_size)
     rng = np.random.default_rng(0)
-    drawn = {
-        split: [sample_layout_in_split(sample, rng, split) for _ in range(2000)] for split in ("train", "eval")
-    }
+    drawn = {split: [sample_layout_in_split(sample, rng, split) for _ in range(2000)] for split in ("train", "eval")}
     grids = {split: {wall_grid_string(layout.walls) for layout in layouts} for split, layouts in drawn.items()}
     assert grids["train"].isdisjoint(grids["eval"])
     assert all(layout_split(layout) == split for split, layouts in drawn.items() for layout in layouts)
