@@ -259,6 +259,17 @@ def test_learning_per_label_metrics_on_a_crafted_episodes_csv(tmp_path):
     assert dagger["cost_to_60_percent"] == {"median": 200.0, "seeds_reached": 2}
 
 
+def test_curve_figures_reject_a_non_positive_label_count():
+    from antmaze_hirl.experiments import normalised_auc, success_at_labels
+
+    trial = [row("a", 0, 0, 50, 0.5)]
+    assert success_at_labels(trial, 50) == 0.5 and success_at_labels(trial, 51) is None
+    with pytest.raises(ValueError, match="label budget must be > 0, got 0"):
+        success_at_labels(trial, 0)
+    with pytest.raises(ValueError, match="label horizon must be > 0, got -5"):
+        normalised_auc(trial, -5)
+
+
 def test_wilson_intervals_and_paired_test_against_known_values():
     from antmaze_hirl.experiments import paired_comparison, wilson_interval
 

@@ -43,12 +43,8 @@ def success_at_labels(trial: Sequence[dict[str, Any]], budget: float) -> float |
     Raises:
         ValueError: If ``budget`` is not > 0.
     """
-    if not budget > 0:
-        raise ValueError(f"label budget must be > 0, got {budget}")
-    labels, success = success_curve(trial)
-    if budget > labels[-1]:
-        return None
-    return float(np.interp(budget, labels, success))
+    curve = _curve_reaching(trial, budget, "label budget")
+    return None if curve is None else float(np.interp(budget, *curve))
 
 
 def normalised_auc(trial: Sequence[dict[str, Any]], horizon: float) -> float | None:
@@ -59,12 +55,19 @@ def normalised_auc(trial: Sequence[dict[str, Any]], horizon: float) -> float | N
     Raises:
         ValueError: If ``horizon`` is not > 0.
     """
-    if not horizon > 0:
-        raise ValueError(f"label horizon must be > 0, got {horizon}")
-    labels, success = success_curve(trial)
-    if horizon > labels[-1]:
+    curve = _curve_reaching(trial, horizon, "label horizon")
+    if curve is None:
         return None
+    labels, success = curve
     inside = labels < horizon
     x = np.append(labels[inside], horizon)
     y = np.append(success[inside], np.interp(horizon, labels, success))
     return float(np.trapezoid(y, x) / horizon)
+
+
+def _curve_reaching(trial: Sequence[dict[str, Any]], labels: float, what: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """The trial's curve if it reaches ``labels`` (validated as ``what``), else ``None``."""
+    if not labels > 0:
+        raise ValueError(f"{what} must be > 0, got {labels}")
+    curve = success_curve(trial)
+    return curve if labels <= curve[0][-1] else None
