@@ -76,7 +76,10 @@ class ExperimentConfig:
 
 
 def evaluation_sets(config: ExperimentConfig) -> dict[str, tuple[LayoutSplit, int, int]]:
-    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}``."""
+    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}``.
+
+    The split restricts the mazes only with ``held_out_layouts`` (:func:`~antmaze_hirl.experiments.runner.make_env`).
+    """
     if config.held_out_layouts:
         return {
             "periodic": ("selection", SELECTION_SEED, config.eval_episodes),
