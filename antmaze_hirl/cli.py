@@ -233,8 +233,19 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         default=defaults.expert_max_distance,
         help="the oracle's farthest subgoal, metres (default: one cell)",
     )
+    parser.add_argument(
+        "--held-out-layouts",
+        action="store_true",
+        help="draw training, periodic-evaluation and final-evaluation mazes from disjoint sets of wall grids "
+        "(antmaze_hirl.envs.layout_splits); default: held out by seed only, as the committed results",
+    )
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial")
     parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes")
+    parser.add_argument(
+        "--allow-code-change",
+        action="store_true",
+        help="resume a results folder written by other code (another commit or package versions)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.set_defaults(handler=_run_experiment)
 
@@ -244,6 +255,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
 
     from antmaze_hirl.experiments.runner import run_experiment
 
+    methods = [method.strip() for method in args.methods.split(",") if method.strip()]
+    if not methods:
+        raise ValueError(f"--methods names no method, got {args.methods!r}; give a comma-separated list")
+    if args.seeds < 1:
+        raise ValueError(f"--seeds must be >= 1 (trials per method), got {args.seeds}")
     torch.set_num_threads(args.threads)
     config = ExperimentConfig(
         body=args.body,
@@ -255,13 +271,24 @@ def _run_experiment(args: argparse.Namespace) -> int:
         gradient_steps=args.gradient_steps,
         decay=args.decay,
         expert_max_distance=args.expert_max_distance,
+        held_out_layouts=args.held_out_layouts,
     )
-    methods = [method.strip() for method in args.methods.split(",") if method.strip()]
-    summary = run_experiment(methods, args.seeds, config, args.out, progress_bar=not args.no_progress, jobs=args.jobs)
+    summary = run_experiment(
+        methods,
+        args.seeds,
+        config,
+        args.out,
+        progress_bar=not args.no_progress,
+        jobs=args.jobs,
+        allow_code_change=args.allow_code_change,
+    )
     for method, figures in summary["methods"].items():
         final = figures["final_success"]
+        pooled = final["pooled"]
         print(
-            f"{method}: final success median {final['median']} (min {final['min']}, max {final['max']}), "
+            f"{method}: final success median {final['median']} (min {final['min']}, max {final['max']}; "
+            f"pooled {pooled['rate']:.3f}, 95% CI {pooled['wilson_95'][0]:.3f}-{pooled['wilson_95'][1]:.3f}), "
+            f"normalised AUC median {figures['normalised_auc']['median']}, "
             f"expert cost/episode {figures['mean_expert_cost_per_episode']:.1f}, "
             f"attempts/episode {figures['mean_attempts_per_episode']:.1f}, "
             f"cost to 60% {figures['cost_to_60_percent']['median']}"

@@ -24,7 +24,7 @@ import json
 from pathlib import Path
 
 import torch
-from paper_experiment import BODY_DEFAULTS, RESULTS, oracle_ceiling
+from paper_experiment import BODY_DEFAULTS, RESULTS, oracle_success
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
@@ -41,7 +41,7 @@ RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
 def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int) -> dict:
     eval_low = evaluate_reach(load_low_level(body, path), ReachEnv(body), episodes=episodes, seed=seed)
     config = ExperimentConfig(body=body, **BODY_DEFAULTS[body])
-    ceiling = oracle_ceiling(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes)
+    ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes)
     return {
         "low_level_id": ceiling["low_level_id"],
         "eval_low": eval_low["success_rate"],

@@ -1,3 +1,4 @@
+import csv
 import dataclasses
 import json
 import math
@@ -35,7 +36,9 @@ def test_cost_to_reach_uses_the_first_evaluation_at_target():
 def test_summary_over_seeds():
     rows = [row("a", 0, 0, 5, 0.7), row("a", 1, 0, 8, 0.2), row("a", 2, 0, 6, 0.4), row("b", 0, 0, 3, 0.1, attempts=9)]
     summary = summarise(rows, ["a", "b"])
-    assert summary["a"]["final_success"] == {"median": 0.4, "min": 0.2, "max": 0.7}
+    final = summary["a"]["final_success"]
+    assert (final["median"], final["min"], final["max"]) == (0.4, 0.2, 0.7)
+    assert final["pooled"] is None  # no eval_mazes column: no count to put an interval on
     assert summary["a"]["cost_to_60_percent"] == {"median": 5.0, "seeds_reached": 1}
     assert summary["b"]["mean_attempts_per_episode"] == 9
     assert summary["b"]["cost_to_60_percent"]["median"] is None
@@ -130,3 +133,190 @@ def test_experiment_cli(tmp_path, capsys):
     assert main([*args, "--out", str(tmp_path), "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("noise: final success median") and "summary.json" in out
+
+
+# --- issue 12: held-out layouts, learning per label, uncertainty, provenance, bad input ---
+
+HELD_OUT = dataclasses.replace(TINY, held_out_layouts=True)
+
+
+def grid_of(layout):
+    return layout.replace("S", "0").replace("G", "0")
+
+
+def test_held_out_runs_rerun_byte_for_byte_and_share_no_wall_grid(tmp_path):
+    from antmaze_hirl.experiments.runner import read_rows
+
+    for folder in ("first", "second"):
+        run_experiment(["dagger"], 1, HELD_OUT, tmp_path / folder, progress_bar=False)
+    for name in ("trials/dagger_seed0.csv", "episodes.csv", "eval_layouts.csv"):
+        assert (tmp_path / "first" / name).read_bytes() == (tmp_path / "second" / name).read_bytes(), name
+    training = {grid_of(row["layout"]) for row in read_rows(tmp_path / "first" / "episodes.csv")}
+    with (tmp_path / "first" / "eval_layouts.csv").open() as handle:
+        evaluation = list(csv.DictReader(handle))
+    assert len(training) >= 1 and len(evaluation) == HELD_OUT.eval_episodes + HELD_OUT.final_eval_episodes
+    periodic = {grid_of(row["layout"]) for row in evaluation if row["set"] == "periodic"}
+    final = {grid_of(row["layout"]) for row in evaluation if row["set"] == "final"}
+    assert training.isdisjoint(periodic | final) and periodic.isdisjoint(final)
+    assert all(layout_split_of(grid) == "train" for grid in training)
+    assert all(layout_split_of(grid) == "eval" for grid in final)
+
+
+def layout_split_of(grid):
+    import numpy as np
+
+    from antmaze_hirl.envs.layout_splits import wall_grid_split
+
+    return wall_grid_split(np.array([[cell == "1" for cell in row] for row in grid.split("/")]))
+
+
+@pytest.mark.parametrize(
+    ("methods", "seeds", "message"),
+    [
+        (["dagger"], 0, "seeds must be an int >= 1 .*got 0"),
+        (["dagger"], -2, "seeds must be an int >= 1 .*got -2"),
+        ([], 1, r"methods must be a non-empty list .*got \[\]"),
+        ("dagger", 1, "methods must be a non-empty list .*got 'dagger'"),
+        (["dagger", "spider"], 1, "unknown method 'spider'"),
+        (["dagger", "dagger"], 1, r"methods name \['dagger'\] more than once"),
+    ],
+)
+def test_experiment_rejects_bad_seeds_and_methods_before_writing(tmp_path, methods, seeds, message):
+    with pytest.raises(ValueError, match=message):
+        run_experiment(methods, seeds, TINY, tmp_path / "out", progress_bar=False)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("flag", "value", "message"),
+    [
+        ("--seeds", "0", "--seeds must be >= 1 (trials per method), got 0"),
+        ("--seeds", "-1", "--seeds must be >= 1 (trials per method), got -1"),
+        ("--methods", ",", "--methods names no method, got ','"),
+        ("--methods", "", "--methods names no method, got ''"),
+        ("--methods", "dagger,spider", "unknown method 'spider'"),
+    ],
+)
+def test_experiment_cli_bad_seeds_and_methods_exit_2_with_one_line(tmp_path, capsys, flag, value, message):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["experiment", "--out", str(tmp_path / "out"), "--no-progress", f"{flag}={value}"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+
+
+def crafted_rows():
+    """Two methods x two seeds; evaluations at (labels, success of 10 mazes), the last one final."""
+    curves = {
+        ("dagger", 0): [(50, 0.2), (150, 0.6), (300, 0.8)],
+        ("dagger", 1): [(100, 0.5), (250, 0.7)],
+        ("noise", 0): [(40, 0.3), (200, 0.9)],
+        ("noise", 1): [(80, 0.4), (400, 0.6)],
+    }
+    rows = []
+    for (method, seed), points in curves.items():
+        for episode, (labels, success) in enumerate(points):
+            # A row without evaluation between evaluations, as every M-th episode is evaluated.
+            rows.append(row(method, seed, 2 * episode, labels - 1))
+            rows.append({**row(method, seed, 2 * episode + 1, labels, success), "eval_mazes": 10})
+    return rows
+
+
+def test_learning_per_label_metrics_on_a_crafted_episodes_csv(tmp_path):
+    from antmaze_hirl.experiments.results_folder import read_rows, rows_to_csv
+
+    path = tmp_path / "episodes.csv"
+    path.write_text(rows_to_csv(crafted_rows()))
+    summary = summarise(read_rows(path), ["dagger", "noise"])
+    dagger, noise = summary["dagger"], summary["noise"]
+    # Curves start at (0 labels, 0 success) and are linear between evaluations.
+    assert dagger["success_at_labels"]["100"]["per_seed"] == pytest.approx([0.4, 0.5])
+    assert dagger["success_at_labels"]["200"]["per_seed"] == pytest.approx([0.6 + 0.2 / 3, 0.5 + 0.2 * 2 / 3])
+    assert dagger["success_at_labels"]["400"] == {
+        "median": None, "min": None, "max": None, "per_seed": [None, None], "seeds_reached": 0
+    }  # fmt: skip
+    assert noise["success_at_labels"]["100"]["per_seed"] == pytest.approx([0.525, 0.4125])
+    assert noise["success_at_labels"]["400"]["median"] == pytest.approx(0.6)
+    assert noise["success_at_labels"]["400"]["seeds_reached"] == 1
+    # L = 200, the smallest final label count (noise seed 0); trapezoids by hand.
+    assert noise["normalised_auc"]["label_horizon"] == 200
+    assert dagger["normalised_auc"]["per_seed"] == pytest.approx([76.66667 / 200, 81.66667 / 200], abs=1e-6)
+    assert noise["normalised_auc"]["per_seed"] == pytest.approx([0.51, 0.3425])
+    assert dagger["normalised_auc"]["median"] == pytest.approx((0.383333 + 0.408333) / 2, abs=1e-6)
+    # Final success: 8/10 and 7/10, pooled 15/20, each with its Wilson interval.
+    final = dagger["final_success"]
+    assert (final["median"], final["min"], final["max"]) == pytest.approx((0.75, 0.7, 0.8))
+    assert final["per_seed"][0]["wilson_95"] == pytest.approx([0.4902, 0.9433], abs=1e-4)
+    assert final["pooled"]["successes"] == 15 and final["pooled"]["episodes"] == 20
+    assert final["pooled"]["wilson_95"] == pytest.approx([0.5313, 0.8881], abs=1e-4)
+    # Paired by seed against plain DAgger.
+    versus = noise["vs_dagger"]
+    assert versus["final_success"]["differences"] == pytest.approx([0.1, -0.1])
+    assert versus["normalised_auc"]["differences"] == pytest.approx([0.51 - 0.383333, 0.3425 - 0.408333], abs=1e-6)
+    assert versus["success_at_400_labels"]["pairs"] == 0 and versus["success_at_400_labels"]["wilcoxon_p"] is None
+    assert "vs_dagger" not in dagger
+    # Secondary: labels to first reach 60%.
+    assert dagger["cost_to_60_percent"] == {"median": 200.0, "seeds_reached": 2}
+
+
+def test_curve_figures_reject_a_non_positive_label_count():
+    from antmaze_hirl.experiments import normalised_auc, success_at_labels
+
+    trial = [row("a", 0, 0, 50, 0.5)]
+    assert success_at_labels(trial, 50) == 0.5 and success_at_labels(trial, 51) is None
+    with pytest.raises(ValueError, match="label budget must be > 0, got 0"):
+        success_at_labels(trial, 0)
+    with pytest.raises(ValueError, match="label horizon must be > 0, got -5"):
+        normalised_auc(trial, -5)
+
+
+def test_wilson_intervals_and_paired_test_against_known_values():
+    from antmaze_hirl.experiments import paired_comparison, wilson_interval
+
+    assert wilson_interval(8, 10) == pytest.approx((0.4902, 0.9433), abs=1e-4)
+    assert wilson_interval(0, 10) == pytest.approx((0.0, 0.2775), abs=1e-4)
+    assert wilson_interval(85, 100) == pytest.approx((0.7672, 0.9069), abs=1e-4)
+    with pytest.raises(ValueError, match=r"successes must lie in \[0, 10\], got 11"):
+        wilson_interval(11, 10)
+    # Five seeds all better: the exact two-sided signed-rank p is 2/32, its floor with 5 pairs.
+    better = paired_comparison([0.9, 0.8, 0.7, 0.95, 0.85], [0.8, 0.6, 0.67, 0.9, 0.5])
+    assert better["wilcoxon_p"] == pytest.approx(0.0625)
+    assert paired_comparison([0.5, 0.6], [0.5, 0.6])["wilcoxon_p"] == 1.0
+    with pytest.raises(ValueError, match="equal lengths, got 2 and 1"):
+        paired_comparison([0.5, 0.6], [0.5])
+
+
+def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
+    one = dataclasses.replace(TINY, episodes=1)
+    summary = run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
+    provenance = json.loads((tmp_path / "provenance.json").read_text())
+    assert summary["provenance"] == provenance and provenance["earlier"] == []
+    assert set(provenance["packages"]) >= {"torch", "numpy", "gymnasium", "gymnasium-robotics", "mujoco"}
+    assert provenance["torch_threads"] == th.get_num_threads() and provenance["cpu_model"] is not None
+    run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)  # same code: resumes
+    other = {**provenance, "git_commit": "0" * 40, "source_sha256": "1" * 64}
+    (tmp_path / "provenance.json").write_text(json.dumps(other))
+    current = provenance["git_commit"]
+    with pytest.raises(ValueError, match=f"other code \\(commit {'0' * 40}\\), this is commit {current}"):
+        run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
+    run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False, allow_code_change=True)
+    resumed = json.loads((tmp_path / "provenance.json").read_text())
+    assert resumed["source_sha256"] == provenance["source_sha256"]
+    assert [writer["git_commit"] for writer in resumed["earlier"]] == ["0" * 40]
+    (tmp_path / "provenance.json").unlink()  # as a folder written before provenance was recorded
+    with pytest.raises(ValueError, match="recorded no provenance"):
+        run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
+
+
+def test_a_curve_of_one_point_gets_a_marker(tmp_path):
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from antmaze_hirl.experiments.plots import draw_band
+
+    fig, ax = plt.subplots()
+    single = draw_band(ax, np.array([10.0]), np.array([[0.4], [0.6]]), "one")
+    several = draw_band(ax, np.array([10.0, 20.0]), np.array([[0.4, 0.5], [0.6, 0.7]]), "two")
+    assert single.get_marker() == "o" and several.get_marker() in (None, "None", "")
+    plt.close(fig)

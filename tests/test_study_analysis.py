@@ -188,7 +188,7 @@ def test_episode_columns_are_the_documented_server_format():
 def test_plot_panels_marks_a_one_point_curve():
     from matplotlib.figure import Figure
 
-    from antmaze_hirl.experiments.plots import _band
+    from antmaze_hirl.experiments.plots import draw_band as _band
 
     ax = Figure().add_subplot()
     _band(ax, np.array([1.0]), np.array([[0.5], [0.7]]), "one evaluation")

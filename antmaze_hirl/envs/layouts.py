@@ -55,6 +55,32 @@ class MazeLayout:
         """The layout as a gymnasium-robotics ``maze_map`` of ``1`` (wall) and ``0`` (free)."""
         return walls_to_maze_map(self.walls)
 
+    def canonical(self) -> str:
+        """The layout as one string: see :func:`canonical_layout`."""
+        return canonical_layout(self)
+
+
+def wall_grid_string(walls: np.ndarray) -> str:
+    """The wall grid alone as one string: rows of ``1`` (wall) and ``0`` (free) joined by ``/``.
+
+    For example ``11111/10001/10101/10001/11111``. Two layouts with the same string differ only in
+    their start and goal cells.
+    """
+    return "/".join("".join("1" if cell else "0" for cell in row) for row in np.asarray(walls, dtype=bool))
+
+
+def canonical_layout(layout: MazeLayout) -> str:
+    """The layout as one string: :func:`wall_grid_string` with ``S`` at the start cell and ``G`` at the goal cell.
+
+    For example ``11111/1S001/10101/100G1/11111``: row 0 (the top border) first, ``1`` wall, ``0``
+    free. This is the form of the ``layout`` columns of an experiment's ``episodes.csv`` and
+    ``eval_layouts.csv``. A layout whose start is its goal (no generator draws one) shows ``G`` there.
+    """
+    rows = [list(row) for row in wall_grid_string(layout.walls).split("/")]
+    for (r, c), mark in ((layout.start_cell, "S"), (layout.goal_cell, "G")):
+        rows[r][c] = mark
+    return "/".join("".join(row) for row in rows)
+
 
 def walls_to_maze_map(walls: np.ndarray) -> list[list[int]]:
     """Converts a boolean wall grid to a gymnasium-robotics ``maze_map`` list of lists."""

@@ -9,9 +9,13 @@ from antmaze_hirl._lazy import lazy_exports
 _EXPORTS = {
     "ExperimentConfig": "antmaze_hirl.experiments.config",
     "cost_to_reach": "antmaze_hirl.experiments.summary",
+    "normalised_auc": "antmaze_hirl.experiments.curves",
+    "paired_comparison": "antmaze_hirl.experiments.uncertainty",
     "run_experiment": "antmaze_hirl.experiments.runner",
     "run_trial": "antmaze_hirl.experiments.runner",
+    "success_at_labels": "antmaze_hirl.experiments.curves",
     "summarise": "antmaze_hirl.experiments.summary",
+    "wilson_interval": "antmaze_hirl.experiments.uncertainty",
 }
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
+from antmaze_hirl.envs.layout_splits import LayoutSplit
 
 DEFAULT_METHODS = ("dagger", "noise", "multi_policy", "reward")
 """Every query strategy of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`, the paper's four methods."""
@@ -33,6 +34,12 @@ BODY_DEFAULTS: dict[str, BodyDefaults] = {
 """Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's."""
 
 
+SELECTION_SEED = 3_000_000
+"""With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
+range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
+the 2,000,000 on of ``benchmarks/select_low_level.py``'s mazes, which chose the shipped ant low level."""
+
+
 @dataclass(frozen=True)
 class ExperimentConfig:
     """Settings shared by every (method, seed) trial.
@@ -50,6 +57,15 @@ class ExperimentConfig:
         mixing: ``"blend"`` or ``"switch"``.
         expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
             shipped low level reaches 2 m subgoals far more reliably than 4 m ones (README).
+        held_out_layouts: Hold the evaluation mazes out by construction
+            (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
+            periodic evaluations from the ``"selection"`` part (seeds from :data:`SELECTION_SEED`: the
+            same ``eval_episodes`` mazes every time, a fixed set; about 50 is the intended size), the
+            final evaluation from the ``"eval"`` part (seeds from ``HELD_OUT_SEED``), so no evaluation
+            maze shares its wall grid with a training maze and the two evaluation sets share none
+            either. ``False`` (the default, kept so that the committed results folders, which lack this
+            setting, still read as what they are): every maze is drawn from the whole family, held out
+            by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
     """
 
     body: str = "point"
@@ -63,6 +79,7 @@ class ExperimentConfig:
     decay: float = 2.0
     mixing: str = "blend"
     expert_max_distance: float | None = None
+    held_out_layouts: bool = False
 
     def __post_init__(self) -> None:
         body_spec(self.body)
@@ -80,3 +97,23 @@ class ExperimentConfig:
             raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
         if self.mixing not in ("blend", "switch"):
             raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
+        if not isinstance(self.held_out_layouts, bool):
+            raise ValueError(f"held_out_layouts must be True or False, got {self.held_out_layouts!r}")
+
+
+def evaluation_sets(config: ExperimentConfig) -> dict[str, tuple[LayoutSplit, int, int]]:
+    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}``.
+
+    The split restricts the mazes only with ``held_out_layouts`` (:func:`~antmaze_hirl.experiments.runner.make_env`).
+    """
+    from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED  # here: the CLI imports this module without torch
+
+    if config.held_out_layouts:
+        return {
+            "periodic": ("selection", SELECTION_SEED, config.eval_episodes),
+            "final": ("eval", HELD_OUT_SEED, config.final_eval_episodes),
+        }
+    return {
+        "periodic": ("eval", HELD_OUT_SEED, config.eval_episodes),
+        "final": ("eval", HELD_OUT_SEED, config.final_eval_episodes),
+    }

@@ -24,10 +24,23 @@ def _per_seed(rows: Sequence[dict[str, Any]], method: str, key: str, evaluated_o
     return np.array([values[:length] for values in trials.values()])
 
 
-def _band(ax: Any, x: np.ndarray, values: np.ndarray, label: str) -> None:
-    # A line through one point draws nothing: a lone point (e.g. a single evaluation) gets a marker.
-    line = ax.plot(x, np.median(values, axis=0), label=label, marker="o" if len(x) == 1 else None)[0]
-    ax.fill_between(x, values.min(axis=0), values.max(axis=0), color=line.get_color(), alpha=0.2)
+def draw_band(ax: Any, x: np.ndarray, values: np.ndarray, label: str) -> Any:
+    """Draws the median over seeds (rows of ``values``) against ``x``, with a min-max band.
+
+    A curve of one point gets a marker and a min-max error bar: a one-point line and band draw nothing.
+
+    Returns:
+        The median's ``Line2D``.
+    """
+    single = len(x) == 1
+    line = ax.plot(x, np.median(values, axis=0), label=label, marker="o" if single else None)[0]
+    if single:
+        median = np.median(values, axis=0)
+        spread = [median - values.min(axis=0), values.max(axis=0) - median]
+        ax.errorbar(x, median, yerr=spread, color=line.get_color(), capsize=3, linestyle="none")
+    else:
+        ax.fill_between(x, values.min(axis=0), values.max(axis=0), color=line.get_color(), alpha=0.2)
+    return line
 
 
 def plot_panels(
@@ -47,10 +60,10 @@ def plot_panels(
             continue
         episodes = np.median(_per_seed(rows, method, "episode", evaluated_only=True), axis=0) + 1
         cost = np.median(_per_seed(rows, method, "cumulative_expert_cost", evaluated_only=True), axis=0)
-        _band(axes[0], episodes, success, method)
-        _band(axes[1], cost, success, method)
+        draw_band(axes[0], episodes, success, method)
+        draw_band(axes[1], cost, success, method)
         attempts = _per_seed(rows, method, "attempts", evaluated_only=False)
-        _band(axes[2], np.arange(1, attempts.shape[1] + 1), attempts, method)
+        draw_band(axes[2], np.arange(1, attempts.shape[1] + 1), attempts, method)
     labels = [
         ("episode", "learner-only success rate"),
         ("cumulative expert cost (labels)", "learner-only success rate"),

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import json
 import math
 import multiprocessing
 import time
@@ -21,29 +18,35 @@ from tqdm.auto import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
-from antmaze_hirl.dagger.strategies import make_strategy
-from antmaze_hirl.experiments.config import ExperimentConfig
-from antmaze_hirl.experiments.plots import plot_panels
-from antmaze_hirl.experiments.summary import summarise
+from antmaze_hirl.dagger.strategies import STRATEGIES, make_strategy
+from antmaze_hirl.envs.layout_splits import LayoutSplit
+from antmaze_hirl.envs.layouts import canonical_layout
+from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.experiments.config import ExperimentConfig, evaluation_sets
+from antmaze_hirl.experiments.provenance import code_provenance
+from antmaze_hirl.experiments.results_folder import (
+    COLUMNS,
+    check_resumable,
+    read_rows,
+    rows_to_csv,
+    trial_path,
+    write_reports,
+)
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
-from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
+from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_policy
 
-COLUMNS = (
-    "method",
-    "seed",
-    "episode",
-    "success",
-    "expert_cost",
-    "cumulative_expert_cost",
-    "attempts",
-    "low_level_steps",
-    "beta",
-    "dataset_size",
-    "removed",
-    "eval_success",
-    "eval_attempts",
-)
+__all__ = [
+    "ExperimentConfig",
+    "check_methods",
+    "evaluation_layouts",
+    "low_level_identity",
+    "make_env",
+    "read_rows",
+    "run_and_save_trial",
+    "run_experiment",
+    "run_trial",
+]
 
 
 def low_level_identity(body: str, low_level: Any = None) -> str:
@@ -58,9 +61,34 @@ def low_level_identity(body: str, low_level: Any = None) -> str:
     return f"callable:{named.__module__}.{named.__qualname__}"  # weights unknown: only what it is is checked
 
 
-def make_env(config: ExperimentConfig, low_level: Any = None) -> gym.Env:
-    """The high-level env of the experiment."""
-    return gym.make(f"antmaze_hirl/{config.body.capitalize()}Maze-v0", maze_size=config.maze_size, low_level=low_level)
+def make_env(config: ExperimentConfig, low_level: Any = None, *, split: LayoutSplit | None = None) -> gym.Env:
+    """The high-level env of the experiment, drawing its mazes from the part ``split`` if given.
+
+    ``split`` is ignored unless ``config.held_out_layouts``: the original protocol draws every maze
+    from the whole family.
+    """
+    settings = {"maze_size": config.maze_size, "low_level": low_level}
+    if config.held_out_layouts and split is not None:
+        if low_level is None:  # what the registered ids plug in by default
+            settings["low_level"] = ShippedPolicyController(config.body)
+        return SplitMazeEnv(config.body, split=split, **settings)
+    return gym.make(f"antmaze_hirl/{config.body.capitalize()}Maze-v0", **settings)
+
+
+def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[dict[str, Any]]:
+    """Every evaluation maze of the experiment: ``{"set", "seed", "layout"}`` rows for ``eval_layouts.csv``.
+
+    Each maze is the one an evaluation episode with that seed plays: the same env is reset with
+    the same seed (an episode's layout is drawn at reset, before the policy acts).
+    """
+    rows = []
+    for name, (split, first_seed, mazes) in evaluation_sets(config).items():
+        env = make_env(config, low_level, split=split)
+        for seed in range(first_seed, first_seed + mazes):
+            env.reset(seed=seed)
+            rows.append({"set": name, "seed": seed, "layout": canonical_layout(env.unwrapped.layout)})
+        env.close()
+    return rows
 
 
 def run_trial(
@@ -70,7 +98,13 @@ def run_trial(
 
     Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation.
     """
-    env, eval_env = make_env(config, low_level), make_env(config, low_level)
+    env = make_env(config, low_level, split="train")
+    sets = evaluation_sets(config)
+    # One env per part: the original protocol plays both sets on one env, as it always has.
+    by_split = {
+        split: make_env(config, low_level, split=split) for split in dict.fromkeys(s for s, _, _ in sets.values())
+    }
+    eval_envs = {name: by_split[split] for name, (split, _, _) in sets.items()}
     rng = np.random.default_rng(seed)
     trainer = DAggerTrainer(
         env=env,
@@ -86,18 +120,25 @@ def run_trial(
     rows: list[dict[str, Any]] = []
     for episode in range(config.episodes):
         record = trainer.run_episode()
-        row = {"method": method, "seed": seed, **record.to_dict(), "cumulative_expert_cost": trainer.total_expert_cost}
+        row = {
+            "method": method,
+            "seed": seed,
+            **record.to_dict(),
+            "cumulative_expert_cost": trainer.total_expert_cost,
+            # The trainer drew this episode's maze and reset the env with it.
+            "layout": canonical_layout(env.unwrapped.layout),
+        }
         final = episode == config.episodes - 1
         if final or (episode + 1) % config.eval_every == 0:
-            result = evaluate_high_level(
-                trainer.policy, eval_env, episodes=config.final_eval_episodes if final else config.eval_episodes
-            )
-            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"])
+            name = "final" if final else "periodic"
+            _, first_seed, mazes = sets[name]
+            result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
+            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
         rows.append({column: row.get(column, math.nan) for column in COLUMNS})
         if progress is not None:
             progress.update(1)
-    env.close()
-    eval_env.close()
+    for opened in (env, *by_split.values()):
+        opened.close()
     return rows
 
 
@@ -114,31 +155,10 @@ def run_and_save_trial(
     start = time.perf_counter()
     rows = run_trial(method, seed, config, low_level=low_level, progress=progress)
     seconds = round(time.perf_counter() - start, 1)
-    path = _trial_path(out_dir, method, seed)
+    path = trial_path(out_dir, method, seed)
     atomic_write_json(path.with_suffix(".json"), {"seconds": seconds})
     atomic_write_text(path, rows_to_csv(rows))  # last: its existence marks the trial done
     return path
-
-
-def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
-    """The rows as CSV text with :data:`COLUMNS`."""
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=COLUMNS)
-    writer.writeheader()
-    writer.writerows(rows)
-    return buffer.getvalue()
-
-
-def read_rows(path: Path) -> list[dict[str, Any]]:
-    """Rows of a trial CSV with numbers parsed back."""
-    with path.open() as handle:
-        return [
-            {
-                key: value if key == "method" else (value == "True" if key == "success" else float(value))
-                for key, value in row.items()
-            }
-            for row in csv.DictReader(handle)
-        ]
 
 
 def run_experiment(
@@ -150,6 +170,7 @@ def run_experiment(
     low_level: Any = None,
     progress_bar: bool = True,
     jobs: int = 1,
+    allow_code_change: bool = False,
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
 
@@ -162,38 +183,38 @@ def run_experiment(
     beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
     unit of resumption).
 
-    Writes ``out_dir/episodes.csv``, ``out_dir/summary.json`` and ``out_dir/panels.png``.
+    Writes ``out_dir/episodes.csv``, ``out_dir/eval_layouts.csv`` (every evaluation maze:
+    :func:`evaluation_layouts`), ``out_dir/summary.json`` and ``out_dir/panels.png``.
 
     ``out_dir/config.json`` records the settings and the low level's identity
-    (:func:`low_level_identity`); a folder holding finished trials made with either different is
-    refused, not resumed.
+    (:func:`low_level_identity`), ``out_dir/provenance.json`` the code and machine
+    (:func:`~antmaze_hirl.experiments.provenance.code_provenance`; earlier writers under ``earlier``).
+    A folder holding finished trials made with other settings or another low level is refused, not
+    resumed; so is one written by other code (another commit, source or package versions, or none
+    recorded) unless ``allow_code_change``.
 
     Raises:
-        ValueError: On an unknown method, or a results folder made with other settings or low level.
+        ValueError: On no or an unknown or repeated method, ``seeds`` or ``jobs`` below 1, or a results
+            folder made with other settings, low level or (without ``allow_code_change``) code.
     """
-    for method in methods:
-        make_strategy(method)
+    check_methods(methods)
+    if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
+        raise ValueError(f"seeds must be an int >= 1 (trials per method, seeds 0..seeds-1), got {seeds!r}")
     if jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
     out_dir = Path(out_dir)
     config_path = out_dir / "config.json"
     settings = asdict(config)
     low_level_id = low_level_identity(config.body, low_level)
-    if config_path.exists() and any((out_dir / "trials").glob("*.csv")):
-        saved = json.loads(config_path.read_text())
-        saved_low_level = saved.pop("low_level", "not recorded (a folder from before low levels were recorded)")
-        # Settings added since the folder was written count at their defaults.
-        saved = {**asdict(ExperimentConfig(body=config.body)), **saved}
-        if saved != settings:
-            raise ValueError(f"{out_dir} holds results made with {saved}, not {settings}; use another --out")
-        if saved_low_level != low_level_id:
-            raise ValueError(
-                f"{out_dir} holds results made with low-level policy {saved_low_level}, not {low_level_id}: "
-                "use another --out, or delete its trials/ to rerun them with this low level"
-            )
+    provenance = code_provenance()
+    earlier = check_resumable(out_dir, config, low_level_id, provenance, allow_code_change)
     atomic_write_json(config_path, {**settings, "low_level": low_level_id})
+    atomic_write_json(out_dir / "provenance.json", {**provenance, "earlier": earlier})
+    atomic_write_text(
+        out_dir / "eval_layouts.csv", rows_to_csv(evaluation_layouts(config, low_level), ("set", "seed", "layout"))
+    )
     # Seed-major order: an interrupted run still has every method on its first seeds.
-    pending = [(m, s) for s in range(seeds) for m in methods if not _trial_path(out_dir, m, s).exists()]
+    pending = [(m, s) for s in range(seeds) for m in methods if not trial_path(out_dir, m, s).exists()]
     with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
         if jobs == 1:
             for method, seed in pending:
@@ -220,20 +241,16 @@ def run_experiment(
     return write_reports(out_dir, methods, seeds, config)
 
 
-def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: ExperimentConfig) -> dict[str, Any]:
-    """Writes ``episodes.csv``, ``summary.json`` and ``panels.png`` from the finished trials on disk."""
-    done = [(m, s) for m in methods for s in range(seeds) if _trial_path(out_dir, m, s).exists()]
-    rows = [row for m, s in done for row in read_rows(_trial_path(out_dir, m, s))]
-    atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
-    timed = sorted(_trial_path(out_dir, m, s).with_suffix(".json") for m, s in done)
-    # Finished trials only (a parallel worker writes its .json just before its .csv); older folders lack some.
-    seconds = {path.stem: json.loads(path.read_text())["seconds"] for path in timed if path.exists()}
-    recorded = json.loads((out_dir / "config.json").read_text())  # the settings and the low level's identity
-    summary = {"config": recorded, "methods": summarise(rows, methods), "trial_seconds": seconds}
-    atomic_write_json(out_dir / "summary.json", summary)
-    plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
-    return summary
+def check_methods(methods: Sequence[str]) -> None:
+    """Raises unless ``methods`` names at least one method, each known and none twice.
 
-
-def _trial_path(out_dir: Path, method: str, seed: int) -> Path:
-    return out_dir / "trials" / f"{method}_seed{seed}.csv"
+    Raises:
+        ValueError: Naming the offending value and the known methods.
+    """
+    if isinstance(methods, str) or not methods:
+        raise ValueError(f"methods must be a non-empty list of names from {sorted(STRATEGIES)}, got {methods!r}")
+    for method in methods:
+        make_strategy(method)
+    repeated = sorted({method for method in methods if list(methods).count(method) > 1})
+    if repeated:
+        raise ValueError(f"methods name {repeated} more than once, got {list(methods)}")

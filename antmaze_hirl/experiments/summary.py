@@ -1,4 +1,21 @@
-"""Per-method figures of an experiment: final success over seeds, expert cost, attempts."""
+"""Per-method figures of an experiment: learning per label, final success with intervals, comparisons.
+
+For each method, over its seeds (median, min and max):
+
+* ``final_success``: learner-only success at the final evaluation, per seed and pooled over seeds, each
+  with its 95% Wilson interval (:mod:`~antmaze_hirl.experiments.uncertainty`);
+* ``success_at_labels``: success at 100, 200 and 400 labels, interpolated on each trial's
+  success-vs-labels curve (:mod:`~antmaze_hirl.experiments.curves`); ``None`` for a seed whose labels
+  end before the budget. An interpolation between two evaluations is no count of successes, so these
+  carry the spread over seeds, not a Wilson interval;
+* ``normalised_auc``: the area under that curve over ``[0, L]`` labels divided by ``L``, where ``L``
+  (``label_horizon``) is the smallest final label count over every trial summarised together (all
+  methods and seeds of one experiment, so of one body), so that every trial's curve covers it and all
+  methods are compared over the same labels;
+* ``vs_<baseline>``: each figure paired by seed against plain DAgger
+  (:func:`~antmaze_hirl.experiments.uncertainty.paired_comparison`, a Wilcoxon signed-rank test);
+* secondary: mean expert cost and attempts per episode, and labels to first reach 60% success.
+"""
 
 from __future__ import annotations
 
@@ -8,13 +25,20 @@ from typing import Any
 
 import numpy as np
 
+from antmaze_hirl.experiments.curves import LABEL_BUDGETS, final_labels, normalised_auc, success_at_labels
+from antmaze_hirl.experiments.uncertainty import paired_comparison, pooled_rate, rate_with_interval
+
 TARGET_SUCCESS = 0.6
+BASELINE = "dagger"
+
+Trial = list[dict[str, Any]]
 
 
-def _spread(values: list[float]) -> dict[str, float | None]:
-    if not values:
+def _spread(values: Sequence[float | None]) -> dict[str, float | None]:
+    present = [value for value in values if value is not None]
+    if not present:
         return {"median": None, "min": None, "max": None}
-    return {"median": float(np.median(values)), "min": float(np.min(values)), "max": float(np.max(values))}
+    return {"median": float(np.median(present)), "min": float(np.min(present)), "max": float(np.max(present))}
 
 
 def cost_to_reach(rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS) -> float | None:
@@ -25,30 +49,109 @@ def cost_to_reach(rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS
     return None
 
 
-def summarise(rows: Sequence[dict[str, Any]], methods: Sequence[str]) -> dict[str, dict[str, Any]]:
-    """Summary per method over seeds.
+def trials_by_method(rows: Sequence[dict[str, Any]], methods: Sequence[str]) -> dict[str, dict[int, Trial]]:
+    """Rows grouped as ``{method: {seed: rows in episode order}}`` (methods without rows map to ``{}``)."""
+    grouped: dict[str, dict[int, Trial]] = {method: {} for method in methods}
+    for row in rows:
+        if row["method"] in grouped:
+            grouped[row["method"]].setdefault(int(row["seed"]), []).append(row)
+    return grouped
 
-    For each method: final learner-only success (median, min, max over seeds), mean expert cost per
-    episode, mean attempts per episode, and the cumulative expert cost to first reach 60% learner-only
-    success (median over the seeds that reached it, and how many did).
+
+def final_success(trials: dict[int, Trial]) -> dict[str, Any]:
+    """Final learner-only success: spread over seeds, each seed's rate and the pooled rate with Wilson intervals.
+
+    The number of mazes comes from each final row's ``eval_mazes``; where that is missing (results
+    written before it was recorded) the intervals are ``None``.
     """
-    summary = {}
-    for method in methods:
-        trials: dict[float, list[dict[str, Any]]] = {}
-        for row in rows:
-            if row["method"] == method:
-                trials.setdefault(row["seed"], []).append(row)
+    finals = {seed: trial[-1] for seed, trial in trials.items()}
+    mazes = {seed: row.get("eval_mazes", math.nan) for seed, row in finals.items()}
+    counted = all(not math.isnan(n) for n in mazes.values())
+    per_seed = [
+        {
+            "seed": seed,
+            **(
+                rate_with_interval(row["eval_success"], int(mazes[seed]))
+                if counted
+                else {"rate": float(row["eval_success"])}
+            ),
+        }
+        for seed, row in finals.items()
+    ]
+    pooled = None
+    if counted:
+        pooled = pooled_rate(sum(seed["successes"] for seed in per_seed), sum(int(n) for n in mazes.values()))
+    return {**_spread([seed["rate"] for seed in per_seed]), "per_seed": per_seed, "pooled": pooled}
+
+
+def _per_seed_figures(trial: Trial, horizon: float) -> dict[str, float | None]:
+    figures = {f"success_at_{budget}_labels": success_at_labels(trial, budget) for budget in LABEL_BUDGETS}
+    return {
+        "final_success": float(trial[-1]["eval_success"]),
+        **figures,
+        "normalised_auc": normalised_auc(trial, horizon),
+    }
+
+
+def summarise(
+    rows: Sequence[dict[str, Any]], methods: Sequence[str], *, baseline: str = BASELINE
+) -> dict[str, dict[str, Any]]:
+    """Summary per method over seeds (see the module docstring for each figure).
+
+    Args:
+        rows: Every episode row of one experiment (the columns of ``episodes.csv``).
+        methods: Methods to summarise, in order; one without rows gets ``{"seeds": 0}``.
+        baseline: The method the others are compared with, when it has rows.
+    """
+    grouped = trials_by_method(rows, methods)
+    every_trial = [trial for trials in grouped.values() for trial in trials.values()]
+    horizon = min((final_labels(trial) for trial in every_trial), default=0.0)
+    figures = {
+        method: {seed: _per_seed_figures(trial, horizon) for seed, trial in trials.items()} if horizon > 0 else {}
+        for method, trials in grouped.items()
+    }
+    summary: dict[str, dict[str, Any]] = {}
+    for method, trials in grouped.items():
         if not trials:
             summary[method] = {"seeds": 0}
             continue
-        finals = [trial[-1]["eval_success"] for trial in trials.values()]
+        per_seed = figures[method]
         costs = [cost for trial in trials.values() if (cost := cost_to_reach(trial)) is not None]
         method_rows = [row for trial in trials.values() for row in trial]
         summary[method] = {
             "seeds": len(trials),
-            "final_success": _spread(finals),
+            "final_success": final_success(trials),
+            "success_at_labels": {str(budget): _budget_figure(per_seed, budget) for budget in LABEL_BUDGETS},
+            "normalised_auc": {
+                **_spread([seed["normalised_auc"] for seed in per_seed.values()]),
+                "per_seed": [seed["normalised_auc"] for seed in per_seed.values()],
+                "label_horizon": horizon,
+            },
             "mean_expert_cost_per_episode": float(np.mean([row["expert_cost"] for row in method_rows])),
             "mean_attempts_per_episode": float(np.mean([row["attempts"] for row in method_rows])),
             "cost_to_60_percent": {"median": float(np.median(costs)) if costs else None, "seeds_reached": len(costs)},
         }
+        if method != baseline and figures.get(baseline):
+            summary[method][f"vs_{baseline}"] = _compare(per_seed, figures[baseline])
     return summary
+
+
+def _budget_figure(per_seed: dict[int, dict[str, float | None]], budget: int) -> dict[str, Any]:
+    values = [seed[f"success_at_{budget}_labels"] for seed in per_seed.values()]
+    return {**_spread(values), "per_seed": values, "seeds_reached": sum(value is not None for value in values)}
+
+
+def _compare(per_seed: dict[int, dict[str, float | None]], baseline: dict[int, dict[str, float | None]]) -> dict:
+    comparisons = {}
+    for figure in next(iter(per_seed.values())):
+        # Pairs: the seeds both methods ran and both reached (a budget beyond a trial's labels is no value).
+        seeds = [
+            seed
+            for seed in sorted(per_seed)
+            if seed in baseline and per_seed[seed][figure] is not None and baseline[seed][figure] is not None
+        ]
+        comparisons[figure] = {
+            "seeds": seeds,
+            **paired_comparison([per_seed[s][figure] for s in seeds], [baseline[s][figure] for s in seeds]),
+        }
+    return comparisons

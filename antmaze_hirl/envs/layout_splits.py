@@ -1,0 +1,87 @@
+"""A fixed partition of maze layouts into training, evaluation and selection parts, by wall grid.
+
+A layout's part is decided by its wall grid alone (:func:`~antmaze_hirl.envs.layouts.wall_grid_string`,
+start and goal ignored): ``int(sha256(wall_grid_string).hexdigest(), 16) % 10`` is 0 or 1 for
+``"eval"`` (20%), 2 for ``"selection"`` (10%), 3 to 9 for ``"train"`` (70%). Hashing the walls rather
+than the whole layout means an evaluation maze never shares its walls with a training maze, not merely
+its start and goal: a small family repeats wall grids often (the ant's 3x3 mazes have about 48), so a
+partition by seed or by the full layout still evaluates on walls seen in training. The partition is a
+pure function of the grid, the same on every machine and in every run.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable
+from typing import Literal, get_args
+
+import numpy as np
+
+from antmaze_hirl.envs.layouts import MazeLayout, wall_grid_string
+
+LayoutSplit = Literal["train", "eval", "selection"]
+SPLITS: tuple[LayoutSplit, ...] = get_args(LayoutSplit)
+_BUCKETS: dict[int, LayoutSplit] = {0: "eval", 1: "eval", 2: "selection", **dict.fromkeys(range(3, 10), "train")}
+
+DEFAULT_MAX_TRIES = 1000
+"""Draws :func:`sample_layout_in_split` makes before giving up: the eval part (20%) misses 1000 in a row
+with probability 0.8**1000, so a failure means the family has no grid in that part, not bad luck."""
+
+
+def check_split(split: str) -> LayoutSplit:
+    """Returns ``split`` if it names a part.
+
+    Raises:
+        ValueError: Naming the value and the parts, otherwise.
+    """
+    if split not in SPLITS:
+        raise ValueError(f"unknown layout split {split!r}; choose one of {list(SPLITS)}")
+    return split  # type: ignore[return-value]
+
+
+def wall_grid_split(walls: np.ndarray) -> LayoutSplit:
+    """The part a wall grid belongs to (see the module docstring)."""
+    digest = hashlib.sha256(wall_grid_string(walls).encode()).hexdigest()
+    return _BUCKETS[int(digest, 16) % 10]
+
+
+def layout_split(layout: MazeLayout) -> LayoutSplit:
+    """The part ``layout`` belongs to: that of its wall grid."""
+    return wall_grid_split(layout.walls)
+
+
+def sample_layout_in_split(
+    sample: Callable[[np.random.Generator], MazeLayout],
+    rng: np.random.Generator,
+    split: LayoutSplit,
+    *,
+    max_tries: int = DEFAULT_MAX_TRIES,
+) -> MazeLayout:
+    """Draws layouts with ``sample(rng)`` until one falls in ``split`` (rejection sampling).
+
+    The result follows the family's own distribution restricted to the part, and the same ``rng``
+    state gives the same layout.
+
+    Args:
+        sample: The family's sampler, e.g. a high-level env's ``sample_layout``.
+        rng: Source of the draws.
+        split: ``"train"``, ``"eval"`` or ``"selection"``.
+        max_tries: Draws before giving up.
+
+    Raises:
+        ValueError: On an unknown split or ``max_tries < 1``, or when no draw fell in ``split``
+            (naming how many distinct wall grids were seen: the family has too few for the partition).
+    """
+    check_split(split)
+    if max_tries < 1:
+        raise ValueError(f"max_tries must be >= 1, got {max_tries}")
+    seen: set[str] = set()
+    for _ in range(max_tries):
+        layout = sample(rng)
+        if layout_split(layout) == split:
+            return layout
+        seen.add(wall_grid_string(layout.walls))
+    raise ValueError(
+        f"no layout in split {split!r} in {max_tries} draws ({len(seen)} distinct wall grids seen, all in "
+        "other parts): this maze family has too few wall grids to hold out; use a larger maze_size"
+    )

@@ -1,0 +1,80 @@
+"""Uncertainty of the reported figures: Wilson intervals of success rates, paired tests over seeds."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy.stats import wilcoxon
+from statsmodels.stats.proportion import proportion_confint
+
+CONFIDENCE = 0.95
+
+
+def wilson_interval(successes: int, trials: int) -> tuple[float, float]:
+    """The 95% Wilson score interval of ``successes`` out of ``trials`` (statsmodels).
+
+    Raises:
+        ValueError: If ``trials < 1`` or ``successes`` is outside ``[0, trials]``.
+    """
+    if trials < 1:
+        raise ValueError(f"trials must be >= 1, got {trials}")
+    if not 0 <= successes <= trials:
+        raise ValueError(f"successes must lie in [0, {trials}], got {successes}")
+    low, high = proportion_confint(successes, trials, alpha=1 - CONFIDENCE, method="wilson")
+    # At 0 or all successes statsmodels' bound lands a rounding error (~1e-17) off 0 or 1.
+    return max(0.0, float(low)), min(1.0, float(high))
+
+
+def rate_with_interval(rate: float, trials: int) -> dict[str, Any]:
+    """A success rate measured on ``trials`` episodes, with its count and 95% Wilson interval.
+
+    Raises:
+        ValueError: If ``rate * trials`` is not a whole count (to 1e-6) or ``trials < 1``.
+    """
+    successes = round(rate * trials)
+    if abs(successes - rate * trials) > 1e-6:
+        raise ValueError(f"success rate {rate} is no whole count of {trials} episodes")
+    return pooled_rate(successes, trials)
+
+
+def pooled_rate(successes: int, trials: int) -> dict[str, Any]:
+    """``{"rate", "successes", "episodes", "wilson_95"}`` of ``successes`` out of ``trials``."""
+    return {
+        "rate": successes / trials,
+        "successes": successes,
+        "episodes": trials,
+        "wilson_95": list(wilson_interval(successes, trials)),
+    }
+
+
+def paired_comparison(values: Sequence[float], baseline: Sequence[float]) -> dict[str, Any]:
+    """Paired comparison of a method with the baseline over seeds (pair i = seed i of each).
+
+    The test is scipy's two-sided Wilcoxon signed-rank test (exact for few seeds, no normality
+    assumption). With 5 seeds its smallest possible p-value is 2/32 = 0.0625, so 5 seeds cannot show a
+    difference at the 5% level whatever the data; the per-seed differences are given to read directly.
+
+    Returns:
+        ``{"pairs", "differences" (value - baseline), "median_difference", "wilcoxon_p"}``; the p-value is
+        ``None`` with fewer than 2 pairs and 1.0 when every difference is 0.
+
+    Raises:
+        ValueError: If the two sequences differ in length.
+    """
+    if len(values) != len(baseline):
+        raise ValueError(f"paired values need equal lengths, got {len(values)} and {len(baseline)}")
+    differences = np.asarray(values, dtype=float) - np.asarray(baseline, dtype=float)
+    if len(differences) < 2:
+        p_value = None
+    elif not differences.any():
+        p_value = 1.0  # scipy divides by a zero variance here; no difference is no evidence of one
+    else:
+        p_value = float(wilcoxon(values, baseline, alternative="two-sided").pvalue)
+    return {
+        "pairs": len(differences),
+        "differences": [float(d) for d in differences],
+        "median_difference": float(np.median(differences)) if len(differences) else None,
+        "wilcoxon_p": p_value,
+    }
