@@ -236,8 +236,8 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser.add_argument(
         "--held-out-layouts",
         action="store_true",
-        help="draw training, periodic-evaluation and final-evaluation mazes from disjoint sets of wall grids "
-        "(antmaze_hirl.envs.layout_splits); default: held out by seed only, as the committed results",
+        help="draw the training mazes and both evaluation sets from disjoint sets of wall grids (see "
+        "antmaze_hirl.envs.layout_splits); without it mazes are held out by seed only, as in the committed results",
     )
     parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial")
     parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes")

@@ -17,7 +17,8 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.config import DEFAULT_METHODS
 from antmaze_hirl.sb3_ext import CheckpointError
 
-COMMANDS = ["demo", "train-low", "eval-low", "experiment"]
+COMMANDS = ["demo", "train-low", "eval-low", "experiment", "study"]
+STUDY_COMMANDS = ["init", "serve", "simulate", "analyze", "export"]
 
 
 def help_text(argv, capsys):
@@ -30,6 +31,14 @@ def help_text(argv, capsys):
 def test_the_subcommand_list_is_the_one_the_parser_builds():
     assert len(SUBCOMMANDS) == len(COMMANDS)
     assert set(build_parser()._subparsers._group_actions[0].choices) == set(COMMANDS)
+
+
+@pytest.mark.parametrize("command", STUDY_COMMANDS)
+def test_every_study_command_help_has_an_example_and_no_markup(command, capsys):
+    text = help_text(["study", command], capsys)
+    assert f"usage: antmaze-hirl study {command}" in text
+    assert "``" not in text
+    assert "example:\n  " in text and f"antmaze-hirl study {command} " in text.split("example:")[1]
 
 
 @pytest.mark.parametrize("command", COMMANDS)
