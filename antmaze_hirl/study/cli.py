@@ -22,7 +22,9 @@ def add_study_parser(subparsers: argparse._SubParsersAction, formatter_class: ty
         epilog="example:\n  antmaze-hirl study init runs/study --body point --participants 4\n"
         "  antmaze-hirl study serve runs/study\n  antmaze-hirl study analyze runs/study",
     )
-    commands = parser.add_subparsers(dest="study_command", required=True, metavar="COMMAND", help="study step")
+    commands = parser.add_subparsers(
+        dest="study_command", required=True, metavar="COMMAND", help="study step (required)"
+    )
     _add_init(commands, formatter_class)
     _add_serve(commands, formatter_class)
     _add_simulate(commands, formatter_class)
