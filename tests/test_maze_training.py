@@ -21,7 +21,7 @@ def flip(env):
 
 
 def test_maze_resets_draw_random_layouts_of_the_given_sizes_with_goals_in_sight():
-    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, 4], goal_radius=3.0)
+    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, np.int64(4)], goal_radius=3.0)
     env.reset(seed=0)
     shapes, layouts = set(), set()
     for _ in range(30):
@@ -84,6 +84,7 @@ def test_chained_and_placed_resets_keep_the_current_walls():
         ({"maze_sizes": []}, r"maze_sizes must be a non-empty list of integers >= 2, got \[\]"),
         ({"maze_sizes": [3, 1]}, r"maze_sizes must be .* got \[3, 1\]"),
         ({"maze_sizes": [2.5]}, r"maze_sizes must be .* got \[2.5\]"),
+        ({"maze_sizes": [True]}, r"maze_sizes must be .* got \[True\]"),
         ({"maze_wall_fraction": 1.0}, r"maze_wall_fraction must lie in \[0, 1\), got 1.0"),
         ({"flip_penalty": -0.5}, "flip_penalty must be >= 0, got -0.5"),
     ],

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 from typing import Any, ClassVar
 
 import numpy as np
@@ -186,14 +187,14 @@ class ReachEnv(GoalEnv, EzPickle):
         if not 0 <= maze_probability <= 1:
             raise ValueError(f"maze_probability must lie in [0, 1], got {maze_probability}")
         sizes = tuple(maze_sizes)
-        if not sizes or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 2 for n in sizes):
+        if not sizes or not all(isinstance(n, numbers.Integral) and not isinstance(n, bool) and n >= 2 for n in sizes):
             raise ValueError(f"maze_sizes must be a non-empty list of integers >= 2, got {maze_sizes!r}")
         if not 0 <= maze_wall_fraction < 1:
             raise ValueError(f"maze_wall_fraction must lie in [0, 1), got {maze_wall_fraction}")
         if flip_penalty < 0:
             raise ValueError(f"flip_penalty must be >= 0, got {flip_penalty}")
         self.maze_probability = float(maze_probability)
-        self.maze_sizes = sizes
+        self.maze_sizes = tuple(int(n) for n in sizes)
         self.maze_wall_fraction = float(maze_wall_fraction)
         self.flip_penalty = float(flip_penalty)
         self.reward_type = reward_type
