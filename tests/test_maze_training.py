@@ -141,3 +141,27 @@ def test_the_committed_maze_config_loads_and_trains_in_mazes():
     env.reset(seed=0)
     shapes = {env.reset()[0] and env.walls.shape for _ in range(20)}
     assert len(shapes) > 1
+
+
+@pytest.mark.parametrize(("penalty", "relabelled_reward"), [(0.0, 1.0), (1.0, 0.0)])
+def test_her_relabelled_flip_steps_carry_the_penalty(penalty, relabelled_reward):
+    config = load_config("ant").replace(
+        buffer_size=100, env_kwargs={"terminate_on_flip": True, "flip_penalty": penalty}
+    )
+    model = make_model("ant", "td3", config, seed=0)
+    buffer, dim = model.replay_buffer, model.observation_space["observation"].shape[0]
+
+    def obs(x):
+        return {"observation": np.full((1, dim), x), "achieved_goal": [[x, 0.0]], "desired_goal": [[9.0, 9.0]]}
+
+    # One 3-step episode that ends in a flip; "future" relabelling of the flip step can only pick its own
+    # next achieved goal, so its relabelled reward is 1 (reached) minus the penalty.
+    for step in range(3):
+        flipped = step == 2
+        buffer.add(obs(step), obs(step + 1), np.zeros((1, 8)), np.zeros(1), np.array([flipped]), [{"flipped": flipped}])
+    batch = buffer.sample(400, env=None)
+    is_flip_step = batch.observations["achieved_goal"][:, 0].numpy() == 2.0
+    relabelled = batch.observations["desired_goal"][:, 0].numpy() == 3.0
+    rewards = batch.rewards[:, 0].numpy()[is_flip_step & relabelled]
+    assert len(rewards) > 0
+    np.testing.assert_array_equal(rewards, relabelled_reward)
