@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from typing import Any, ClassVar
 
@@ -12,7 +13,7 @@ from gymnasium_robotics.core import GoalEnv
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
-from antmaze_hirl.envs.layouts import MazeMap, validate_maze_map
+from antmaze_hirl.envs.layouts import MazeMap, generate_layout, validate_maze_map
 from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
 
 REWARD_TYPES = ("sparse", "dense")
@@ -63,6 +64,22 @@ def _goal_option(options: dict[str, Any]) -> Any:
     return options["goal"]
 
 
+def flipped_flags(info: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``info["flipped"]`` as floats of ``shape``: one dict (one step) or a sequence of dicts (HER's batch).
+
+    Raises:
+        ValueError: If ``info`` is neither, or holds another number of dicts than ``shape`` needs.
+    """
+    if isinstance(info, dict):
+        return np.full(shape, float(bool(info.get("flipped", False))))
+    if not isinstance(info, list | tuple | np.ndarray) or not all(isinstance(item, dict) for item in info):
+        raise ValueError(f"info must be a dict or a sequence of dicts, got {type(info).__name__}: {info!r:.80}")
+    flags = np.array([float(bool(item.get("flipped", False))) for item in info])
+    if flags.size != int(np.prod(shape)):
+        raise ValueError(f"info holds {flags.size} dicts for {int(np.prod(shape))} rewards of shape {shape}")
+    return flags.reshape(shape)
+
+
 class ReachEnv(GoalEnv, EzPickle):
     """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
 
@@ -104,6 +121,19 @@ class ReachEnv(GoalEnv, EzPickle):
             Never after a flip. Default 0: every episode starts from rest.
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
+        maze_probability: Chance that a from-rest ``reset()`` without ``start_xy``/``goal`` options
+            rebuilds the walls from a random layout (:func:`~antmaze_hirl.envs.layouts.generate_layout`)
+            instead of ``maze_map``: the high level walks the body between walls, the open map never
+            shows any. Subgoals stay in line of sight, so they hug walls and corners. Default 0: always
+            ``maze_map``.
+        maze_sizes: Free cells per side of those random layouts, one drawn uniformly per layout
+            (the ant experiment's mazes are 3x3). Each at least 2.
+        maze_wall_fraction: Share of interior cells that random layouts turn into walls, in ``[0, 1)``
+            (default 0.3, as :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv`).
+        flip_penalty: Ant only: subtracted from the reward of every step on which the body is flipped
+            (``info["flipped"]``), so a flip costs more than a timeout. With ``terminate_on_flip`` that
+            is the terminal step only. HER relabelling needs the infos kept (SB3's
+            ``copy_info_dict=True``) to see it. Default 0.
 
     """
 
@@ -124,6 +154,10 @@ class ReachEnv(GoalEnv, EzPickle):
         chain_probability: float = 0.0,
         include_contact_forces: bool = False,
         render_mode: str | None = None,
+        maze_probability: float = 0.0,
+        maze_sizes: tuple[int, ...] | list[int] = (3,),
+        maze_wall_fraction: float = 0.3,
+        flip_penalty: float = 0.0,
     ) -> None:
         EzPickle.__init__(
             self,
@@ -139,6 +173,10 @@ class ReachEnv(GoalEnv, EzPickle):
             chain_probability=chain_probability,
             include_contact_forces=include_contact_forces,
             render_mode=render_mode,
+            maze_probability=maze_probability,
+            maze_sizes=maze_sizes,
+            maze_wall_fraction=maze_wall_fraction,
+            flip_penalty=flip_penalty,
         )
         spec = body_spec(body)
         self.body = body
@@ -167,13 +205,27 @@ class ReachEnv(GoalEnv, EzPickle):
             raise ValueError(f"chain_probability must lie in [0, 1], got {chain_probability}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        if not 0 <= maze_probability <= 1:
+            raise ValueError(f"maze_probability must lie in [0, 1], got {maze_probability}")
+        sizes = tuple(maze_sizes)
+        if not sizes or not all(isinstance(n, numbers.Integral) and not isinstance(n, bool) and n >= 2 for n in sizes):
+            raise ValueError(f"maze_sizes must be a non-empty list of integers >= 2, got {maze_sizes!r}")
+        if not 0 <= maze_wall_fraction < 1:
+            raise ValueError(f"maze_wall_fraction must lie in [0, 1), got {maze_wall_fraction}")
+        if flip_penalty < 0:
+            raise ValueError(f"flip_penalty must be >= 0, got {flip_penalty}")
+        self.maze_probability = float(maze_probability)
+        self.maze_sizes = tuple(int(n) for n in sizes)
+        self.maze_wall_fraction = float(maze_wall_fraction)
+        self.flip_penalty = float(flip_penalty)
         self.reward_type = reward_type
         self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
         self.terminate_on_flip = terminate_on_flip and body == "ant"
         self.chain_probability = float(chain_probability)
         self.render_mode = render_mode
         self._include_contact_forces = include_contact_forces
-        self.sim = MazeSimulator(body, validate_maze_map(maze_map), include_contact_forces=include_contact_forces)
+        self._base_walls = validate_maze_map(maze_map)
+        self.sim = MazeSimulator(body, self._base_walls, include_contact_forces=include_contact_forces)
         self.action_space = spaces.Box(-1.0, 1.0, shape=self.sim.action_space.shape, dtype=np.float32)
         xy_space = spaces.Box(-np.inf, np.inf, shape=(2,), dtype=np.float64)
         self.observation_space = spaces.Dict(
@@ -215,9 +267,16 @@ class ReachEnv(GoalEnv, EzPickle):
         walls = np.asarray(walls, dtype=bool)
         if walls.shape != self.sim.walls.shape:
             raise ValueError(f"new layout has shape {walls.shape}, this env's spaces are for {self.sim.walls.shape}")
-        if not np.array_equal(walls, self.sim.walls):
+        self._load_walls(walls)
+
+    def _load_walls(self, walls: np.ndarray) -> None:
+        # Any shape: the spaces hold xy and body state only. The random layouts of maze_probability
+        # differ in size from maze_map; a rebuild takes ~4 ms, against ~0.3 ms per ant step and far
+        # more per gradient update, so every from-rest episode may draw a new one.
+        if walls.shape != self.sim.walls.shape or not np.array_equal(walls, self.sim.walls):
             self.sim.close()
             self.sim = MazeSimulator(self.body, walls, include_contact_forces=self._include_contact_forces)
+            self._renderer = BirdseyeRenderer(self.sim.geometry)
             self._started = False  # the new simulator holds no body to chain from
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
@@ -238,8 +297,10 @@ class ReachEnv(GoalEnv, EzPickle):
         super().reset(seed=seed)
         if self._chains(seed, options):
             return self.set_goal(self.sample_goal()), {"is_success": self._is_success()}
-        self._started = True
         options = options or {}
+        if all(options.get(key) is None for key in ("start_xy", "goal_xy", "goal")):
+            self._draw_walls()  # only a free draw may move it to another maze: given positions are in this one
+        self._started = True  # after the walls: a rebuild clears it
         geometry = self.sim.geometry
         if options.get("start_xy") is not None:
             start = as_free_point(options["start_xy"], geometry, self.walls, "start_xy")
@@ -257,6 +318,19 @@ class ReachEnv(GoalEnv, EzPickle):
             return False
         # Draw only when chaining is on, so chain_probability=0 keeps the random stream unchanged.
         return self.chain_probability > 0 and bool(self.np_random.random() < self.chain_probability)
+
+    def _draw_walls(self) -> None:
+        # Draw only when mazes are on, so maze_probability=0 keeps the random stream (and figures) unchanged.
+        if self.maze_probability == 0:
+            return
+        if self.np_random.random() < self.maze_probability:
+            size = self.maze_sizes[self.np_random.integers(len(self.maze_sizes))]
+            layout = generate_layout(
+                self.np_random, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
+            )
+            self._load_walls(np.asarray(layout.walls))
+        else:
+            self._load_walls(self._base_walls)
 
     def set_goal(self, goal: np.ndarray) -> dict[str, np.ndarray]:
         """Gives the body a new subgoal and restarts the step count (one new sub-episode of H steps).
@@ -295,18 +369,26 @@ class ReachEnv(GoalEnv, EzPickle):
         self._body_obs, self._xy = self.sim.step(np.clip(action, -1.0, 1.0) * self.action_scale)
         self._steps += 1
         obs = self._get_obs()
-        info = {"is_success": self._is_success()}
+        info = {"is_success": self._is_success(), "flipped": self.sim.is_flipped}
         reward = float(self.compute_reward(self._xy, self._goal, info))
         terminated = self.terminate_on_flip and self.sim.is_flipped
         truncated = self._steps >= self.horizon
         return obs, reward, terminated, truncated, info
 
     def compute_reward(self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any) -> np.ndarray:
-        """Reward for (batches of) achieved and desired goals; vectorised over leading axes for HER."""
+        """Reward for (batches of) achieved and desired goals; vectorised over leading axes for HER.
+
+        ``info`` is one step's dict or, from HER, a sequence of them; with ``flip_penalty`` their
+        ``"flipped"`` entries (missing = not flipped) cost ``flip_penalty`` each.
+        """
         distance = np.linalg.norm(np.asarray(achieved_goal) - np.asarray(desired_goal), axis=-1)
         if self.reward_type == "dense":
-            return np.exp(-distance)
-        return (distance <= self.distance_threshold).astype(np.float64)
+            reward = np.exp(-distance)
+        else:
+            reward = (distance <= self.distance_threshold).astype(np.float64)
+        if self.flip_penalty > 0:
+            reward = reward - self.flip_penalty * flipped_flags(info, np.shape(distance))
+        return reward
 
     def render(self) -> np.ndarray | None:
         """Bird's-eye RGB image (rows, cols, 3) of walls, body and subgoal when ``render_mode="rgb_array"``."""

@@ -71,7 +71,13 @@ def make_model(
         gradient_steps=config.gradient_steps,
         action_noise=NormalActionNoise(np.zeros(n_actions), config.action_noise_std * np.ones(n_actions)),
         replay_buffer_class=HerReplayBuffer,
-        replay_buffer_kwargs={"n_sampled_goal": config.n_sampled_goal, "goal_selection_strategy": "future"},
+        replay_buffer_kwargs={
+            "n_sampled_goal": config.n_sampled_goal,
+            "goal_selection_strategy": "future",
+            # HER recomputes relabelled rewards from the stored infos; without a copy it passes empty
+            # dicts and a flip penalty would vanish from 80% of the samples. Copying costs time, so only then.
+            "copy_info_dict": config.env_kwargs.get("flip_penalty", 0) > 0,
+        },
         policy_kwargs=policy_kwargs(config),
         tensorboard_log=tensorboard_log,
         seed=seed,

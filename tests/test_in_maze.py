@@ -1,0 +1,67 @@
+"""benchmarks/in_maze.py: step limits, outcome classes, Wilson intervals and a scaled-limit episode."""
+
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from conftest import StillController
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+import in_maze
+
+from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.experts import PathOracle
+
+
+def test_step_limit_scales_with_the_shortest_path_around_walls():
+    walls = validate_maze_map("u")  # rows 1-3 free, a wall at (2, 1)-(2, 2): the path goes round it
+    assert in_maze.step_limit(walls, (1, 1), (3, 1), 4.0) == 6 * 4 * in_maze.STEPS_PER_METRE  # 6 grid steps, 24 m
+    assert in_maze.step_limit(walls, (1, 1), (1, 2), 4.0) == in_maze.MIN_STEPS  # 4 m: the floor
+
+
+def test_is_frozen_looks_at_the_last_subgoals_only():
+    still = [np.full((3, 2), 5.0) for _ in range(5)]
+    walked = [np.array([[0.0, 0.0], [4.0, 0.0]]), *still]
+    assert in_maze.is_frozen(walked)  # the walk was 6 subgoals ago
+    assert not in_maze.is_frozen(walked, subgoals=6)
+    assert not in_maze.is_frozen([np.array([[0.0, 0.0], [0.6, 0.0], [0.0, 1.0]])])
+    with pytest.raises(ValueError, match="at least one subgoal, got none"):
+        in_maze.is_frozen([])
+
+
+def test_outcomes_are_exclusive_success_first_then_flip():
+    still, moving = [np.zeros((2, 2))], [np.array([[0.0, 0.0], [3.0, 0.0]])]
+    assert in_maze.outcome({"is_success": True, "flipped": True}, still) == "success"
+    assert in_maze.outcome({"is_success": False, "flipped": True}, still) == "flip"
+    assert in_maze.outcome({"is_success": False, "flipped": False}, still) == "frozen"
+    assert in_maze.outcome({"is_success": False, "flipped": False}, moving) == "timeout"
+
+
+def test_wilson_interval_matches_the_closed_form():
+    z2 = 1.959963984540054**2
+    low, high = in_maze.wilson_interval(0, 10)
+    assert low == pytest.approx(0.0, abs=1e-12) and high == pytest.approx(z2 / (10 + z2))
+    low, high = in_maze.wilson_interval(84, 100)
+    assert low < 0.84 < high and high - low == pytest.approx(0.1437, abs=1e-3)
+
+
+def test_a_still_ant_on_the_u_map_runs_out_of_its_scaled_budget_frozen():
+    env = in_maze.MazeEpisodeRecorder(
+        gym.make("antmaze_hirl/AntMaze-v0", maze_map="u", low_level=StillController()), scale_step_limit=True
+    )
+    figures = in_maze.evaluate_family(env, PathOracle.for_env(env, max_distance=2.0), episodes=1, seed=0)
+    layout = env.unwrapped.layout
+    assert env.max_steps == in_maze.step_limit(layout.walls, layout.start_cell, layout.goal_cell, 4.0)
+    assert figures["mean_low_level_steps"] == env.max_steps
+    assert (figures["successes"], figures["flips"], figures["frozen"], figures["timeouts"]) == (0, 0, 1, 0)
+    assert figures["subgoals"] == len(env.paths)
+    assert figures["success_ci95"][0] == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(ValueError, match="episodes must be >= 1, got 0"):
+        in_maze.evaluate_family(env, PathOracle.for_env(env), episodes=0, seed=0)
+
+
+def test_unknown_family_is_named():
+    with pytest.raises(ValueError, match="unknown maze family 'open'"):
+        in_maze.family_env("open", StillController())
