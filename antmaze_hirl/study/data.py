@@ -31,8 +31,8 @@ EPISODE_COLUMNS: tuple[str, ...] = (
 """Columns of ``episodes.csv``, in order."""
 
 _BOOLEAN_COLUMNS = ("practice", "success")
-_TEXT_COLUMNS = ("participant", "method", "label")
-_OPTIONAL_COLUMNS = ("eval_success", "eval_attempts", "seconds_per_label")
+_TEXT_COLUMNS = ("participant", "method", "label", "layout")
+_OPTIONAL_COLUMNS = ("eval_success", "eval_attempts", "seconds_per_label", "eval_mazes")
 _NUMBER_COLUMNS = tuple(c for c in EPISODE_COLUMNS if c not in _BOOLEAN_COLUMNS + _TEXT_COLUMNS)
 
 

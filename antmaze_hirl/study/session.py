@@ -41,6 +41,7 @@ from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic
 from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
 from antmaze_hirl.dagger.strategies import make_strategy
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
+from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
@@ -519,6 +520,7 @@ class ParticipantSession:
             "seed": trial.seed,
             **record.to_dict(),
             "cumulative_expert_cost": state.trainer.total_expert_cost,
+            "layout": canonical_layout(self._env.unwrapped.layout),  # still this episode's maze
             "seconds_per_label": (
                 round(float(np.mean(self._episode_label_seconds)), 4) if self._episode_label_seconds else ""
             ),
@@ -528,7 +530,7 @@ class ParticipantSession:
         if final or (episode + 1) % self.settings.eval_every == 0:
             episodes = self.settings.final_eval_episodes if final else self.settings.eval_episodes
             result = evaluate_high_level(state.trainer.policy, self._eval_env, episodes=episodes)
-            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"])
+            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=episodes)
         state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
         state.successes += int(record.success)
         state.demonstrations.success.append(bool(record.success))
