@@ -20,7 +20,9 @@ LAYERS = (
     ("experts", "sb3_ext", "rollout"),
     ("plotting", "registration"),
     ("dagger",),
-    ("experiments", "study"),
+    # Both are the architecture's layer 4; the study kit runs the experiment protocol, so it sits on top.
+    ("experiments",),
+    ("study",),
     ("demo",),
     ("cli", "__init__"),
 )

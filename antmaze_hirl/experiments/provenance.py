@@ -11,15 +11,13 @@ from typing import Any
 
 import torch
 
-import antmaze_hirl
-
 PACKAGES = ("antmaze_hirl", "torch", "numpy", "gymnasium", "gymnasium-robotics", "mujoco", "stable-baselines3")
 """Distributions whose versions a results folder records and a resume must match."""
 
 CODE_KEYS = ("git_commit", "source_sha256", "packages")
 """The provenance entries that identify the code; the machine's (CPU, threads) are recorded only."""
 
-_PACKAGE_DIR = Path(antmaze_hirl.__file__).parent
+_PACKAGE_DIR = Path(__file__).resolve().parents[1]  # antmaze_hirl/, without importing the root
 
 
 def _git(*args: str) -> str | None:
