@@ -10,6 +10,7 @@ Ray is an optional extra (``pip install -e .[ray]``), imported only when the ``r
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import multiprocessing
 import os
@@ -71,6 +72,56 @@ class Backend:
         import torch  # here: the CLI builds a Backend without loading torch
 
         return torch.get_num_threads()
+
+
+def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    """Adds ``--backend``, ``--jobs``, ``--address`` and ``--cpus-per-trial`` (alias ``--threads``) to ``parser``.
+
+    :func:`backend_settings` turns them into :func:`~antmaze_hirl.experiments.runner.run_experiment`'s keywords.
+    """
+    parser.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default=None,
+        help="where the trials run: serial (one after the other, here), processes (--jobs local processes) or "
+        "ray (one Ray task each, on a local Ray instance or the cluster at --address; needs "
+        f"{RAY_EXTRA}) (default: processes with --jobs above 1, else serial)",
+    )
+    parser.add_argument(
+        "--jobs",
+        type=_positive_int,
+        default=None,
+        help="trials at once with processes or ray (default: processes one per core, ray what the cluster's CPUs take)",
+    )
+    parser.add_argument(
+        "--address",
+        default=None,
+        help="with --backend ray: the cluster to join, as 'ray start --head' prints it, e.g. 10.0.0.5:6379 "
+        "(default: $RAY_ADDRESS, else a local Ray instance)",
+    )
+    parser.add_argument(
+        "--cpus-per-trial",
+        "--threads",
+        dest="cpus_per_trial",
+        type=_positive_int,
+        default=1,
+        help="CPU cores per trial: its torch threads, and the CPUs Ray reserves for it",
+    )
+
+
+def backend_settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The keywords of :func:`~antmaze_hirl.experiments.runner.run_experiment` set by :func:`add_backend_arguments`."""
+    return {"backend": args.backend, "jobs": args.jobs, "address": args.address, "cpus_per_trial": args.cpus_per_trial}
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an int >= 1, got {text!r}")
+    return value
 
 
 def import_ray() -> Any:
