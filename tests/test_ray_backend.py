@@ -117,3 +117,8 @@ def test_a_worker_with_another_low_level_is_refused(local_ray, tmp_path, monkeyp
     with pytest.raises(ValueError, match=r"worker .* has low_level sha256:[0-9a-f]{16}, the driver sha256:0{16}"):
         run_experiment(METHODS, SEEDS, SMALL, tmp_path, progress_bar=False, backend="ray")
     assert not list((tmp_path / "trials").glob("*.csv")), "a refused worker's trial was saved"
+
+
+def test_a_trial_needing_more_cpus_than_any_node_has_is_refused(local_ray, tmp_path):
+    with pytest.raises(ValueError, match=r"a task's 3 CPUs \(--cpus-per-trial\) are more than any Ray node has \(2\)"):
+        run_experiment(METHODS, SEEDS, SMALL, tmp_path, progress_bar=False, backend="ray", cpus_per_trial=3)

@@ -36,7 +36,8 @@ class Backend:
         kind: ``"serial"`` (one at a time in this process), ``"processes"`` (a pool of fresh local
             interpreters) or ``"ray"`` (one Ray task each).
         jobs: Tasks at once. ``None``: serial 1; processes one per core; ray as many as the Ray
-            cluster's CPUs take (a local Ray instance gets ``os.cpu_count()`` CPUs).
+            cluster's CPUs take (a local Ray instance gets ``os.cpu_count()`` CPUs; with ``jobs``,
+            ``jobs * cpus_per_task``).
         address: Ray only: the cluster to join (``ray start --head`` prints it); ``None`` reads
             ``RAY_ADDRESS``, and without it starts a local Ray instance.
         cpus_per_task: CPU cores a task uses: its torch threads, and the ``num_cpus`` Ray reserves for
@@ -209,13 +210,33 @@ def _run_on_ray(
 ) -> None:
     ray = import_ray()
     started_here = not ray.is_initialized()  # a caller's own ray.init() (and its settings) is kept
-    threads = backend.threads()
     if started_here:
         address = backend.address or os.environ.get("RAY_ADDRESS") or None
-        # A local instance gets an explicit CPU count (Ray's default counts every core of the machine,
-        # beside whatever else runs there); joining a cluster must not set one (the cluster has its own).
-        cpus = {} if address else {"num_cpus": (backend.jobs or os.cpu_count() or 1) * threads}
-        ray.init(address=address, include_dashboard=False, logging_level="WARNING", **cpus)
+        # A local instance gets an explicit CPU count: jobs trials' worth, else the machine's cores (and at
+        # least one trial's); joining a cluster must not set one (the cluster has its own).
+        threads = backend.threads()
+        local_cpus = backend.jobs * threads if backend.jobs else max(os.cpu_count() or 1, threads)
+        ray.init(
+            address=address,
+            include_dashboard=False,
+            logging_level="WARNING",
+            **({} if address else {"num_cpus": local_cpus}),
+        )
+    try:
+        _run_ray_tasks(ray, function, tasks, backend, on_result)
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def _run_ray_tasks(
+    ray: Any, function: Callable[..., Any], tasks: Mapping[Key, tuple[Any, ...]], backend: Backend, on_result: Callable
+) -> None:
+    threads = backend.threads()
+    # Ray would keep a task that no node can hold waiting for ever (for an autoscaler to add one).
+    largest = max((node["Resources"].get("CPU", 0) for node in ray.nodes() if node["Alive"]), default=0)
+    if largest < threads:
+        raise ValueError(f"a task's {threads} CPUs (--cpus-per-trial) are more than any Ray node has ({largest:g})")
     # A worker that dies is a system failure, retried; an exception the task raises is not: a seeded
     # task raises it again on every attempt, so a retry would only delay the error.
     submit = ray.remote(num_cpus=threads, max_retries=backend.max_retries, retry_exceptions=False)(in_worker)
@@ -241,8 +262,6 @@ def _run_on_ray(
     finally:
         for ref in running:  # an interrupt: nothing keeps running for a driver that is gone
             ray.cancel(ref, force=True)
-        if started_here:
-            ray.shutdown()
 
 
 def _ray_result(ray: Any, ref: Any) -> Any:
