@@ -13,6 +13,7 @@ from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.bodies import BODY_SPECS
+from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, DEFAULT_METHODS, ExperimentConfig
 from antmaze_hirl.sb3_ext.config import ALGOS
 
@@ -204,7 +205,8 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         subparsers,
         "experiment",
         "DAgger with active learning: the paper's protocol over methods and seeds",
-        "antmaze-hirl experiment --body ant --maze-size 3 --expert-max-distance 2 --out runs/ant --jobs 2",
+        "antmaze-hirl experiment --body ant --maze-size 3 --expert-max-distance 2 --out runs/ant --jobs 2\n"
+        "  antmaze-hirl experiment --body point --out runs/point --backend ray --address 10.0.0.5:6379",
     )
     parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
     parser.add_argument(
@@ -239,8 +241,7 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         help="draw the training mazes and both evaluation sets from disjoint sets of wall grids (see "
         "antmaze_hirl.envs.layout_splits); without it mazes are held out by seed only, as in the committed results",
     )
-    parser.add_argument("--threads", type=int, default=1, help="torch CPU threads per trial")
-    parser.add_argument("--jobs", type=int, default=1, help="trials run in parallel processes")
+    add_backend_arguments(parser)
     parser.add_argument(
         "--allow-code-change",
         action="store_true",
@@ -260,7 +261,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         raise ValueError(f"--methods names no method, got {args.methods!r}; give a comma-separated list")
     if args.seeds < 1:
         raise ValueError(f"--seeds must be >= 1 (trials per method), got {args.seeds}")
-    torch.set_num_threads(args.threads)
+    torch.set_num_threads(args.cpus_per_trial)
     config = ExperimentConfig(
         body=args.body,
         episodes=args.episodes,
@@ -279,8 +280,8 @@ def _run_experiment(args: argparse.Namespace) -> int:
         config,
         args.out,
         progress_bar=not args.no_progress,
-        jobs=args.jobs,
         allow_code_change=args.allow_code_change,
+        **backend_settings(args),
     )
     for method, figures in summary["methods"].items():
         final = figures["final_success"]

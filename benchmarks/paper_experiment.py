@@ -19,7 +19,8 @@ Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) 
 runs 3x3 mazes with 2 m oracle subgoals. At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps
 (25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
 
-Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--seeds 5] [--episodes 100] [--maze-size N]
+Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
+           [--address RAY_ADDRESS] [--cpus-per-trial 1] [--seeds 5] [--episodes 100] [--maze-size N]
            [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
            [--held-out-layouts --eval-episodes 50] [--allow-code-change]
        python benchmarks/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
@@ -35,6 +36,7 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, DEFAULT_METHODS, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
@@ -105,7 +107,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS))
-    parser.add_argument("--jobs", type=int, default=1, help="trials in parallel processes (2 on 2 cores)")
+    add_backend_arguments(parser)  # --backend, --jobs (2 on 2 cores), --address, --cpus-per-trial
     parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment_BODY")
     parser.add_argument("--maze-size", type=int, default=None, help="default: BODY_DEFAULTS")
     parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
@@ -126,7 +128,7 @@ def main() -> None:
         help="with --ceiling-only: a candidate low-level policy .zip instead of the shipped one",
     )
     args = parser.parse_args()
-    torch.set_num_threads(1)
+    torch.set_num_threads(args.cpus_per_trial)
     settings = {
         **BODY_DEFAULTS[args.body],
         **{
@@ -149,7 +151,9 @@ def main() -> None:
         return
     out = args.out if args.out is not None else RESULTS / f"paper_experiment_{args.body}"
     methods = [method.strip() for method in args.methods.split(",") if method.strip()]
-    summary = run_experiment(methods, args.seeds, config, out, jobs=args.jobs, allow_code_change=args.allow_code_change)
+    summary = run_experiment(
+        methods, args.seeds, config, out, allow_code_change=args.allow_code_change, **backend_settings(args)
+    )
     summary["goals"] = goals(summary, args.body)
     summary["oracle_success"] = oracle_success(config)
     atomic_write_json(out / "summary.json", summary)

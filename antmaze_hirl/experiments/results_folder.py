@@ -112,7 +112,7 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
     rows = [row for m, s in done for row in with_eval_mazes(read_rows(trial_path(out_dir, m, s)), config)]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
     timed = sorted(trial_path(out_dir, m, s).with_suffix(".json") for m, s in done)
-    # Finished trials only (a parallel worker writes its .json just before its .csv); older folders lack some.
+    # Finished trials only (save_trial writes the .json just before the .csv); older folders lack some.
     seconds = {path.stem: json.loads(path.read_text())["seconds"] for path in timed if path.exists()}
     recorded = json.loads((out_dir / "config.json").read_text())  # the settings and the low level's identity
     provenance = json.loads((out_dir / "provenance.json").read_text())

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import functools
 import math
-import multiprocessing
+import os
+import socket
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -22,8 +23,9 @@ from antmaze_hirl.dagger.strategies import STRATEGIES, make_strategy
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.experiments.backends import Backend, import_ray, run_tasks
 from antmaze_hirl.experiments.config import ExperimentConfig, evaluation_sets
-from antmaze_hirl.experiments.provenance import code_provenance
+from antmaze_hirl.experiments.provenance import code_provenance, source_sha256
 from antmaze_hirl.experiments.results_folder import (
     COLUMNS,
     check_resumable,
@@ -39,6 +41,8 @@ from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_p
 __all__ = [
     "ExperimentConfig",
     "check_methods",
+    "check_worker",
+    "checked_trial",
     "evaluation_layouts",
     "low_level_identity",
     "make_env",
@@ -46,6 +50,9 @@ __all__ = [
     "run_and_save_trial",
     "run_experiment",
     "run_trial",
+    "save_trial",
+    "timed_trial",
+    "worker_identity",
 ]
 
 
@@ -152,9 +159,58 @@ def run_and_save_trial(
     progress: tqdm | None = None,
 ) -> Path:
     """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``."""
+    return save_trial(out_dir, method, seed, *timed_trial(method, seed, config, low_level, progress=progress))
+
+
+def timed_trial(
+    method: str, seed: int, config: ExperimentConfig, low_level: Any = None, *, progress: tqdm | None = None
+) -> tuple[list[dict[str, Any]], float]:
+    """:func:`run_trial`'s rows and its wall time in seconds (rounded to 0.1 s)."""
+    if progress is not None:
+        progress.set_postfix_str(f"{method} seed {seed}")
     start = time.perf_counter()
     rows = run_trial(method, seed, config, low_level=low_level, progress=progress)
-    seconds = round(time.perf_counter() - start, 1)
+    return rows, round(time.perf_counter() - start, 1)
+
+
+def checked_trial(
+    method: str, seed: int, config: ExperimentConfig, low_level: Any, *, expected: dict[str, str]
+) -> tuple[list[dict[str, Any]], float]:
+    """:func:`timed_trial` on a worker, once :func:`check_worker` found the driver's low level and code there."""
+    check_worker(config.body, low_level, expected)
+    return timed_trial(method, seed, config, low_level)
+
+
+def worker_identity(body: str, low_level: Any = None) -> dict[str, str]:
+    """What must be the same on every worker of a grid: the low level's identity and the package's sources.
+
+    Returns:
+        ``{"low_level": low_level_identity(body, low_level), "source_sha256": ...}``
+        (:func:`~antmaze_hirl.experiments.provenance.source_sha256`).
+    """
+    return {"low_level": low_level_identity(body, low_level), "source_sha256": source_sha256()}
+
+
+def check_worker(body: str, low_level: Any, expected: dict[str, str]) -> None:
+    """Raises unless this process has the low level and code of ``expected`` (the driver's :func:`worker_identity`).
+
+    A cluster node with another shipped policy or another version of the package would otherwise
+    mix its trials into the driver's results.
+
+    Raises:
+        ValueError: One line naming the host, what differs, and both values.
+    """
+    found = worker_identity(body, low_level)
+    for name, value in expected.items():
+        if found[name] != value:
+            raise ValueError(
+                f"worker {socket.gethostname()} (pid {os.getpid()}) has {name} {found[name]}, the driver {value}: "
+                "install the same antmaze_hirl (with its shipped policies) on every node"
+            )
+
+
+def save_trial(out_dir: Path, method: str, seed: int, rows: list[dict[str, Any]], seconds: float) -> Path:
+    """Saves a finished trial atomically: its rows in ``trials/<method>_seed<k>.csv``, its wall time beside it."""
     path = trial_path(out_dir, method, seed)
     atomic_write_json(path.with_suffix(".json"), {"seconds": seconds})
     atomic_write_text(path, rows_to_csv(rows))  # last: its existence marks the trial done
@@ -169,19 +225,30 @@ def run_experiment(
     *,
     low_level: Any = None,
     progress_bar: bool = True,
-    jobs: int = 1,
+    jobs: int | None = None,
     allow_code_change: bool = False,
+    backend: str | None = None,
+    address: str | None = None,
+    cpus_per_trial: int | None = None,
+    max_retries: int = 3,
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
 
-    With ``jobs > 1`` the trials run in that many worker processes (each with this process's torch
-    thread count); the numbers are the same as with one job, the recorded trial wall times are
-    those of the busy machine. ``low_level`` must then be picklable (``None``, the shipped policy, is).
-    A worker's error is raised once the trials already running have finished (each is saved).
+    ``backend`` says where the trials run (:class:`~antmaze_hirl.experiments.backends.Backend`):
+    ``"serial"`` one after the other in this process; ``"processes"`` in ``jobs`` local worker
+    processes; ``"ray"`` one Ray task per trial, on a local Ray instance or the cluster at ``address``
+    (or ``RAY_ADDRESS``), a task whose worker died retried up to ``max_retries`` times. ``None``:
+    ``"processes"`` with ``jobs > 1``, else ``"serial"``. Each trial runs with ``cpus_per_trial``
+    torch threads (``None``: this process's count), and Ray reserves that many CPUs for it. The
+    numbers are the same on every backend (each trial is seeded by its own rng); the recorded trial
+    wall times are those of the machine that ran it. Off the serial backend ``low_level`` must be
+    picklable (``None``, the shipped policy, is), and each worker checks that it has the driver's
+    low level and package sources (:func:`check_worker`) before a trial runs. A trial's error is
+    raised once the trials already running have finished (each is saved).
 
-    Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv`` (its wall time
-    beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
-    unit of resumption).
+    Only this process writes: each finished trial is saved atomically, as soon as it finishes, as
+    ``out_dir/trials/<method>_seed<k>.csv`` (its wall time beside it in ``.json``), so an interrupted
+    experiment resumes where it stopped (a trial is the unit of resumption).
 
     Writes ``out_dir/episodes.csv``, ``out_dir/eval_layouts.csv`` (every evaluation maze:
     :func:`evaluation_layouts`), ``out_dir/summary.json`` and ``out_dir/panels.png``.
@@ -194,14 +261,25 @@ def run_experiment(
     recorded) unless ``allow_code_change``.
 
     Raises:
-        ValueError: On no or an unknown or repeated method, ``seeds`` or ``jobs`` below 1, or a results
-            folder made with other settings, low level or (without ``allow_code_change``) code.
+        ValueError: On no or an unknown or repeated method, ``seeds`` or ``jobs`` below 1, an unknown
+            backend or settings it does not take, ``"ray"`` where Ray is not installed, a results
+            folder made with other settings, low level or (without ``allow_code_change``) code, or a
+            worker with another low level or code.
     """
     check_methods(methods)
     if isinstance(seeds, bool) or not isinstance(seeds, int) or seeds < 1:
         raise ValueError(f"seeds must be an int >= 1 (trials per method, seeds 0..seeds-1), got {seeds!r}")
-    if jobs < 1:
+    if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be >= 1, got {jobs}")
+    runner = Backend(
+        kind=backend or ("processes" if jobs is not None and jobs > 1 else "serial"),
+        jobs=jobs,
+        address=address,
+        cpus_per_task=cpus_per_trial,
+        max_retries=max_retries,
+    )
+    if runner.kind == "ray":
+        import_ray()  # before anything is written
     out_dir = Path(out_dir)
     config_path = out_dir / "config.json"
     settings = asdict(config)
@@ -214,30 +292,30 @@ def run_experiment(
         out_dir / "eval_layouts.csv", rows_to_csv(evaluation_layouts(config, low_level), ("set", "seed", "layout"))
     )
     # Seed-major order: an interrupted run still has every method on its first seeds.
-    pending = [(m, s) for s in range(seeds) for m in methods if not trial_path(out_dir, m, s).exists()]
-    with tqdm(total=len(pending) * config.episodes, disable=not progress_bar, desc="experiment", unit="episode") as bar:
-        if jobs == 1:
-            for method, seed in pending:
-                bar.set_postfix_str(f"{method} seed {seed}")
-                run_and_save_trial(method, seed, config, out_dir, low_level=low_level, progress=bar)
-                write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
-        else:
-            # Trials are independent and seeded by their own rng, so a pool gives the same numbers;
-            # spawn: a fresh interpreter per worker (no forked MuJoCo or torch thread state).
-            context = multiprocessing.get_context("spawn")
-            initargs = (torch.get_num_threads(),)
-            pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=torch.set_num_threads, initargs=initargs)
-            try:
-                futures = [
-                    pool.submit(run_and_save_trial, method, seed, config, out_dir, low_level=low_level)
-                    for method, seed in pending
-                ]
-                for future in as_completed(futures):
-                    future.result()  # re-raises a worker's error here
-                    bar.update(config.episodes)
-                    write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
-            finally:
-                pool.shutdown(cancel_futures=True)  # on an error, trials not started are dropped
+    pending = {
+        (m, s): (m, s, config, low_level)
+        for s in range(seeds)
+        for m in methods
+        if not trial_path(out_dir, m, s).exists()
+    }
+    serial = runner.kind == "serial"
+    # Serial: the bar counts episodes (a trial takes minutes); elsewhere trials, as they come back.
+    total, unit = (len(pending) * config.episodes, "episode") if serial else (len(pending), "trial")
+    with tqdm(total=total, disable=not progress_bar, desc="experiment", unit=unit) as bar:
+
+        def save(key: tuple[str, int], result: tuple[list[dict[str, Any]], float]) -> None:
+            save_trial(out_dir, *key, *result)
+            if not serial:
+                bar.update(1)
+            write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
+
+        expected = {"low_level": low_level_id, "source_sha256": provenance["source_sha256"]}
+        trial = (
+            functools.partial(timed_trial, progress=bar)
+            if serial
+            else functools.partial(checked_trial, expected=expected)
+        )
+        run_tasks(trial, pending, runner, save)
     return write_reports(out_dir, methods, seeds, config)
 
 
