@@ -32,14 +32,30 @@ def add_study_parser(subparsers: argparse._SubParsersAction, formatter_class: ty
     _add_export(commands, formatter_class)
 
 
+def _command(
+    commands: argparse._SubParsersAction,
+    formatter_class: type,
+    name: str,
+    *,
+    help: str,  # argparse's own keyword
+    description: str,
+    example: str,
+) -> argparse.ArgumentParser:
+    """One ``study`` subcommand's parser, with its example in the epilog (as every command has)."""
+    return commands.add_parser(
+        name, help=help, description=description, formatter_class=formatter_class, epilog=f"example:\n  {example}"
+    )
+
+
 def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> None:
-    parser = commands.add_parser(
+    parser = _command(
+        commands,
+        formatter_class,
         "init",
         help="write the study plan: counterbalanced method orders, anonymous participants",
         description="Writes DIR/plan.json (each participant's method order from a balanced Latin square, "
         "a practice trial first, neutral method labels) and DIR/settings.json (maze family and trial settings).",
-        formatter_class=formatter_class,
-        epilog="example:\n  antmaze-hirl study init runs/study --body point --methods dagger,noise --participants 4 "
+        example="antmaze-hirl study init runs/study --body point --methods dagger,noise --participants 4 "
         "--episodes 30 --practice 5",
     )
     parser.add_argument("dir", type=Path, help="study folder to create")
@@ -93,13 +109,14 @@ def _run_init(args: argparse.Namespace) -> int:
 
 
 def _add_serve(commands: argparse._SubParsersAction, formatter_class: type) -> None:
-    parser = commands.add_parser(
+    parser = _command(
+        commands,
+        formatter_class,
         "serve",
         help="serve the study page (loopback only by default; prints the URL with its token)",
         description="Serves the study page and its API on uvicorn until Ctrl-C. Everything a participant "
         "does is saved as it happens; a restarted server resumes each participant where they were.",
-        formatter_class=formatter_class,
-        epilog="example:\n  MUJOCO_GL=egl antmaze-hirl study serve runs/study --port 8765",
+        example="MUJOCO_GL=egl antmaze-hirl study serve runs/study --port 8765",
     )
     parser.add_argument("dir", type=Path, help="study folder made by 'study init'")
     parser.add_argument("--host", default="127.0.0.1", help="interface to listen on; others than loopback warn")
@@ -119,13 +136,14 @@ def _run_serve(args: argparse.Namespace) -> int:
 
 
 def _add_simulate(commands: argparse._SubParsersAction, formatter_class: type) -> None:
-    parser = commands.add_parser(
+    parser = _command(
+        commands,
+        formatter_class,
         "simulate",
         help="rehearse the study: the oracle plays participants through the page's HTTP API",
         description="Plays participants with the scripted oracle (plus click noise and reaction delays) "
         "through the same HTTP API the page uses, and answers the questionnaires from a seeded model.",
-        formatter_class=formatter_class,
-        epilog="example:\n  antmaze-hirl study simulate runs/study --participants 3 --noise 0.1 --delay 0.5",
+        example="antmaze-hirl study simulate runs/study --participants 3 --noise 0.1 --delay 0.5",
     )
     parser.add_argument("dir", type=Path, help="study folder made by 'study init'")
     parser.add_argument("--participants", type=int, default=None, help="play the first N participants (default: all)")
@@ -163,14 +181,15 @@ def _run_simulate(args: argparse.Namespace) -> int:
 
 
 def _add_analyze(commands: argparse._SubParsersAction, formatter_class: type) -> None:
-    parser = commands.add_parser(
+    parser = _command(
+        commands,
+        formatter_class,
         "analyze",
         help="write DIR/report/: panels, questionnaire charts, ANOVAs and report.md",
         description="Analyses what the participants did and answered (practice trials left out): the "
         "experiment's panels across participants, NASA-TLX charts, one-way and repeated-measures ANOVAs "
         "with Holm-corrected paired post-hoc tests, seconds per label.",
-        formatter_class=formatter_class,
-        epilog="example:\n  antmaze-hirl study analyze runs/study",
+        example="antmaze-hirl study analyze runs/study",
     )
     parser.add_argument("dir", type=Path, help="study folder")
     parser.set_defaults(handler=_run_analyze)
@@ -185,13 +204,14 @@ def _run_analyze(args: argparse.Namespace) -> int:
 
 
 def _add_export(commands: argparse._SubParsersAction, formatter_class: type) -> None:
-    parser = commands.add_parser(
+    parser = _command(
+        commands,
+        formatter_class,
         "export",
         help="write the collected demonstrations as a Minari dataset (needs the minari extra)",
         description="Writes every labelled high-level step (observations, executed subgoals, the expert's "
         "labels in the step infos, episode boundaries) as a Minari dataset, loadable with minari.load_dataset.",
-        formatter_class=formatter_class,
-        epilog="example:\n  antmaze-hirl study export runs/study --minari antmaze_hirl/study-point-v0",
+        example="antmaze-hirl study export runs/study --minari antmaze_hirl/study-point-v0",
     )
     parser.add_argument("dir", type=Path, help="study folder")
     parser.add_argument("--minari", required=True, metavar="NAME", help="dataset id, namespace/name-v0")
