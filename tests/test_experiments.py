@@ -307,16 +307,3 @@ def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
     (tmp_path / "provenance.json").unlink()  # as a folder written before provenance was recorded
     with pytest.raises(ValueError, match="recorded no provenance"):
         run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
-
-
-def test_a_curve_of_one_point_gets_a_marker(tmp_path):
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from antmaze_hirl.experiments.plots import draw_band
-
-    fig, ax = plt.subplots()
-    single = draw_band(ax, np.array([10.0]), np.array([[0.4], [0.6]]), "one")
-    several = draw_band(ax, np.array([10.0, 20.0]), np.array([[0.4, 0.5], [0.6, 0.7]]), "two")
-    assert single.get_marker() == "o" and several.get_marker() in (None, "None", "")
-    plt.close(fig)

@@ -306,20 +306,6 @@ def test_action_penalty_lowers_the_actors_objective_by_l2_of_the_actions(tmp_pat
         make_model("point", "td3", tiny_config(action_l2=-1.0), seed=0)
 
 
-def test_learning_curves_plot_one_line_per_run(tmp_path, monkeypatch):
-    from antmaze_hirl import plotting
-
-    lines = []
-
-    def record(self, x, y, **kwargs):
-        lines.append((list(x), list(y), kwargs["label"]))
-
-    monkeypatch.setattr(plotting.plt.Axes, "plot", record)
-    out = plotting.plot_learning_curves({"a": ([1, 2], [0.1, 0.5]), "b": ([1], [0.2])}, tmp_path / "deep" / "c.png")
-    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert lines == [([1, 2], [0.1, 0.5], "a"), ([1], [0.2], "b")]
-
-
 def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):
     overrides = tmp_path / "mine.yml"
     overrides.write_text("ant:\n  gamma: 0.9\n  env_kwargs: {chain_probability: 0.5}\n")

@@ -1,7 +1,6 @@
 import json
 import re
 
-import numpy as np
 import pandas as pd
 import pytest
 
@@ -183,17 +182,6 @@ def test_episode_columns_are_the_documented_server_format():
     import antmaze_hirl.study.analysis as analysis
 
     assert ", ".join(EPISODE_COLUMNS) in " ".join(analysis.__doc__.split()).replace("``", "")
-
-
-def test_plot_panels_marks_a_one_point_curve():
-    from matplotlib.figure import Figure
-
-    from antmaze_hirl.experiments.plots import draw_band as _band
-
-    ax = Figure().add_subplot()
-    _band(ax, np.array([1.0]), np.array([[0.5], [0.7]]), "one evaluation")
-    _band(ax, np.array([1.0, 2.0]), np.array([[0.5, 0.6]]), "two evaluations")
-    assert [line.get_marker() for line in ax.lines] == ["o", "None"]
 
 
 @pytest.mark.parametrize(
