@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import time
@@ -32,6 +33,7 @@ from antmaze_hirl.experiments.results_folder import (
     trial_path,
     write_reports,
 )
+from antmaze_hirl.experiments.tensorboard import DAggerTensorBoard, trial_log_dir
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_policy
@@ -92,11 +94,19 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
 
 
 def run_trial(
-    method: str, seed: int, config: ExperimentConfig, *, low_level: Any = None, progress: tqdm | None = None
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    *,
+    low_level: Any = None,
+    progress: tqdm | None = None,
+    tensorboard_dir: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Trains one learner with ``method`` from seed ``seed``; returns one row per training episode.
 
-    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation.
+    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation. With
+    ``tensorboard_dir``, each row and each update's loss is logged there too (:class:`DAggerTensorBoard`);
+    the rows are the same either way.
     """
     env = make_env(config, low_level, split="train")
     sets = evaluation_sets(config)
@@ -118,25 +128,29 @@ def run_trial(
         gradient_steps=config.gradient_steps,
     )
     rows: list[dict[str, Any]] = []
-    for episode in range(config.episodes):
-        record = trainer.run_episode()
-        row = {
-            "method": method,
-            "seed": seed,
-            **record.to_dict(),
-            "cumulative_expert_cost": trainer.total_expert_cost,
-            # The trainer drew this episode's maze and reset the env with it.
-            "layout": canonical_layout(env.unwrapped.layout),
-        }
-        final = episode == config.episodes - 1
-        if final or (episode + 1) % config.eval_every == 0:
-            name = "final" if final else "periodic"
-            _, first_seed, mazes = sets[name]
-            result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
-            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
-        rows.append({column: row.get(column, math.nan) for column in COLUMNS})
-        if progress is not None:
-            progress.update(1)
+    with contextlib.ExitStack() as stack:
+        board = stack.enter_context(DAggerTensorBoard(tensorboard_dir)) if tensorboard_dir is not None else None
+        for episode in range(config.episodes):
+            record = trainer.run_episode()
+            row = {
+                "method": method,
+                "seed": seed,
+                **record.to_dict(),
+                "cumulative_expert_cost": trainer.total_expert_cost,
+                # The trainer drew this episode's maze and reset the env with it.
+                "layout": canonical_layout(env.unwrapped.layout),
+            }
+            final = episode == config.episodes - 1
+            if final or (episode + 1) % config.eval_every == 0:
+                name = "final" if final else "periodic"
+                _, first_seed, mazes = sets[name]
+                result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
+                row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
+            rows.append({column: row.get(column, math.nan) for column in COLUMNS})
+            if board is not None:
+                board.write_episode(rows[-1], trainer)
+            if progress is not None:
+                progress.update(1)
     for opened in (env, *by_split.values()):
         opened.close()
     return rows
@@ -150,10 +164,15 @@ def run_and_save_trial(
     *,
     low_level: Any = None,
     progress: tqdm | None = None,
+    tensorboard: bool = False,
 ) -> Path:
-    """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``."""
+    """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``.
+
+    With ``tensorboard``, the trial's curves go to :func:`trial_log_dir` (``out_dir/tb/<method>_seed<k>/``).
+    """
     start = time.perf_counter()
-    rows = run_trial(method, seed, config, low_level=low_level, progress=progress)
+    log_dir = trial_log_dir(out_dir, method, seed) if tensorboard else None
+    rows = run_trial(method, seed, config, low_level=low_level, progress=progress, tensorboard_dir=log_dir)
     seconds = round(time.perf_counter() - start, 1)
     path = trial_path(out_dir, method, seed)
     atomic_write_json(path.with_suffix(".json"), {"seconds": seconds})
@@ -171,6 +190,7 @@ def run_experiment(
     progress_bar: bool = True,
     jobs: int = 1,
     allow_code_change: bool = False,
+    tensorboard: bool = True,
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
 
@@ -182,6 +202,9 @@ def run_experiment(
     Each finished trial is saved atomically as ``out_dir/trials/<method>_seed<k>.csv`` (its wall time
     beside it in ``.json``), so an interrupted experiment resumes where it stopped (a trial is the
     unit of resumption).
+
+    With ``tensorboard`` (the default) each trial also logs its episodes to ``out_dir/tb/<method>_seed<k>/``
+    (``tensorboard --logdir out_dir/tb``); the logs are not part of the results and change no number.
 
     Writes ``out_dir/episodes.csv``, ``out_dir/eval_layouts.csv`` (every evaluation maze:
     :func:`evaluation_layouts`), ``out_dir/summary.json`` and ``out_dir/panels.png``.
@@ -219,7 +242,9 @@ def run_experiment(
         if jobs == 1:
             for method, seed in pending:
                 bar.set_postfix_str(f"{method} seed {seed}")
-                run_and_save_trial(method, seed, config, out_dir, low_level=low_level, progress=bar)
+                run_and_save_trial(
+                    method, seed, config, out_dir, low_level=low_level, progress=bar, tensorboard=tensorboard
+                )
                 write_reports(out_dir, methods, seeds, config)  # partial results stay readable if stopped
         else:
             # Trials are independent and seeded by their own rng, so a pool gives the same numbers;
@@ -229,7 +254,9 @@ def run_experiment(
             pool = ProcessPoolExecutor(jobs, mp_context=context, initializer=torch.set_num_threads, initargs=initargs)
             try:
                 futures = [
-                    pool.submit(run_and_save_trial, method, seed, config, out_dir, low_level=low_level)
+                    pool.submit(
+                        run_and_save_trial, method, seed, config, out_dir, low_level=low_level, tensorboard=tensorboard
+                    )
                     for method, seed in pending
                 ]
                 for future in as_completed(futures):
