@@ -62,9 +62,17 @@ def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     assert (tmp_path / "trials" / "reward_seed1.csv").exists()
 
 
-def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path):
-    serial = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "serial", progress_bar=False)
-    parallel = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "parallel", progress_bar=False, jobs=2)
+@pytest.mark.parametrize(
+    ("methods", "config"),
+    [
+        # Fast: two one-episode trials in two worker processes.
+        (["reward"], dataclasses.replace(TINY, episodes=1, final_eval_episodes=1)),
+        pytest.param(["dagger", "reward"], TINY, marks=pytest.mark.slow),
+    ],
+)
+def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path, methods, config):
+    serial = run_experiment(methods, 2, config, tmp_path / "serial", progress_bar=False)
+    parallel = run_experiment(methods, 2, config, tmp_path / "parallel", progress_bar=False, jobs=2)
     assert parallel["methods"] == serial["methods"]
     assert (tmp_path / "parallel" / "episodes.csv").read_text() == (tmp_path / "serial" / "episodes.csv").read_text()
     with pytest.raises(ValueError, match="jobs must be >= 1, got 0"):

@@ -25,6 +25,7 @@ def tiny_config(body="point", **changes):
     return load_config(body).replace(learning_starts=100, buffer_size=20_000, **changes)
 
 
+@pytest.mark.slow
 def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
     config = tiny_config()
     env = ReachEnv("point")
