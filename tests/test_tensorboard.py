@@ -2,6 +2,7 @@
 
 import csv
 import math
+from types import SimpleNamespace
 
 import gymnasium as gym
 import numpy as np
@@ -71,7 +72,8 @@ def test_a_trial_logs_each_episode_and_changes_no_result(tmp_path, losses):
 def test_a_rerun_trial_replaces_its_curves(tmp_path):
     log_dir = tmp_path / "tb" / "dagger_seed0"
     with DAggerTensorBoard(log_dir) as board:
-        board._writer.add_scalar("episode/success", 1.0, 7)  # what an interrupted run left behind
+        # What an interrupted run left behind: an episode the rerun will not reach.
+        board.write_episode({"episode": 7, "success": True}, SimpleNamespace(updates=0, last_loss=None))
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
     trainer = DAggerTrainer(
