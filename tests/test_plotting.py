@@ -66,11 +66,14 @@ def test_panels_draw_a_median_line_per_method_on_each_panel(tmp_path, saved_figu
     assert colour_pixels(tmp_path / "panels.png", "#ff7f0e") > 100
 
 
-def test_a_curve_of_one_point_gets_a_marker():
+def test_a_curve_of_one_point_gets_a_marker_and_an_error_bar():
     ax = plotting.new_figure().add_subplot()
-    plotting.draw_band(ax, np.array([1.0]), np.array([[0.5], [0.7]]), "one evaluation")
-    plotting.draw_band(ax, np.array([1.0, 2.0]), np.array([[0.5, 0.6]]), "two evaluations")
-    assert [line.get_marker() for line in ax.lines] == ["o", "None"]
+    single = plotting.draw_band(ax, np.array([1.0]), np.array([[0.5], [0.7]]), "one evaluation")
+    several = plotting.draw_band(ax, np.array([1.0, 2.0]), np.array([[0.5, 0.6]]), "two evaluations")
+    assert (single.get_marker(), several.get_marker()) == ("o", "None")
+    (bar,) = ax.containers  # the min-max bar of the one-point curve; the longer curve has a band instead
+    np.testing.assert_allclose(bar.lines[0].get_ydata(), [0.6])
+    assert len(ax.collections) == 2  # the bar's segment and the longer curve's band
 
 
 def test_importing_the_plotting_modules_keeps_the_users_backend():
