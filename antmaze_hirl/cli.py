@@ -247,6 +247,12 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         action="store_true",
         help="resume a results folder written by other code (another commit or package versions)",
     )
+    parser.add_argument(
+        "--tensorboard",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="log each trial's episodes to OUT/tb/<method>_seed<k>/ (view: tensorboard --logdir OUT/tb)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     parser.set_defaults(handler=_run_experiment)
 
@@ -281,6 +287,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         args.out,
         progress_bar=not args.no_progress,
         allow_code_change=args.allow_code_change,
+        tensorboard=args.tensorboard,
         **backend_settings(args),
     )
     for method, figures in summary["methods"].items():

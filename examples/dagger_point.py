@@ -1,11 +1,13 @@
 """DAgger with noise-based active learning on random point-mass mazes, top to bottom in one file.
 
-Run: .venv/bin/python examples/dagger_point.py [--episodes 30] [--seed 0]
+Run: .venv/bin/python examples/dagger_point.py [--episodes 30] [--seed 0] [--eval-episodes 50] [--out runs/examples]
 Trains the high-level policy from the scripted oracle, evaluates it alone on 50 held-out mazes,
 saves it, and draws one evaluation episode to runs/examples/dagger_point.png.
+A smoke run (what the tests do): --episodes 2 --eval-episodes 2 --out /tmp/smoke
 """
 
 import argparse
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -20,6 +22,8 @@ from antmaze_hirl.rollout import play_episode
 parser = argparse.ArgumentParser()
 parser.add_argument("--episodes", type=int, default=30)
 parser.add_argument("--seed", type=int, default=0)
+parser.add_argument("--eval-episodes", type=int, default=50, help="held-out mazes the learner plays alone")
+parser.add_argument("--out", type=Path, default=Path("runs/examples"), help="folder of the policy and the picture")
 args = parser.parse_args()
 torch.set_num_threads(1)
 
@@ -35,12 +39,12 @@ print(f"expert labels: {trainer.total_expert_cost} over {len(records)} episodes"
 
 # 3. The learner alone on held-out mazes.
 eval_env = gym.make("antmaze_hirl/PointMaze-v0")
-print("learner-only:", evaluate_high_level(policy, eval_env, episodes=50))
-policy.save("runs/examples/high_level_point.zip")
+print("learner-only:", evaluate_high_level(policy, eval_env, episodes=args.eval_episodes))
+print("policy:", policy.save(args.out / "high_level_point.zip"))
 
 # 4. One episode, drawn.
 episode = play_episode(eval_env, policy, seed=7)
 picture = plot_played_episode(
-    eval_env, episode, "runs/examples/dagger_point.png", title=f"learner alone: success={episode.success}"
+    eval_env, episode, args.out / "dagger_point.png", title=f"learner alone: success={episode.success}"
 )
 print("picture:", picture)

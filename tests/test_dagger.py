@@ -214,6 +214,22 @@ def test_switch_mixing_and_per_step_updates_run():
     assert trainer.updates == 1 and trainer.beta == 0.5
 
 
+def test_dagger_moves_the_learner_towards_the_experts_labels():
+    # The fast check of learning: on mazes it never trained on, the learner's subgoals get nearer the oracle's.
+    trainer, _ = make_trainer(seed=0, gradient_steps=100)
+    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
+    oracle = PathOracle.for_env(eval_env)
+    observations = [eval_env.reset(seed=1000 + seed)[0] for seed in range(30)]
+
+    def distance_to_the_experts_labels():
+        return np.mean([np.linalg.norm(trainer.policy.predict(obs) - oracle.label(obs)) for obs in observations])
+
+    untrained = distance_to_the_experts_labels()
+    trainer.train(4)
+    assert distance_to_the_experts_labels() < 0.6 * untrained, untrained
+
+
+@pytest.mark.slow
 def test_dagger_learns_small_mazes_end_to_end():
     trainer, _ = make_trainer(seed=0, gradient_steps=300)
     eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())

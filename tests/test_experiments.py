@@ -62,9 +62,17 @@ def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     assert (tmp_path / "trials" / "reward_seed1.csv").exists()
 
 
-def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path):
-    serial = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "serial", progress_bar=False)
-    parallel = run_experiment(["dagger", "reward"], 2, TINY, tmp_path / "parallel", progress_bar=False, jobs=2)
+@pytest.mark.parametrize(
+    ("methods", "config"),
+    [
+        # Fast: two one-episode trials in two worker processes.
+        (["reward"], dataclasses.replace(TINY, episodes=1, final_eval_episodes=1)),
+        pytest.param(["dagger", "reward"], TINY, marks=pytest.mark.slow),
+    ],
+)
+def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path, methods, config):
+    serial = run_experiment(methods, 2, config, tmp_path / "serial", progress_bar=False)
+    parallel = run_experiment(methods, 2, config, tmp_path / "parallel", progress_bar=False, jobs=2)
     assert parallel["methods"] == serial["methods"]
     assert (tmp_path / "parallel" / "episodes.csv").read_text() == (tmp_path / "serial" / "episodes.csv").read_text()
     with pytest.raises(ValueError, match="jobs must be >= 1, got 0"):
@@ -307,16 +315,3 @@ def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
     (tmp_path / "provenance.json").unlink()  # as a folder written before provenance was recorded
     with pytest.raises(ValueError, match="recorded no provenance"):
         run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
-
-
-def test_a_curve_of_one_point_gets_a_marker(tmp_path):
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from antmaze_hirl.experiments.plots import draw_band
-
-    fig, ax = plt.subplots()
-    single = draw_band(ax, np.array([10.0]), np.array([[0.4], [0.6]]), "one")
-    several = draw_band(ax, np.array([10.0, 20.0]), np.array([[0.4, 0.5], [0.6, 0.7]]), "two")
-    assert single.get_marker() == "o" and several.get_marker() in (None, "None", "")
-    plt.close(fig)

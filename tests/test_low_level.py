@@ -1,3 +1,4 @@
+import copy
 import csv
 import io
 import json
@@ -7,7 +8,7 @@ import numpy as np
 import pytest
 import torch as th
 from conftest import tiny_sac_her
-from stable_baselines3 import DDPG
+from stable_baselines3 import DDPG, HerReplayBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 
 from antmaze_hirl.envs.reach import ReachEnv
@@ -24,6 +25,33 @@ def tiny_config(body="point", **changes):
     return load_config(body).replace(learning_starts=100, buffer_size=20_000, **changes)
 
 
+def goal_value_gap(model, env):
+    """Mean Q1 of the actor's action for a goal 5 cm away minus that for one 1.5 m away, over 40 start states."""
+    gaps = []
+    for seed in range(40):
+        obs, _ = env.reset(seed=seed)
+        values = []
+        for distance in (0.05, 1.5):
+            goal = obs["achieved_goal"] + distance * np.array([np.cos(seed), np.sin(seed)])
+            tensor = model.policy.obs_to_tensor({**obs, "desired_goal": goal.astype(np.float32)})[0]
+            with th.no_grad():
+                values.append(float(model.critic.q1_forward(tensor, model.actor(tensor))))
+        gaps.append(values[0] - values[1])
+    return float(np.mean(gaps))
+
+
+def test_point_td3_her_learns_that_near_goals_are_worth_more(tmp_path):
+    # The fast check of learning (the success-rate one below is slow): HER's relabelled sparse rewards teach
+    # the critic, within 1000 steps, that a goal next to the body is worth more than one far away (without
+    # relabelling, n_sampled_goal=0, the gap stays under 0.2).
+    config = tiny_config()
+    env = ReachEnv("point")
+    untrained = goal_value_gap(make_model("point", "td3", config, seed=0), env)
+    model = train_low_level("point", "td3", 1000, tmp_path, seed=0, config=config, checkpoint_freq=10**9, **TINY)
+    assert goal_value_gap(model, env) > untrained + 0.5, untrained
+
+
+@pytest.mark.slow
 def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
     config = tiny_config()
     env = ReachEnv("point")
@@ -34,12 +62,26 @@ def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
     assert trained["success_rate"] >= untrained["success_rate"] + 0.3, (untrained, trained)
 
 
-def test_ddpg_trains_and_writes_policy(tmp_path):
-    model = train_low_level("point", "ddpg", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
+def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the_same(tmp_path):
+    # Values unlike SB3's and the shipped point defaults, so a setting dropped on the way shows.
+    config = tiny_config(gamma=0.9, tau=0.02, batch_size=64, net_arch=[32, 16], action_noise_std=0.3, n_sampled_goal=2)
+    model = train_low_level("point", "ddpg", 300, tmp_path, config=config, checkpoint_freq=10**9, **TINY)
     assert isinstance(model, DDPG) and model.num_timesteps == 300
-    # SB3's DDPG is TD3 with one critic, no policy delay and target noise clipped to 0; the saved zip keeps that.
+    assert isinstance(model.replay_buffer, HerReplayBuffer) and model.replay_buffer.n_sampled_goal == 2
+    np.testing.assert_allclose(model.action_noise._sigma, [0.3, 0.3])
     loaded = load_low_level("point", tmp_path / "policy.zip")
-    assert (loaded.policy_delay, loaded.target_noise_clip, loaded.policy.critic.n_critics) == (1, 0.0, 1)
+    for kept in (model, loaded):
+        assert (kept.gamma, kept.tau, kept.batch_size, kept.learning_rate) == (0.9, 0.02, 64, config.learning_rate)
+        widths = [layer.out_features for layer in kept.actor.mu if isinstance(layer, th.nn.Linear)]
+        assert widths == [32, 16, 2]
+    # The zip loads as TD3, SB3's base class of DDPG: it must still act as the DDPG that was trained.
+    assert (loaded.policy_delay, loaded.policy.critic.n_critics) == (1, 1)
+    env = ReachEnv("point")
+    for seed in range(3):
+        obs, _ = env.reset(seed=seed)
+        np.testing.assert_array_equal(
+            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
+        )
 
 
 def test_save_load_round_trip_gives_identical_actions(tmp_path):
@@ -103,17 +145,41 @@ class CrashAt(BaseCallback):
         return True
 
 
+class StartOfTraining(BaseCallback):
+    """Keeps what a (resumed) run starts from: the actor's weights and the replay buffer's observations."""
+
+    def _on_training_start(self):
+        self.actor = [parameter.detach().clone() for parameter in self.model.actor.parameters()]
+        self.observations = self.model.replay_buffer.observations["observation"][
+            : self.model.replay_buffer.size()
+        ].copy()
+
+    def _on_step(self):
+        return True
+
+
 def test_a_run_killed_mid_way_resumes_losing_at_most_checkpoint_freq_steps(tmp_path):
     config = tiny_config()
+    crash = CrashAt(520)
     with pytest.raises(Crash):
         train_low_level(
-            "point", "td3", 1000, tmp_path, config=config, checkpoint_freq=150, extra_callbacks=[CrashAt(520)], **TINY
+            "point", "td3", 1000, tmp_path, config=config, checkpoint_freq=150, extra_callbacks=[crash], **TINY
         )
-    _, state = latest_checkpoint(tmp_path / "checkpoints")
+    lived = crash.model.replay_buffer.observations["observation"][:520].copy()
+    folder, state = latest_checkpoint(tmp_path / "checkpoints")
     assert state["num_timesteps"] == 450 and state["buffer_size"] == 450  # 520 - 450 < 150 steps lost
     assert not (tmp_path / "policy.zip").exists()
-    resumed = train_low_level("point", "td3", 600, tmp_path, config=config, resume=True, checkpoint_freq=150, **TINY)
+    saved = load_low_level("point", folder / "model.zip")
+    start = StartOfTraining()
+    resumed = train_low_level(
+        "point", "td3", 600, tmp_path, config=config, resume=True, checkpoint_freq=150, extra_callbacks=[start], **TINY
+    )
     assert resumed.num_timesteps == 600 and resumed.replay_buffer.size() == 600
+    # It went on from the checkpoint's networks and the 450 transitions the killed run had lived, not afresh.
+    for kept, restarted in zip(saved.actor.parameters(), start.actor, strict=True):
+        th.testing.assert_close(restarted, kept.detach())
+    np.testing.assert_array_equal(start.observations, lived[:450])
+    assert np.abs(resumed.replay_buffer.observations["observation"][450:600]).sum() > 0
 
 
 def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
@@ -287,37 +353,58 @@ def test_relative_goal_extractor_uses_offsets_in_the_heading_frame():
         RelativeGoalExtractor(env.observation_space, quaternion_index=30)
 
 
-def test_action_penalty_lowers_the_actors_objective_by_l2_of_the_actions(tmp_path):
+def actor_update(model, seed):
+    """One SB3 ``train`` step that updates the actor: the actor's gradient and the batch it was computed on."""
+    seen = {}
+    sample, step = model.replay_buffer.sample, model.actor.optimizer.step
+
+    def recording_sample(*args, **kwargs):
+        seen["batch"] = sample(*args, **kwargs)
+        return seen["batch"]
+
+    def recording_step(*args, **kwargs):
+        seen["gradient"] = [parameter.grad.clone() for parameter in model.actor.parameters()]
+        return step(*args, **kwargs)
+
+    model.replay_buffer.sample, model.actor.optimizer.step = recording_sample, recording_step
+    model._n_updates = model.policy_delay - 1  # TD3 updates the actor when the update count hits the delay
+    np.random.seed(seed)  # HER draws its relabelled goals from numpy's global RNG, the target noise from torch's
+    th.manual_seed(seed)
+    try:
+        model.train(gradient_steps=1, batch_size=32)
+    finally:
+        model.replay_buffer.sample, model.actor.optimizer.step = sample, step
+    return seen["gradient"], seen["batch"]
+
+
+def test_action_penalty_adds_its_l2_gradient_to_the_actors_update_in_sb3s_own_train(tmp_path):
     config = tiny_config(action_l2=0.5)
     model = make_model("point", "td3", config, seed=0)
-    critic = model.policy.critic
-    obs, _ = ReachEnv("point").reset(seed=0)
-    tensor_obs = model.policy.obs_to_tensor(obs)[0]
-    actions = th.tensor([[0.0, 0.0], [1.0, -1.0], [0.5, 0.0]])
-    batch = {key: value.repeat(3, 1) for key, value in tensor_obs.items()}
-    with th.no_grad():
-        plain = critic.q_networks[0](th.cat([critic.extract_features(batch, critic.features_extractor), actions], 1))
-        penalised = critic.q1_forward(batch, actions)
-    np.testing.assert_allclose((plain - penalised).squeeze(1).numpy(), [0.0, 0.5, 0.5 * 0.125], rtol=1e-6)
+    model.learn(100)  # fills the buffer; learning_starts=100: no update yet
+    modules = (model.policy, model.actor.optimizer, model.critic.optimizer)
+    start = [copy.deepcopy(module.state_dict()) for module in modules]
+    penalised, batch = actor_update(model, seed=3)
+    for module, state in zip(modules, start, strict=True):  # the same weights and Adam moments again ...
+        module.load_state_dict(state)
+    model.policy.critic.action_l2 = 0.0
+    plain, plain_batch = actor_update(model, seed=3)
+    np.testing.assert_array_equal(batch.actions.numpy(), plain_batch.actions.numpy())  # ... and the same batch
+    model.policy.load_state_dict(start[0])
+    # The actor minimises -mean(Q1(s, a) - l2 * mean(a**2)): the penalty adds the gradient of l2 * mean(a**2).
+    penalty = 0.5 * model.actor(batch.observations).pow(2).mean()
+    expected = th.autograd.grad(penalty, list(model.actor.parameters()))
+    assert any(g.abs().max() > 1e-4 for g in expected)  # the check has power: the penalty moves the actor
+    for with_penalty, without, term in zip(penalised, plain, expected, strict=True):
+        np.testing.assert_allclose((with_penalty - without).numpy(), term.numpy(), atol=1e-6)
+
+
+def test_action_penalty_is_saved_checked_and_off_by_default(tmp_path):
+    model = make_model("point", "td3", tiny_config(action_l2=0.5), seed=0)
     model.save(tmp_path / "penalty.zip")
     assert load_low_level("point", tmp_path / "penalty.zip").policy.critic.action_l2 == 0.5
     assert type(make_model("point", "td3", tiny_config(), seed=0).policy.critic).__name__ == "ContinuousCritic"
     with pytest.raises(ValueError, match="action_l2 must be >= 0, got -1"):
         make_model("point", "td3", tiny_config(action_l2=-1.0), seed=0)
-
-
-def test_learning_curves_plot_one_line_per_run(tmp_path, monkeypatch):
-    from antmaze_hirl import plotting
-
-    lines = []
-
-    def record(self, x, y, **kwargs):
-        lines.append((list(x), list(y), kwargs["label"]))
-
-    monkeypatch.setattr(plotting.plt.Axes, "plot", record)
-    out = plotting.plot_learning_curves({"a": ([1, 2], [0.1, 0.5]), "b": ([1], [0.2])}, tmp_path / "deep" / "c.png")
-    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert lines == [([1, 2], [0.1, 0.5], "a"), ([1], [0.2], "b")]
 
 
 def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):

@@ -4,6 +4,7 @@ import pytest
 
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.high_level import STATE_AGENT_XY, STATE_GOAL_XY
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experts import PathOracle, plan_subgoal
 
@@ -57,8 +58,26 @@ def test_oracle_reads_observations_not_env_state():
     oracle = PathOracle.for_env(env)
     obs_a, _ = env.reset(seed=1)
     label_a = oracle.label(obs_a)
-    env.reset(seed=2)  # another maze: a stored observation must still get its own label
-    np.testing.assert_array_equal(oracle.label(obs_a), label_a)
+    obs_b, _ = env.reset(seed=2)  # another maze, start and goal: the env now holds maze b
+    label_b = oracle.label(obs_b)
+    assert np.linalg.norm(label_a - label_b) > 0.5  # the two observations do call for different labels
+    np.testing.assert_array_equal(oracle.label(obs_a), label_a)  # a stored observation keeps its own label
+    # An observation no env produced: maze b's walls with maze a's agent and goal. Its label is planned on
+    # what the observation shows, whichever maze the env (or an earlier call) held.
+    mixed = {"image": obs_b["image"], "state": obs_a["state"]}
+    walls_b = oracle.renderer.walls_from_image(obs_b["image"])
+    state = obs_a["state"].astype(np.float64)
+    expected = plan_subgoal(
+        walls_b,
+        oracle.geometry,
+        state[STATE_AGENT_XY],
+        state[STATE_GOAL_XY],
+        max_distance=oracle.max_distance,
+        clearance=oracle.clearance,
+    )
+    np.testing.assert_allclose(oracle.label(mixed), expected)
+    assert not np.allclose(expected, label_a), "maze b's walls must change a's plan, or this check proves nothing"
+    np.testing.assert_array_equal(walls_b, env.unwrapped.layout.walls)  # the decoded walls are maze b's
 
 
 def test_oracle_noise_is_seeded():

@@ -196,6 +196,10 @@ class DAggerTrainer:
             updates); 0 disables them.
     """
 
+    # What the learner's fit_dataset returned at the last update (None before any): read by loggers such as
+    # TensorBoard's. A class default, so trainers pickled before it existed still have it.
+    last_loss: float | None = None
+
     def __init__(
         self,
         *,
@@ -355,7 +359,7 @@ class DAggerTrainer:
         return chosen
 
     def _fit(self, steps: int) -> None:
-        self.policy.fit_dataset(self.dataset, steps)
+        self.last_loss = self.policy.fit_dataset(self.dataset, steps)
 
     def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
         geometry = self.env.unwrapped.geometry

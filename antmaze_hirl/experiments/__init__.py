@@ -7,6 +7,7 @@ help without loading torch.
 from antmaze_hirl._lazy import lazy_exports
 
 _EXPORTS = {
+    "DAggerTensorBoard": "antmaze_hirl.experiments.tensorboard",
     "ExperimentConfig": "antmaze_hirl.experiments.config",
     "cost_to_reach": "antmaze_hirl.experiments.summary",
     "normalised_auc": "antmaze_hirl.experiments.curves",

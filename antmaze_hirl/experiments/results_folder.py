@@ -13,9 +13,9 @@ from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.experiments.config import ExperimentConfig
-from antmaze_hirl.experiments.plots import plot_panels
 from antmaze_hirl.experiments.provenance import check_same_code
 from antmaze_hirl.experiments.summary import summarise
+from antmaze_hirl.plotting import plot_panels
 
 COLUMNS = (
     "method",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import os
@@ -34,6 +35,7 @@ from antmaze_hirl.experiments.results_folder import (
     trial_path,
     write_reports,
 )
+from antmaze_hirl.experiments.tensorboard import DAggerTensorBoard, trial_log_dir
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_policy
@@ -99,11 +101,19 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
 
 
 def run_trial(
-    method: str, seed: int, config: ExperimentConfig, *, low_level: Any = None, progress: tqdm | None = None
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    *,
+    low_level: Any = None,
+    progress: tqdm | None = None,
+    tensorboard_dir: Path | None = None,
 ) -> list[dict[str, Any]]:
     """Trains one learner with ``method`` from seed ``seed``; returns one row per training episode.
 
-    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation.
+    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation. With
+    ``tensorboard_dir``, each row and each update's loss is logged there too (:class:`DAggerTensorBoard`);
+    the rows are the same either way.
     """
     env = make_env(config, low_level, split="train")
     sets = evaluation_sets(config)
@@ -125,25 +135,29 @@ def run_trial(
         gradient_steps=config.gradient_steps,
     )
     rows: list[dict[str, Any]] = []
-    for episode in range(config.episodes):
-        record = trainer.run_episode()
-        row = {
-            "method": method,
-            "seed": seed,
-            **record.to_dict(),
-            "cumulative_expert_cost": trainer.total_expert_cost,
-            # The trainer drew this episode's maze and reset the env with it.
-            "layout": canonical_layout(env.unwrapped.layout),
-        }
-        final = episode == config.episodes - 1
-        if final or (episode + 1) % config.eval_every == 0:
-            name = "final" if final else "periodic"
-            _, first_seed, mazes = sets[name]
-            result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
-            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
-        rows.append({column: row.get(column, math.nan) for column in COLUMNS})
-        if progress is not None:
-            progress.update(1)
+    with contextlib.ExitStack() as stack:
+        board = stack.enter_context(DAggerTensorBoard(tensorboard_dir)) if tensorboard_dir is not None else None
+        for episode in range(config.episodes):
+            record = trainer.run_episode()
+            row = {
+                "method": method,
+                "seed": seed,
+                **record.to_dict(),
+                "cumulative_expert_cost": trainer.total_expert_cost,
+                # The trainer drew this episode's maze and reset the env with it.
+                "layout": canonical_layout(env.unwrapped.layout),
+            }
+            final = episode == config.episodes - 1
+            if final or (episode + 1) % config.eval_every == 0:
+                name = "final" if final else "periodic"
+                _, first_seed, mazes = sets[name]
+                result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
+                row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
+            rows.append({column: row.get(column, math.nan) for column in COLUMNS})
+            if board is not None:
+                board.write_episode(rows[-1], trainer)
+            if progress is not None:
+                progress.update(1)
     for opened in (env, *by_split.values()):
         opened.close()
     return rows
@@ -157,28 +171,45 @@ def run_and_save_trial(
     *,
     low_level: Any = None,
     progress: tqdm | None = None,
+    tensorboard: bool = False,
 ) -> Path:
-    """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``."""
-    return save_trial(out_dir, method, seed, *timed_trial(method, seed, config, low_level, progress=progress))
+    """Runs one trial and saves it atomically: ``trials/<method>_seed<k>.csv`` and its wall time in ``.json``.
+
+    With ``tensorboard``, the trial's curves go to :func:`trial_log_dir` (``out_dir/tb/<method>_seed<k>/``).
+    """
+    log_dir = trial_log_dir(out_dir, method, seed) if tensorboard else None
+    return save_trial(out_dir, method, seed, *timed_trial(method, seed, config, low_level, log_dir, progress=progress))
 
 
 def timed_trial(
-    method: str, seed: int, config: ExperimentConfig, low_level: Any = None, *, progress: tqdm | None = None
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    low_level: Any = None,
+    tensorboard_dir: Path | None = None,
+    *,
+    progress: tqdm | None = None,
 ) -> tuple[list[dict[str, Any]], float]:
     """:func:`run_trial`'s rows and its wall time in seconds (rounded to 0.1 s)."""
     if progress is not None:
         progress.set_postfix_str(f"{method} seed {seed}")
     start = time.perf_counter()
-    rows = run_trial(method, seed, config, low_level=low_level, progress=progress)
+    rows = run_trial(method, seed, config, low_level=low_level, progress=progress, tensorboard_dir=tensorboard_dir)
     return rows, round(time.perf_counter() - start, 1)
 
 
 def checked_trial(
-    method: str, seed: int, config: ExperimentConfig, low_level: Any, *, expected: dict[str, str]
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    low_level: Any,
+    tensorboard_dir: Path | None = None,
+    *,
+    expected: dict[str, str],
 ) -> tuple[list[dict[str, Any]], float]:
     """:func:`timed_trial` on a worker, once :func:`check_worker` found the driver's low level and code there."""
     check_worker(config.body, low_level, expected)
-    return timed_trial(method, seed, config, low_level)
+    return timed_trial(method, seed, config, low_level, tensorboard_dir)
 
 
 def worker_identity(body: str, low_level: Any = None) -> dict[str, str]:
@@ -231,6 +262,7 @@ def run_experiment(
     address: str | None = None,
     cpus_per_trial: int | None = None,
     max_retries: int = 3,
+    tensorboard: bool = True,
 ) -> dict[str, Any]:
     """Runs every (method, seed) trial not yet on disk, then writes the tables, summary and panels.
 
@@ -249,6 +281,9 @@ def run_experiment(
     Only this process writes: each finished trial is saved atomically, as soon as it finishes, as
     ``out_dir/trials/<method>_seed<k>.csv`` (its wall time beside it in ``.json``), so an interrupted
     experiment resumes where it stopped (a trial is the unit of resumption).
+
+    With ``tensorboard`` (the default) each trial also logs its episodes to ``out_dir/tb/<method>_seed<k>/``
+    (``tensorboard --logdir out_dir/tb``); the logs are not part of the results and change no number.
 
     Writes ``out_dir/episodes.csv``, ``out_dir/eval_layouts.csv`` (every evaluation maze:
     :func:`evaluation_layouts`), ``out_dir/summary.json`` and ``out_dir/panels.png``.
@@ -292,8 +327,9 @@ def run_experiment(
         out_dir / "eval_layouts.csv", rows_to_csv(evaluation_layouts(config, low_level), ("set", "seed", "layout"))
     )
     # Seed-major order: an interrupted run still has every method on its first seeds.
+    # TensorBoard logs are written where a trial runs: on a cluster, out_dir must be shared (or --no-tensorboard).
     pending = {
-        (m, s): (m, s, config, low_level)
+        (m, s): (m, s, config, low_level, trial_log_dir(out_dir, m, s) if tensorboard else None)
         for s in range(seeds)
         for m in methods
         if not trial_path(out_dir, m, s).exists()

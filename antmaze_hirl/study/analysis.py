@@ -30,8 +30,8 @@ from typing import Any
 
 import pandas as pd
 
-from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text, atomic_write_with
-from antmaze_hirl.experiments.plots import plot_panels
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
+from antmaze_hirl.plotting import plot_panels
 from antmaze_hirl.study.data import finished_trials, load_answers, load_episodes
 from antmaze_hirl.study.figures import save_likert, save_per_participant
 from antmaze_hirl.study.plan import StudyPlan, load_plan, williams_design
@@ -164,7 +164,7 @@ def _write_figures(
     panel_rows = _panel_rows(finished, names)
     panel_names = [names[m] for m in plan.methods]
     title = f"User study ({plan.body})"
-    atomic_write_with(out / "panels.png", lambda tmp: plot_panels(panel_rows, panel_names, tmp, title=title))
+    plot_panels(panel_rows, panel_names, out / "panels.png", title=title)
     likert = [(item.title, measures[item.key]["methods"]) for item in TLX_ITEMS]
     save_likert(likert, plan.methods, names, out / "likert.png")
     seconds = _values(outcomes, "seconds_per_label").dropna()

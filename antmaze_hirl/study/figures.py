@@ -1,7 +1,7 @@
 """The report's own figures: questionnaire bars and per-participant values per method.
 
-Figures are built on :class:`matplotlib.figure.Figure` directly, so nothing here touches pyplot's
-global state or the backend, and each PNG is written atomically.
+Figures come from :mod:`antmaze_hirl.plotting` (a ``Figure`` on an Agg canvas), so nothing here touches
+pyplot's global state or the backend, and each PNG is written atomically.
 """
 
 from __future__ import annotations
@@ -12,15 +12,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
-from antmaze_hirl.atomic_io import atomic_write_with
-
-
-def _save(fig: Figure, path: str | Path) -> Path:
-    fig.tight_layout()
-    # The temp file keeps the .png suffix, so matplotlib picks the format from the name.
-    return atomic_write_with(path, lambda tmp: fig.savefig(tmp, dpi=110))
+from antmaze_hirl.plotting import new_figure, save_figure
 
 
 def save_likert(
@@ -42,7 +35,7 @@ def save_likert(
     """
     columns = 3
     rows = max(1, -(-len(items) // columns))
-    fig = Figure(figsize=(4.5 * columns, 3.4 * rows))
+    fig = new_figure(figsize=(4.5 * columns, 3.4 * rows))
     x = np.arange(len(methods))
     for i, (title, summary) in enumerate(items):
         ax = fig.add_subplot(rows, columns, i + 1)
@@ -54,7 +47,7 @@ def save_likert(
         ax.set_title(title)
         ax.set_ylabel("rating (1-5), mean ± SE")
         ax.grid(axis="y", alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def save_per_participant(
@@ -71,7 +64,7 @@ def save_per_participant(
     Returns:
         ``path``.
     """
-    fig = Figure(figsize=(5 * len(panels), 3.8))
+    fig = new_figure(figsize=(5 * len(panels), 3.8))
     for i, (ylabel, frame) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), i + 1)
         for x, method in enumerate(methods):
@@ -87,4 +80,4 @@ def save_per_participant(
         ax.set_ylabel(ylabel)
         ax.grid(axis="y", alpha=0.3)
     fig.suptitle("dots: participants; lines: median over participants", fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
