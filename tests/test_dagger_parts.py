@@ -1,5 +1,6 @@
 """The dagger package's parts and contracts: dataset, policy, learner, state layout, task sampler, names."""
 
+import pickle
 from pathlib import Path
 
 import gymnasium as gym
@@ -72,6 +73,8 @@ def test_learner_encodings_stay_right_after_removal():
     fresh = policy.encoder.encode_observations([observations[1], observations[3]])
     np.testing.assert_array_equal(cached.grids, fresh.grids)
     np.testing.assert_array_equal(cached.vectors, fresh.vectors)
+    copy = pickle.loads(pickle.dumps(dataset))  # may grow apart from the original: a cache tells them apart
+    assert copy.key != dataset.key and len(copy) == 2
 
 
 def test_learner_and_policy_leave_torchs_global_rng_alone():

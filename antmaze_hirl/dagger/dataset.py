@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -50,10 +51,13 @@ class DemonstrationDataset:
     Rows are never changed or moved once added: each keeps a stable id (its storage row), so a learner
     may cache what it derives from a row (its encoding) under that id. Positions (``indices``) count the
     kept rows in the order they were added, as ``len`` does. Read accessors return read-only arrays.
+
+    Attributes:
+        key: A random name of this dataset, so caches keyed by row id tell it from another dataset.
     """
 
     def __init__(self) -> None:
-        self.key = uuid.uuid4().hex  # tells row-id caches of one dataset from another's
+        self.key = uuid.uuid4().hex
         self._size = 0  # storage rows in use, kept or removed
         self._kept = np.zeros(0, dtype=bool)
         self._images = np.zeros((0, 0, 0, 0), dtype=np.uint8)
@@ -64,6 +68,11 @@ class DemonstrationDataset:
 
     def __len__(self) -> int:
         return int(np.count_nonzero(self._kept[: self._size]))
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # A copy (unpickled or deep-copied) may grow apart from its original: caches must not mix them up.
+        self.__dict__.update(state)
+        self.key = uuid.uuid4().hex
 
     def add(self, demonstration: Demonstration) -> int:
         """Appends one demonstration (copied); returns its position.
