@@ -19,8 +19,8 @@ from antmaze_hirl.envs.simulator import Body, body_spec
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.task import Task
 
-STATE_AGENT_XY = STATE_LAYOUT.agent  # older names of STATE_LAYOUT's slices, kept for existing imports
-STATE_GOAL_XY = STATE_LAYOUT.goal
+STATE_AGENT_XY = STATE_LAYOUT.agent_slice  # older names of STATE_LAYOUT's slices, kept for existing imports
+STATE_GOAL_XY = STATE_LAYOUT.goal_slice
 DEFAULT_MIN_GOAL_CELLS = 3
 
 _MIN_GOAL_DISTANCE_RENAMED = (

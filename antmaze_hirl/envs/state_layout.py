@@ -17,14 +17,14 @@ class HighLevelStateLayout:
     reading through them changes no numbers.
 
     Attributes:
-        agent: Slice of the agent's xy, metres.
-        goal: Slice of the goal's xy, metres.
-        body: Slice of the body observation (the rest of the vector).
+        agent_slice: Where the agent's xy, metres, sits.
+        goal_slice: Where the goal's xy, metres, sits.
+        body_slice: Where the body observation sits (the rest of the vector).
     """
 
-    agent: ClassVar[slice] = slice(0, _XY_DIM)
-    goal: ClassVar[slice] = slice(_XY_DIM, 2 * _XY_DIM)
-    body: ClassVar[slice] = slice(2 * _XY_DIM, None)
+    agent_slice: ClassVar[slice] = slice(0, _XY_DIM)
+    goal_slice: ClassVar[slice] = slice(_XY_DIM, 2 * _XY_DIM)
+    body_slice: ClassVar[slice] = slice(2 * _XY_DIM, None)
 
     @property
     def planar_dim(self) -> int:
@@ -33,15 +33,15 @@ class HighLevelStateLayout:
 
     def agent_xy(self, state: np.ndarray) -> np.ndarray:
         """The agent's xy in ``state``."""
-        return state[..., self.agent]
+        return state[..., self.agent_slice]
 
     def goal_xy(self, state: np.ndarray) -> np.ndarray:
         """The goal's xy in ``state``."""
-        return state[..., self.goal]
+        return state[..., self.goal_slice]
 
     def body_observation(self, state: np.ndarray) -> np.ndarray:
         """The body observation in ``state`` (the point's velocity, the ant's torso and joints)."""
-        return state[..., self.body]
+        return state[..., self.body_slice]
 
     def state_dim(self, body_dim: int) -> int:
         """Length of a state whose body observation has ``body_dim`` values.
