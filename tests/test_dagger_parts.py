@@ -152,7 +152,7 @@ def test_reset_draws_its_task_with_sample_task():
     assert bare.start_xy is None and "start_xy" not in bare.reset_options()
     env.reset(seed=1, options=bare.reset_options())
     np.testing.assert_array_equal(env.unwrapped.goal_xy, bare.goal_xy)
-    with pytest.raises(ValueError, match="options\\['layout'\\] must be a MazeLayout, got str"):
+    with pytest.raises(ValueError, match=r"layout \(reset's options\['layout'\]\) must be a MazeLayout, got str"):
         env.unwrapped.sample_task(np.random.default_rng(0), layout="u")
 
 

@@ -343,7 +343,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         """
         layout = layout or self.sample_layout(rng)
         if not isinstance(layout, MazeLayout):
-            raise ValueError(f"options['layout'] must be a MazeLayout, got {type(layout).__name__}")
+            raise ValueError(f"layout (reset's options['layout']) must be a MazeLayout, got {type(layout).__name__}")
         if start_xy is None and draw_start:
             start_xy = self.noisy_cell_centre(layout.start_cell, rng)
         if goal_xy is None:
