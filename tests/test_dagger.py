@@ -7,8 +7,8 @@ from antmaze_hirl.dagger import (
     DAggerTrainer,
     Demonstration,
     DemonstrationDataset,
-    ExponentialBetaSchedule,
     HighLevelPolicy,
+    InverseDecayBetaSchedule,
     LinearBetaSchedule,
     MultiPolicyQuery,
     NoiseQuery,
@@ -16,17 +16,14 @@ from antmaze_hirl.dagger import (
     evaluate_high_level,
 )
 from antmaze_hirl.dagger.agent import HierarchicalAgent
-from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder, augment
+from antmaze_hirl.dagger.features import ObservationEncoder, augment
 from antmaze_hirl.dagger.strategies import StartQuery
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 GEOMETRY = MazeGeometry(5, 5, 1.0)
-
-
-def encoded_row(value=0.0):
-    return EncodedBatch(np.full((1, 2, 3, 3), value, np.float32), np.full((1, 6), value, np.float32))
 
 
 def demo(episode, step):
@@ -36,7 +33,7 @@ def demo(episode, step):
 def failed_episode_dataset(length):
     dataset = DemonstrationDataset()
     for step in range(length):
-        dataset.add(demo(episode=0, step=step), encoded_row(step))
+        dataset.add(demo(episode=0, step=step))
     return dataset
 
 
@@ -56,7 +53,7 @@ def test_reward_based_removal_frequency_matches_exp_minus_t_d():
 def test_reward_based_keeps_successful_episodes_and_other_episodes():
     strategy, rng = RewardBasedQuery(), np.random.default_rng(0)
     dataset = failed_episode_dataset(4)
-    dataset.add(demo(episode=1, step=0), encoded_row())
+    dataset.add(demo(episode=1, step=0))
     assert strategy.on_episode_end(dataset, 0, success=True, rng=rng) == []
     assert len(dataset) == 5
     strategy.on_episode_end(dataset, 1, success=False, rng=rng)  # t_d = 0: always removed
@@ -119,12 +116,12 @@ def test_multi_policy_members_share_the_learners_gradient_budget(member_steps, e
 
 
 def test_beta_schedules_are_exact():
-    schedule = ExponentialBetaSchedule(decay=2.0)
+    schedule = InverseDecayBetaSchedule(decay=2.0)
     assert [schedule(k) for k in range(4)] == [1.0, 0.5, 0.25, 0.125]
-    assert ExponentialBetaSchedule(decay=3.0, beta0=0.9)(2) == 0.9 / 9
+    assert InverseDecayBetaSchedule(decay=3.0, beta0=0.9)(2) == 0.9 / 9
     assert [LinearBetaSchedule(4)(k) for k in (0, 1, 4, 9)] == [1.0, 0.75, 0.0, 0.0]
     with pytest.raises(ValueError, match="decay d must be >= 1"):
-        ExponentialBetaSchedule(decay=0.5)
+        InverseDecayBetaSchedule(decay=0.5)
 
 
 def test_augmentation_keeps_grid_vector_and_label_consistent():
@@ -152,7 +149,7 @@ def make_trainer(seed=0, **kwargs):
 
 
 def test_blend_executes_the_beta_mix_and_counts_labels():
-    trainer, env = make_trainer(beta_schedule=ExponentialBetaSchedule(decay=1.0, beta0=0.25), gradient_steps=1)
+    trainer, env = make_trainer(beta_schedule=InverseDecayBetaSchedule(decay=1.0, beta0=0.25), gradient_steps=1)
     executed = []
     step = env.step
 
@@ -165,7 +162,7 @@ def test_blend_executes_the_beta_mix_and_counts_labels():
     expert_label = trainer.expert.label
 
     def recording_label(obs):
-        labels.append((expert_label(obs), trainer.policy.predict(obs), obs["state"][:2]))
+        labels.append((expert_label(obs), trainer.policy.predict(obs), STATE_LAYOUT.agent_xy(obs["state"])))
         return labels[-1][0]
 
     trainer.expert.label = recording_label
@@ -199,7 +196,7 @@ def test_a_mix_the_agent_already_reaches_is_replaced_by_the_experts_subgoal():
         expert=PathOracle.for_env(env),
         policy=CornerSeeker(policy.encoder),
         rng=rng,
-        beta_schedule=ExponentialBetaSchedule(decay=1.0, beta0=0.0),
+        beta_schedule=InverseDecayBetaSchedule(decay=1.0, beta0=0.0),
         gradient_steps=0,
     )
     records = [trainer.run_episode() for _ in range(3)]

@@ -72,7 +72,7 @@ def test_split_env_draws_every_layout_from_its_part():
     for seed in range(5):
         env.reset(seed=seed)
         assert layout_split(env.layout) == "selection"
-    # The trainer's way of drawing: env.unwrapped.sample_layout, same rng state, same layout.
+    # sample_task (reset and the trainer) draws through sample_layout: same rng state, same layout.
     first = env.unwrapped.sample_layout(np.random.default_rng(7))
     assert canonical_layout(first) == canonical_layout(env.unwrapped.sample_layout(np.random.default_rng(7)))
     assert layout_split(first) == "selection"

@@ -1,11 +1,23 @@
-"""DAgger for the high level: trainer, beta schedules, active-learning strategies, policy."""
+"""DAgger for the high level: trainer, beta schedules, active-learning strategies, data, policy, learner.
+
+``ExponentialBetaSchedule`` is a deprecated alias of :class:`InverseDecayBetaSchedule`.
+"""
 
 from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluate_high_level
-from antmaze_hirl.dagger.policy import HighLevelPolicy
-from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule, LinearBetaSchedule
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.dagger.learner import SubgoalLearner
+from antmaze_hirl.dagger.policy import SubgoalPolicy
+from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
+from antmaze_hirl.dagger.schedules import (
+    BetaSchedule,
+    ExponentialBetaSchedule,
+    InverseDecayBetaSchedule,
+    LinearBetaSchedule,
+)
 from antmaze_hirl.dagger.strategies import (
     STRATEGIES,
+    DAggerQuery,
     MultiPolicyQuery,
     NoiseQuery,
     QueryStrategy,
@@ -18,17 +30,23 @@ __all__ = [
     "HELD_OUT_SEED",
     "STRATEGIES",
     "BetaSchedule",
+    "DAggerQuery",
     "DAggerTrainer",
     "Demonstration",
     "DemonstrationDataset",
     "EpisodeRecord",
     "ExponentialBetaSchedule",
     "HighLevelPolicy",
+    "InverseDecayBetaSchedule",
+    "Learner",
     "LinearBetaSchedule",
     "MultiPolicyQuery",
     "NoiseQuery",
+    "OffsetLearner",
     "QueryStrategy",
     "RewardBasedQuery",
+    "SubgoalLearner",
+    "SubgoalPolicy",
     "evaluate_high_level",
     "make_strategy",
 ]

@@ -8,7 +8,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from antmaze_hirl.dagger.policy import HighLevelPolicy
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
 from antmaze_hirl.envs.controllers import as_controller
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
-from antmaze_hirl.envs.high_level import STATE_AGENT_XY, STATE_GOAL_XY
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 GRID_CHANNELS = 2  # walls, goal
 PLANAR_DIM = 4  # goal offset (x, y) and agent offset within its cell (x, y), both in cells
@@ -55,9 +55,9 @@ class ObservationEncoder:
         parts = [
             (
                 self.renderer.walls_from_image(obs["image"]),
-                np.asarray(obs["state"][STATE_AGENT_XY], dtype=np.float64),
-                np.asarray(obs["state"][STATE_GOAL_XY], dtype=np.float64),
-                np.asarray(obs["state"][4:], dtype=np.float64),
+                np.asarray(STATE_LAYOUT.agent_xy(obs["state"]), dtype=np.float64),
+                np.asarray(STATE_LAYOUT.goal_xy(obs["state"]), dtype=np.float64),
+                np.asarray(STATE_LAYOUT.body_observation(obs["state"]), dtype=np.float64),
             )
             for obs in observations
         ]

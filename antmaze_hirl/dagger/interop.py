@@ -16,7 +16,6 @@ from imitation.util import logger as imitation_logger
 from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
-from antmaze_hirl.dagger.features import ObservationEncoder
 
 
 def to_transitions(dataset: DemonstrationDataset) -> types.Transitions:
@@ -31,21 +30,20 @@ def to_transitions(dataset: DemonstrationDataset) -> types.Transitions:
     """
     if len(dataset) == 0:
         raise ValueError("the dataset is empty")
-    demos = dataset.demonstrations
-    follows = [i + 1 < len(demos) and demos[i + 1].episode == demos[i].episode for i in range(len(demos))]
-    following = [i + 1 if follows[i] else i for i in range(len(demos))]
+    episodes = dataset.episodes
+    follows = np.append(episodes[1:] == episodes[:-1], False)
+    following = np.where(follows, np.arange(len(dataset)) + 1, np.arange(len(dataset)))
+    images, states = dataset.images, dataset.states
 
-    def dict_obs(order: list[int]) -> types.DictObs:
-        return types.DictObs(
-            {"image": np.stack([demos[i].image for i in order]), "state": np.stack([demos[i].state for i in order])}
-        )
+    def dict_obs(order: np.ndarray) -> types.DictObs:
+        return types.DictObs({"image": images[order], "state": states[order]})
 
     return types.Transitions(
-        obs=dict_obs(list(range(len(demos)))),
+        obs=dict_obs(np.arange(len(dataset))),
         acts=dataset.subgoals().astype(np.float32),
-        infos=np.array([{}] * len(demos)),
+        infos=np.array([{}] * len(dataset)),
         next_obs=dict_obs(following),
-        dones=~np.array(follows),
+        dones=~follows,
     )
 
 
@@ -53,24 +51,25 @@ class BCLearner:
     """``imitation``'s behaviour cloning as the DAgger learner (SB3 ``MultiInputActorCriticPolicy``).
 
     Works with plain DAgger and the reward-based strategy; the start-selecting strategies read the
-    heading network of :class:`~antmaze_hirl.dagger.policy.HighLevelPolicy` and do not apply.
+    offsets of an :class:`~antmaze_hirl.dagger.protocols.OffsetLearner` and do not apply.
 
     Args:
         env: The high-level env (for its spaces and geometry).
-        rng: Seeds the policy initialisation and, before each fit, torch's global RNG that
-            ``imitation``'s data loader shuffles with (it takes no generator of its own).
+        rng: Seeds the policy initialisation and each fit's shuffling. ``imitation``'s data loader
+            shuffles with torch's global RNG (it takes no generator of its own), so both run inside
+            ``torch.random.fork_rng``: seeded there, and the caller's global RNG is left as it was.
         batch_size: BC minibatch size.
         net_arch: Policy MLP sizes after SB3's image/vector extractor.
     """
 
     def __init__(self, env: Any, *, rng: np.random.Generator, batch_size: int = 32, net_arch: list[int] | None = None):
         inner = env.unwrapped
-        self.encoder = ObservationEncoder(inner.geometry, inner.renderer.pixels_per_cell)
         self.rng = rng
-        th.manual_seed(int(rng.integers(2**31)))
-        policy = MultiInputActorCriticPolicy(
-            inner.observation_space, inner.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
-        )
+        with th.random.fork_rng(devices=[]):
+            th.manual_seed(int(rng.integers(2**31)))
+            policy = MultiInputActorCriticPolicy(
+                inner.observation_space, inner.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
+            )
         self.bc = bc.BC(
             observation_space=inner.observation_space,
             action_space=inner.action_space,
@@ -84,9 +83,10 @@ class BCLearner:
         """Runs ``steps`` BC minibatches on all labels so far (none while D is smaller than a minibatch)."""
         if steps <= 0 or len(dataset) < self.bc.batch_size:
             return
-        th.manual_seed(int(self.rng.integers(2**31)))
-        self.bc.set_demonstrations(to_transitions(dataset))
-        self.bc.train(n_batches=steps, progress_bar=False)
+        with th.random.fork_rng(devices=[]):
+            th.manual_seed(int(self.rng.integers(2**31)))
+            self.bc.set_demonstrations(to_transitions(dataset))
+            self.bc.train(n_batches=steps, progress_bar=False)
 
     def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
         """The cloned policy's deterministic subgoal."""

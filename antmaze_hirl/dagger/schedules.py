@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import abc
+import warnings
 
 
 class BetaSchedule(abc.ABC):
@@ -13,16 +14,28 @@ class BetaSchedule(abc.ABC):
         """Beta after ``updates`` learner updates."""
 
 
-class ExponentialBetaSchedule(BetaSchedule):
+class InverseDecayBetaSchedule(BetaSchedule):
     """The paper's ``beta <- beta / d`` after every update: ``beta0 / d**updates``.
 
+    Not ``imitation``'s ``ExponentialBetaSchedule(decay_probability)``, which multiplies by a
+    probability in ``(0, 1]``: ``d`` here divides, so ``d = 2`` is that class's ``0.5``.
+
     Args:
-        decay: ``d >= 1``.
+        decay: The paper's ``d >= 1``.
         beta0: Initial beta in ``[0, 1]``.
+
+    Raises:
+        ValueError: If ``decay < 1`` (naming ``imitation``'s convention when it lies in ``(0, 1)``) or
+            ``beta0`` is outside ``[0, 1]``.
     """
 
     def __init__(self, decay: float = 2.0, beta0: float = 1.0) -> None:
-        if decay < 1:
+        if 0 < decay < 1:
+            raise ValueError(
+                f"decay d must be >= 1 (beta is divided by d), got {decay}: imitation's ExponentialBetaSchedule "
+                f"multiplies by decay_probability in (0, 1]; its {decay} is d = {1 / decay:g} here"
+            )
+        if not decay >= 1:
             raise ValueError(f"decay d must be >= 1, got {decay}")
         if not 0 <= beta0 <= 1:
             raise ValueError(f"beta0 must lie in [0, 1], got {beta0}")
@@ -32,6 +45,22 @@ class ExponentialBetaSchedule(BetaSchedule):
     def __call__(self, updates: int) -> float:
         """Returns ``beta0 / decay**updates``."""
         return self.beta0 / self.decay**updates
+
+
+class ExponentialBetaSchedule(InverseDecayBetaSchedule):
+    """Deprecated name of :class:`InverseDecayBetaSchedule` (it clashed with ``imitation``'s class).
+
+    Warns ``DeprecationWarning``; takes the same ``d >= 1``.
+    """
+
+    def __init__(self, decay: float = 2.0, beta0: float = 1.0) -> None:
+        warnings.warn(
+            "antmaze_hirl's ExponentialBetaSchedule is renamed InverseDecayBetaSchedule (it divides by d >= 1, "
+            "unlike imitation's ExponentialBetaSchedule); the old name will be removed",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        super().__init__(decay, beta0)
 
 
 class LinearBetaSchedule(BetaSchedule):

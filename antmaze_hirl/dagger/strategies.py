@@ -1,22 +1,22 @@
 """Active-learning query strategies: where episodes start, and which labels are kept.
 
-Plain DAgger is :class:`QueryStrategy` itself (corner starts, every label kept). The paper's three
-strategies override one hook each and compose with any trainer setting.
+:class:`QueryStrategy` is the base: its hooks do nothing, which is plain DAgger (:class:`DAggerQuery`,
+corner starts, every label kept). The paper's three strategies override one hook each and compose with
+any trainer setting.
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, ClassVar
 
 import numpy as np
 
+from antmaze_hirl.dagger.dataset import DemonstrationDataset
 from antmaze_hirl.dagger.features import EncodedBatch
-
-if TYPE_CHECKING:
-    from antmaze_hirl.dagger.dataset import DemonstrationDataset
-    from antmaze_hirl.dagger.policy import HighLevelPolicy
+from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,7 @@ class StartQuery:
     goal_xy: np.ndarray
     candidates: np.ndarray
     body_observation: np.ndarray
-    policy: HighLevelPolicy
+    policy: OffsetLearner
 
     def encode(self, agent_xy: np.ndarray, body_observations: np.ndarray) -> EncodedBatch:
         """Encodes the agent at each of ``agent_xy`` with the matching body observation."""
@@ -44,9 +44,29 @@ class StartQuery:
 
 
 class QueryStrategy:
-    """Plain DAgger: start in the layout's corner, aggregate every label."""
+    """Base of the active-learning strategies: hooks the trainer calls, each a no-op here.
 
-    name = "dagger"
+    A subclass sets :attr:`name` and overrides the hooks it needs. Instantiating the base itself is
+    deprecated (it used to be plain DAgger): it warns and gives a :class:`DAggerQuery`.
+    """
+
+    name: ClassVar[str] = ""
+    reads_policy_outputs: ClassVar[bool] = False
+    """Whether the strategy reads the learner's offsets (then the learner must be an :class:`OffsetLearner`)."""
+
+    def __new__(cls, *args: Any, **kwargs: Any) -> QueryStrategy:
+        """A new strategy; ``QueryStrategy()`` itself gives a :class:`DAggerQuery`, with a warning."""
+        if cls is QueryStrategy:
+            warnings.warn(
+                "QueryStrategy() as plain DAgger is deprecated: use DAggerQuery() (QueryStrategy is the base now)",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            cls = DAggerQuery
+        return super().__new__(cls)
+
+    def attach(self, learner: Learner) -> None:
+        """Called once by the trainer with its learner (for strategies that build models like it)."""
 
     def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
         """Start xy for the next episode, or ``None`` for the env's own corner start."""
@@ -55,11 +75,17 @@ class QueryStrategy:
     def on_episode_end(
         self, dataset: DemonstrationDataset, episode: int, success: bool, rng: np.random.Generator
     ) -> list[int]:
-        """Adjusts the dataset after an episode; returns the removed indices."""
+        """Adjusts the dataset after an episode; returns the removed positions."""
         return []
 
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
         """Called after each learner update (for strategies that train models of their own)."""
+
+
+class DAggerQuery(QueryStrategy):
+    """Plain DAgger: start in the layout's corner, aggregate every label."""
+
+    name = "dagger"
 
 
 def spread(outputs: np.ndarray) -> float:
@@ -80,6 +106,7 @@ class NoiseQuery(QueryStrategy):
     """
 
     name = "noise"
+    reads_policy_outputs = True
 
     def __init__(self, n_noises: int = 10, noise_scale: float = 1.0) -> None:
         if n_noises < 2:
@@ -111,8 +138,8 @@ class MultiPolicyQuery(QueryStrategy):
 
     Args:
         n_policies: Ensemble size.
-        make_policy: Factory ``rng -> HighLevelPolicy`` for the ensemble members (set by the trainer
-            when left ``None``).
+        make_policy: Factory ``rng -> learner`` for the ensemble members (left ``None``: the trainer's
+            learner's :meth:`~antmaze_hirl.dagger.protocols.OffsetLearner.spawn`).
         member_steps: Gradient steps per member per update. Default: the trainer's N divided by
             ``n_policies`` (rounded up), so the whole ensemble costs about as much as the learner;
             disagreement only has to rank start cells, and full-length member training made a trial
@@ -120,11 +147,12 @@ class MultiPolicyQuery(QueryStrategy):
     """
 
     name = "multi_policy"
+    reads_policy_outputs = True
 
     def __init__(
         self,
         n_policies: int = 5,
-        make_policy: Callable[[np.random.Generator], HighLevelPolicy] | None = None,
+        make_policy: Callable[[np.random.Generator], OffsetLearner] | None = None,
         member_steps: int | None = None,
     ) -> None:
         if n_policies < 2:
@@ -134,7 +162,12 @@ class MultiPolicyQuery(QueryStrategy):
         self.n_policies = n_policies
         self.make_policy = make_policy
         self.member_steps = member_steps
-        self.members: list[HighLevelPolicy] = []
+        self.members: list[OffsetLearner] = []
+
+    def attach(self, learner: Learner) -> None:
+        """Makes the members with ``learner``'s ``spawn`` unless :attr:`make_policy` was given."""
+        if self.make_policy is None and isinstance(learner, OffsetLearner):
+            self.make_policy = learner.spawn
 
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
         """Trains every member on its own bootstrap resample of the dataset."""
@@ -187,7 +220,7 @@ class RewardBasedQuery(QueryStrategy):
 
 
 STRATEGIES: dict[str, type[QueryStrategy]] = {
-    "dagger": QueryStrategy,
+    "dagger": DAggerQuery,
     "noise": NoiseQuery,
     "multi_policy": MultiPolicyQuery,
     "reward": RewardBasedQuery,

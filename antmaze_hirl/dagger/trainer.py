@@ -2,37 +2,22 @@
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Callable, Generator
-from dataclasses import asdict, dataclass
-from typing import Any, Literal, Protocol
+from dataclasses import asdict, dataclass, replace
+from typing import Any, Literal
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
-from antmaze_hirl.dagger.features import ObservationEncoder
-from antmaze_hirl.dagger.policy import HighLevelPolicy
-from antmaze_hirl.dagger.schedules import BetaSchedule, ExponentialBetaSchedule
-from antmaze_hirl.dagger.strategies import MultiPolicyQuery, NoiseQuery, QueryStrategy, StartQuery
+from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
+from antmaze_hirl.dagger.schedules import BetaSchedule, InverseDecayBetaSchedule
+from antmaze_hirl.dagger.strategies import DAggerQuery, QueryStrategy, StartQuery
 from antmaze_hirl.envs.reach import as_finite_vector
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experts.base import Expert
 
 Mixing = Literal["blend", "switch"]
-
-
-class Learner(Protocol):
-    """What the trainer needs of a learner (:class:`HighLevelPolicy`, or ``BCLearner`` from ``interop``)."""
-
-    encoder: ObservationEncoder
-
-    def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
-        """The learner's subgoal for ``observation``."""
-        ...
-
-    def fit_dataset(self, dataset: DemonstrationDataset, steps: int) -> Any:
-        """Trains ``steps`` minibatch steps on the aggregated dataset."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -168,26 +153,28 @@ class EpisodeRun:
 
 
 class DAggerTrainer:
-    """Trains a :class:`HighLevelPolicy` by DAgger on a high-level maze env.
+    """Trains a learner (:class:`~antmaze_hirl.dagger.HighLevelPolicy` or any :class:`Learner`) by DAgger.
 
-    Per episode: sample a maze, start (the strategy may choose it) and goal; at each high-level step
+    Per episode: sample a task with the env's ``sample_task`` (maze and goal; the strategy may choose
+    the start, else the env's reset places it); at each high-level step
     query the expert for ``pi*(s)``, execute the mix of learner and expert subgoals with the env's
     low-level controller, and aggregate ``(s, pi*(s))`` into D. Every ``episodes_per_update`` episodes,
     run ``gradient_steps`` of regression on D and advance beta (``beta <- beta / d`` by default).
 
     Beta is the *expert's* weight, as in Ross et al. and ``imitation``: beta = 1 executes the expert's
-    subgoal, beta = 0 the learner's. A mix that lands within the env's ``min_subgoal_distance`` of the
-    agent (after clipping to the maze: a learner pointing into a border corner, or two opposite
-    proposals blended) is replaced by the expert's subgoal: it would be "reached" without moving, so
-    every low-level step would cost a label and add the same sample to D.
+    subgoal, beta = 0 the learner's. A mix that is still a no-op after clipping to the maze (the env's
+    ``is_no_op_subgoal``: within ``min_subgoal_distance`` of the agent, as a learner pointing into a
+    border corner, or two opposite proposals blended) is replaced by the expert's subgoal: it would be
+    "reached" without moving, so every low-level step would cost a label and add the same sample to D.
 
     Args:
         env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
         expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
-        policy: The learner (start-selecting strategies need a :class:`HighLevelPolicy`).
+        policy: The learner (start-selecting strategies need an
+            :class:`~antmaze_hirl.dagger.protocols.OffsetLearner`, such as ``HighLevelPolicy``).
         rng: Source of all of the trainer's randomness (maze draws, switching, strategies).
         strategy: Active-learning strategy; default plain DAgger.
-        beta_schedule: Beta after ``k`` updates; default :class:`ExponentialBetaSchedule` with d = 2.
+        beta_schedule: Beta after ``k`` updates; default :class:`InverseDecayBetaSchedule` with d = 2.
         mixing: ``"blend"`` executes ``beta * expert + (1 - beta) * learner`` (the paper); ``"switch"``
             executes the expert's subgoal with probability beta, else the learner's (``imitation``).
         episodes_per_update: K, episodes between updates.
@@ -224,14 +211,13 @@ class DAggerTrainer:
         self.expert = expert
         self.policy = policy
         self.rng = rng
-        self.strategy = strategy if strategy is not None else QueryStrategy()
-        if isinstance(self.strategy, NoiseQuery | MultiPolicyQuery) and not isinstance(policy, HighLevelPolicy):
+        self.strategy = strategy if strategy is not None else DAggerQuery()
+        if self.strategy.reads_policy_outputs and not isinstance(policy, OffsetLearner):
             raise ValueError(
                 f"strategy {self.strategy.name!r} reads a HighLevelPolicy's outputs; got {type(policy).__name__}"
             )
-        if isinstance(self.strategy, MultiPolicyQuery) and self.strategy.make_policy is None:
-            self.strategy.make_policy = self._member_factory()
-        self.beta_schedule = beta_schedule if beta_schedule is not None else ExponentialBetaSchedule()
+        self.strategy.attach(policy)
+        self.beta_schedule = beta_schedule if beta_schedule is not None else InverseDecayBetaSchedule()
         self.mixing = mixing
         self.episodes_per_update = episodes_per_update
         self.gradient_steps = gradient_steps
@@ -299,17 +285,15 @@ class DAggerTrainer:
 
     def _episode_steps(self, executed: list[ExecutedStep]) -> Generator[LabelRequest, Any, EpisodeRecord]:
         # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
-        inner = self.env.unwrapped
-        layout = inner.sample_layout(self.rng)
-        goal_xy = inner.noisy_cell_centre(layout.goal_cell, self.rng)
-        options: dict[str, Any] = {"layout": layout, "goal_xy": goal_xy}
+        # The trainer's rng draws layout and goal; the start is the strategy's, else the env's reset places it.
+        task = self.env.unwrapped.sample_task(self.rng, draw_start=False)
         if self._rest_body is not None:
-            start = self.strategy.choose_start(self._start_query(layout.walls, goal_xy), self.rng)
+            start = self.strategy.choose_start(self._start_query(task.layout.walls, task.goal_xy), self.rng)
             if start is not None:
-                options["start_xy"] = start
-        obs, _ = self.env.reset(seed=int(self.rng.integers(2**31)), options=options)
+                task = replace(task, start_xy=start)
+        obs, _ = self.env.reset(seed=int(self.rng.integers(2**31)), options=task.reset_options())
         if self._rest_body is None:
-            self._rest_body = np.asarray(obs["state"][4:], dtype=np.float64)
+            self._rest_body = np.asarray(STATE_LAYOUT.body_observation(obs["state"]), dtype=np.float64)
         beta, episode, cost, done, info = self.beta, self.episodes_done, 0, False, {}
         while not done:
             # The learner's proposal is computed before the label so a person can be shown it; it is
@@ -318,10 +302,7 @@ class DAggerTrainer:
             answer = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)
             expert_subgoal = as_finite_vector(answer, 2, "expert subgoal")
             cost += 1
-            self.dataset.add(
-                Demonstration(obs["image"], obs["state"], expert_subgoal, episode, cost - 1),
-                self.policy.encoder.encode_observations([obs]),
-            )
+            self.dataset.add(Demonstration(obs["image"], obs["state"], expert_subgoal, episode, cost - 1))
             if self.per_step_gradient_steps:
                 self._fit(self.per_step_gradient_steps)
             subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
@@ -353,8 +334,7 @@ class DAggerTrainer:
         inner = self.env.unwrapped
         low, high = inner.action_space.low, inner.action_space.high
         chosen = np.clip(chosen, low, high)
-        # Measured as the env measures its push-out: from the body's exact position.
-        if np.linalg.norm(chosen - inner.agent_xy) < inner.min_subgoal_distance:
+        if inner.is_no_op_subgoal(chosen):
             return np.clip(expert_subgoal, low, high)
         return chosen
 
@@ -367,13 +347,3 @@ class DAggerTrainer:
         cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]
         candidates = np.stack([geometry.cell_to_xy(cell) for cell in cells])
         return StartQuery(walls, goal_xy, candidates, self._rest_body, self.policy)
-
-    def _member_factory(self) -> Callable[[np.random.Generator], HighLevelPolicy]:
-        settings = self.policy.config()
-        settings.pop("geometry")
-        return functools.partial(_make_member, self.policy.geometry, settings)
-
-
-def _make_member(geometry: Any, settings: dict[str, Any], rng: np.random.Generator) -> HighLevelPolicy:
-    # Module level (not a lambda) so a trainer pickles: the study server checkpoints it between episodes.
-    return HighLevelPolicy(geometry, rng=rng, **settings)

@@ -16,9 +16,11 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
 from antmaze_hirl.envs.simulator import Body, body_spec
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.envs.task import Task
 
-STATE_AGENT_XY = slice(0, 2)
-STATE_GOAL_XY = slice(2, 4)
+STATE_AGENT_XY = STATE_LAYOUT.agent_slice  # older names of STATE_LAYOUT's slices, kept for existing imports
+STATE_GOAL_XY = STATE_LAYOUT.goal_slice
 DEFAULT_MIN_GOAL_CELLS = 3
 
 _MIN_GOAL_DISTANCE_RENAMED = (
@@ -185,7 +187,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             (self.geometry.high - scale).astype(np.float32),
             dtype=np.float32,
         )
-        state_dim = 4 + self.reach.sim.observation_dim
+        state_dim = STATE_LAYOUT.state_dim(self.reach.sim.observation_dim)
         self.observation_space = spaces.Dict(
             {
                 "image": spaces.Box(0, 255, shape=self.renderer.shape, dtype=np.uint8),
@@ -221,20 +223,18 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         """
         super().reset(seed=seed)
         options = options or {}
-        layout = options.get("layout") or self.sample_layout(self.np_random)
-        if not isinstance(layout, MazeLayout):
-            raise ValueError(f"options['layout'] must be a MazeLayout, got {type(layout).__name__}")
-        self.reach.set_walls(layout.walls)
-        self.layout = layout
-        start = options.get("start_xy")
-        if start is None:
-            start = self.noisy_cell_centre(layout.start_cell, self.np_random)
-        goal = options.get("goal_xy")
-        if goal is None:
-            self.goal_xy = self.noisy_cell_centre(layout.goal_cell, self.np_random)
-        else:
-            self.goal_xy = as_free_point(goal, self.geometry, layout.walls, "goal_xy")
-        self.reach.reset(seed=int(self.np_random.integers(2**31)), options={"start_xy": start, "goal_xy": self.goal_xy})
+        task = self.sample_task(
+            self.np_random,
+            layout=options.get("layout"),
+            start_xy=options.get("start_xy"),
+            goal_xy=options.get("goal_xy"),
+        )
+        self.reach.set_walls(task.layout.walls)
+        self.layout = task.layout
+        self.goal_xy = task.goal_xy
+        self.reach.reset(
+            seed=int(self.np_random.integers(2**31)), options={"start_xy": task.start_xy, "goal_xy": self.goal_xy}
+        )
         self.attempts = 0
         self.total_low_level_steps = 0
         return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
@@ -283,10 +283,18 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         truncated = not success and self.total_low_level_steps >= self.max_steps
         return self._get_obs(), float(success), success or fell, truncated, info
 
+    def is_no_op_subgoal(self, subgoal: np.ndarray) -> bool:
+        """Whether ``subgoal`` lies within :attr:`min_subgoal_distance` of the body's exact position.
+
+        The low level would "reach" such a subgoal without moving: :meth:`step` pushes it out, and the
+        DAgger trainer replaces a mix that is still one after clipping by the expert's subgoal.
+        """
+        return bool(np.linalg.norm(subgoal - self.agent_xy) < self.min_subgoal_distance)
+
     def _push_out(self, subgoal: np.ndarray) -> tuple[np.ndarray, bool]:
         offset = subgoal - self.agent_xy
         distance = float(np.linalg.norm(offset))
-        if distance >= self.min_subgoal_distance or distance == 0.0:
+        if not self.is_no_op_subgoal(subgoal) or distance == 0.0:
             return subgoal, False
         pushed = self.agent_xy + offset * (self.min_subgoal_distance / distance)
         return np.clip(pushed, self.action_space.low, self.action_space.high), True
@@ -314,10 +322,40 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             )
         return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_cells)
 
+    def sample_task(
+        self,
+        rng: np.random.Generator,
+        *,
+        layout: MazeLayout | None = None,
+        start_xy: np.ndarray | None = None,
+        goal_xy: np.ndarray | None = None,
+        draw_start: bool = True,
+    ) -> Task:
+        """Draws an episode's task from ``rng`` the way :meth:`reset` does, keeping the parts given.
+
+        Draws, in this order and only where not given: the layout (:meth:`sample_layout`), the start
+        (its start cell, when ``draw_start``) and the goal (its goal cell), each cell's position with
+        :meth:`noisy_cell_centre`. :meth:`reset` calls it with its ``options``; the DAgger trainer with
+        ``draw_start=False``, since its query strategy picks the start once it knows layout and goal.
+
+        Raises:
+            ValueError: If ``layout`` is not a :class:`MazeLayout` or ``goal_xy`` is NaN or in a wall.
+        """
+        layout = layout or self.sample_layout(rng)
+        if not isinstance(layout, MazeLayout):
+            raise ValueError(f"layout (reset's options['layout']) must be a MazeLayout, got {type(layout).__name__}")
+        if start_xy is None and draw_start:
+            start_xy = self.noisy_cell_centre(layout.start_cell, rng)
+        if goal_xy is None:
+            goal_xy = self.noisy_cell_centre(layout.goal_cell, rng)
+        else:
+            goal_xy = as_free_point(goal_xy, self.geometry, layout.walls, "goal_xy")
+        return Task(layout, goal_xy, start_xy)
+
     def noisy_cell_centre(self, cell: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
         """The centre of ``cell`` plus uniform ``±position_noise`` cells of noise from ``rng``.
 
-        This is how :meth:`reset` places starts and goals; the DAgger trainer places its goals the same way.
+        This is how :meth:`sample_task` places starts and goals.
         """
         noise = rng.uniform(-self.position_noise, self.position_noise, size=2)
         return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
@@ -327,5 +365,5 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         agent_xy = self.reach.agent_xy
-        state = np.concatenate([agent_xy, self.goal_xy, self.reach.body_observation]).astype(np.float32)
+        state = STATE_LAYOUT.compose(agent_xy, self.goal_xy, self.reach.body_observation)
         return {"image": self.renderer.observation(self.layout.walls, agent_xy, self.goal_xy), "state": state}

@@ -15,10 +15,11 @@ from antmaze_hirl.envs.layouts import MazeLayout
 class SplitMazeEnv(HighLevelMazeEnv):
     """:class:`HighLevelMazeEnv` drawing every layout from one part (``"train"``, ``"eval"``, ``"selection"``).
 
-    Overriding :meth:`sample_layout` covers both ways a layout is drawn: :meth:`reset` without a
-    ``layout`` option (evaluation) and :class:`~antmaze_hirl.dagger.DAggerTrainer`, which calls
-    ``env.unwrapped.sample_layout`` itself; a ``gym.Wrapper`` could intercept neither, since both
-    reach the unwrapped env. Everything else is the parent's.
+    Overriding :meth:`sample_layout` covers every way a layout is drawn, since :meth:`sample_task`
+    draws through it: :meth:`reset` without a ``layout`` option (evaluation) and
+    :class:`~antmaze_hirl.dagger.DAggerTrainer`, which calls ``env.unwrapped.sample_task``; a
+    ``gym.Wrapper`` could intercept neither, since both reach the unwrapped env. Everything else is
+    the parent's.
 
     Args:
         split: The part of :mod:`antmaze_hirl.envs.layout_splits` to draw from.

@@ -19,7 +19,7 @@ import torch
 from tqdm.auto import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
-from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, evaluate_high_level
 from antmaze_hirl.dagger.strategies import STRATEGIES, make_strategy
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
@@ -129,7 +129,7 @@ def run_trial(
         policy=HighLevelPolicy.for_env(env, rng=rng),
         rng=rng,
         strategy=make_strategy(method),
-        beta_schedule=ExponentialBetaSchedule(config.decay),
+        beta_schedule=InverseDecayBetaSchedule(config.decay),
         mixing=config.mixing,  # type: ignore[arg-type]
         episodes_per_update=config.episodes_per_update,
         gradient_steps=config.gradient_steps,

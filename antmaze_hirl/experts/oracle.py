@@ -8,8 +8,8 @@ import numpy as np
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
-from antmaze_hirl.envs.high_level import STATE_AGENT_XY, STATE_GOAL_XY
 from antmaze_hirl.envs.layouts import shortest_path
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
 def plan_subgoal(
@@ -111,8 +111,8 @@ class PathOracle:
         subgoal = plan_subgoal(
             walls,
             self.geometry,
-            state[STATE_AGENT_XY],
-            state[STATE_GOAL_XY],
+            STATE_LAYOUT.agent_xy(state),
+            STATE_LAYOUT.goal_xy(state),
             max_distance=self.max_distance,
             clearance=self.clearance,
         )

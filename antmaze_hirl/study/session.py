@@ -38,10 +38,11 @@ from typing import Any
 import numpy as np
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
-from antmaze_hirl.dagger import DAggerTrainer, ExponentialBetaSchedule, HighLevelPolicy, evaluate_high_level
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, evaluate_high_level
 from antmaze_hirl.dagger.strategies import make_strategy
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
@@ -232,8 +233,8 @@ class ParticipantSession:
                 "walls": inner.layout.walls.astype(int).tolist(),
                 "bounds": [inner.action_space.low.tolist(), inner.action_space.high.tolist()],
             },
-            "agent": [float(v) for v in observation["state"][:2]],
-            "goal": [float(v) for v in observation["state"][2:4]],
+            "agent": [float(v) for v in STATE_LAYOUT.agent_xy(observation["state"])],
+            "goal": [float(v) for v in STATE_LAYOUT.goal_xy(observation["state"])],
             "trail": self._trail,
             "max_distance": self.max_distance,
             "goal_radius": float(inner.goal_threshold),
@@ -461,7 +462,7 @@ class ParticipantSession:
             policy=HighLevelPolicy.for_env(self._env, rng=rng),
             rng=rng,
             strategy=make_strategy(trial.method),
-            beta_schedule=ExponentialBetaSchedule(config.decay),
+            beta_schedule=InverseDecayBetaSchedule(config.decay),
             mixing=config.mixing,  # type: ignore[arg-type]
             episodes_per_update=config.episodes_per_update,
             gradient_steps=config.gradient_steps,
@@ -494,7 +495,9 @@ class ParticipantSession:
         assert self._trial is not None
         self._run = self._trial.trainer.start_episode()
         self._trail = (
-            [[round(float(v), 3) for v in self._run.request.observation["state"][:2]]] if self._run.request else []
+            [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(self._run.request.observation["state"])]]
+            if self._run.request
+            else []
         )
         self._episode_started_at = self.clock()
         self._episode_paused = 0.0

@@ -1,0 +1,222 @@
+"""The dagger package's parts and contracts: dataset, policy, learner, state layout, task sampler, names."""
+
+import pickle
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch as th
+
+from antmaze_hirl.dagger import (
+    STRATEGIES,
+    DAggerQuery,
+    Demonstration,
+    DemonstrationDataset,
+    ExponentialBetaSchedule,
+    HighLevelPolicy,
+    InverseDecayBetaSchedule,
+    OffsetLearner,
+    QueryStrategy,
+    SubgoalLearner,
+    SubgoalPolicy,
+)
+from antmaze_hirl.envs import PointGoToController
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.envs.task import Task
+
+V2_ZIP = Path(__file__).parent / "data" / "high_level_policy_v2.zip"
+
+
+def point_env(**kwargs):
+    return gym.make(
+        "antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController(), **kwargs
+    )
+
+
+def demo(episode, step, value=0.0):
+    state = np.full(6, value, np.float32)
+    return Demonstration(np.zeros((3, 8, 8), np.uint8), state, np.array([value, -value]), episode, step)
+
+
+def test_dataset_removal_clears_the_mask_and_keeps_ids_of_the_rest():
+    dataset = DemonstrationDataset()
+    for step in range(100):  # past the first capacity, so the arrays grow once
+        dataset.add(demo(episode=step // 10, step=step % 10, value=step))
+    ids_before = dataset.ids()
+    dataset.remove([1, 3, 50])
+    assert len(dataset) == 97
+    np.testing.assert_array_equal(dataset.ids(), np.delete(ids_before, [1, 3, 50]))
+    np.testing.assert_array_equal(dataset.agent_xy()[:3, 0], [0.0, 2.0, 4.0])
+    np.testing.assert_array_equal(dataset.subgoals([2])[0], [4.0, -4.0])
+    assert dataset.episode_indices(0) == list(range(8))
+    assert dataset.add(demo(episode=10, step=0, value=7)) == 97 and dataset.ids()[-1] == 100  # ids never reused
+    with pytest.raises(ValueError, match="read-only"):
+        dataset.states[0, 0] = 1.0
+    with pytest.raises(IndexError, match=r"positions to remove must lie in \[0, 98\), got \[98\]"):
+        dataset.remove([98])
+    with pytest.raises(ValueError, match="does not match the dataset's image"):
+        dataset.add(Demonstration(np.zeros((3, 4, 4), np.uint8), np.zeros(6, np.float32), np.zeros(2), 0, 0))
+
+
+def test_learner_encodings_stay_right_after_removal():
+    env = point_env()
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
+    dataset = DemonstrationDataset()
+    observations = [env.reset(seed=seed)[0] for seed in range(4)]
+    for step, obs in enumerate(observations):
+        dataset.add(Demonstration(obs["image"], obs["state"], np.zeros(2), 0, step))
+    policy.fit_dataset(dataset, 1)  # fills the encoding cache
+    dataset.remove([0, 2])
+    cached = policy.learner.cache.encoded(policy.policy, dataset, None)
+    fresh = policy.encoder.encode_observations([observations[1], observations[3]])
+    np.testing.assert_array_equal(cached.grids, fresh.grids)
+    np.testing.assert_array_equal(cached.vectors, fresh.vectors)
+    copy = pickle.loads(pickle.dumps(dataset))  # may grow apart from the original: a cache tells them apart
+    assert copy.key != dataset.key and len(copy) == 2
+
+
+def test_learner_and_policy_leave_torchs_global_rng_alone():
+    env = point_env()
+    obs, _ = env.reset(seed=0)
+    dataset = DemonstrationDataset()
+    dataset.add(Demonstration(obs["image"], obs["state"], np.zeros(2), 0, 0))
+    th.manual_seed(123)
+    expected = th.rand(3)
+    th.manual_seed(123)
+    learner_policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))  # seeds its initialisation
+    SubgoalLearner(learner_policy.policy, rng=np.random.default_rng(1)).fit_dataset(dataset, 3)
+    th.testing.assert_close(th.rand(3), expected)
+
+
+def test_bc_learner_leaves_torchs_global_rng_alone():
+    pytest.importorskip("imitation", reason="the imitation extra is not installed")
+    from antmaze_hirl.dagger.interop import BCLearner
+
+    env = point_env()
+    dataset = DemonstrationDataset()
+    for seed in range(4):
+        obs, _ = env.reset(seed=seed)
+        dataset.add(Demonstration(obs["image"], obs["state"], np.zeros(2), 0, seed))
+    th.manual_seed(7)
+    expected = th.rand(3)
+    th.manual_seed(7)
+    BCLearner(env, rng=np.random.default_rng(0), batch_size=2).fit_dataset(dataset, 2)
+    th.testing.assert_close(th.rand(3), expected)
+
+
+def test_policy_is_a_module_and_loads_the_v2_zip_format(tmp_path):
+    # Written by the code before the split (one HighLevelPolicy class); its prediction was recorded then.
+    rng = np.random.default_rng(1)
+    image = (rng.random((3, 12, 12)) > 0.5).astype(np.uint8) * 255
+    obs = {"image": image, "state": np.array([0.1, -0.2, 0.9, 0.8, 0.3, -0.1], np.float32)}
+    recorded = [0.5323548391461372, -0.3630983680486679]
+    loaded = HighLevelPolicy.load(V2_ZIP)
+    assert loaded.config()["learning_rate"] == 5e-4 and loaded.learner.batch_size == 16
+    np.testing.assert_array_equal(loaded.predict(obs), recorded)
+    policy = SubgoalPolicy.load(V2_ZIP)
+    assert isinstance(policy, th.nn.Module) and isinstance(loaded, OffsetLearner)
+    np.testing.assert_array_equal(policy.predict(obs), recorded)
+    resaved = HighLevelPolicy.load(loaded.save(tmp_path / "again.zip"))
+    assert resaved.config() == loaded.config()
+    np.testing.assert_array_equal(resaved.predict(obs), recorded)
+
+
+def test_state_layout_reads_agent_goal_and_body():
+    state = np.arange(7, dtype=np.float32)
+    np.testing.assert_array_equal(STATE_LAYOUT.agent_xy(state), [0, 1])
+    np.testing.assert_array_equal(STATE_LAYOUT.goal_xy(state), [2, 3])
+    np.testing.assert_array_equal(STATE_LAYOUT.body_observation(state), [4, 5, 6])
+    np.testing.assert_array_equal(STATE_LAYOUT.agent_xy(np.stack([state, state + 10])), [[0, 1], [10, 11]])
+    np.testing.assert_array_equal(STATE_LAYOUT.compose([0, 1], [2, 3], [4, 5, 6]), state)
+    assert STATE_LAYOUT.body_dim(7) == 3 and STATE_LAYOUT.state_dim(3) == 7
+    with pytest.raises(ValueError, match="at least 4 values, got 3"):
+        STATE_LAYOUT.body_dim(3)
+    env = point_env()
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_allclose(STATE_LAYOUT.agent_xy(obs["state"]), env.unwrapped.agent_xy, atol=1e-6)
+    np.testing.assert_allclose(STATE_LAYOUT.goal_xy(obs["state"]), env.unwrapped.goal_xy, atol=1e-6)
+
+
+def test_reset_draws_its_task_with_sample_task():
+    env = point_env()
+    env.reset(seed=5)
+    task = env.unwrapped.sample_task(np.random.default_rng(5))  # what reset(seed=5) drew from np_random
+    assert isinstance(task, Task)
+    np.testing.assert_array_equal(env.unwrapped.layout.walls, task.layout.walls)
+    np.testing.assert_array_equal(env.unwrapped.goal_xy, task.goal_xy)
+    np.testing.assert_allclose(env.unwrapped.agent_xy, task.start_xy, atol=1e-6)
+    # Starting the task drawn without a start: layout and goal as given, the env places the start.
+    bare = env.unwrapped.sample_task(np.random.default_rng(9), draw_start=False)
+    assert bare.start_xy is None and "start_xy" not in bare.reset_options()
+    env.reset(seed=1, options=bare.reset_options())
+    np.testing.assert_array_equal(env.unwrapped.goal_xy, bare.goal_xy)
+    with pytest.raises(ValueError, match=r"layout \(reset's options\['layout'\]\) must be a MazeLayout, got str"):
+        env.unwrapped.sample_task(np.random.default_rng(0), layout="u")
+
+
+def test_trainer_draws_its_task_with_sample_task():
+    from antmaze_hirl import PathOracle
+    from antmaze_hirl.dagger import DAggerTrainer
+
+    env = point_env()
+    rng = np.random.default_rng(3)
+    trainer = DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env), policy=HighLevelPolicy.for_env(env, rng=rng), rng=rng
+    )
+    drawn = []
+    sample_task = env.unwrapped.sample_task
+
+    def recording(*args, **kwargs):
+        drawn.append(sample_task(*args, **kwargs))
+        return drawn[-1]
+
+    env.unwrapped.sample_task = recording
+    run = trainer.start_episode()
+    assert len(drawn) == 2  # the trainer's draw, then reset's (which keeps the given layout and goal)
+    assert drawn[1].layout is drawn[0].layout
+    np.testing.assert_array_equal(
+        STATE_LAYOUT.goal_xy(run.request.observation["state"]), drawn[0].goal_xy.astype(np.float32)
+    )
+
+
+def test_no_op_subgoal_check_matches_the_push_out():
+    env = point_env(min_subgoal_distance=0.4)
+    env.reset(seed=0)
+    inner = env.unwrapped
+    assert inner.is_no_op_subgoal(inner.agent_xy + np.array([0.3, 0.0]))
+    assert not inner.is_no_op_subgoal(inner.agent_xy + np.array([0.0, 0.4]))
+    _, _, _, _, info = env.step(
+        np.clip(inner.agent_xy + np.array([0.2, 0.0]), env.action_space.low, env.action_space.high)
+    )
+    assert info["subgoal_extended"]
+
+
+def test_renamed_beta_schedule_and_its_deprecated_alias():
+    assert [InverseDecayBetaSchedule(2.0)(k) for k in range(3)] == [1.0, 0.5, 0.25]
+    with pytest.raises(ValueError, match=r"imitation's ExponentialBetaSchedule .* its 0.5 is d = 2 here"):
+        InverseDecayBetaSchedule(0.5)
+    with pytest.raises(ValueError, match="decay d must be >= 1, got -1"):
+        InverseDecayBetaSchedule(-1)
+    with pytest.warns(DeprecationWarning, match="renamed InverseDecayBetaSchedule"):
+        old = ExponentialBetaSchedule(3.0)
+    assert isinstance(old, InverseDecayBetaSchedule) and old(2) == 1 / 9
+
+
+def test_query_strategy_is_the_base_and_dagger_query_plain_dagger():
+    assert STRATEGIES["dagger"] is DAggerQuery and issubclass(DAggerQuery, QueryStrategy)
+    with pytest.warns(DeprecationWarning, match="use DAggerQuery"):
+        strategy = QueryStrategy()
+    assert type(strategy) is DAggerQuery and strategy.name == "dagger"
+
+
+def test_learner_settings_are_checked():
+    policy_rng = np.random.default_rng(0)
+    policy = SubgoalPolicy(MazeGeometry(3, 3, 1.0), pixels_per_cell=4, body_dim=2, rng=policy_rng)
+    with pytest.raises(ValueError, match="batch_size must be >= 1, got 0"):
+        SubgoalLearner(policy, rng=np.random.default_rng(0), batch_size=0)
+    with pytest.raises(ValueError, match="n_directions must be a positive multiple of 4, got 6"):
+        SubgoalPolicy(
+            MazeGeometry(3, 3, 1.0), pixels_per_cell=4, body_dim=2, rng=np.random.default_rng(0), n_directions=6
+        )
