@@ -9,6 +9,7 @@ import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl.envs.layout_splits import layout_split, sample_layout_in_split, wall_grid_split
 from antmaze_hirl.envs.layouts import MazeLayout, canonical_layout, generate_layout, wall_grid_string
 from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 
 
 def still(action_dim):
@@ -82,7 +83,8 @@ def test_split_env_draws_every_layout_from_its_part():
 
 
 def test_split_env_pickles_with_its_split():
-    env = SplitMazeEnv("point", split="eval", maze_size=3)  # the shipped low level pickles
+    # the shipped low level's controller pickles as its body's name
+    env = SplitMazeEnv("point", split="eval", maze_size=3, low_level=ShippedPolicyController("point"))
     copy = pickle.loads(pickle.dumps(env))
     assert copy.split == "eval" and layout_split(copy.layout) == "eval"
     env.close()
