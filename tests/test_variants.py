@@ -11,13 +11,19 @@ import pytest
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.cli import main
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, MultiPolicyQuery, NoiseQuery
+from antmaze_hirl.dagger import (
+    AggreVaTeQuery,
+    DAggerTrainer,
+    HighLevelPolicy,
+    InverseDecayBetaSchedule,
+    MultiPolicyQuery,
+    NoiseQuery,
+    RewardPerStepQuery,
+)
 from antmaze_hirl.dagger.features import ObservationEncoder
 from antmaze_hirl.dagger.network import direction_bins
 from antmaze_hirl.dagger.strategies import (
     STRATEGIES,
-    AggreVaTeQuery,
-    RewardPerStepQuery,
     StartQuery,
     cost_to_go,
     make_strategy,
