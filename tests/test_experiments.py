@@ -83,8 +83,8 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="holds results made with"):
         run_experiment(["dagger"], 1, ExperimentConfig(body="point", episodes=4), tmp_path, progress_bar=False)
-    with pytest.raises(ValueError, match="unknown method 'aggrevate'"):
-        run_experiment(["aggrevate"], 1, TINY, tmp_path / "other", progress_bar=False)
+    with pytest.raises(ValueError, match="unknown method 'gail'"):
+        run_experiment(["gail"], 1, TINY, tmp_path / "other", progress_bar=False)
     with pytest.raises(ValueError, match="expert_max_distance must be > 0 metres, got -1"):
         ExperimentConfig(expert_max_distance=-1.0)
 

@@ -17,11 +17,13 @@ from antmaze_hirl.dagger.schedules import (
 )
 from antmaze_hirl.dagger.strategies import (
     STRATEGIES,
+    AggreVaTeQuery,
     DAggerQuery,
     MultiPolicyQuery,
     NoiseQuery,
     QueryStrategy,
     RewardBasedQuery,
+    RewardPerStepQuery,
     make_strategy,
 )
 from antmaze_hirl.dagger.trainer import DAggerTrainer, EpisodeRecord
@@ -29,6 +31,7 @@ from antmaze_hirl.dagger.trainer import DAggerTrainer, EpisodeRecord
 __all__ = [
     "HELD_OUT_SEED",
     "STRATEGIES",
+    "AggreVaTeQuery",
     "BetaSchedule",
     "DAggerQuery",
     "DAggerTrainer",
@@ -45,6 +48,7 @@ __all__ = [
     "OffsetLearner",
     "QueryStrategy",
     "RewardBasedQuery",
+    "RewardPerStepQuery",
     "SubgoalLearner",
     "SubgoalPolicy",
     "evaluate_high_level",

@@ -7,6 +7,7 @@ any trainer setting.
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -17,6 +18,9 @@ import numpy as np
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
 from antmaze_hirl.dagger.features import EncodedBatch
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
+from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.layouts import bfs_distances
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
 @dataclass(frozen=True)
@@ -53,6 +57,13 @@ class QueryStrategy:
     name: ClassVar[str] = ""
     reads_policy_outputs: ClassVar[bool] = False
     """Whether the strategy reads the learner's offsets (then the learner must be an :class:`OffsetLearner`)."""
+    updates_every_step: ClassVar[bool] = False
+    """Whether the trainer updates after every high-level step (Alg. 4) instead of every K episodes.
+
+    Each such update is a full one: :attr:`step_gradient_steps` gradient steps (``None``: the trainer's
+    N), :meth:`on_update`, and one step of the beta schedule, so beta decays per step."""
+    step_gradient_steps: int | None = None
+    """Gradient steps of each per-step update (read only when :attr:`updates_every_step`)."""
 
     def __new__(cls, *args: Any, **kwargs: Any) -> QueryStrategy:
         """A new strategy; ``QueryStrategy()`` itself gives a :class:`DAggerQuery`, with a warning."""
@@ -81,6 +92,16 @@ class QueryStrategy:
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
         """Called after each learner update (for strategies that train models of their own)."""
 
+    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+        """The subgoal stored in D for ``observation``; here the expert's own (what every method but AggreVaTe keeps).
+
+        Args:
+            env: The trainer's env (``env.unwrapped`` holds the episode's layout, goal and geometry).
+            observation: The labelled observation.
+            expert_subgoal: The expert's answer, which the executed mix still uses.
+        """
+        return expert_subgoal
+
 
 class DAggerQuery(QueryStrategy):
     """Plain DAgger: start in the layout's corner, aggregate every label."""
@@ -100,26 +121,43 @@ class NoiseQuery(QueryStrategy):
     body observation, ``±noise_scale``); the episode starts at the candidate whose perturbed states
     make the current policy's outputs vary most.
 
+    With ``shared_noise`` (the default, as the paper has it) one buffer of ``n_noises`` perturbations
+    is drawn per start and applied to every candidate, so candidates differ only in where they are,
+    not in the luck of their noise. ``shared_noise=False`` draws fresh noise for each candidate: the
+    behaviour before issue 12, with which the committed ``noise`` results up to then were made (the
+    new default changes the method's numbers).
+
     Args:
         n_noises: Perturbations per candidate.
         noise_scale: Half-width of the uniform noise, in body-observation units.
+        shared_noise: One noise buffer for all candidates (the paper's Alg. 2), else fresh noise per candidate.
+
+    Raises:
+        ValueError: If ``n_noises`` is below 2 or ``noise_scale`` is negative.
     """
 
     name = "noise"
     reads_policy_outputs = True
 
-    def __init__(self, n_noises: int = 10, noise_scale: float = 1.0) -> None:
+    def __init__(self, n_noises: int = 10, noise_scale: float = 1.0, *, shared_noise: bool = True) -> None:
         if n_noises < 2:
             raise ValueError(f"n_noises must be >= 2 to measure a spread, got {n_noises}")
+        if not noise_scale >= 0:
+            raise ValueError(f"noise_scale must be >= 0, got {noise_scale}")
         self.n_noises = n_noises
         self.noise_scale = noise_scale
+        self.shared_noise = shared_noise
 
     def scores(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray:
         """Spread of the policy's outputs at each candidate."""
         body = query.body_observation
-        noisy = body + rng.uniform(
-            -self.noise_scale, self.noise_scale, size=(len(query.candidates), self.n_noises, *body.shape)
-        )
+        if self.shared_noise:
+            buffer = rng.uniform(-self.noise_scale, self.noise_scale, size=(self.n_noises, *body.shape))
+            noisy = body + np.broadcast_to(buffer, (len(query.candidates), *buffer.shape))
+        else:
+            noisy = body + rng.uniform(
+                -self.noise_scale, self.noise_scale, size=(len(query.candidates), self.n_noises, *body.shape)
+            )
         agents = np.repeat(query.candidates, self.n_noises, axis=0)
         outputs = query.policy.offsets(query.encode(agents, noisy.reshape(-1, *body.shape)))
         return np.array([spread(block) for block in outputs.reshape(len(query.candidates), self.n_noises, 2)])
@@ -135,6 +173,11 @@ class MultiPolicyQuery(QueryStrategy):
     Keeps ``n_policies`` extra learners; after every update each trains on a fresh bootstrap resample
     of D (warm-started, as the main learner is). The episode starts at the candidate where their
     subgoals disagree most.
+
+    The ``multi_policy`` method's ensemble settings (these defaults; the one place they are stated):
+    5 members, each made like the learner (its ``spawn``) and trained after every update for
+    ``ceil(N / 5)`` gradient steps (40 at the experiments' N = 200), a fifth of the learner's, on a
+    bootstrap resample of D the size of D. The paper trains its policies fully; see ``member_steps``.
 
     Args:
         n_policies: Ensemble size.
@@ -219,11 +262,128 @@ class RewardBasedQuery(QueryStrategy):
         return removed
 
 
+class RewardPerStepQuery(RewardBasedQuery):
+    """Alg. 4 as the paper writes it: reward-based filtering with an update after every high-level step.
+
+    The trainer (:attr:`QueryStrategy.updates_every_step`) runs, after each label is aggregated, N
+    gradient steps on D (``step_gradient_steps``; ``None`` keeps the trainer's N, the paper's
+    "train pi on D" inside the step loop) and one step of the beta schedule, so beta is divided by d
+    after every step rather than every episode. The step's executed mix uses the beta it was labelled
+    with (and the learner's proposal from before the update, the one a person is shown); the next step
+    sees the decayed beta. No update runs at the episode's end: the pruning of a failed episode is seen
+    by the next step's update; an episode's record carries its first step's beta. With d = 2, beta is
+    below 0.001 after ten labels, so rollouts are the learner's almost from the first episode on: that
+    is the algorithm as written. A trial costs about the mean episode length times the gradient steps
+    of ``reward``; ``step_gradient_steps`` trades that against fidelity.
+    :class:`RewardBasedQuery` (method ``reward``) keeps the per-episode updates of Alg. 1.
+
+    Args:
+        step_gradient_steps: Gradient steps after every step; ``None``: the trainer's ``gradient_steps``.
+
+    Raises:
+        ValueError: If ``step_gradient_steps`` is below 1.
+    """
+
+    name = "reward_per_step"
+    updates_every_step = True
+
+    def __init__(self, step_gradient_steps: int | None = None) -> None:
+        if step_gradient_steps is not None and step_gradient_steps < 1:
+            raise ValueError(f"step_gradient_steps must be >= 1, got {step_gradient_steps}")
+        self.step_gradient_steps = step_gradient_steps
+
+
+def cost_to_go(walls: np.ndarray, geometry: MazeGeometry, goal_xy: np.ndarray, xy: np.ndarray) -> float:
+    """The oracle's cost-to-go from ``xy``: metres along the maze grid's shortest path to the goal.
+
+    In the goal's cell it is the straight-line distance to the goal; elsewhere it is the BFS distance
+    (:func:`~antmaze_hirl.envs.layouts.bfs_distances`) from ``xy``'s cell to the goal's cell, in cells
+    times the cell side, plus the distance from ``xy`` to its cell's centre. A point in a wall, outside
+    the map or cut off from the goal costs ``inf``.
+    """
+    if not geometry.is_free(walls, xy):
+        return math.inf
+    cell, goal_cell = geometry.xy_to_cell(xy), geometry.xy_to_cell(goal_xy)
+    if cell == goal_cell:
+        return float(np.linalg.norm(np.asarray(xy) - goal_xy))
+    cells = int(bfs_distances(walls, goal_cell)[cell])
+    if cells < 0:
+        return math.inf
+    return cells * geometry.scale + float(np.linalg.norm(np.asarray(xy) - geometry.cell_to_xy(cell)))
+
+
+class AggreVaTeQuery(QueryStrategy):
+    """AggreVaTe(D) with the oracle's cost-to-go as the expert's Q (the paper's failed baseline).
+
+    Rolls in as DAgger does (the beta mix of learner and expert, every state labelled, one expert query
+    each), but the learner is not trained to copy the expert's subgoal: at each labelled state the
+    ``n_directions`` heading-bin subgoals at the expert's step length are scored by ``Q = step + c``,
+    the step's own length (``inf`` where the straight step touches a wall) plus :func:`cost_to_go`, and
+    D stores the lowest-Q candidate. The learner's heading cross-entropy then trains it towards the
+    argmin-Q bin, the hard-target reduction of AggreVaTe's cost-sensitive classification (Ross & Bagnell
+    2014; a softmax of ``-Q`` would be the soft one); its distance head towards the expert's step length.
+
+    How it differs from the paper's AggreVaTeD (Sun et al. 2017): there the expert's Q came from the
+    environment's sparse reward (success or not), which is flat almost everywhere, so the learner had
+    nothing to descend and failed. Here Q is the oracle's dense shortest-path cost-to-go, which no
+    sparse-reward setting gives; it is close to DAgger with the labels snapped to the best heading bin,
+    so it is an optimistic AggreVaTe, not the paper's. It is not a policy-gradient method (AggreVaTeD's
+    "D"): the learner is trained by the same supervised update as every other method.
+
+    Args:
+        n_directions: Candidate headings; ``None``: the learner's heading bins (16 if it has none).
+
+    Raises:
+        ValueError: If ``n_directions`` is below 4.
+    """
+
+    name = "aggrevate"
+
+    def __init__(self, n_directions: int | None = None) -> None:
+        if n_directions is not None and n_directions < 4:
+            raise ValueError(f"n_directions must be >= 4, got {n_directions}")
+        self.n_directions = n_directions
+
+    def attach(self, learner: Learner) -> None:
+        """Takes the learner's heading bins, so each candidate is exactly one of its classes."""
+        if self.n_directions is None:
+            self.n_directions = int(getattr(getattr(learner, "policy", None), "n_directions", 16))
+
+    def candidate_costs(
+        self, walls: np.ndarray, geometry: MazeGeometry, goal_xy: np.ndarray, agent_xy: np.ndarray, distance: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The heading-bin candidates ``(n, 2)`` at ``distance`` from ``agent_xy`` and their Q ``(n,)``."""
+        n = self.n_directions if self.n_directions is not None else 16
+        angles = np.arange(n) * (2 * np.pi / n)
+        candidates = agent_xy + distance * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+        costs = [
+            distance + cost_to_go(walls, geometry, goal_xy, c)
+            if geometry.segment_is_free(walls, agent_xy, c)
+            else math.inf
+            for c in candidates
+        ]
+        return candidates, np.array(costs)
+
+    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+        """The lowest-Q heading candidate at the expert's step length (the expert's subgoal if none is finite)."""
+        inner = env.unwrapped
+        agent_xy = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
+        distance = float(np.linalg.norm(expert_subgoal - agent_xy))
+        if distance == 0:
+            return expert_subgoal
+        candidates, costs = self.candidate_costs(inner.layout.walls, inner.geometry, inner.goal_xy, agent_xy, distance)
+        if not np.isfinite(costs).any():
+            return expert_subgoal
+        return candidates[int(np.argmin(costs))]
+
+
 STRATEGIES: dict[str, type[QueryStrategy]] = {
     "dagger": DAggerQuery,
     "noise": NoiseQuery,
     "multi_policy": MultiPolicyQuery,
     "reward": RewardBasedQuery,
+    "reward_per_step": RewardPerStepQuery,
+    "aggrevate": AggreVaTeQuery,
 }
 """Strategy classes by method name (the ``--methods`` of ``antmaze-hirl experiment``)."""
 

@@ -158,8 +158,10 @@ class DAggerTrainer:
     Per episode: sample a task with the env's ``sample_task`` (maze and goal; the strategy may choose
     the start, else the env's reset places it); at each high-level step
     query the expert for ``pi*(s)``, execute the mix of learner and expert subgoals with the env's
-    low-level controller, and aggregate ``(s, pi*(s))`` into D. Every ``episodes_per_update`` episodes,
-    run ``gradient_steps`` of regression on D and advance beta (``beta <- beta / d`` by default).
+    low-level controller, and aggregate ``(s, pi*(s))`` into D (the strategy's ``label_target``, which
+    only AggreVaTe changes). Every ``episodes_per_update`` episodes, run ``gradient_steps`` of regression
+    on D and advance beta (``beta <- beta / d`` by default); a strategy with ``updates_every_step``
+    (Alg. 4 as written) does both after every step instead.
 
     Beta is the *expert's* weight, as in Ross et al. and ``imitation``: beta = 1 executes the expert's
     subgoal, beta = 0 the learner's. A mix that is still a no-op after clipping to the maze (the env's
@@ -179,8 +181,10 @@ class DAggerTrainer:
             executes the expert's subgoal with probability beta, else the learner's (``imitation``).
         episodes_per_update: K, episodes between updates.
         gradient_steps: N, gradient steps per update.
-        per_step_gradient_steps: Gradient steps after every high-level step (Alg. 4's online
-            updates); 0 disables them.
+        per_step_gradient_steps: Gradient steps after every high-level step, beta unchanged; 0 disables
+            them. Alg. 4 as written (updates and beta decay after every step) is the strategy's
+            :attr:`~antmaze_hirl.dagger.strategies.QueryStrategy.updates_every_step` (method
+            ``reward_per_step``).
     """
 
     # What the learner's fit_dataset returned at the last update (None before any): read by loggers such as
@@ -279,9 +283,13 @@ class DAggerTrainer:
         # Every episodes_per_update episodes: N gradient steps on D, the strategy's own models, beta's next step.
         if self._update_due:
             self._update_due = False
-            self._fit(self.gradient_steps)
-            self.strategy.on_update(self.dataset, self.gradient_steps, self.rng)
-            self.updates += 1
+            self._update(self.gradient_steps)
+
+    def _update(self, steps: int) -> None:
+        # One update: gradient steps on D, the strategy's own models, beta's next step.
+        self._fit(steps)
+        self.strategy.on_update(self.dataset, steps, self.rng)
+        self.updates += 1
 
     def _episode_steps(self, executed: list[ExecutedStep]) -> Generator[LabelRequest, Any, EpisodeRecord]:
         # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
@@ -302,10 +310,17 @@ class DAggerTrainer:
             answer = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)
             expert_subgoal = as_finite_vector(answer, 2, "expert subgoal")
             cost += 1
-            self.dataset.add(Demonstration(obs["image"], obs["state"], expert_subgoal, episode, cost - 1))
+            label = self.strategy.label_target(self.env, obs, expert_subgoal)
+            self.dataset.add(Demonstration(obs["image"], obs["state"], label, episode, cost - 1))
             if self.per_step_gradient_steps:
                 self._fit(self.per_step_gradient_steps)
-            subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
+            if self.strategy.updates_every_step:
+                # Alg. 4: the step is executed with the beta it was labelled with; the update decays the next one.
+                step_beta = self.beta
+                self._update(self.strategy.step_gradient_steps or self.gradient_steps)
+                subgoal = self._mix(expert_subgoal, learner_subgoal, step_beta)
+            else:
+                subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
             obs, _, terminated, truncated, info = self.env.step(subgoal)
             done = terminated or truncated
             executed.append(ExecutedStep(subgoal, expert_subgoal, info, done))
@@ -314,7 +329,12 @@ class DAggerTrainer:
         self.total_expert_cost += cost
         # The update itself waits for EpisodeRun.finish() (or the next start_episode()), so a person sees the
         # episode's end at once; it draws from self.rng before the next episode does, so the numbers stay the same.
-        self._update_due = self.episodes_done % self.episodes_per_update == 0 and len(self.dataset) > 0
+        # A strategy that updates after every step has no episode-end update (Alg. 4).
+        self._update_due = (
+            not self.strategy.updates_every_step
+            and self.episodes_done % self.episodes_per_update == 0
+            and len(self.dataset) > 0
+        )
         return EpisodeRecord(
             episode=episode,
             success=bool(info["is_success"]),

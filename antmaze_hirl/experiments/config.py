@@ -8,8 +8,9 @@ from typing import TypedDict
 from antmaze_hirl.envs.bodies import body_spec
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 
-DEFAULT_METHODS = ("dagger", "noise", "multi_policy", "reward")
-"""Every query strategy of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`, the paper's four methods."""
+DEFAULT_METHODS = ("dagger", "noise", "multi_policy", "reward", "reward_per_step", "aggrevate")
+"""Every query strategy of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`: the paper's four methods, its
+Alg. 4 as written (``reward_per_step``) and the AggreVaTe baseline (``aggrevate``)."""
 
 
 class BodyDefaults(TypedDict):
