@@ -45,7 +45,7 @@ from antmaze_hirl.experiments import ExperimentConfig
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
-from antmaze_hirl.sb3_ext.policies import load_low_level
+from antmaze_hirl.sb3_ext.loading import load_low_level
 
 FAMILIES = ("ant3", "u", "medium", "large")
 STEPS_PER_METRE = 40
