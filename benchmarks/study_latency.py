@@ -2,8 +2,9 @@
 
 Runs a simulated participant (the oracle, through the page's HTTP API on loopback) for one trial per
 body and reports p50 / p95 / max of the server's own time per click (the ``Server-Timing`` header)
-and of the HTTP round trip, for all clicks and for the clicks that end an episode (those also update
-the learner and write its checkpoint). Evaluations are left out of the clicks measured by evaluating
+and of the HTTP round trip, for all clicks and for the clicks that end an episode, and the wait between
+mazes (``POST next``: the learner's update and checkpoint, sent by the page while it animates the last
+walk). Evaluations are left out of the clicks measured by evaluating
 only after the trial (``eval_every`` = episodes), and the final evaluation uses 5 mazes: a real study's
 evaluation every 10 episodes adds a wait on about one click in 60-100 (see the README).
 
@@ -52,6 +53,13 @@ def measure(body: str, episodes: int, seed: int) -> dict:
             (result,) = simulate_study(server.url, ["P01"], SimulatedParticipant(seed=seed))
     clicks = result["latencies"][:-1]  # the trial's last click also runs the final evaluation
     figures = {"episodes": episodes, "clicks": len(clicks)}
+    # The wait between mazes (POST next: the learner's update, a checkpoint, the next maze), which the
+    # page overlaps with the animation of the last walk; the trial's last one also runs the final evaluation.
+    between = result["between"][:-1]
+    figures["between_episodes"] = {
+        "server": percentiles([b["server"] for b in between]),
+        "round_trip": percentiles([b["round_trip"] for b in between]),
+    }
     for name, chosen in (
         ("all", clicks),
         ("within_episode", [c for c in clicks if not c["episode_end"]]),
@@ -82,6 +90,8 @@ def main() -> None:
                 f"{body:5s} {name:14s} n={server['n']:3d}  server p50 {server['p50_ms']} ms, "
                 f"p95 {server['p95_ms']} ms, max {server['max_ms']} ms;  round trip p95 {trip['p95_ms']} ms"
             )
+        wait = figures["between_episodes"]["server"]
+        print(f"{body:5s} between mazes  n={wait['n']:3d}  server p50 {wait['p50_ms']} ms, p95 {wait['p95_ms']} ms")
     ant = results["bodies"].get("ant")
     if ant is not None:
         p95 = ant["all"]["server"]["p95_ms"]
