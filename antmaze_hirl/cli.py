@@ -206,7 +206,7 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         "experiment",
         "DAgger with active learning: the paper's protocol over methods and seeds",
         "antmaze-hirl experiment --body ant --maze-size 3 --expert-max-distance 2 --out runs/ant --jobs 2\n"
-        "  antmaze-hirl experiment --body point --out runs/point --backend ray --address 10.0.0.5:6379",
+        "  antmaze-hirl experiment --body point --out runs/point --backend ray --address head-node:6379",
     )
     parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
     parser.add_argument(

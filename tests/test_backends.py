@@ -19,7 +19,7 @@ from antmaze_hirl.experiments.runner import check_worker, worker_identity
         ({"kind": "serial", "jobs": 2}, "the serial backend runs one task at a time, got jobs=2"),
         ({"kind": "processes", "jobs": 0}, "jobs must be an int >= 1, got 0"),
         ({"kind": "ray", "cpus_per_task": 1.5}, "cpus_per_task must be an int >= 1, got 1.5"),
-        ({"kind": "processes", "address": "10.0.0.5:6379"}, "an address is for the ray backend only, got address"),
+        ({"kind": "processes", "address": "head-node:6379"}, "an address is for the ray backend only, got address"),
         ({"kind": "ray", "max_retries": -1}, "max_retries must be an int >= 0, got -1"),
     ],
 )

@@ -97,7 +97,7 @@ def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--address",
         default=None,
-        help="with --backend ray: the cluster to join, as 'ray start --head' prints it, e.g. 10.0.0.5:6379 "
+        help="with --backend ray: the cluster to join, as 'ray start --head' prints it, e.g. head-node:6379 "
         "(default: $RAY_ADDRESS, else a local Ray instance)",
     )
     parser.add_argument(
