@@ -30,8 +30,14 @@ def read_csv(path):
 def test_a_simulated_three_participant_study_runs_over_http_and_is_analysed(tmp_path):
     folder = make_tiny_study(tmp_path / "study", participants=3)
     with StudyServer(folder).running() as server:
-        results = simulate_study(server.url, ["P01", "P02", "P03"], SimulatedParticipant(noise=0.1, delay=0.01, seed=3))
+        lines = []
+        participants = ["P01", "P02", "P03"]
+        results = simulate_study(
+            server.url, participants, SimulatedParticipant(noise=0.1, delay=0.01, seed=3), log=lines.append
+        )
     assert [r["trials"] for r in results] == [2, 2, 2]  # practice is not rated
+    assert [line.split(":")[0] for line in lines] == [p for p in participants for _ in range(3)]  # a line per trial
+    assert "part 1 of 3 (Practice)" in lines[0]
     plan = load_plan(folder)
     for participant in plan.participants:
         rows = read_csv(folder / "participants" / participant.id / "episodes.csv")
@@ -39,6 +45,7 @@ def test_a_simulated_three_participant_study_runs_over_http_and_is_analysed(tmp_
         assert [r["method"] for r in rows[1:]] == [m for m in participant.order for _ in range(2)]
         assert all(r["label"] != r["method"] for r in rows)  # the page shows neutral labels only
         assert all(float(r["seconds_per_label"]) >= 0 for r in rows)
+        assert all(0 <= float(r["time_on_task"]) < 60 for r in rows)  # seconds from the episode start to its last click
         clicks = (folder / "participants" / participant.id / "clicks.jsonl").read_text().splitlines()
         assert len(clicks) == sum(int(r["expert_cost"]) for r in rows)
         answers = [json.loads(line) for line in (folder / "participants" / participant.id / "answers.jsonl").open()]

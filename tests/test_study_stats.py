@@ -5,7 +5,7 @@ import pandas as pd
 import pingouin as pg
 import pytest
 
-from antmaze_hirl.study.stats import compare_methods, one_way_anova, rm_anova
+from antmaze_hirl.study.stats import compare_methods, one_way_anova, paired_tests, rm_anova
 
 # Field, "Discovering Statistics Using SPSS" (3rd ed., 2009), ch. 13, the Bushtucker Trial: 8 celebrities
 # x 4 animals, seconds to retch. Published: sphericity-assumed F(3, 21) = 3.79, p = .026.
@@ -94,3 +94,10 @@ def test_identical_values_give_none_not_nan():
     assert tests["run"] is True
     assert tests["posthoc"][0]["t"] is None and tests["posthoc"][0]["p_holm"] is None
     json.dumps(tests, allow_nan=False)  # no NaN anywhere: stats.json stays valid JSON
+
+
+def test_a_pair_with_equal_differences_has_no_test_and_no_holm_share():
+    wide = pd.DataFrame({"a": [1.0, 2.0, 3.0], "b": [0.5, 1.5, 2.5], "c": [1.0, 2.5, 2.0]})
+    rows = {(row["a"], row["b"]): row for row in paired_tests(wide, ["a", "b", "c"])}
+    assert rows[("a", "b")]["t"] is None and rows[("a", "b")]["p"] is None and rows[("a", "b")]["p_holm"] is None
+    assert rows[("a", "c")]["p"] is not None and rows[("a", "c")]["p_holm"] is not None

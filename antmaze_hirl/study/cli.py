@@ -170,10 +170,10 @@ def _run_simulate(args: argparse.Namespace) -> int:
             )
         ids = ids[: args.participants]
     if args.url is not None:
-        results = simulate_study(args.url, ids, behaviour)
+        results = simulate_study(args.url, ids, behaviour, log=lambda line: print(line, flush=True))
     else:
         with StudyServer(args.dir).running() as server:
-            results = simulate_study(server.url, ids, behaviour)
+            results = simulate_study(server.url, ids, behaviour, log=lambda line: print(line, flush=True))
     for result in results:
         print(f"{result['participant']}: {result['trials']} rated trials, {result['clicks']} clicks")
     print(f"next: antmaze-hirl study analyze {args.dir}")

@@ -142,7 +142,8 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         participants = []
         for participant_id in study.participant_ids:
             session = study.session(participant_id)
-            participants.append({"id": participant_id, "phase": session.phase, "trial": session.trial_index + 1})
+            number = session.trial_index + 1 if session.trial is not None else None  # None once every trial is done
+            participants.append({"id": participant_id, "phase": session.phase, "trial": number})
         return {"body": study.plan.body, "participants": participants}
 
     @app.get("/api/questionnaire")

@@ -169,6 +169,7 @@ class ParticipantSession:
         self._query_id = 0
         self._query_shown_at = 0.0
         self._episode_started_at = 0.0
+        self._episode_ended_at = 0.0
         self._episode_paused = 0.0
         self._episode_label_seconds: list[float] = []
         self._trail: list[list[float]] = []
@@ -329,6 +330,7 @@ class ParticipantSession:
             if self._run.done:
                 assert self._run.record is not None
                 self.phase = "episode_over"  # the page calls next_episode() while it animates the last walk
+                self._episode_ended_at = now  # the person's time ends with their last click, not the update
                 episode_end = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
             else:
                 self._show_query()
@@ -527,7 +529,7 @@ class ParticipantSession:
             "seconds_per_label": (
                 round(float(np.mean(self._episode_label_seconds)), 4) if self._episode_label_seconds else ""
             ),
-            "time_on_task": round(self.clock() - self._episode_started_at - self._episode_paused, 3),
+            "time_on_task": round(self._episode_ended_at - self._episode_started_at - self._episode_paused, 3),
         }
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:

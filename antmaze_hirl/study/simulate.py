@@ -18,6 +18,7 @@ import json
 import time
 import urllib.error
 import urllib.request
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 from urllib.parse import parse_qs, quote, urlsplit
@@ -126,9 +127,16 @@ def oracle_click(state: dict[str, Any]) -> np.ndarray:
 
 
 def play_participant(
-    client: StudyClient, participant_id: str, behaviour: SimulatedParticipant, *, rng: np.random.Generator
+    client: StudyClient,
+    participant_id: str,
+    behaviour: SimulatedParticipant,
+    *,
+    rng: np.random.Generator,
+    log: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Plays one participant's whole session (every trial and questionnaire) through the API.
+
+    ``log`` (e.g. ``print``) hears a line as each trial starts: a whole study takes minutes.
 
     Returns:
         ``{"participant", "clicks", "trials", "latencies", "between"}``: each latency is a click's
@@ -141,6 +149,10 @@ def play_participant(
     trials = 0
     while state["phase"] != "done":
         if state["phase"] == "intro":
+            if log is not None:
+                trial = state["trial"]
+                part = f"part {trial['number']} of {state['trials']} ({trial['label']})"
+                log(f"{participant_id}: {part}, {clicks} clicks so far")
             state = client.participant(participant_id, "start", {})
             trial_clicks = trial_failures = trial_episodes = 0
         elif state["phase"] == "label":
@@ -205,7 +217,9 @@ def _ratings(
     return ratings
 
 
-def simulate_study(url: str, participant_ids: list[str], behaviour: SimulatedParticipant) -> list[dict[str, Any]]:
+def simulate_study(
+    url: str, participant_ids: list[str], behaviour: SimulatedParticipant, *, log: Callable[[str], None] | None = None
+) -> list[dict[str, Any]]:
     """Plays ``participant_ids`` one after another on the study served at ``url``.
 
     Each participant's randomness is seeded by ``behaviour.seed`` and their position in the list.
@@ -214,5 +228,5 @@ def simulate_study(url: str, participant_ids: list[str], behaviour: SimulatedPar
     results = []
     for position, participant_id in enumerate(participant_ids):
         rng = np.random.default_rng([behaviour.seed, position])
-        results.append(play_participant(client, participant_id, behaviour, rng=rng))
+        results.append(play_participant(client, participant_id, behaviour, rng=rng, log=log))
     return results

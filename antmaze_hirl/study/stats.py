@@ -72,6 +72,8 @@ def paired_tests(wide: pd.DataFrame, methods: Sequence[str]) -> list[dict[str, A
     rows = []
     for a, b in itertools.combinations(methods, 2):
         result = stats.ttest_rel(wide[a], wide[b])
+        # Equal differences give t = +-inf and p = 0 (scipy), or nan when they are all 0: no test either way.
+        tested_pair = bool(np.isfinite(result.statistic))
         rows.append(
             {
                 "a": a,
@@ -79,7 +81,7 @@ def paired_tests(wide: pd.DataFrame, methods: Sequence[str]) -> list[dict[str, A
                 "mean_difference": number((wide[a] - wide[b]).mean()),
                 "t": number(result.statistic),
                 "df": len(wide) - 1,
-                "p": number(result.pvalue),
+                "p": number(result.pvalue) if tested_pair else None,
                 "p_holm": None,
             }
         )
