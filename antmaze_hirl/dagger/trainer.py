@@ -124,11 +124,11 @@ class EpisodeRun:
         if self.done:
             raise RuntimeError("the episode has ended; start another with DAggerTrainer.start_episode()")
         try:  # checked before the coroutine runs, so a bad label leaves the run as it was
-            as_finite_vector(subgoal, 2, "expert subgoal")
+            label = as_finite_vector(subgoal, 2, "expert subgoal")
         except (TypeError, ValueError) as error:
             raise ValueError(f"expert subgoal must be two finite numbers (x, y metres), got {subgoal!r}") from error
         self._executed.clear()
-        self._advance(subgoal)
+        self._advance(label)
         return list(self._executed)
 
     def finish(self) -> None:
@@ -280,7 +280,7 @@ class DAggerTrainer:
         return EpisodeRun(self._episode_steps, self._update_if_due)
 
     def _update_if_due(self) -> None:
-        # Every episodes_per_update episodes: N gradient steps on D, the strategy's own models, beta's next step.
+        # The episode-end update, every episodes_per_update episodes (set at the end of _episode_steps).
         if self._update_due:
             self._update_due = False
             self._update(self.gradient_steps)
@@ -307,8 +307,7 @@ class DAggerTrainer:
             # The learner's proposal is computed before the label so a person can be shown it; it is
             # deterministic and draws no randomness, so the order leaves the numbers unchanged.
             learner_subgoal = np.asarray(self.policy.predict(obs), dtype=np.float64)
-            answer = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)
-            expert_subgoal = as_finite_vector(answer, 2, "expert subgoal")
+            expert_subgoal = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)  # checked by answer()
             cost += 1
             label = self.strategy.label_target(self.env, obs, expert_subgoal)
             self.dataset.add(Demonstration(obs["image"], obs["state"], label, episode, cost - 1))

@@ -36,6 +36,7 @@ from antmaze_hirl.experiments.results_folder import (
     write_reports,
 )
 from antmaze_hirl.experiments.tensorboard import DAggerTensorBoard, trial_log_dir
+from antmaze_hirl.experts.base import Expert
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_policy
@@ -48,6 +49,7 @@ __all__ = [
     "evaluation_layouts",
     "low_level_identity",
     "make_env",
+    "make_trainer",
     "read_rows",
     "run_and_save_trial",
     "run_experiment",
@@ -100,6 +102,25 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
     return rows
 
 
+def make_trainer(method: str, seed: int, config: ExperimentConfig, env: Any, expert: Expert) -> DAggerTrainer:
+    """The trainer of one trial: a fresh learner seeded by ``seed``, ``method``'s strategy, ``config``'s settings.
+
+    The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
+    """
+    rng = np.random.default_rng(seed)
+    return DAggerTrainer(
+        env=env,
+        expert=expert,
+        policy=HighLevelPolicy.for_env(env, rng=rng),
+        rng=rng,
+        strategy=make_strategy(method),
+        beta_schedule=InverseDecayBetaSchedule(config.decay),
+        mixing=config.mixing,  # type: ignore[arg-type]
+        episodes_per_update=config.episodes_per_update,
+        gradient_steps=config.gradient_steps,
+    )
+
+
 def run_trial(
     method: str,
     seed: int,
@@ -122,18 +143,7 @@ def run_trial(
         split: make_env(config, low_level, split=split) for split in dict.fromkeys(s for s, _, _ in sets.values())
     }
     eval_envs = {name: by_split[split] for name, (split, _, _) in sets.items()}
-    rng = np.random.default_rng(seed)
-    trainer = DAggerTrainer(
-        env=env,
-        expert=PathOracle.for_env(env, max_distance=config.expert_max_distance),
-        policy=HighLevelPolicy.for_env(env, rng=rng),
-        rng=rng,
-        strategy=make_strategy(method),
-        beta_schedule=InverseDecayBetaSchedule(config.decay),
-        mixing=config.mixing,  # type: ignore[arg-type]
-        episodes_per_update=config.episodes_per_update,
-        gradient_steps=config.gradient_steps,
-    )
+    trainer = make_trainer(method, seed, config, env, PathOracle.for_env(env, max_distance=config.expert_max_distance))
     rows: list[dict[str, Any]] = []
     with contextlib.ExitStack() as stack:
         board = stack.enter_context(DAggerTensorBoard(tensorboard_dir)) if tensorboard_dir is not None else None

@@ -38,12 +38,11 @@ from typing import Any
 import numpy as np
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, evaluate_high_level
-from antmaze_hirl.dagger.strategies import make_strategy
+from antmaze_hirl.dagger import DAggerTrainer, evaluate_high_level
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
-from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
@@ -434,11 +433,7 @@ class ParticipantSession:
 
     # -------------------------------------------------------------------------------- internals
     def _check_click(self, x: Any, y: Any) -> tuple[float, float]:
-        values = []
-        for name, value in (("x", x), ("y", y)):
-            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-                raise BadInput(f"click {name} must be a finite number, got {value!r}")
-            values.append(float(value))
+        values = [_json_number(x, "click x"), _json_number(y, "click y")]
         low, high = self._env.unwrapped.action_space.low, self._env.unwrapped.action_space.high
         if not (low[0] <= values[0] <= high[0] and low[1] <= values[1] <= high[1]):
             raise BadInput(
@@ -451,24 +446,14 @@ class ParticipantSession:
     def _check_response_seconds(value: Any) -> float | None:
         if value is None:
             return None
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value < 0:
+        seconds = _json_number(value, "response_seconds", ">= 0")
+        if seconds < 0:
             raise BadInput(f"response_seconds must be a finite number >= 0, got {value!r}")
-        return float(value)
+        return seconds
 
     def _make_trainer(self, trial: TrialPlan) -> DAggerTrainer:
         config = self.settings.experiment_config(trial.episodes)
-        rng = np.random.default_rng(trial.seed)
-        return DAggerTrainer(
-            env=self._env,
-            expert=PageExpert(),
-            policy=HighLevelPolicy.for_env(self._env, rng=rng),
-            rng=rng,
-            strategy=make_strategy(trial.method),
-            beta_schedule=InverseDecayBetaSchedule(config.decay),
-            mixing=config.mixing,  # type: ignore[arg-type]
-            episodes_per_update=config.episodes_per_update,
-            gradient_steps=config.gradient_steps,
-        )
+        return make_trainer(trial.method, trial.seed, config, self._env, PageExpert())
 
     def _open_trial(self, *, resume: bool) -> None:
         trial = self.trial
@@ -609,6 +594,17 @@ class ParticipantSession:
             raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
         if self.phase == "label":
             self._open_trial(resume=True)
+
+
+def _json_number(value: Any, name: str, bound: str = "") -> float:
+    """``value`` from a request body as a finite float; JSON's true/false are not numbers here.
+
+    Raises:
+        BadInput: Naming ``name`` (and ``bound``, the range the caller checks next) and the value.
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise BadInput(f"{name} must be a finite number{' ' + bound if bound else ''}, got {value!r}")
+    return float(value)
 
 
 def _save_checkpoint(state: TrialState, path: Path) -> None:
