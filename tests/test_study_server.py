@@ -100,3 +100,16 @@ def test_json_parsing_refuses_non_finite_constants():
         with pytest.raises(BadInput):
             parse_json_object(text)
     assert parse_json_object(b'{"x": 1.5}') == {"x": 1.5}
+
+
+def test_the_overview_reads_saved_progress_without_building_sessions(tmp_path):
+    from antmaze_hirl.study.store import Study, UnknownParticipant
+
+    study = Study(make_tiny_study(tmp_path / "study", participants=2))
+    assert [study.progress(pid) for pid in study.participant_ids] == [(0, "intro"), (0, "intro")]
+    assert study._sessions == {}  # no simulators were made for the picker
+    study.session("P01").start_trial()
+    assert study.progress("P01") == (0, "label")
+    with pytest.raises(UnknownParticipant, match="P99"):
+        study.progress("P99")
+    study.close()

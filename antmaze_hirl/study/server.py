@@ -139,11 +139,12 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
 
     @app.get("/api/study")
     async def study_overview() -> Any:
+        # From the saved progress: the participant picker must not build every participant's simulators.
         participants = []
-        for participant_id in study.participant_ids:
-            session = study.session(participant_id)
-            number = session.trial_index + 1 if session.trial is not None else None  # None once every trial is done
-            participants.append({"id": participant_id, "phase": session.phase, "trial": number})
+        for participant in study.plan.participants:
+            index, phase = study.progress(participant.id)
+            number = index + 1 if index < len(participant.trials) else None  # None once every trial is done
+            participants.append({"id": participant.id, "phase": phase, "trial": number})
         return {"body": study.plan.body, "participants": participants}
 
     @app.get("/api/questionnaire")

@@ -584,16 +584,25 @@ class ParticipantSession:
         durable_append(self.folder / "events.jsonl", json.dumps(event) + "\n")
 
     def _restore(self) -> None:
-        progress = self.folder / "progress.json"
-        if not progress.is_file():
-            return
-        try:
-            saved = json.loads(progress.read_text())
-            self.trial_index, self.phase = int(saved["trial_index"]), str(saved["phase"])
-        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
-            raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
+        self.trial_index, self.phase = read_progress(self.folder)
         if self.phase == "label":
             self._open_trial(resume=True)
+
+
+def read_progress(folder: Path) -> tuple[int, str]:
+    """``(trial_index, phase)`` saved in a participant's folder; ``(0, "intro")`` before they start.
+
+    Raises:
+        ValueError: If ``progress.json`` is malformed (names the file).
+    """
+    progress = folder / "progress.json"
+    if not progress.is_file():
+        return 0, "intro"
+    try:
+        saved = json.loads(progress.read_text())
+        return int(saved["trial_index"]), str(saved["phase"])
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
 
 
 def _json_number(value: Any, name: str, bound: str = "") -> float:

@@ -6,7 +6,7 @@ import threading
 from pathlib import Path
 
 from antmaze_hirl.study.plan import StudyPlan, load_plan
-from antmaze_hirl.study.session import ParticipantSession
+from antmaze_hirl.study.session import ParticipantSession, read_progress
 from antmaze_hirl.study.settings import StudySettings, load_settings
 
 
@@ -51,14 +51,30 @@ class Study:
         Raises:
             UnknownParticipant: If the plan has no such participant.
         """
-        if participant_id not in self._participants:
-            raise UnknownParticipant(f"unknown participant {participant_id!r}; the plan has {self.participant_ids}")
+        self._check_known(participant_id)
         with self._lock:
             if participant_id not in self._sessions:
                 self._sessions[participant_id] = ParticipantSession(
                     self.folder, self.plan, self._participants[participant_id], self.settings
                 )
             return self._sessions[participant_id]
+
+    def progress(self, participant_id: str) -> tuple[int, str]:
+        """``(trial_index, phase)`` of ``participant_id``, without restoring a session (no simulators built).
+
+        Raises:
+            UnknownParticipant: If the plan has no such participant.
+        """
+        self._check_known(participant_id)
+        with self._lock:
+            session = self._sessions.get(participant_id)
+        if session is not None:
+            return session.trial_index, session.phase
+        return read_progress(self.folder / "participants" / participant_id)
+
+    def _check_known(self, participant_id: str) -> None:
+        if participant_id not in self._participants:
+            raise UnknownParticipant(f"unknown participant {participant_id!r}; the plan has {self.participant_ids}")
 
     def close(self) -> None:
         """Releases every session's simulators."""
