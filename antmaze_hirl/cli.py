@@ -14,7 +14,13 @@ from pathlib import Path
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
-from antmaze_hirl.experiments.config import BODY_DEFAULTS, DEFAULT_METHODS, ExperimentConfig
+from antmaze_hirl.experiments.config import (
+    BODY_DEFAULTS,
+    DEFAULT_METHODS,
+    HELD_OUT_MAZE_SIZE,
+    ExperimentConfig,
+    body_settings,
+)
 from antmaze_hirl.sb3_ext.config import ALGOS
 
 DESCRIPTION = "Active hierarchical imitation learning on the MuJoCo Ant maze."
@@ -52,6 +58,14 @@ def _add_parser(subparsers: _Subparsers, name: str, help_text: str, example: str
     )
 
 
+_DEFAULT_SIZES = {body: settings["maze_size"] for body, settings in BODY_DEFAULTS.items()}
+
+
+def _per_body(values: dict[str, int]) -> str:
+    # "ant 3, point 5": a default that depends on --body, for help texts.
+    return ", ".join(f"{body} {value}" for body, value in sorted(values.items()))
+
+
 def _add_demo(subparsers: _Subparsers) -> None:
     parser = _add_parser(
         subparsers,
@@ -66,9 +80,7 @@ def _add_demo(subparsers: _Subparsers) -> None:
         "--maze-size",
         type=int,
         default=None,
-        help="free cells per side (default: per body, "
-        + ", ".join(f"{body} {settings['maze_size']}" for body, settings in sorted(BODY_DEFAULTS.items()))
-        + ")",
+        help=f"free cells per side (default: per body, {_per_body(_DEFAULT_SIZES)})",
     )
     parser.add_argument(
         "--max-subgoal-distance",
@@ -205,7 +217,7 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         subparsers,
         "experiment",
         "DAgger with active learning: the paper's protocol over methods and seeds",
-        "antmaze-hirl experiment --body ant --maze-size 3 --expert-max-distance 2 --out runs/ant --jobs 2\n"
+        "antmaze-hirl experiment --body ant --held-out-layouts --eval-episodes 50 --out runs/ant --jobs 2\n"
         "  antmaze-hirl experiment --body point --out runs/point --backend ray --address head-node:6379",
     )
     parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
@@ -224,7 +236,13 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser.add_argument(
         "--final-eval-episodes", type=int, default=defaults.final_eval_episodes, help="held-out mazes at the end"
     )
-    parser.add_argument("--maze-size", type=int, default=defaults.maze_size, help="free cells per side")
+    parser.add_argument(
+        "--maze-size",
+        type=int,
+        default=None,
+        help=f"free cells per side (default: per body, {_per_body(_DEFAULT_SIZES)}; "
+        f"with --held-out-layouts {_per_body(HELD_OUT_MAZE_SIZE)})",
+    )
     parser.add_argument(
         "--gradient-steps", type=int, default=defaults.gradient_steps, help="N: gradient steps per update"
     )
@@ -232,8 +250,8 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser.add_argument(
         "--expert-max-distance",
         type=float,
-        default=defaults.expert_max_distance,
-        help="the oracle's farthest subgoal, metres (default: one cell)",
+        default=None,
+        help="the oracle's farthest subgoal, metres (default: per body, point one cell, ant 2 m)",
     )
     parser.add_argument(
         "--held-out-layouts",
@@ -274,11 +292,15 @@ def _run_experiment(args: argparse.Namespace) -> int:
         eval_every=args.eval_every,
         eval_episodes=args.eval_episodes,
         final_eval_episodes=args.final_eval_episodes,
-        maze_size=args.maze_size,
         gradient_steps=args.gradient_steps,
         decay=args.decay,
-        expert_max_distance=args.expert_max_distance,
         held_out_layouts=args.held_out_layouts,
+        **body_settings(
+            args.body,
+            held_out_layouts=args.held_out_layouts,
+            maze_size=args.maze_size,
+            expert_max_distance=args.expert_max_distance,
+        ),
     )
     summary = run_experiment(
         methods,

@@ -5,6 +5,8 @@ the same mazes) and each maze family:
 
 * ``ant3``: the ant experiment's family (random 3x3 layouts, 500-step limit), the mazes of
   ``paper_experiment.py --ceiling-only``;
+* ``ant4``: the held-out-layouts protocol's ant family (random 4x4 layouts from the ``eval`` part of the layout
+  partition, 500-step limit), the mazes of ``paper_experiment.py --body ant --oracle-only --held-out-layouts``;
 * ``u``, ``medium``, ``large``: gymnasium-robotics' standard maps, random start corner and goal (at least 3 grid
   steps apart), with the step limit scaled to the episode's shortest path (:func:`step_limit`).
 
@@ -18,7 +20,7 @@ Each episode ends in exactly one outcome: ``success``, ``flip`` (the ant turned 
 :data:`FROZEN_RADIUS` m from where it stood when the first of them was set) or ``timeout`` (any other truncation).
 Success rates carry a 95% Wilson interval; ``flips_per_subgoal`` is flips over subgoals set.
 
-Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,u,medium,large] [--low-level cand.zip ...]
+Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
 Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
@@ -35,19 +37,20 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
-from paper_experiment import BODY_DEFAULTS, RESULTS
+from paper_experiment import RESULTS
 from statsmodels.stats.proportion import proportion_confint
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-FAMILIES = ("ant3", "u", "medium", "large")
+FAMILIES = ("ant3", "ant4", "u", "medium", "large")
 STEPS_PER_METRE = 40
 """Step budget per metre of shortest cell path: a 0.5 m/s average, half the ~1 m/s of a straight walk."""
 MIN_STEPS = 500
@@ -171,6 +174,10 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
     if family == "ant3":
         config = ExperimentConfig(body="ant", **BODY_DEFAULTS["ant"])
         return MazeEpisodeRecorder(make_env(config, low_level), scale_step_limit=False)
+    if family == "ant4":
+        config = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
+        split = evaluation_sets(config)["final"][0]
+        return MazeEpisodeRecorder(make_env(config, low_level, split=split), scale_step_limit=False)
     if family not in STANDARD_MAPS or family == "open":
         raise ValueError(f"unknown maze family {family!r}; choose from {list(FAMILIES)}")
     return MazeEpisodeRecorder(
@@ -245,7 +252,9 @@ def main() -> None:
         {
             "command": shlex.join(["python", "benchmarks/in_maze.py", *sys.argv[1:]]),
             "expert_max_distance": BODY_DEFAULTS["ant"]["expert_max_distance"],
-            "step_limit": f"ant3: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))",
+            "step_limit": (
+                f"ant3, ant4: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))"
+            ),
             "frozen": f"truncated, and within {FROZEN_RADIUS} m over the last {FROZEN_SUBGOALS} subgoals",
             "results": results,
         },

@@ -24,11 +24,12 @@ import json
 from pathlib import Path
 
 import torch
-from paper_experiment import BODY_DEFAULTS, RESULTS, oracle_success
+from paper_experiment import RESULTS, oracle_success
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments import ExperimentConfig
+from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level

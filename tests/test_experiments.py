@@ -268,6 +268,38 @@ def test_learning_per_label_metrics_on_a_crafted_episodes_csv(tmp_path):
     assert dagger["cost_to_60_percent"] == {"median": 200.0, "seeds_reached": 2}
 
 
+def test_labels_to_match_dagger_on_crafted_curves():
+    curves = {
+        ("dagger", 0): [(100, 0.3), (200, 0.6)],  # never reaches DAgger's median final success, 0.7
+        ("dagger", 1): [(100, 0.5), (300, 0.8)],  # 0.7 at 100 + 200 * 2/3 labels
+        ("dagger", 2): [(200, 0.7)],  # from (0, 0): at its last evaluation
+        ("gated", 0): [(50, 0.7)],
+        ("gated", 1): [(40, 0.35), (80, 0.7)],
+        ("gated", 2): [(100, 0.5)],
+    }
+    rows = [
+        row(m, s, e, labels, success) for (m, s), points in curves.items() for e, (labels, success) in enumerate(points)
+    ]
+    summary = summarise(rows, ["dagger", "gated"])
+    dagger, gated = summary["dagger"]["labels_to_match_dagger"], summary["gated"]["labels_to_match_dagger"]
+    assert dagger["target"] == gated["target"] == pytest.approx(0.7)
+    assert dagger["per_seed"] == pytest.approx([None, 100 + 200 * 2 / 3, 200])
+    # The seed that never reaches it sorts last: the median is the middle of (200, 233.3, inf).
+    assert dagger["median"] == pytest.approx(233.3333, abs=1e-4) and dagger["seeds_reached"] == 2
+    assert gated["per_seed"] == pytest.approx([50, 80, None]) and gated["median"] == 80
+    assert gated["ratio_vs_dagger"] == pytest.approx(80 / (100 + 200 * 2 / 3))
+    assert summary["gated"]["total_labels"] == {"median": 80.0, "min": 50.0, "max": 100.0}
+    # Half the seeds short of the target: the median is no label count.
+    assert summarise(rows, ["dagger", "gated"])["dagger"]["labels_to_match_dagger"]["ratio_vs_dagger"] == 1.0
+    two_seeds = [r for r in rows if r["seed"] != 2]
+    assert summarise(two_seeds, ["dagger"])["dagger"]["labels_to_match_dagger"]["median"] is None
+    from antmaze_hirl.experiments.curves import labels_to_reach
+
+    with pytest.raises(ValueError, match=r"target success must lie in \(0, 1\], got 1.5"):
+        labels_to_reach(curves_trial := rows[:2], 1.5)
+    assert labels_to_reach(curves_trial, 0.3) == 100
+
+
 def test_curve_figures_reject_a_non_positive_label_count():
     from antmaze_hirl.experiments import normalised_auc, success_at_labels
 
@@ -315,3 +347,17 @@ def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
     (tmp_path / "provenance.json").unlink()  # as a folder written before provenance was recorded
     with pytest.raises(ValueError, match="recorded no provenance"):
         run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)
+
+
+def test_body_settings_pick_the_held_out_family_and_keep_given_values():
+    from antmaze_hirl.experiments.config import body_settings
+
+    assert body_settings("ant") == {"maze_size": 3, "expert_max_distance": 2.0}
+    assert body_settings("ant", held_out_layouts=True) == {"maze_size": 4, "expert_max_distance": 2.0}
+    assert body_settings("ant", held_out_layouts=True, maze_size=5, expert_max_distance=3.0) == {
+        "maze_size": 5,
+        "expert_max_distance": 3.0,
+    }
+    assert body_settings("point", held_out_layouts=True) == {"maze_size": 5, "expert_max_distance": None}
+    with pytest.raises(ValueError, match="unknown body 'cat'"):
+        body_settings("cat")

@@ -178,3 +178,17 @@ def test_load_plan_rejects_edited_files(tmp_path, edit, message):
         load_plan(tmp_path)
     assert "plan.json is not a valid study plan" in str(error.value)
     assert "\n" not in str(error.value)
+
+
+def test_new_studies_hold_layouts_out_and_old_settings_files_read_as_they_ran(tmp_path):
+    from antmaze_hirl.study.settings import SETTINGS_FILE, StudySettings, load_settings, save_settings
+
+    ant = StudySettings.for_body("ant")
+    assert ant.held_out_layouts and ant.maze_size == 4 and ant.experiment_config(3).held_out_layouts
+    assert StudySettings.for_body("ant", held_out_layouts=False).maze_size == 3
+    save_settings(StudySettings.for_body("point"), tmp_path)
+    written = json.loads((tmp_path / SETTINGS_FILE).read_text())
+    assert written["held_out_layouts"] is True
+    del written["held_out_layouts"]  # a settings.json from before the setting existed
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps(written))
+    assert load_settings(tmp_path).held_out_layouts is False

@@ -34,6 +34,34 @@ BODY_DEFAULTS: dict[str, BodyDefaults] = {
 }
 """Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's."""
 
+HELD_OUT_MAZE_SIZE: dict[str, int] = {"point": 5, "ant": 4}
+"""Maze size of the held-out-layouts protocol per body. Holding layouts out needs a family with many wall
+grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968, on which the oracle driving the
+shipped ant succeeds on 82% of 100 held-out mazes, 95% Wilson interval 73-88%, in 500 steps
+(``benchmarks/results/maze_families.json``, ``benchmarks/results/oracle_success_ant_4.json``)."""
+
+
+def body_settings(
+    body: str, *, held_out_layouts: bool = False, maze_size: int | None = None, expert_max_distance: float | None = None
+) -> BodyDefaults:
+    """A body's maze size and oracle reach, each replaced by its argument when that is not ``None``.
+
+    The defaults are :data:`BODY_DEFAULTS`, with the maze size of :data:`HELD_OUT_MAZE_SIZE` for held-out layouts.
+
+    Raises:
+        ValueError: For an unknown body.
+    """
+    if body not in BODY_DEFAULTS:
+        raise ValueError(f"unknown body {body!r}; choose from {sorted(BODY_DEFAULTS)}")
+    settings = dict(BODY_DEFAULTS[body])
+    if held_out_layouts:
+        settings["maze_size"] = HELD_OUT_MAZE_SIZE[body]
+    if maze_size is not None:
+        settings["maze_size"] = maze_size
+    if expert_max_distance is not None:
+        settings["expert_max_distance"] = expert_max_distance
+    return BodyDefaults(**settings)
+
 
 SELECTION_SEED = 3_000_000
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed

@@ -47,6 +47,27 @@ def success_at_labels(trial: Sequence[dict[str, Any]], budget: float) -> float |
     return None if curve is None else float(np.interp(budget, *curve))
 
 
+def labels_to_reach(trial: Sequence[dict[str, Any]], target: float) -> float | None:
+    """Labels where the curve first reaches ``target`` success, linearly interpolated; ``None`` if it never does.
+
+    Interpolated like :func:`success_at_labels`, so a method is not charged for the labels between its
+    last evaluation below ``target`` and its first at or above it.
+
+    Raises:
+        ValueError: If ``target`` is not in ``(0, 1]``.
+    """
+    if not 0 < target <= 1:
+        raise ValueError(f"target success must lie in (0, 1], got {target}")
+    labels, success = success_curve(trial)
+    reached = np.flatnonzero(success >= target)
+    if not len(reached):
+        return None
+    after = int(reached[0])  # >= 1: the curve starts at 0 success
+    before = after - 1
+    fraction = (target - success[before]) / (success[after] - success[before])
+    return float(labels[before] + fraction * (labels[after] - labels[before]))
+
+
 def normalised_auc(trial: Sequence[dict[str, Any]], horizon: float) -> float | None:
     """Area under the curve over ``[0, horizon]`` labels divided by ``horizon`` (in ``[0, 1]``).
 

@@ -14,6 +14,11 @@ For each method, over its seeds (median, min and max):
   methods are compared over the same labels;
 * ``vs_<baseline>``: each figure paired by seed against plain DAgger
   (:func:`~antmaze_hirl.experiments.uncertainty.paired_comparison`, a Wilcoxon signed-rank test);
+* ``total_labels``: the expert's labels over the whole trial;
+* ``labels_to_match_<baseline>``: labels at which the curve first reaches plain DAgger's median final
+  success (:func:`~antmaze_hirl.experiments.curves.labels_to_reach`), and the ratio of its median to
+  DAgger's own: the expert-cost figure of "equal success with fewer labels". A seed that never reaches it
+  counts as infinitely many labels in the median (``None`` if that is the median);
 * secondary: mean expert cost and attempts per episode, and labels to first reach 60% success.
 """
 
@@ -25,7 +30,13 @@ from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.experiments.curves import LABEL_BUDGETS, final_labels, normalised_auc, success_at_labels
+from antmaze_hirl.experiments.curves import (
+    LABEL_BUDGETS,
+    final_labels,
+    labels_to_reach,
+    normalised_auc,
+    success_at_labels,
+)
 from antmaze_hirl.experiments.uncertainty import paired_comparison, pooled_rate, rate_with_interval
 
 TARGET_SUCCESS = 0.6
@@ -130,10 +141,34 @@ def summarise(
             "mean_expert_cost_per_episode": float(np.mean([row["expert_cost"] for row in method_rows])),
             "mean_attempts_per_episode": float(np.mean([row["attempts"] for row in method_rows])),
             "cost_to_60_percent": {"median": float(np.median(costs)) if costs else None, "seeds_reached": len(costs)},
+            "total_labels": _spread([float(trial[-1]["cumulative_expert_cost"]) for trial in trials.values()]),
         }
         if method != baseline and figures.get(baseline):
             summary[method][f"vs_{baseline}"] = _compare(per_seed, figures[baseline])
+    target = summary.get(baseline, {}).get("final_success", {}).get("median")
+    if target:  # None without baseline trials; 0 success is no target to match
+        matches = {method: _labels_to_match(trials, target) for method, trials in grouped.items() if trials}
+        for method, match in matches.items():
+            ratio = (
+                match["median"] / matches[baseline]["median"]
+                if match["median"] and matches[baseline]["median"]
+                else None
+            )
+            summary[method][f"labels_to_match_{baseline}"] = {**match, f"ratio_vs_{baseline}": ratio}
     return summary
+
+
+def _labels_to_match(trials: dict[int, Trial], target: float) -> dict[str, Any]:
+    per_seed = [labels_to_reach(trial, target) for trial in trials.values()]
+    # A seed that never reaches the target has spent more labels than any that did: it sorts last.
+    ranked = np.array([math.inf if labels is None else labels for labels in per_seed])
+    median = float(np.median(ranked))
+    return {
+        "target": target,
+        "median": median if math.isfinite(median) else None,
+        "per_seed": per_seed,
+        "seeds_reached": sum(labels is not None for labels in per_seed),
+    }
 
 
 def _budget_figure(per_seed: dict[int, dict[str, float | None]], budget: int) -> dict[str, Any]:

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.config import BODY_DEFAULTS, ExperimentConfig
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 
 SETTINGS_FILE = "settings.json"
 
@@ -28,6 +28,10 @@ class StudySettings:
         gradient_steps: Gradient steps per learner update (N).
         decay: ``d`` in ``beta <- beta / d``.
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
+        held_out_layouts: Training and evaluation mazes from disjoint wall grids
+            (:attr:`~antmaze_hirl.experiments.config.ExperimentConfig.held_out_layouts`). ``False`` here,
+            so that a study folder written before the setting existed reads as what it ran; ``study init``
+            (:meth:`for_body`) sets it.
     """
 
     body: str = "point"
@@ -39,6 +43,7 @@ class StudySettings:
     gradient_steps: int = 200
     decay: float = 2.0
     show_learner_subgoal: bool = True
+    held_out_layouts: bool = False
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
@@ -47,18 +52,18 @@ class StudySettings:
 
     @classmethod
     def for_body(cls, body: str, **overrides: Any) -> StudySettings:
-        """The paper experiment's maze family and expert reach for ``body`` (``BODY_DEFAULTS``), with ``overrides``.
+        """The paper protocol's maze family and expert reach for ``body``, held-out layouts on, with ``overrides``.
 
         Raises:
             ValueError: For an unknown body or setting.
         """
-        if body not in BODY_DEFAULTS:
-            raise ValueError(f"unknown body {body!r}; choose from {sorted(BODY_DEFAULTS)}")
         known = {field.name for field in fields(cls)}
         unknown = sorted(set(overrides) - known)
         if unknown:
             raise ValueError(f"unknown study setting(s) {unknown}; known: {sorted(known)}")
-        return cls(body=body, **{**BODY_DEFAULTS[body], **overrides})
+        held_out = overrides.pop("held_out_layouts", True)
+        family = body_settings(body, held_out_layouts=held_out)
+        return cls(body=body, held_out_layouts=held_out, **{**family, **overrides})
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
@@ -72,6 +77,7 @@ class StudySettings:
             gradient_steps=self.gradient_steps,
             decay=self.decay,
             expert_max_distance=self.expert_max_distance,
+            held_out_layouts=self.held_out_layouts,
         )
 
 
