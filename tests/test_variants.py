@@ -1,6 +1,7 @@
 """The paper's algorithms as written beside this project's variants (issue 12): Alg. 4 per step, Alg. 2's
 shared noise buffer, the ensemble's stated settings, and the AggreVaTe baseline."""
 
+import dataclasses
 import json
 import math
 from types import SimpleNamespace
@@ -226,6 +227,21 @@ def test_new_methods_run_a_point_trial(method):
     assert [row["method"] for row in rows] == [method] * 2 and rows[0]["beta"] == 1.0
     decayed = 0.5 ** rows[0]["expert_cost"] if method == "reward_per_step" else 0.5
     assert rows[1]["beta"] == decayed and 0.0 <= rows[1]["eval_success"] <= 1.0
+
+
+def test_the_experiment_sets_the_per_step_gradient_budget_of_alg_4():
+    from antmaze_hirl.experiments.runner import make_env, make_trainer
+    from antmaze_hirl.experts import PathOracle
+
+    env = make_env(TINY)
+    trainers = {
+        steps: make_trainer("reward_per_step", 0, dataclasses.replace(TINY, step_gradient_steps=steps), env, None)
+        for steps in (7, None)
+    }
+    assert trainers[7].strategy.step_gradient_steps == 7 and trainers[None].strategy.step_gradient_steps is None
+    assert make_trainer("reward", 0, TINY, env, PathOracle.for_env(env)).strategy.step_gradient_steps is None
+    with pytest.raises(ValueError, match="step_gradient_steps must be >= 1 or None, got 0"):
+        dataclasses.replace(TINY, step_gradient_steps=0)
 
 
 def test_cli_accepts_the_new_methods(tmp_path):

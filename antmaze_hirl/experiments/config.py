@@ -95,6 +95,11 @@ class ExperimentConfig:
             either. ``False`` (the default, kept so that the committed results folders, which lack this
             setting, still read as what they are): every maze is drawn from the whole family, held out
             by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+        step_gradient_steps: Gradient steps after every labelled step for the strategies that update
+            after every step (``reward_per_step``, Alg. 4). 20 gives about the gradient budget of the
+            per-episode methods (N = 200 per episode of about 10 labels), so the comparison is of when the
+            learner updates, not of how much; ``None`` runs N after every step (10x the compute: about
+            35 minutes per point trial on one core).
     """
 
     body: str = "point"
@@ -109,6 +114,7 @@ class ExperimentConfig:
     mixing: str = "blend"
     expert_max_distance: float | None = None
     held_out_layouts: bool = False
+    step_gradient_steps: int | None = 20
 
     def __post_init__(self) -> None:
         body_spec(self.body)
@@ -126,6 +132,8 @@ class ExperimentConfig:
             raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
         if self.mixing not in ("blend", "switch"):
             raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
+        if self.step_gradient_steps is not None and self.step_gradient_steps < 1:
+            raise ValueError(f"step_gradient_steps must be >= 1 or None, got {self.step_gradient_steps}")
         if not isinstance(self.held_out_layouts, bool):
             raise ValueError(f"held_out_layouts must be True or False, got {self.held_out_layouts!r}")
 

@@ -108,12 +108,15 @@ def make_trainer(method: str, seed: int, config: ExperimentConfig, env: Any, exp
     The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
     """
     rng = np.random.default_rng(seed)
+    strategy = make_strategy(method)
+    if strategy.updates_every_step:
+        strategy.step_gradient_steps = config.step_gradient_steps
     return DAggerTrainer(
         env=env,
         expert=expert,
         policy=HighLevelPolicy.for_env(env, rng=rng),
         rng=rng,
-        strategy=make_strategy(method),
+        strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),
         mixing=config.mixing,  # type: ignore[arg-type]
         episodes_per_update=config.episodes_per_update,
