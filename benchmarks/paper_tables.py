@@ -1,0 +1,113 @@
+"""The README's tables of a paper-experiment results folder, printed from its ``summary.json``.
+
+Every figure of the README's experiment tables comes from this command, so each is traceable to a committed
+file. Two tables: final success and expert cost, then learning per label (success at label budgets, the
+normalised area under the success-vs-labels curve, labels to match plain DAgger), each paired by seed
+against DAgger (Wilcoxon signed-rank p; with 5 seeds it cannot go below 0.0625).
+
+Usage: python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from antmaze_hirl.experiments.curves import LABEL_BUDGETS
+
+
+def _percent(value: float | None) -> str:
+    return "n/a" if value is None else f"{100 * value:.0f}%"
+
+
+def _spread(figure: dict[str, Any], fmt: Any = _percent) -> str:
+    if figure.get("median") is None:
+        return "n/a"
+    return f"{fmt(figure['median'])} ({fmt(figure['min'])}-{fmt(figure['max'])})"
+
+
+def _p_value(method: dict[str, Any], figure: str) -> str:
+    test = method.get("vs_dagger", {}).get(figure)
+    return "" if not test or test.get("wilcoxon_p") is None else f", p = {test['wilcoxon_p']:.3g}"
+
+
+def _minutes(seconds: dict[str, float], method: str) -> str:
+    times = [value / 60 for key, value in seconds.items() if key.rsplit("_seed", 1)[0] == method]
+    return f"{min(times):.1f}-{max(times):.1f} min" if times else "n/a"
+
+
+def cost_table(summary: dict[str, Any]) -> str:
+    """Final learner-only success and what it cost, one row per method, and the oracle's success."""
+    lines = [
+        "| method | final success, median (min-max) | pooled [95% Wilson] | labels / episode | attempts / episode "
+        "| labels per trial, median (min-max) | trial time |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, method in summary["methods"].items():
+        if not method.get("seeds"):
+            continue
+        pooled = method["final_success"]["pooled"]
+        interval = (
+            f"{100 * pooled['rate']:.1f}% [{100 * pooled['wilson_95'][0]:.1f}, {100 * pooled['wilson_95'][1]:.1f}]"
+            if pooled
+            else "n/a"
+        )
+        lines.append(
+            f"| {name} | {_spread(method['final_success'])}{_p_value(method, 'final_success')} | {interval} "
+            f"| {method['mean_expert_cost_per_episode']:.1f} | {method['mean_attempts_per_episode']:.1f} "
+            f"| {_spread(method.get('total_labels', {}), lambda v: f'{v:.0f}')} "
+            f"| {_minutes(summary.get('trial_seconds', {}), name)} |"
+        )
+    oracle = summary.get("oracle_success")
+    if oracle:
+        low, high = oracle["wilson_95"]
+        successes = round(oracle["success_rate"] * oracle["episodes"])
+        lines.append(
+            f"| oracle success | | {successes} of {oracle['episodes']}: {100 * oracle['success_rate']:.0f}% "
+            f"[{100 * low:.1f}, {100 * high:.1f}] | | {oracle['mean_attempts']:.1f} | | |"
+        )
+    return "\n".join(lines)
+
+
+def per_label_table(summary: dict[str, Any]) -> str:
+    """Learning per label: success at each budget, normalised AUC and labels to match DAgger's success."""
+    budgets = " | ".join(f"success at {budget} labels" for budget in LABEL_BUDGETS)
+    lines = [
+        f"| method | {budgets} | normalised AUC | labels to match DAgger, median (seeds reaching) | ratio to DAgger |",
+        "|---|" + "---|" * (len(LABEL_BUDGETS) + 3),
+    ]
+    for name, method in summary["methods"].items():
+        if not method.get("seeds"):
+            continue
+        cells = [
+            _spread(method["success_at_labels"][str(budget)]) + _p_value(method, f"success_at_{budget}_labels")
+            for budget in LABEL_BUDGETS
+        ]
+        auc = _spread(method["normalised_auc"], lambda v: f"{v:.2f}") + _p_value(method, "normalised_auc")
+        match = method.get("labels_to_match_dagger", {})
+        labels = "n/a" if match.get("median") is None else f"{match['median']:.0f}"
+        reached = f" ({match['seeds_reached']} of {method['seeds']})" if match else ""
+        ratio = "n/a" if match.get("ratio_vs_dagger") is None else f"{match['ratio_vs_dagger']:.2f}x"
+        lines.append(f"| {name} | {' | '.join(cells)} | {auc} | {labels}{reached} | {ratio} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folder", type=Path, help="a results folder with summary.json")
+    args = parser.parse_args()
+    path = args.folder / "summary.json"
+    if not path.is_file():
+        parser.error(f"no summary.json in {args.folder}")
+    summary = json.loads(path.read_text())
+    if any(method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()):
+        parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
+    print(cost_table(summary), end="\n\n")
+    print(per_label_table(summary))
+    print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
+
+
+if __name__ == "__main__":
+    main()
