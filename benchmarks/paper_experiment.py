@@ -32,6 +32,8 @@ Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--back
 from __future__ import annotations
 
 import argparse
+import shlex
+import sys
 from pathlib import Path
 
 import torch
@@ -164,7 +166,10 @@ def main() -> None:
     if args.low_level is not None and not args.oracle_only:
         parser.error("--low-level only goes with --oracle-only: trials always use the shipped policy")
     if args.oracle_only:
-        oracle = oracle_success(config, args.low_level)
+        oracle = {
+            "command": shlex.join(["python", "benchmarks/paper_experiment.py", *sys.argv[1:]]),
+            **oracle_success(config, args.low_level),
+        }
         atomic_write_json(RESULTS / f"oracle_success_{args.body}_{config.maze_size}.json", oracle)
         print("oracle success:", oracle)
         return
