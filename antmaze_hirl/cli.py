@@ -112,11 +112,13 @@ def _add_train_low(subparsers: _Subparsers) -> None:
     parser = _add_parser(
         subparsers,
         "train-low",
-        "train a low-level reach policy with SB3 TD3/DDPG + HER",
+        "train a low-level reach policy with SB3 TD3/DDPG/SAC (or TQC) + HER",
         "antmaze-hirl train-low --body point --timesteps 20000 --out runs/point_td3",
     )
     parser.add_argument("--body", choices=_BODIES, required=True, help="body to train (required)")
-    parser.add_argument("--algo", choices=list(ALGOS), default="td3", help="SB3 algorithm")
+    parser.add_argument(
+        "--algo", choices=list(ALGOS), default="td3", help="SB3 algorithm (tqc: sb3-contrib's, pip install '.[tqc]')"
+    )
     parser.add_argument(
         "--timesteps", type=int, required=True, help="total env steps, counting resumed ones (required)"
     )
@@ -155,7 +157,7 @@ def _run_train_low(args: argparse.Namespace) -> int:
         args.out,
         seed=args.seed,
         resume=args.resume,
-        config=load_config(args.body, args.hyperparams),
+        config=load_config(args.body, args.hyperparams, algo=args.algo),
         init_from=args.init_from,
         checkpoint_freq=args.checkpoint_freq,
         eval_freq=args.eval_freq,

@@ -1,4 +1,4 @@
-"""Low-level training with SB3's own TD3/DDPG and ``HerReplayBuffer``, plus checkpoints and evaluation."""
+"""Low-level training with SB3's own TD3/DDPG/SAC (or sb3-contrib's TQC) and ``HerReplayBuffer``, plus checkpoints."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3 import DDPG, TD3, HerReplayBuffer
+from stable_baselines3 import DDPG, SAC, TD3, HerReplayBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.noise import NormalActionNoise
@@ -19,18 +19,25 @@ from antmaze_hirl.sb3_ext.checkpoint import RunCheckpointCallback, latest_checkp
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
-from antmaze_hirl.sb3_ext.loading import save_policy
+from antmaze_hirl.sb3_ext.loading import algorithm_of, save_policy
 
-ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG}
+# TQC is looked up on use (algo_class): sb3-contrib is an optional extra.
+ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG, "sac": SAC}
 
 
 def algo_class(algo: str) -> type[OffPolicyAlgorithm]:
-    """SB3 class for ``"td3"`` or ``"ddpg"``.
+    """SB3 class for ``"td3"``, ``"ddpg"``, ``"sac"`` or ``"tqc"`` (sb3-contrib's).
 
     Raises:
-        ValueError: For any other name.
+        ValueError: For any other name, or ``"tqc"`` without sb3-contrib installed.
 
     """
+    if algo == "tqc":
+        try:
+            from sb3_contrib import TQC
+        except ImportError as error:
+            raise ValueError("--algo tqc needs sb3-contrib: pip install 'antmaze_hirl[tqc]'") from error
+        return TQC
     if algo not in ALGO_CLASSES:
         raise ValueError(f"unknown algo {algo!r}; choose one of {list(ALGOS)}")
     return ALGO_CLASSES[algo]
@@ -49,16 +56,50 @@ def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
         kwargs["features_extractor_kwargs"] = {"quaternion_index": config.quaternion_index}
     if config.action_l2 > 0:
         kwargs["action_l2"] = config.action_l2
+    if config.algo == "tqc":
+        kwargs["n_quantiles"] = config.n_quantiles
     return kwargs
+
+
+def algo_kwargs(config: LowLevelConfig, n_actions: int) -> dict[str, Any]:
+    """The constructor keywords only ``config.algo``'s family takes: exploration noise or entropy settings.
+
+    SAC and TQC explore by sampling their stochastic policy (their entropy term sets how widely), so they
+    take no action noise; TD3/DDPG's deterministic actor needs the Gaussian noise.
+    """
+    if config.algo in ("td3", "ddpg"):
+        return {"action_noise": NormalActionNoise(np.zeros(n_actions), config.action_noise_std * np.ones(n_actions))}
+    kwargs: dict[str, Any] = {
+        "ent_coef": config.ent_coef,
+        "target_entropy": config.target_entropy,
+        "target_update_interval": config.target_update_interval,
+    }
+    if config.algo == "tqc":
+        kwargs["top_quantiles_to_drop_per_net"] = config.top_quantiles_to_drop_per_net
+    return kwargs
+
+
+def _check_config_algo(config: LowLevelConfig, algo: str) -> None:
+    # TD3 and DDPG read the same keys; any other pair would train with keys the config's author did not set.
+    if config.algo != algo and {config.algo, algo} != {"td3", "ddpg"}:
+        raise ValueError(
+            f"the config is for {config.algo}, not {algo}: load it with load_config(body, ..., algo={algo!r})"
+        )
 
 
 def make_model(
     body: str, algo: str, config: LowLevelConfig, *, seed: int, tensorboard_log: str | None = None
 ) -> OffPolicyAlgorithm:
-    """A fresh SB3 TD3/DDPG with ``HerReplayBuffer`` on the reach env, configured by ``config``."""
+    """A fresh SB3 TD3/DDPG/SAC (or TQC) with ``HerReplayBuffer`` on the reach env, configured by ``config``.
+
+    Raises:
+        ValueError: If ``algo`` is unknown (or TQC is not installed), or ``config`` is for another algorithm.
+    """
+    _check_config_algo(config, algo)
+    algorithm = algo_class(algo)
     env = make_reach_env(body, config)
-    n_actions = env.action_space.shape[0]
-    return algo_class(algo)(
+    return algorithm(
+        # action_l2 > 0 only for TD3/DDPG (the config refuses it for the others): the penalty lives in TD3's critic.
         ActionPenaltyPolicy if config.action_l2 > 0 else "MultiInputPolicy",
         env,
         learning_rate=config.learning_rate,
@@ -69,7 +110,7 @@ def make_model(
         learning_starts=config.learning_starts,
         train_freq=config.train_freq,
         gradient_steps=config.gradient_steps,
-        action_noise=NormalActionNoise(np.zeros(n_actions), config.action_noise_std * np.ones(n_actions)),
+        **algo_kwargs(config, env.action_space.shape[0]),
         replay_buffer_class=HerReplayBuffer,
         replay_buffer_kwargs={
             "n_sampled_goal": config.n_sampled_goal,
@@ -111,16 +152,17 @@ def train_low_level(
 
     Args:
         body: ``"ant"`` or ``"point"``.
-        algo: ``"td3"`` or ``"ddpg"``.
+        algo: ``"td3"``, ``"ddpg"``, ``"sac"`` or ``"tqc"`` (with sb3-contrib installed).
         total_timesteps: Target step count, counting steps done before a resume.
         out_dir: Run folder.
         seed: Seed of the model and envs.
         resume: Continue from the latest checkpoint in ``out_dir`` (error if there is none or it was
             made with another body, algo, seed or config).
-        config: Hyperparameters; default :func:`load_config` for ``body``.
-        init_from: Warm start: a TD3/DDPG ``.zip`` with the same networks whose weights and optimiser
-            states the new model starts from (its replay buffer starts empty). On resume it may be left
-            out (the checkpoint holds the weights); if given, it must be the one the run started from.
+        config: Hyperparameters for ``algo``; default :func:`load_config` for ``body`` and ``algo``.
+        init_from: Warm start: a ``.zip`` of the same algorithm (a TD3 zip for TD3 or DDPG) with the same
+            networks whose weights and optimiser states the new model starts from (its replay buffer starts
+            empty). On resume it may be left out (the checkpoint holds the weights); if given, it must be the
+            one the run started from.
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
@@ -131,13 +173,21 @@ def train_low_level(
     Raises:
         antmaze_hirl.sb3_ext.checkpoint.CheckpointError: On a missing, corrupt or mismatched checkpoint.
         FileExistsError: If a fresh run (``resume=False``) would overwrite a run in ``out_dir``.
-        ValueError: On a negative ``total_timesteps``, or a frequency or episode count below 1.
+        ValueError: On a negative ``total_timesteps``, a frequency or episode count below 1, a ``config`` for
+            another algorithm, or an ``init_from`` saved by another algorithm.
 
     """
     if total_timesteps < 0:
         raise ValueError(f"total_timesteps must be >= 0, got {total_timesteps}")
-    config = config if config is not None else load_config(body)
-    algo_class(algo)
+    config = config if config is not None else load_config(body, algo=algo)
+    _check_config_algo(config, algo)
+    algorithm = algo_class(algo)
+    source = None if init_from is None else algorithm_of(init_from)
+    if source is not None and not issubclass(algorithm, source):
+        # A TD3 actor cannot initialise SAC's Gaussian one; set_parameters would fail on missing keys.
+        raise ValueError(
+            f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
+        )
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
     identity = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
@@ -145,7 +195,7 @@ def train_low_level(
     if resume:
         folder, state = latest_checkpoint(checkpoint_dir, expected=run_state if init_from is not None else identity)
         run_state["init_from"] = state.get("init_from")  # later checkpoints keep where the run started from
-        model = algo_class(algo).load(folder / "model.zip", env=make_reach_env(body, config))
+        model = algorithm.load(folder / "model.zip", env=make_reach_env(body, config))
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     else:
         if (checkpoint_dir / "latest.json").exists():
