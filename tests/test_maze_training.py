@@ -143,6 +143,13 @@ def test_the_committed_maze_config_loads_and_trains_in_mazes():
     assert len(shapes) > 1
 
 
+def test_the_sac_maze_config_trains_in_the_same_setting_with_the_flip_penalty_relabelled():
+    sac = load_config("ant", ANT_MAZE_YML.with_name("ant_maze_sac.yml"), algo="sac")
+    assert sac.env_kwargs == load_config("ant", ANT_MAZE_YML).env_kwargs and sac.action_l2 == 0.0
+    model = make_model("ant", "sac", sac.replace(buffer_size=1000), seed=0)
+    assert model.replay_buffer.copy_info_dict and model.action_noise is None
+
+
 @pytest.mark.parametrize(("penalty", "relabelled_reward"), [(0.0, 1.0), (1.0, 0.0)])
 def test_her_relabelled_flip_steps_carry_the_penalty(penalty, relabelled_reward):
     config = load_config("ant").replace(

@@ -182,12 +182,6 @@ def train_low_level(
     config = config if config is not None else load_config(body, algo=algo)
     _check_config_algo(config, algo)
     algorithm = algo_class(algo)
-    source = None if init_from is None else algorithm_of(init_from)
-    if source is not None and not issubclass(algorithm, source):
-        # A TD3 actor cannot initialise SAC's Gaussian one; set_parameters would fail on missing keys.
-        raise ValueError(
-            f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
-        )
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
     identity = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
@@ -201,6 +195,13 @@ def train_low_level(
         if (checkpoint_dir / "latest.json").exists():
             raise FileExistsError(
                 f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir"
+            )
+        # On resume init_from is only the run's provenance, checked against the checkpoint; here it is read.
+        source = None if init_from is None else algorithm_of(init_from)
+        if source is not None and not issubclass(algorithm, source):
+            # A TD3 actor cannot initialise SAC's Gaussian one; set_parameters would fail on missing keys.
+            raise ValueError(
+                f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
             )
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
         if init_from is not None:
