@@ -112,7 +112,7 @@ class QueryStrategy:
         return True
 
     def on_step(self, observation: dict[str, np.ndarray], subgoal: np.ndarray, info: dict[str, Any]) -> None:
-        """Called after each executed high-level step: the observation it started from, the subgoal sent, the env's info."""
+        """Called after each executed step with the observation it started from, the subgoal sent and the env's info."""
 
     def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
         """The subgoal stored in D for ``observation``; here the expert's own (what every method but AggreVaTe keeps).
@@ -195,10 +195,7 @@ class BaggedEnsemble:
     Warm-started, as the main learner is. Where its members' subgoals disagree the data say little:
     :class:`MultiPolicyQuery` starts episodes there, :class:`GatedQuery` asks the expert there.
 
-    The ensemble settings (these defaults; the one place they are stated): 5 members, each made like
-    the learner (its ``spawn``) and trained after every update for ``ceil(N / 5)`` gradient steps (40 at
-    the experiments' N = 200), a fifth of the learner's, on a bootstrap resample of D the size of D. The
-    paper trains its policies fully; see ``member_steps``.
+    Its defaults are the ``multi_policy`` method's ensemble settings, stated in :class:`MultiPolicyQuery`.
 
     Args:
         n_policies: Ensemble size.
@@ -253,8 +250,14 @@ class BaggedEnsemble:
 class MultiPolicyQuery(BaggedEnsemble, QueryStrategy):
     """Multi-policy start selection (Alg. 3, eq. 2).
 
-    Keeps a :class:`BaggedEnsemble` of ``n_policies`` extra learners (its settings are the ``multi_policy``
-    method's); the episode starts at the candidate where their subgoals disagree most.
+    Keeps a :class:`BaggedEnsemble` of ``n_policies`` extra learners; after every update each trains on a
+    fresh bootstrap resample of D (warm-started, as the main learner is). The episode starts at the
+    candidate where their subgoals disagree most.
+
+    The ``multi_policy`` method's ensemble settings (these defaults; the one place they are stated):
+    5 members, each made like the learner (its ``spawn``) and trained after every update for
+    ``ceil(N / 5)`` gradient steps (40 at the experiments' N = 200), a fifth of the learner's, on a
+    bootstrap resample of D the size of D. The paper trains its policies fully; see ``member_steps``.
 
     Args:
         n_policies: Ensemble size.
