@@ -157,6 +157,26 @@ function animate(walked, startTrail) {
   });
 }
 
+// Steps the learner walked on its own (gated methods) before this query or to the maze's end: replayed first.
+async function replayWalk() {
+  const walk = state.walk || [];
+  if (walk.length === 0 || !state.maze) { return; }
+  const walkedPoints = walk.reduce((n, w) => n + w.path.length - 1, 0);
+  busy = true;
+  $("status").textContent = "The robot walks on its own...";
+  try {
+    await animate(walk, state.trail.slice(0, state.trail.length - walkedPoints));
+  } finally {
+    busy = false;
+  }
+}
+
+function endMessage(end) {
+  return end.success
+    ? `Maze ${end.number}: goal reached!`
+    : `Maze ${end.number}: the robot did not make it this time.`;
+}
+
 // ------------------------------------------------------------------------------------ render
 function renderProgress() {
   const parts = [`Participant ${state.participant}`];
@@ -177,7 +197,13 @@ function renderProgress() {
 }
 
 async function render() {
-  if (state.phase === "episode_over") {  // reloaded between a maze's end and the next: move on
+  while (state.phase === "episode_over") {  // a maze walked without a question, or a reload after a maze's end
+    if (state.episode_end && state.walk) {
+      show("task");
+      renderProgress();
+      await replayWalk();
+      $("status").textContent = endMessage(state.episode_end);
+    }
     state = await api(participantPath("next"), {});
   }
   renderProgress();
@@ -190,6 +216,13 @@ async function render() {
   } else if (state.phase === "label") {
     show("task");
     $("legend-learner").hidden = !state.learner_subgoal;
+    if (state.walk && state.walk.length) {
+      await replayWalk();
+      $("status").textContent = "Your turn: click the next point.";
+    }
+    if (state.query && state.query.executes === false) {
+      $("status").textContent = "The robot did not make it. Where should it have gone from here?";
+    }
     draw();
     queryVisibleAt = performance.now();
     refreshCamera();
@@ -290,9 +323,7 @@ canvas.addEventListener("click", async (event) => {
     const next = result.episode_end ? api(participantPath("next"), {}) : null;
     await animate(result.walked, before.trail);
     if (result.episode_end) {
-      $("status").textContent = result.episode_end.success
-        ? `Maze ${result.episode_end.number}: goal reached!`
-        : `Maze ${result.episode_end.number}: the robot did not make it this time.`;
+      $("status").textContent = endMessage(result.episode_end);
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
