@@ -105,25 +105,17 @@ class RiskModel:
 
     Args:
         rng: Seeds the initialisation (torch's global RNG is left as it was) and draws the minibatches.
-        hidden: Width of the hidden layer.
-        learning_rate: Adam step size.
-        batch_size: Minibatch size.
+        hidden: Width of the hidden layer (Adam at 1e-3 on minibatches of 64, as the learner's defaults).
 
     Raises:
-        ValueError: If ``hidden`` or ``batch_size`` is below 1 or ``learning_rate`` is not positive.
+        ValueError: If ``hidden`` is below 1.
     """
 
-    def __init__(
-        self, *, rng: np.random.Generator, hidden: int = 64, learning_rate: float = 1e-3, batch_size: int = 64
-    ) -> None:
-        if hidden < 1 or batch_size < 1:
-            raise ValueError(f"hidden and batch_size must be >= 1, got {hidden} and {batch_size}")
-        if not learning_rate > 0:
-            raise ValueError(f"learning_rate must be > 0, got {learning_rate}")
+    def __init__(self, *, rng: np.random.Generator, hidden: int = 64) -> None:
+        if hidden < 1:
+            raise ValueError(f"hidden must be >= 1, got {hidden}")
         self.rng = rng
         self.hidden = hidden
-        self.learning_rate = learning_rate
-        self.batch_size = batch_size
         self.network: nn.Module | None = None  # built at the first fit, when the input size is known
         self.optimizer: th.optim.Optimizer | None = None
 
@@ -145,13 +137,13 @@ class RiskModel:
                 self.network = nn.Sequential(
                     nn.Linear(features.shape[1], self.hidden), nn.ReLU(), nn.Linear(self.hidden, 1)
                 )
-            self.optimizer = th.optim.Adam(self.network.parameters(), lr=self.learning_rate)
+            self.optimizer = th.optim.Adam(self.network.parameters(), lr=1e-3)
         assert self.optimizer is not None
         inputs, targets = th.from_numpy(features), th.from_numpy(np.asarray(failed, dtype=np.float32))
         self.network.train()
         losses = []
         for _ in range(steps):
-            index = th.from_numpy(self.rng.integers(len(features), size=min(self.batch_size, len(features))))
+            index = th.from_numpy(self.rng.integers(len(features), size=min(64, len(features))))
             logits = self.network(inputs[index]).squeeze(-1)
             loss = nn.functional.binary_cross_entropy_with_logits(logits, targets[index])
             self.optimizer.zero_grad()
