@@ -35,6 +35,7 @@ def click_until(page, phases, save_screenshot=False):
     """Clicks the oracle's subgoal on the canvas until the page's phase is one of ``phases``."""
     shot = False
     while True:
+        page.wait_for_function("() => !busy && state", timeout=120_000)  # a replay of the learner's steps ends
         state = page.evaluate("() => state")
         if state["phase"] in phases:
             return state
@@ -104,3 +105,27 @@ def test_a_participant_clicks_through_practice_and_a_trial_in_chromium(tmp_path)
     events = [json.loads(line)["event"] for line in (participant / "events.jsonl").open()]
     assert events.count("pause") == events.count("resume") == 1
     assert SCREENSHOT.stat().st_size > 10_000
+
+
+def test_a_gated_trial_replays_the_learners_own_steps_in_chromium(tmp_path, monkeypatch):
+    from antmaze_hirl.dagger import GatedQuery
+    from antmaze_hirl.study.server import StudyServer
+
+    # Once D holds labels the gate opens only at no-ops: mazes are walked, in part or whole, without a question.
+    monkeypatch.setattr(GatedQuery, "wants_label", lambda self, observation, subgoal, learner: False)
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("gated",), episodes=3, practice=0)
+    with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1100, "height": 800})
+        errors = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        page.goto(server.url)
+        page.get_by_role("button", name="P01").click()
+        page.get_by_role("button", name="Start").click()
+        page.wait_for_function("() => state && state.phase === 'label'")
+        click_until(page, ("questionnaire",))
+        browser.close()
+    assert errors == []
+    with (folder / "participants" / "P01" / "episodes.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 3 and sum(int(r["expert_cost"]) for r in rows[1:]) < sum(int(r["attempts"]) for r in rows[1:])

@@ -162,13 +162,8 @@ async function replayWalk() {
   const walk = state.walk || [];
   if (walk.length === 0 || !state.maze) { return; }
   const walkedPoints = walk.reduce((n, w) => n + w.path.length - 1, 0);
-  busy = true;
   $("status").textContent = "The robot walks on its own...";
-  try {
-    await animate(walk, state.trail.slice(0, state.trail.length - walkedPoints));
-  } finally {
-    busy = false;
-  }
+  await animate(walk, state.trail.slice(0, state.trail.length - walkedPoints));
 }
 
 function endMessage(end) {
@@ -197,14 +192,26 @@ function renderProgress() {
 }
 
 async function render() {
-  while (state.phase === "episode_over") {  // a maze walked without a question, or a reload after a maze's end
-    if (state.episode_end && state.walk) {
+  const wasBusy = busy;
+  busy = true;  // while the learner's own steps replay and the page moves on, clicks wait
+  try {
+    while (state.phase === "episode_over") {  // a maze walked without a question, or a reload after a maze's end
+      if (state.episode_end && state.walk) {
+        show("task");
+        renderProgress();
+        await replayWalk();
+        $("status").textContent = endMessage(state.episode_end);
+      }
+      state = await api(participantPath("next"), {});
+    }
+    if (state.phase === "label" && state.walk && state.walk.length) {
       show("task");
       renderProgress();
       await replayWalk();
-      $("status").textContent = endMessage(state.episode_end);
+      $("status").textContent = "Your turn: click the next point.";
     }
-    state = await api(participantPath("next"), {});
+  } finally {
+    busy = wasBusy;
   }
   renderProgress();
   $("paused").hidden = !state.paused;
@@ -216,10 +223,6 @@ async function render() {
   } else if (state.phase === "label") {
     show("task");
     $("legend-learner").hidden = !state.learner_subgoal;
-    if (state.walk && state.walk.length) {
-      await replayWalk();
-      $("status").textContent = "Your turn: click the next point.";
-    }
     if (state.query && state.query.executes === false) {
       $("status").textContent = "The robot did not make it. Where should it have gone from here?";
     }
