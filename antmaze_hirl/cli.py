@@ -224,7 +224,10 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     )
     parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
     parser.add_argument(
-        "--methods", default=",".join(DEFAULT_METHODS), help="comma-separated query strategies, any of the default's"
+        "--methods",
+        default=",".join(DEFAULT_METHODS),
+        help="comma-separated query strategies: any of the default's, gated, or gated+noise, gated+multi_policy, "
+        "gated+reward, gated+aggrevate (uncertainty-gated queries)",
     )
     parser.add_argument("--seeds", type=int, default=5, help="trials per method, seeds 0..N-1")
     parser.add_argument("--episodes", type=int, default=defaults.episodes, help="training episodes per trial")

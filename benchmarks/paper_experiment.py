@@ -122,7 +122,7 @@ def main() -> None:
     parser.add_argument("--body", choices=["point", "ant"], required=True)
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--episodes", type=int, default=100)
-    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS))
+    parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="also gated, gated+reward, ...")
     add_backend_arguments(parser)  # --backend, --jobs (2 on 2 cores), --address, --cpus-per-trial
     parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment_BODY")
     parser.add_argument(

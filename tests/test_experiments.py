@@ -203,6 +203,7 @@ def test_experiment_rejects_bad_seeds_and_methods_before_writing(tmp_path, metho
         ("--methods", ",", "--methods names no method, got ','"),
         ("--methods", "", "--methods names no method, got ''"),
         ("--methods", "dagger,spider", "unknown method 'spider'"),
+        ("--methods", "gated,gated+spider", "unknown method 'gated+spider'"),
     ],
 )
 def test_experiment_cli_bad_seeds_and_methods_exit_2_with_one_line(tmp_path, capsys, flag, value, message):

@@ -35,6 +35,7 @@ def click_until(page, phases, save_screenshot=False):
     """Clicks the oracle's subgoal on the canvas until the page's phase is one of ``phases``."""
     shot = False
     while True:
+        page.wait_for_function("() => !busy && state", timeout=120_000)  # a replay of the learner's steps ends
         state = page.evaluate("() => state")
         if state["phase"] in phases:
             return state
@@ -51,17 +52,23 @@ def click_until(page, phases, save_screenshot=False):
         )
 
 
+def open_page(playwright, url):
+    """Chromium on the study page, P01 picked; the list of page errors fills as they happen."""
+    browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+    page = browser.new_page(viewport={"width": 1100, "height": 800})
+    errors = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(url)
+    page.get_by_role("button", name="P01").click()
+    return browser, page, errors
+
+
 def test_a_participant_clicks_through_practice_and_a_trial_in_chromium(tmp_path):
     from antmaze_hirl.study.server import StudyServer
 
     folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger", "noise"), episodes=1, practice=1)
     with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1100, "height": 800})
-        errors = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        page.goto(server.url)
-        page.get_by_role("button", name="P01").click()
+        browser, page, errors = open_page(p, server.url)
         page.get_by_role("button", name="Start").wait_for()
         assert "Practice" in page.locator("#intro-title").inner_text()
         page.get_by_role("button", name="Start").click()
@@ -104,3 +111,22 @@ def test_a_participant_clicks_through_practice_and_a_trial_in_chromium(tmp_path)
     events = [json.loads(line)["event"] for line in (participant / "events.jsonl").open()]
     assert events.count("pause") == events.count("resume") == 1
     assert SCREENSHOT.stat().st_size > 10_000
+
+
+def test_a_gated_trial_replays_the_learners_own_steps_in_chromium(tmp_path, monkeypatch):
+    from antmaze_hirl.dagger import GatedQuery
+    from antmaze_hirl.study.server import StudyServer
+
+    # Once D holds labels the gate opens only at no-ops: mazes are walked, in part or whole, without a question.
+    monkeypatch.setattr(GatedQuery, "wants_label", lambda self, observation, subgoal, learner: False)
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("gated",), episodes=3, practice=0)
+    with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
+        browser, page, errors = open_page(p, server.url)
+        page.get_by_role("button", name="Start").click()
+        page.wait_for_function("() => state && state.phase === 'label'")
+        click_until(page, ("questionnaire",))
+        browser.close()
+    assert errors == []
+    with (folder / "participants" / "P01" / "episodes.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == 3 and sum(int(r["expert_cost"]) for r in rows[1:]) < sum(int(r["attempts"]) for r in rows[1:])

@@ -9,9 +9,11 @@ import sys
 import time
 
 import httpx
+import numpy as np
 import pytest
 from study_helpers import TINY_SETTINGS, make_tiny_study
 
+from antmaze_hirl.dagger import GatedQuery
 from antmaze_hirl.experiments.runner import run_trial
 from antmaze_hirl.study.analysis import analyze
 from antmaze_hirl.study.plan import load_plan
@@ -151,3 +153,40 @@ def test_evaluations_land_on_the_paper_schedule(tmp_path, episodes):
     evaluated = [int(r["episode"]) for r in rows if r["eval_success"] != ""]
     # every eval_every-th episode, and the last one (with the final evaluation's mazes)
     assert evaluated == [1, 2, 1, 2]
+
+
+def test_a_gated_trial_asks_less_and_gives_the_oracle_experiments_numbers(tmp_path):
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("gated",), episodes=4, practice=0)
+    with StudyServer(folder).running() as server:
+        simulate_study(server.url, ["P01"], SimulatedParticipant())
+    plan, settings = load_plan(folder), load_settings(folder)
+    (trial,) = plan.participants[0].trials
+    rows = read_csv(folder / "participants" / "P01" / "episodes.csv")
+    expected = run_trial(trial.method, trial.seed, settings.experiment_config(trial.episodes))
+    assert [[str(e[c]) for c in COMPARED] for e in expected] == [[g[c] for c in COMPARED] for g in rows]
+    clicks = (folder / "participants" / "P01" / "clicks.jsonl").read_text().splitlines()
+    assert len(clicks) == sum(int(r["expert_cost"]) for r in rows) < sum(int(r["attempts"]) for r in rows)
+    with np.load(folder / "participants" / "P01" / f"trial{trial.index}" / "demonstrations.npz") as log:
+        assert len(log["labelled"]) == sum(int(r["attempts"]) for r in rows)  # every step, asked or not
+        assert log["labelled"].sum() == len(clicks) and np.isnan(log["labels"][~log["labelled"]]).all()
+
+
+def test_a_maze_the_learner_walks_unasked_is_shown_and_closed(tmp_path, monkeypatch):
+    # The gate never opens once D holds labels: after the first maze the page asks only at no-ops.
+    monkeypatch.setattr(GatedQuery, "wants_label", lambda self, observation, subgoal, learner: False)
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("gated",), episodes=3, practice=0)
+    with StudyServer(folder).running() as server:
+        client = StudyClient(server.url)
+        state, unasked_mazes = client.participant("P01", "start", {}), []
+        while state["phase"] in ("label", "episode_over"):
+            if state["phase"] == "episode_over":  # walked to its end without a question
+                assert state["query"] is None and state["walk"] and not any(step["asked"] for step in state["walk"])
+                unasked_mazes.append(state["episode_end"]["number"])
+                state = client.participant("P01", "next", {})
+                continue
+            click = oracle_click(state)
+            result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
+            state = client.participant("P01", "next", {}) if result["episode_end"] else result["state"]
+    assert unasked_mazes and 1 not in unasked_mazes  # the first maze is always asked (no labels yet)
+    rows = read_csv(folder / "participants" / "P01" / "episodes.csv")
+    assert [int(r["expert_cost"]) == 0 for r in rows[1:]] == [n in unasked_mazes for n in (2, 3)]

@@ -17,6 +17,7 @@ import numpy as np
 
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
 from antmaze_hirl.dagger.features import EncodedBatch
+from antmaze_hirl.dagger.gating import QuantileThreshold, ReferenceStates, RiskModel, disagreement
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import bfs_distances
@@ -64,6 +65,14 @@ class QueryStrategy:
     N), :meth:`on_update`, and one step of the beta schedule, so beta decays per step."""
     step_gradient_steps: int | None = None
     """Gradient steps of each per-step update (read only when :attr:`updates_every_step`)."""
+    gates: ClassVar[bool] = False
+    """Whether the trainer asks :meth:`wants_label` at each high-level step (an uncertainty gate).
+
+    Then an unasked step executes the learner's subgoal and adds nothing to D, and an asked step executes
+    the expert's own subgoal (the expert takes over for that step, as in HG-DAgger and ThriftyDAgger):
+    the beta mix does not apply. Otherwise every step is asked and executes the beta mix."""
+    label_failures: bool = False
+    """Whether, after a failed episode, the expert labels its unasked states (read only when :attr:`gates`)."""
 
     def __new__(cls, *args: Any, **kwargs: Any) -> QueryStrategy:
         """A new strategy; ``QueryStrategy()`` itself gives a :class:`DAggerQuery`, with a warning."""
@@ -91,6 +100,19 @@ class QueryStrategy:
 
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
         """Called after each learner update (for strategies that train models of their own)."""
+
+    def wants_label(self, observation: dict[str, np.ndarray], learner_subgoal: np.ndarray, learner: Learner) -> bool:
+        """Whether the expert is asked at this step (called only when :attr:`gates`); here always.
+
+        Args:
+            observation: The high-level observation.
+            learner_subgoal: The learner's proposal, clipped to the maze (what runs if the expert is not asked).
+            learner: The trainer's learner.
+        """
+        return True
+
+    def on_step(self, observation: dict[str, np.ndarray], subgoal: np.ndarray, info: dict[str, Any]) -> None:
+        """Called after each executed step with the observation it started from, the subgoal sent and the env's info."""
 
     def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
         """The subgoal stored in D for ``observation``; here the expert's own (what every method but AggreVaTe keeps).
@@ -167,30 +189,26 @@ class NoiseQuery(QueryStrategy):
         return query.candidates[int(np.argmax(self.scores(query, rng)))]
 
 
-class MultiPolicyQuery(QueryStrategy):
-    """Multi-policy start selection (Alg. 3, eq. 2).
+class BaggedEnsemble:
+    """Learners like the trainer's, each trained after every update on its own bootstrap resample of D.
 
-    Keeps ``n_policies`` extra learners; after every update each trains on a fresh bootstrap resample
-    of D (warm-started, as the main learner is). The episode starts at the candidate where their
-    subgoals disagree most.
+    Warm-started, as the main learner is. Where its members' subgoals disagree the data say little:
+    :class:`MultiPolicyQuery` starts episodes there, :class:`GatedQuery` asks the expert there.
 
-    The ``multi_policy`` method's ensemble settings (these defaults; the one place they are stated):
-    5 members, each made like the learner (its ``spawn``) and trained after every update for
-    ``ceil(N / 5)`` gradient steps (40 at the experiments' N = 200), a fifth of the learner's, on a
-    bootstrap resample of D the size of D. The paper trains its policies fully; see ``member_steps``.
+    Its defaults are the ``multi_policy`` method's ensemble settings, stated in :class:`MultiPolicyQuery`.
 
     Args:
         n_policies: Ensemble size.
-        make_policy: Factory ``rng -> learner`` for the ensemble members (left ``None``: the trainer's
-            learner's :meth:`~antmaze_hirl.dagger.protocols.OffsetLearner.spawn`).
+        make_policy: Factory ``rng -> learner`` for the members (left ``None``: the trainer's learner's
+            :meth:`~antmaze_hirl.dagger.protocols.OffsetLearner.spawn`).
         member_steps: Gradient steps per member per update. Default: the trainer's N divided by
             ``n_policies`` (rounded up), so the whole ensemble costs about as much as the learner;
-            disagreement only has to rank start cells, and full-length member training made a trial
+            disagreement only has to rank states, and full-length member training made a trial
             ~5x slower for no measured gain.
-    """
 
-    name = "multi_policy"
-    reads_policy_outputs = True
+    Raises:
+        ValueError: If ``n_policies`` is below 2 or ``member_steps`` below 1.
+    """
 
     def __init__(
         self,
@@ -215,7 +233,7 @@ class MultiPolicyQuery(QueryStrategy):
     def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
         """Trains every member on its own bootstrap resample of the dataset."""
         if self.make_policy is None:
-            raise ValueError("MultiPolicyQuery needs make_policy (the trainer sets it)")
+            raise ValueError(f"{type(self).__name__} needs make_policy (the trainer sets it)")
         if not self.members:
             self.members = [
                 self.make_policy(np.random.default_rng(rng.integers(2**63))) for _ in range(self.n_policies)
@@ -224,13 +242,38 @@ class MultiPolicyQuery(QueryStrategy):
         for member in self.members:
             member.fit_dataset(dataset, steps, rng.integers(len(dataset), size=len(dataset)))
 
+    def member_offsets(self, batch: EncodedBatch) -> np.ndarray:
+        """Every member's normalised offsets for an encoded batch, ``(B, members, 2)``."""
+        return np.stack([member.offsets(batch) for member in self.members], axis=1)
+
+
+class MultiPolicyQuery(BaggedEnsemble, QueryStrategy):
+    """Multi-policy start selection (Alg. 3, eq. 2).
+
+    Keeps a :class:`BaggedEnsemble` of ``n_policies`` extra learners; after every update each trains on a
+    fresh bootstrap resample of D (warm-started, as the main learner is). The episode starts at the
+    candidate where their subgoals disagree most.
+
+    The ``multi_policy`` method's ensemble settings (these defaults; the one place they are stated):
+    5 members, each made like the learner (its ``spawn``) and trained after every update for
+    ``ceil(N / 5)`` gradient steps (40 at the experiments' N = 200), a fifth of the learner's, on a
+    bootstrap resample of D the size of D. The paper trains its policies fully; see ``member_steps``.
+
+    Args:
+        n_policies: Ensemble size.
+        make_policy: Factory ``rng -> learner`` for the ensemble members (``None``: the learner's ``spawn``).
+        member_steps: Gradient steps per member per update (``None``: ``ceil(N / n_policies)``).
+    """
+
+    name = "multi_policy"
+    reads_policy_outputs = True
+
     def scores(self, query: StartQuery) -> np.ndarray:
         """Disagreement (spread across members) at each candidate."""
         if not self.members:
             return np.zeros(len(query.candidates))
         bodies = np.repeat(query.body_observation[None], len(query.candidates), axis=0)
-        encoded = query.encode(query.candidates, bodies)
-        outputs = np.stack([member.offsets(encoded) for member in self.members], axis=1)  # (candidates, members, 2)
+        outputs = self.member_offsets(query.encode(query.candidates, bodies))  # (candidates, members, 2)
         return np.array([spread(block) for block in outputs])
 
     def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
@@ -377,6 +420,166 @@ class AggreVaTeQuery(QueryStrategy):
         return candidates[int(np.argmin(costs))]
 
 
+class GatedQuery(QueryStrategy):
+    """Uncertainty-gated queries: the expert is asked only where the learner is unsure (method ``gated``).
+
+    At each high-level step the learner proposes a subgoal; the gate opens, and the expert is asked, where
+    a :class:`BaggedEnsemble`'s members disagree on the state (their mean distance from their mean
+    subgoal, in units of the learner's ``max_offset``: :func:`~antmaze_hirl.dagger.gating.disagreement`)
+    more than the threshold. An asked step's label is aggregated and the expert's subgoal is executed (the
+    expert takes over for the step, as in ThriftyDAgger and HG-DAgger; the trainer's beta mix does not
+    apply); an unasked step executes the learner's subgoal, adds nothing to D and costs nothing. The
+    trainer also opens the gate before D holds any label and wherever the learner's clipped subgoal is a
+    no-op (it would loop in place), so ``expert_cost`` counts asked steps and ``attempts`` all steps.
+
+    The threshold is set from ``target_rate`` as ThriftyDAgger sets its own
+    (:class:`~antmaze_hirl.dagger.gating.QuantileThreshold`): after every update it is the
+    ``1 - target_rate`` quantile of the new ensemble's disagreement over the last ``reference_size``
+    states the episodes visited, asked or not, so about ``target_rate`` of the states like those ask, and
+    the threshold falls with the disagreement as the learner improves. Before the first update (no
+    ensemble yet) the gate is open everywhere.
+
+    With ``risk``, the gate also opens where a :class:`~antmaze_hirl.dagger.gating.RiskModel` (trained
+    after every update on every executed step's outcome) gives the low level a probability above
+    ``risk_threshold`` of missing the learner's subgoal: novelty OR risk, as ThriftyDAgger combines them.
+    With ``label_failures``, after a failed episode the expert labels its unasked states (each label
+    counts; in ask/tell these requests have ``executes=False``).
+
+    Composition: ``inner`` picks starts and keeps or prunes labels (its ``choose_start``,
+    ``on_episode_end``, ``label_target`` and ``on_update``): ``GatedQuery(inner=RewardBasedQuery())`` is
+    method ``gated+reward`` and prunes the asked labels of failed episodes (``t_d`` counts the episode's
+    labels back from its last); an inner :class:`MultiPolicyQuery` lends its ensemble to the gate.
+
+    Args:
+        inner: The start-selection or pruning strategy it wraps (default plain DAgger's corner starts).
+        target_rate: The share of states that should ask, in ``(0, 1)``.
+        reference_size: Recent states whose disagreement sets the threshold.
+        n_policies: Ensemble size (ignored when ``inner`` is a :class:`MultiPolicyQuery`).
+        member_steps: Gradient steps per member per update (as :class:`BaggedEnsemble`; ignored likewise).
+        risk: Also gate on the learned risk of missing the subgoal.
+        risk_threshold: Failure probability above which the risk opens the gate, in ``(0, 1)``.
+        risk_steps: Gradient steps of the risk model per update.
+        label_failures: Ask for labels of a failed episode's unasked states after it ends.
+
+    Raises:
+        ValueError: For an ``inner`` that gates or updates every step, or a setting out of range (named).
+    """
+
+    name = "gated"
+    reads_policy_outputs = True
+    gates = True
+
+    def __init__(
+        self,
+        inner: QueryStrategy | None = None,
+        *,
+        target_rate: float = 0.2,
+        reference_size: int = 200,
+        n_policies: int = 5,
+        member_steps: int | None = None,
+        risk: bool = False,
+        risk_threshold: float = 0.5,
+        risk_steps: int = 100,
+        label_failures: bool = False,
+    ) -> None:
+        inner = inner if inner is not None else DAggerQuery()
+        if inner.gates or inner.updates_every_step:
+            raise ValueError(f"GatedQuery cannot wrap {inner.name!r}: it gates or updates every step itself")
+        if not 0.0 < risk_threshold < 1.0:
+            raise ValueError(f"risk_threshold must be in (0, 1), got {risk_threshold!r}")
+        if risk_steps < 1:
+            raise ValueError(f"risk_steps must be >= 1, got {risk_steps}")
+        self.inner = inner
+        self.threshold = QuantileThreshold(target_rate)
+        self.reference = ReferenceStates(reference_size)
+        # One ensemble serves both where an inner multi-policy strategy already trains one.
+        self.ensemble = inner if isinstance(inner, BaggedEnsemble) else BaggedEnsemble(n_policies, None, member_steps)
+        self.risk = risk
+        self.risk_threshold = float(risk_threshold)
+        self.risk_steps = risk_steps
+        self.label_failures = label_failures
+        self.risk_model: RiskModel | None = None
+        self.outcomes: list[tuple[np.ndarray, bool]] = []  # (risk features, failed) of every executed step
+        self.max_offset = 1.0
+        self._last: tuple[int, EncodedBatch] | None = None  # the encoding of the observation gated last
+
+    @property
+    def method(self) -> str:
+        """The method name: ``gated``, or ``gated+<inner>`` for a start-selecting or pruning inner strategy."""
+        return "gated" if isinstance(self.inner, DAggerQuery) else f"gated+{self.inner.name}"
+
+    def attach(self, learner: Learner) -> None:
+        """Attaches the inner strategy and the ensemble to the learner; reads its ``max_offset``."""
+        self.inner.attach(learner)
+        if self.ensemble is not self.inner:
+            self.ensemble.attach(learner)
+        self.max_offset = float(getattr(learner, "max_offset", 1.0))
+
+    def novelty(self, encoded: EncodedBatch) -> np.ndarray:
+        """The ensemble's disagreement at each encoded state (``inf`` before the first update: ask)."""
+        if not self.ensemble.members:
+            return np.full(len(encoded), np.inf)
+        return disagreement(self.ensemble.member_offsets(encoded))
+
+    def wants_label(self, observation: dict[str, np.ndarray], learner_subgoal: np.ndarray, learner: Learner) -> bool:
+        """Whether the novelty (or, with ``risk``, the risk of the learner's subgoal) passes its threshold.
+
+        The state joins the reference set whatever the answer.
+        """
+        encoded = self._encode(observation, learner)
+        self.reference.add(encoded)
+        if self.threshold.opens(float(self.novelty(encoded)[0])):
+            return True
+        if self.risk and self.risk_model is not None:
+            features = RiskModel.features(encoded, self._offset(observation, learner_subgoal))
+            return bool(self.risk_model.predict(features)[0] > self.risk_threshold)
+        return False
+
+    def on_step(self, observation: dict[str, np.ndarray], subgoal: np.ndarray, info: dict[str, Any]) -> None:
+        """With ``risk``: keeps the step's features and whether the low level missed the subgoal."""
+        if self.risk and self._last is not None and self._last[0] == id(observation):
+            failed = not (info["subgoal_reached"] or info["is_success"])
+            self.outcomes.append((RiskModel.features(self._last[1], self._offset(observation, subgoal))[0], failed))
+
+    def on_update(self, dataset: DemonstrationDataset, gradient_steps: int, rng: np.random.Generator) -> None:
+        """The inner strategy's update, the ensemble's training, the risk model's, then the new threshold."""
+        self.inner.on_update(dataset, gradient_steps, rng)
+        if self.ensemble is not self.inner:
+            self.ensemble.on_update(dataset, gradient_steps, rng)
+        if self.risk and self.outcomes:
+            if self.risk_model is None:
+                self.risk_model = RiskModel(rng=np.random.default_rng(rng.integers(2**63)))
+            features, failed = zip(*self.outcomes, strict=True)
+            self.risk_model.fit(np.stack(features), np.array(failed), self.risk_steps)
+        if len(self.reference):
+            self.threshold.fit(self.novelty(self.reference.batch()))
+
+    def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
+        """The inner strategy's start."""
+        return self.inner.choose_start(query, rng)
+
+    def on_episode_end(
+        self, dataset: DemonstrationDataset, episode: int, success: bool, rng: np.random.Generator
+    ) -> list[int]:
+        """The inner strategy's pruning (of the episode's asked labels)."""
+        return self.inner.on_episode_end(dataset, episode, success, rng)
+
+    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+        """The inner strategy's stored label."""
+        return self.inner.label_target(env, observation, expert_subgoal)
+
+    def _encode(self, observation: dict[str, np.ndarray], learner: Learner) -> EncodedBatch:
+        if not isinstance(learner, OffsetLearner):
+            raise ValueError(f"GatedQuery reads a HighLevelPolicy's encoder; got {type(learner).__name__}")
+        encoded = learner.encoder.encode_observations([observation])
+        self._last = (id(observation), encoded)
+        return encoded
+
+    def _offset(self, observation: dict[str, np.ndarray], subgoal: np.ndarray) -> np.ndarray:
+        agent = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
+        return ((np.asarray(subgoal, dtype=np.float64) - agent) / self.max_offset)[None]
+
+
 STRATEGIES: dict[str, type[QueryStrategy]] = {
     "dagger": DAggerQuery,
     "noise": NoiseQuery,
@@ -384,16 +587,27 @@ STRATEGIES: dict[str, type[QueryStrategy]] = {
     "reward": RewardBasedQuery,
     "reward_per_step": RewardPerStepQuery,
     "aggrevate": AggreVaTeQuery,
+    "gated": GatedQuery,
 }
 """Strategy classes by method name (the ``--methods`` of ``antmaze-hirl experiment``)."""
 
+GATED_INNER = ("noise", "multi_policy", "reward", "aggrevate")
+"""The strategies ``gated`` composes with: method ``gated+<name>`` is ``GatedQuery(inner=<name>'s strategy)``."""
+
+METHODS = (*STRATEGIES, *(f"gated+{name}" for name in GATED_INNER))
+"""Every method name :func:`make_strategy` takes."""
+
 
 def make_strategy(name: str) -> QueryStrategy:
-    """A strategy with default settings by method name.
+    """A strategy with default settings by method name (one of :data:`METHODS`).
+
+    ``gated+<inner>`` gates the queries of ``inner`` (one of :data:`GATED_INNER`): :class:`GatedQuery`.
 
     Raises:
         ValueError: For an unknown name.
     """
-    if name not in STRATEGIES:
-        raise ValueError(f"unknown method {name!r}; choose from {sorted(STRATEGIES)}")
+    if name not in METHODS:
+        raise ValueError(f"unknown method {name!r}; choose from {list(METHODS)}")
+    if name.startswith("gated+"):
+        return GatedQuery(inner=make_strategy(name.removeprefix("gated+")))
     return STRATEGIES[name]()

@@ -27,10 +27,11 @@ class EpisodeRecord:
     Attributes:
         episode: Index, from 0.
         success: Whether the goal was reached.
-        expert_cost: Expert labels queried in the episode (one per high-level step).
-        attempts: Subgoals executed (the paper's "attempts").
+        expert_cost: Expert labels queried in the episode: one per high-level step, except with a gating
+            strategy (``gated``), where only asked steps (and labels after a failure) count.
+        attempts: Subgoals executed (the paper's "attempts"), asked or not.
         low_level_steps: Low-level steps used.
-        beta: Expert weight used in the episode.
+        beta: Expert weight used in the episode (1.0 with a gating strategy: asked steps run the expert's subgoal).
         dataset_size: Labels in D after the episode (and any removal).
         removed: Labels removed after the episode (reward-based strategy).
     """
@@ -59,6 +60,8 @@ class LabelRequest:
         episode: Training episode index, from 0.
         step: Label index within the episode, from 0.
         beta: The expert's weight in the executed mix this episode.
+        executes: Whether the label is executed; ``False`` for the labels a gating strategy asks for after
+            a failed episode (of states the learner passed unasked), which only join D.
     """
 
     observation: dict[str, np.ndarray]
@@ -66,23 +69,31 @@ class LabelRequest:
     episode: int
     step: int
     beta: float
+    executes: bool = True
 
 
 @dataclass(frozen=True)
 class ExecutedStep:
-    """One high-level step the env executed after a label.
+    """One high-level step the env executed.
 
     Attributes:
-        subgoal: The subgoal sent to the env (the mix of expert and learner).
-        expert_subgoal: The expert's label it came from.
+        subgoal: The subgoal sent to the env (the mix of expert and learner, or the learner's unasked).
+        expert_subgoal: The expert's label it came from; ``None`` for a step a gating strategy did not ask.
         info: The env's step ``info`` (``agent_path``, ``subgoal_reached``, ``flipped``, ...).
         done: Whether the episode ended with this step.
+        observation: The high-level observation the step started from.
     """
 
     subgoal: np.ndarray
-    expert_subgoal: np.ndarray
+    expert_subgoal: np.ndarray | None
     info: dict[str, Any]
     done: bool
+    observation: dict[str, np.ndarray]
+
+    @property
+    def asked(self) -> bool:
+        """Whether the expert labelled this step."""
+        return self.expert_subgoal is not None
 
 
 class EpisodeRun:
@@ -92,6 +103,10 @@ class EpisodeRun:
     may come from anywhere, at any time (a click over HTTP). Once :attr:`done`, :meth:`finish` runs the
     learner update that is due. An unanswered run can be dropped: the trainer's aggregated data then
     holds the labels of its answered steps.
+
+    With a gating strategy (``gated``) the learner may walk unasked steps before a request, or the whole
+    episode: :attr:`executed` holds the steps run before the current request (or the end), so a page can
+    show them; a run may be :attr:`done` as soon as it is made.
     """
 
     def __init__(
@@ -107,6 +122,11 @@ class EpisodeRun:
         self._advance(None)
 
     @property
+    def executed(self) -> list[ExecutedStep]:
+        """The steps executed since the last answer (since the start before the first), in order."""
+        return list(self._executed)
+
+    @property
     def done(self) -> bool:
         """Whether the episode has ended (then :attr:`record` holds its measures)."""
         return self.record is not None
@@ -115,7 +135,8 @@ class EpisodeRun:
         """Gives the expert's subgoal for :attr:`request`; runs the env to the next request or the end.
 
         Returns:
-            The steps executed since the label, in order.
+            The steps executed since the label, in order (as :attr:`executed`; none for a label that
+            does not execute, :attr:`LabelRequest.executes`).
 
         Raises:
             RuntimeError: If the episode has already ended.
@@ -129,7 +150,7 @@ class EpisodeRun:
             raise ValueError(f"expert subgoal must be two finite numbers (x, y metres), got {subgoal!r}") from error
         self._executed.clear()
         self._advance(label)
-        return list(self._executed)
+        return self.executed
 
     def finish(self) -> None:
         """Runs the learner update due after this episode (a no-op when none is due, or run already).
@@ -302,28 +323,57 @@ class DAggerTrainer:
         obs, _ = self.env.reset(seed=int(self.rng.integers(2**31)), options=task.reset_options())
         if self._rest_body is None:
             self._rest_body = np.asarray(STATE_LAYOUT.body_observation(obs["state"]), dtype=np.float64)
-        beta, episode, cost, done, info = self.beta, self.episodes_done, 0, False, {}
+        gating = self.strategy.gates
+        beta = 1.0 if gating else self.beta  # a gating strategy's asked steps run the expert's subgoal
+        episode, cost, step, done, info = self.episodes_done, 0, 0, False, {}
+        unasked: list[tuple[dict[str, np.ndarray], np.ndarray, int]] = []  # for labels after a failure
         while not done:
             # The learner's proposal is computed before the label so a person can be shown it; it is
             # deterministic and draws no randomness, so the order leaves the numbers unchanged.
             learner_subgoal = np.asarray(self.policy.predict(obs), dtype=np.float64)
-            expert_subgoal = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)  # checked by answer()
-            cost += 1
-            label = self.strategy.label_target(self.env, obs, expert_subgoal)
-            self.dataset.add(Demonstration(obs["image"], obs["state"], label, episode, cost - 1))
-            if self.per_step_gradient_steps:
-                self._fit(self.per_step_gradient_steps)
-            if self.strategy.updates_every_step:
-                # Alg. 4: the step is executed with the beta it was labelled with; the update decays the next one.
-                step_beta = self.beta
-                self._update(self.strategy.step_gradient_steps or self.gradient_steps)
-                subgoal = self._mix(expert_subgoal, learner_subgoal, step_beta)
+            if gating:
+                own = self._clip(learner_subgoal)
+                # The strategy is asked first, always: it keeps every state for its threshold.
+                asked = (
+                    self.strategy.wants_label(obs, own, self.policy)
+                    or len(self.dataset) == 0
+                    or self.env.unwrapped.is_no_op_subgoal(own)
+                )
             else:
-                subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
+                asked = True
+            expert_subgoal = None
+            if asked:
+                expert_subgoal = yield LabelRequest(obs, learner_subgoal, episode, cost, beta)  # checked by answer()
+                cost += 1
+                self._aggregate(obs, expert_subgoal, episode, step)
+                if self.per_step_gradient_steps:
+                    self._fit(self.per_step_gradient_steps)
+                if gating:
+                    subgoal = self._clip(expert_subgoal)
+                elif self.strategy.updates_every_step:
+                    # Alg. 4: the step is executed with the beta it was labelled with; the update decays the next one.
+                    step_beta = self.beta
+                    self._update(self.strategy.step_gradient_steps or self.gradient_steps)
+                    subgoal = self._mix(expert_subgoal, learner_subgoal, step_beta)
+                else:
+                    subgoal = self._mix(expert_subgoal, learner_subgoal, beta)
+            else:
+                subgoal = own
+                unasked.append((obs, learner_subgoal, step))
+            before = obs
             obs, _, terminated, truncated, info = self.env.step(subgoal)
             done = terminated or truncated
-            executed.append(ExecutedStep(subgoal, expert_subgoal, info, done))
-        removed = self.strategy.on_episode_end(self.dataset, episode, bool(info["is_success"]), self.rng)
+            step += 1
+            self.strategy.on_step(before, subgoal, info)
+            executed.append(ExecutedStep(subgoal, expert_subgoal, info, done, before))
+        success = bool(info["is_success"])
+        # Pruning sees the labels that were executed (those that led to the failure), not the ones asked after it.
+        removed = self.strategy.on_episode_end(self.dataset, episode, success, self.rng)
+        if gating and self.strategy.label_failures and not success:
+            for observation, proposal, at in unasked:
+                label = yield LabelRequest(observation, proposal, episode, cost, beta, executes=False)
+                cost += 1
+                self._aggregate(observation, label, episode, at)
         self.episodes_done += 1
         self.total_expert_cost += cost
         # The update itself waits for EpisodeRun.finish() (or the next start_episode()), so a person sees the
@@ -336,7 +386,7 @@ class DAggerTrainer:
         )
         return EpisodeRecord(
             episode=episode,
-            success=bool(info["is_success"]),
+            success=success,
             expert_cost=cost,
             attempts=int(info["attempts"]),
             low_level_steps=int(info["total_low_level_steps"]),
@@ -345,16 +395,25 @@ class DAggerTrainer:
             removed=len(removed),
         )
 
+    def _aggregate(
+        self, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray, episode: int, step: int
+    ) -> None:
+        # D gets the strategy's target for the label (the expert's own but for AggreVaTe).
+        label = self.strategy.label_target(self.env, observation, expert_subgoal)
+        self.dataset.add(Demonstration(observation["image"], observation["state"], label, episode, step))
+
+    def _clip(self, subgoal: np.ndarray) -> np.ndarray:
+        space = self.env.unwrapped.action_space
+        return np.clip(subgoal, space.low, space.high)
+
     def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
         if self.mixing == "switch":
             chosen = expert_subgoal if self.rng.random() < beta else learner_subgoal
         else:
             chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
-        inner = self.env.unwrapped
-        low, high = inner.action_space.low, inner.action_space.high
-        chosen = np.clip(chosen, low, high)
-        if inner.is_no_op_subgoal(chosen):
-            return np.clip(expert_subgoal, low, high)
+        chosen = self._clip(chosen)
+        if self.env.unwrapped.is_no_op_subgoal(chosen):
+            return self._clip(expert_subgoal)
         return chosen
 
     def _fit(self, steps: int) -> None:

@@ -20,7 +20,7 @@ from tqdm.auto import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, evaluate_high_level
-from antmaze_hirl.dagger.strategies import STRATEGIES, make_strategy
+from antmaze_hirl.dagger.strategies import METHODS, make_strategy
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.split_env import SplitMazeEnv
@@ -375,7 +375,7 @@ def check_methods(methods: Sequence[str]) -> None:
         ValueError: Naming the offending value and the known methods.
     """
     if isinstance(methods, str) or not methods:
-        raise ValueError(f"methods must be a non-empty list of names from {sorted(STRATEGIES)}, got {methods!r}")
+        raise ValueError(f"methods must be a non-empty list of names from {list(METHODS)}, got {methods!r}")
     for method in methods:
         make_strategy(method)
     repeated = sorted({method for method in methods if list(methods).count(method) > 1})

@@ -108,7 +108,7 @@ class StudyPlan:
 
     Attributes:
         body: ``"point"`` or ``"ant"``.
-        methods: The compared methods (names of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`).
+        methods: The compared methods (names of :data:`antmaze_hirl.dagger.strategies.METHODS`).
         labels: ``(method, label)`` pairs: each method's neutral label, fixed for the whole study.
         episodes: Episodes per compared trial.
         practice: Episodes of the practice trial (0: no practice trial).
@@ -142,9 +142,9 @@ class StudyPlan:
 
 def _known_methods() -> list[str]:
     # Imported here: the study kit (layer 4) reads the trainer's strategies (layer 3), not the reverse.
-    from antmaze_hirl.dagger.strategies import STRATEGIES
+    from antmaze_hirl.dagger.strategies import METHODS
 
-    return list(STRATEGIES)
+    return list(METHODS)
 
 
 def _check_count(name: str, value: object, minimum: int) -> int:

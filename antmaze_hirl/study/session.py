@@ -84,15 +84,17 @@ class DemonstrationLog:
     terminal_success: list[bool] = field(default_factory=list)
     success: list[bool] = field(default_factory=list)
 
-    def add(self, observation: dict[str, np.ndarray], executed: ExecutedStep, episode: int, step: int) -> None:
-        """Records one step: the state the expert saw, their label and what the env executed."""
+    def add(self, executed: ExecutedStep, episode: int) -> None:
+        """Records one step: the state it started from, the label (NaN where not asked) and what the env executed."""
+        observation = executed.observation
         self.images.append(np.asarray(observation["image"], dtype=np.uint8))
         self.states.append(np.asarray(observation["state"], dtype=np.float32))
         self.executed.append(np.asarray(executed.subgoal, dtype=np.float32))
-        self.labels.append(np.asarray(executed.expert_subgoal, dtype=np.float32))
-        self.labelled.append(True)
+        label = executed.expert_subgoal if executed.asked else np.full(2, np.nan)
+        self.labels.append(np.asarray(label, dtype=np.float32))
+        self.labelled.append(executed.asked)
         self.episode.append(episode)
-        self.step.append(step)
+        self.step.append(int(executed.info["attempts"]) - 1)  # the high-level step, asked or not
         self.terminal_success.append(bool(executed.done and executed.info["is_success"]))
 
     def save(self, path: Path) -> None:
@@ -131,7 +133,8 @@ class ParticipantSession:
     """The study protocol for one participant: practice, counterbalanced trials, questionnaires.
 
     Phases: ``"intro"`` (a trial is about to start), ``"label"`` (a query waits for a click),
-    ``"episode_over"`` (the last click ended an episode; :meth:`next_episode` closes it),
+    ``"episode_over"`` (the last click ended an episode, or, with a gating method such as ``gated``, the
+    learner walked a whole episode unasked; :meth:`next_episode` closes it),
     ``"questionnaire"`` (a trial ended; its questionnaire is due), ``"done"``.
 
     Args:
@@ -172,6 +175,7 @@ class ParticipantSession:
         self._episode_paused = 0.0
         self._episode_label_seconds: list[float] = []
         self._trail: list[list[float]] = []
+        self._walk: list[dict[str, Any]] = []  # the learner's unasked steps the page has not shown yet
         self._camera: AntCamera | None = None
         self._restore()
 
@@ -212,18 +216,27 @@ class ParticipantSession:
                 state["successes"] = self._trial.successes
                 state["labels"] = int(self._trial.trainer.total_expert_cost + self._labels_this_episode())
             if self.phase == "label" and self._run is not None and self._run.request is not None:
-                state.update(self._scene(self._run.request))
+                state.update(self._scene(self._run.request.observation, self._run.request))
+            elif self.phase == "episode_over" and self._walk and self._run is not None and self._run.record:
+                # An episode the learner walked unasked: the page shows the walk, then asks for the next maze.
+                state.update(self._scene(self._run.executed[-1].observation, None))
+                state["episode_end"] = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
+            if self._walk:
+                state["walk"] = self._walk
             return state
 
     def _labels_this_episode(self) -> int:
         return 0 if self._run is None or self._run.request is None else self._run.request.step
 
-    def _scene(self, request: Any) -> dict[str, Any]:
+    def _scene(self, observation: dict[str, np.ndarray], request: Any) -> dict[str, Any]:
         inner = self._env.unwrapped
-        observation = request.observation
         geometry = inner.geometry
         return {
-            "query": {"id": self._query_id, "step": request.step},
+            "query": (
+                {"id": self._query_id, "step": request.step, "executes": request.executes}
+                if request is not None
+                else None
+            ),
             "maze": {
                 "rows": geometry.n_rows,
                 "cols": geometry.n_cols,
@@ -239,7 +252,9 @@ class ParticipantSession:
             "max_distance": self.max_distance,
             "goal_radius": float(inner.goal_threshold),
             "learner_subgoal": (
-                [float(v) for v in request.learner_subgoal] if self.settings.show_learner_subgoal else None
+                [float(v) for v in request.learner_subgoal]
+                if self.settings.show_learner_subgoal and request is not None
+                else None
             ),
         }
 
@@ -311,20 +326,8 @@ class ParticipantSession:
             )
             self._episode_label_seconds.append(seconds if seconds is not None else server_seconds)
             executed = self._run.answer(np.asarray(subgoal))
-            observation = request.observation
-            walked = []
-            for step in executed:
-                self._trial.demonstrations.add(observation, step, request.episode, request.step)
-                path = np.asarray(step.info["agent_path"], dtype=float)
-                self._trail.extend(path[1:].round(3).tolist())
-                walked.append(
-                    {
-                        "subgoal": [float(v) for v in step.subgoal],
-                        "path": path.round(3).tolist(),
-                        "reached": bool(step.info["subgoal_reached"]),
-                        "flipped": bool(step.info["flipped"]),
-                    }
-                )
+            self._walk = []  # shown before this click
+            walked = self._walked(executed, request.episode)
             episode_end = None
             if self._run.done:
                 assert self._run.record is not None
@@ -349,6 +352,7 @@ class ParticipantSession:
                 raise ProtocolError(
                     f"no episode has just ended (participant {self.participant.id} is at {self.phase!r})"
                 )
+            self._walk = []  # shown
             self._finish_episode()
             if self.phase == "label":
                 self._show_query()
@@ -481,15 +485,36 @@ class ParticipantSession:
     def _start_episode(self) -> None:
         assert self._trial is not None
         self._run = self._trial.trainer.start_episode()
-        self._trail = (
-            [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(self._run.request.observation["state"])]]
-            if self._run.request
-            else []
-        )
+        # A gating method may let the learner walk before the first request (or the whole episode).
+        first = self._run.executed[0].observation if self._run.executed else self._run.request.observation
+        self._trail = [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(first["state"])]]
+        self._walk = self._walked(self._run.executed, self._trial.trainer.episodes_done - int(self._run.done))
         self._episode_started_at = self.clock()
         self._episode_paused = 0.0
         self._episode_label_seconds = []
+        if self._run.done:
+            self.phase = "episode_over"  # nothing to ask: the page shows the walk, then calls next_episode()
+            self._episode_ended_at = self._episode_started_at
         self._show_query()
+
+    def _walked(self, executed: list[ExecutedStep], episode: int) -> list[dict[str, Any]]:
+        # Logs the steps and extends the trail; returns what the page animates (asked: the expert's subgoal ran).
+        assert self._trial is not None
+        walked = []
+        for step in executed:
+            self._trial.demonstrations.add(step, episode)
+            path = np.asarray(step.info["agent_path"], dtype=float)
+            self._trail.extend(path[1:].round(3).tolist())
+            walked.append(
+                {
+                    "subgoal": [float(v) for v in step.subgoal],
+                    "path": path.round(3).tolist(),
+                    "reached": bool(step.info["subgoal_reached"]),
+                    "flipped": bool(step.info["flipped"]),
+                    "asked": step.asked,
+                }
+            )
+        return walked
 
     def _show_query(self) -> None:
         self._query_id += 1

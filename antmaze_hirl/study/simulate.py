@@ -184,6 +184,10 @@ def play_participant(
                 started = time.perf_counter()
                 state = client.participant(participant_id, "next", {})
                 between.append({"round_trip": time.perf_counter() - started, "server": client.last_server_seconds})
+        elif state["phase"] == "episode_over":  # a gated method's learner walked the whole maze unasked
+            trial_episodes += 1
+            trial_failures += int(not state["episode_end"]["success"])
+            state = client.participant(participant_id, "next", {})
         elif state["phase"] == "questionnaire":
             ratings = _ratings(
                 rng, offset, trial_clicks / max(trial_episodes, 1), trial_failures / max(trial_episodes, 1)

@@ -157,6 +157,21 @@ function animate(walked, startTrail) {
   });
 }
 
+// Steps the learner walked on its own (gated methods) before this query or to the maze's end: replayed first.
+async function replayWalk() {
+  const walk = state.walk || [];
+  if (walk.length === 0 || !state.maze) { return; }
+  const walkedPoints = walk.reduce((n, w) => n + w.path.length - 1, 0);
+  $("status").textContent = "The robot walks on its own...";
+  await animate(walk, state.trail.slice(0, state.trail.length - walkedPoints));
+}
+
+function endMessage(end) {
+  return end.success
+    ? `Maze ${end.number}: goal reached!`
+    : `Maze ${end.number}: the robot did not make it this time.`;
+}
+
 // ------------------------------------------------------------------------------------ render
 function renderProgress() {
   const parts = [`Participant ${state.participant}`];
@@ -177,8 +192,26 @@ function renderProgress() {
 }
 
 async function render() {
-  if (state.phase === "episode_over") {  // reloaded between a maze's end and the next: move on
-    state = await api(participantPath("next"), {});
+  const wasBusy = busy;
+  busy = true;  // while the learner's own steps replay and the page moves on, clicks wait
+  try {
+    while (state.phase === "episode_over") {  // a maze walked without a question, or a reload after a maze's end
+      if (state.episode_end && state.walk) {
+        show("task");
+        renderProgress();
+        await replayWalk();
+        $("status").textContent = endMessage(state.episode_end);
+      }
+      state = await api(participantPath("next"), {});
+    }
+    if (state.phase === "label" && state.walk && state.walk.length) {
+      show("task");
+      renderProgress();
+      await replayWalk();
+      $("status").textContent = "Your turn: click the next point.";
+    }
+  } finally {
+    busy = wasBusy;
   }
   renderProgress();
   $("paused").hidden = !state.paused;
@@ -190,6 +223,9 @@ async function render() {
   } else if (state.phase === "label") {
     show("task");
     $("legend-learner").hidden = !state.learner_subgoal;
+    if (state.query && state.query.executes === false) {
+      $("status").textContent = "The robot did not make it. Where should it have gone from here?";
+    }
     draw();
     queryVisibleAt = performance.now();
     refreshCamera();
@@ -290,9 +326,7 @@ canvas.addEventListener("click", async (event) => {
     const next = result.episode_end ? api(participantPath("next"), {}) : null;
     await animate(result.walked, before.trail);
     if (result.episode_end) {
-      $("status").textContent = result.episode_end.success
-        ? `Maze ${result.episode_end.number}: goal reached!`
-        : `Maze ${result.episode_end.number}: the robot did not make it this time.`;
+      $("status").textContent = endMessage(result.episode_end);
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
