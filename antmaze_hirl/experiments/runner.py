@@ -86,6 +86,40 @@ def make_env(config: ExperimentConfig, low_level: Any = None, *, split: LayoutSp
     return gym.make(f"antmaze_hirl/{config.body.capitalize()}Maze-v0", **settings)
 
 
+class TrialEnvs:
+    """The envs of one trial: training mazes, and the periodic and final evaluation sets (:func:`evaluation_sets`).
+
+    The experiment and the user study both train and evaluate through this, so a study trial plays the
+    experiment's mazes. With ``held_out_layouts`` each draws from its part of the layout partition; the
+    original protocol plays both evaluation sets on one env, as it always has.
+
+    Args:
+        config: The trial's settings.
+        low_level: The low-level controller (``None``: the body's shipped policy).
+    """
+
+    def __init__(self, config: ExperimentConfig, low_level: Any = None) -> None:
+        self.sets = evaluation_sets(config)
+        self.train = make_env(config, low_level, split="train")
+        by_split = {
+            split: make_env(config, low_level, split=split)
+            for split in dict.fromkeys(s for s, _, _ in self.sets.values())
+        }
+        self.evaluation = {name: by_split[split] for name, (split, _, _) in self.sets.items()}
+
+    def evaluate(self, policy: Any, *, final: bool) -> dict[str, float]:
+        """The learner alone on the final (or periodic) set: ``eval_success``, ``eval_attempts``, ``eval_mazes``."""
+        name = "final" if final else "periodic"
+        _, first_seed, mazes = self.sets[name]
+        result = evaluate_high_level(policy, self.evaluation[name], episodes=mazes, seed=first_seed)
+        return {"eval_success": result["success_rate"], "eval_attempts": result["mean_attempts"], "eval_mazes": mazes}
+
+    def close(self) -> None:
+        """Closes every env."""
+        for env in {id(env): env for env in (self.train, *self.evaluation.values())}.values():
+            env.close()
+
+
 def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[dict[str, Any]]:
     """Every evaluation maze of the experiment: ``{"set", "seed", "layout"}`` rows for ``eval_layouts.csv``.
 
@@ -139,13 +173,8 @@ def run_trial(
     ``tensorboard_dir``, each row and each update's loss is logged there too (:class:`DAggerTensorBoard`);
     the rows are the same either way.
     """
-    env = make_env(config, low_level, split="train")
-    sets = evaluation_sets(config)
-    # One env per part: the original protocol plays both sets on one env, as it always has.
-    by_split = {
-        split: make_env(config, low_level, split=split) for split in dict.fromkeys(s for s, _, _ in sets.values())
-    }
-    eval_envs = {name: by_split[split] for name, (split, _, _) in sets.items()}
+    envs = TrialEnvs(config, low_level)
+    env = envs.train
     trainer = make_trainer(method, seed, config, env, PathOracle.for_env(env, max_distance=config.expert_max_distance))
     rows: list[dict[str, Any]] = []
     with contextlib.ExitStack() as stack:
@@ -162,17 +191,13 @@ def run_trial(
             }
             final = episode == config.episodes - 1
             if final or (episode + 1) % config.eval_every == 0:
-                name = "final" if final else "periodic"
-                _, first_seed, mazes = sets[name]
-                result = evaluate_high_level(trainer.policy, eval_envs[name], episodes=mazes, seed=first_seed)
-                row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=mazes)
+                row.update(envs.evaluate(trainer.policy, final=final))
             rows.append({column: row.get(column, math.nan) for column in COLUMNS})
             if board is not None:
                 board.write_episode(rows[-1], trainer)
             if progress is not None:
                 progress.update(1)
-    for opened in (env, *by_split.values()):
-        opened.close()
+    envs.close()
     return rows
 
 

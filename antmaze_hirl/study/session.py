@@ -38,11 +38,11 @@ from typing import Any
 import numpy as np
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
-from antmaze_hirl.dagger import DAggerTrainer, evaluate_high_level
+from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
-from antmaze_hirl.experiments.runner import make_env, make_trainer
+from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
@@ -166,7 +166,7 @@ class ParticipantSession:
         self.paused_since: float | None = None
         self._trial: TrialState | None = None
         self._env: Any = None
-        self._eval_env: Any = None
+        self._envs: TrialEnvs | None = None
         self._run: EpisodeRun | None = None
         self._query_id = 0
         self._query_shown_at = 0.0
@@ -427,10 +427,9 @@ class ParticipantSession:
     def close(self) -> None:
         """Releases the trial's simulators and the camera."""
         with self.lock:
-            for env in (self._env, self._eval_env):
-                if env is not None:
-                    env.close()
-            self._env = self._eval_env = None
+            if self._envs is not None:
+                self._envs.close()
+            self._envs = self._env = None
             if self._camera is not None:
                 self._camera.close()
                 self._camera = None
@@ -464,7 +463,8 @@ class ParticipantSession:
         assert trial is not None
         config = self.settings.experiment_config(trial.episodes)
         if self._env is None:
-            self._env, self._eval_env = make_env(config), make_env(config)
+            self._envs = TrialEnvs(config)
+            self._env = self._envs.train
         checkpoint = self._trial_folder / "checkpoint.pkl"
         if resume and checkpoint.is_file():
             self._trial = _load_checkpoint(checkpoint, self._env)
@@ -543,9 +543,7 @@ class ParticipantSession:
         }
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:
-            episodes = self.settings.final_eval_episodes if final else self.settings.eval_episodes
-            result = evaluate_high_level(state.trainer.policy, self._eval_env, episodes=episodes)
-            row.update(eval_success=result["success_rate"], eval_attempts=result["mean_attempts"], eval_mazes=episodes)
+            row.update(self._envs.evaluate(state.trainer.policy, final=final))
         state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
         state.successes += int(record.success)
         state.demonstrations.success.append(bool(record.success))
