@@ -34,6 +34,7 @@ class HighLevelPolicy:
         planning_iterations: Value-iteration rounds of an added planning module (0: CNN only).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
+        head: ``"heading"`` or ``"next_cell"`` (:class:`~antmaze_hirl.dagger.policy.SubgoalPolicy`).
     """
 
     def __init__(
@@ -51,6 +52,7 @@ class HighLevelPolicy:
         planning_iterations: int = 0,
         channels: int = 16,
         hidden: int = 128,
+        head: str = "heading",
     ) -> None:
         self.policy = SubgoalPolicy(
             geometry,
@@ -62,6 +64,7 @@ class HighLevelPolicy:
             planning_iterations=planning_iterations,
             channels=channels,
             hidden=hidden,
+            head=head,
         )
         self.learner = SubgoalLearner(
             self.policy,

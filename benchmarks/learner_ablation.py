@@ -1,0 +1,173 @@
+"""Which change to the high-level learner closes the point's gap to its teacher (issue 13): an ablation.
+
+Each variant is a set of :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings. Each trial runs plain
+DAgger with the oracle for ``--episodes`` episodes on the point's 5x5 training mazes (held-out layouts,
+``ExperimentConfig.held_out_layouts``), then measures learner-only success (beta = 0, no expert) on the
+50 mazes of the selection part (what a choice between variants may read) and on the 100 mazes of the
+final evaluation part (what the README quotes), each with its 95% Wilson interval.
+
+Variants:
+
+* ``heading_cnn``: the previous default (CNN + MLP, 16 heading bins plus a distance).
+* ``next_cell_cnn``: the same CNN classifying the next cell of the path (3x3 around the agent's cell).
+* ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell.
+
+Usage: python benchmarks/learner_ablation.py [--variants heading_cnn,next_cell_vin] [--seeds 0,1]
+           [--episodes 100] [--trials-dir /tmp/ablation] [--out benchmarks/results/learner_ablation.json]
+
+Finished trials are kept in ``--trials-dir`` (one JSON each) and reused, so an interrupted run resumes;
+the summary lists every variant and seed found there for the settings given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, evaluation_sets
+from antmaze_hirl.experiments.runner import make_env, make_trainer
+from antmaze_hirl.experiments.uncertainty import rate_with_interval
+from antmaze_hirl.experts import PathOracle
+
+RESULTS = Path(__file__).parent / "results"
+
+VARIANTS: dict[str, dict[str, Any]] = {
+    "heading_cnn": {"head": "heading", "planning_iterations": 0},
+    "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0},
+    "next_cell_vin": {"head": "next_cell", "planning_iterations": 16},
+}
+"""HighLevelPolicy settings of each variant (given explicitly, so a later change of default changes none)."""
+
+SELECTION_MAZES = 50
+
+
+def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict[str, Any]:
+    """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success."""
+    start = time.perf_counter()
+    env = make_env(config, split="train")
+    trainer = make_trainer(
+        "dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant]
+    )
+    records = [trainer.run_episode() for _ in range(config.episodes)]
+    train_seconds = time.perf_counter() - start
+    evaluations = {}
+    for name, (split, first_seed, mazes) in (
+        ("selection", ("selection", SELECTION_SEED, SELECTION_MAZES)),
+        ("final", evaluation_sets(config)["final"]),
+    ):
+        eval_env = make_env(config, split=split)
+        result = evaluate_high_level(trainer.policy, eval_env, episodes=mazes, seed=first_seed)
+        eval_env.close()
+        evaluations[name] = {
+            **rate_with_interval(result["success_rate"], mazes),
+            "mean_attempts": result["mean_attempts"],
+            "split": split,
+            "first_seed": first_seed,
+        }
+    env.close()
+    return {
+        "variant": variant,
+        "seed": seed,
+        "policy_settings": VARIANTS[variant],
+        "episodes": config.episodes,
+        "labels": trainer.total_expert_cost,
+        "training_successes": int(sum(record.success for record in records)),
+        "gradient_steps": trainer.policy.gradient_steps,
+        "train_seconds": round(train_seconds, 1),
+        "trial_seconds": round(time.perf_counter() - start, 1),
+        **{f"{name}_success": figures for name, figures in evaluations.items()},
+    }
+
+
+def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per variant: each seed's figures and the medians of final and selection success."""
+    summary: dict[str, Any] = {}
+    for variant in VARIANTS:
+        mine = sorted((t for t in trials if t["variant"] == variant), key=lambda t: t["seed"])
+        if not mine:
+            continue
+        summary[variant] = {
+            "policy_settings": VARIANTS[variant],
+            "seeds": [t["seed"] for t in mine],
+            "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
+            "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
+            "labels_median": statistics.median(t["labels"] for t in mine),
+            "trial_seconds_median": statistics.median(t["trial_seconds"] for t in mine),
+            "trials": mine,
+        }
+    return summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--seeds", default="0,1", help="comma-separated trial seeds")
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--trials-dir", type=Path, default=Path("/tmp/learner_ablation"))
+    parser.add_argument("--out", type=Path, default=RESULTS / "learner_ablation.json")
+    args = parser.parse_args()
+    torch.set_num_threads(1)  # one core per trial, as paper_experiment's --cpus-per-trial 1
+    variants = [name.strip() for name in args.variants.split(",") if name.strip()]
+    unknown = sorted(set(variants) - set(VARIANTS))
+    if unknown:
+        parser.error(f"unknown variants {unknown}; choose from {sorted(VARIANTS)}")
+    seeds = [int(seed) for seed in args.seeds.split(",")]
+    config = ExperimentConfig(body="point", episodes=args.episodes, held_out_layouts=True, eval_episodes=50)
+    args.trials_dir.mkdir(parents=True, exist_ok=True)
+    for seed in seeds:  # seed-major: every variant of a seed before the next seed
+        for variant in variants:
+            path = args.trials_dir / f"{variant}_e{args.episodes}_seed{seed}.json"
+            if not path.exists():
+                atomic_write_json(path, run_variant_trial(variant, seed, config))
+            trial = json.loads(path.read_text())
+            print(
+                f"{variant} seed {seed}: final {trial['final_success']['rate']:.2f} "
+                f"{trial['final_success']['wilson_95']}, selection {trial['selection_success']['rate']:.2f}, "
+                f"{trial['labels']} labels, {trial['trial_seconds']:.0f} s",
+                flush=True,
+            )
+    trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
+    summary = summarise([t for t in trials if t["variant"] in VARIANTS])
+    atomic_write_json(
+        args.out,
+        {
+            "command": shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]]),
+            "protocol": {
+                "body": "point",
+                "maze_size": config.maze_size,
+                "method": "dagger",
+                "expert": "PathOracle",
+                "episodes": config.episodes,
+                "gradient_steps_per_update": config.gradient_steps,
+                "held_out_layouts": True,
+                "selection_mazes": SELECTION_MAZES,
+                "final_mazes": config.final_eval_episodes,
+                "interval": "95% Wilson",
+                "torch_threads": 1,
+            },
+            "variants": summary,
+        },
+    )
+    print(f"\n{'variant':<16}{'final (median)':>16}{'selection (median)':>20}{'labels':>8}{'trial s':>9}")
+    for name, figures in summary.items():
+        print(
+            f"{name:<16}{figures['final_success_median']:>16.2f}{figures['selection_success_median']:>20.2f}"
+            f"{figures['labels_median']:>8.0f}{figures['trial_seconds_median']:>9.0f}"
+        )
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=3)
+    main()
