@@ -56,9 +56,7 @@ def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict
     """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success."""
     start = time.perf_counter()
     env = make_env(config, split="train")
-    trainer = make_trainer(
-        "dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant]
-    )
+    trainer = make_trainer("dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
     evaluations = {}

@@ -72,13 +72,13 @@ def point_policy(**kwargs):
 def test_labels_become_the_cell_step_to_the_subgoals_cell():
     policy = point_policy(head="next_cell")
     centre = policy.geometry.cell_to_xy((3, 3))
-    agents = np.stack([centre, centre, centre + [0.3, 0.0], centre, np.array([-3.6, 0.0])])
+    agents = np.stack([centre, centre, centre + np.array([0.3, 0.0]), centre, np.array([-3.6, 0.0])])
     subgoals = np.stack(
         [
-            centre + [0.0, 1.0],  # north
-            centre + [0.7, -0.7],  # south-east, one metre along the diagonal
-            centre + [0.1, 0.0],  # back to its own cell's centre
-            centre + [0.0, -2.0],  # two cells south: clipped to one step
+            centre + np.array([0.0, 1.0]),  # north
+            centre + np.array([0.7, -0.7]),  # south-east, one metre along the diagonal
+            centre + np.array([0.1, 0.0]),  # back to its own cell's centre
+            centre + np.array([0.0, -2.0]),  # two cells south: clipped to one step
             np.array([-2.5, 0.0]),  # agent pressed into the border: its cell is clipped to the map's
         ]
     )
