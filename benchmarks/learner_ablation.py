@@ -15,6 +15,12 @@ Variants:
 Usage: python benchmarks/learner_ablation.py [--variants heading_cnn,next_cell_vin] [--seeds 0,1]
            [--episodes 100] [--trials-dir /tmp/ablation] [--out benchmarks/results/learner_ablation.json]
 
+Each trial also measures the learner's agreement with the oracle, the fraction of states where its
+subgoal lies in the same cell as the oracle's label (one measure for both heads): on its own training
+labels (DAgger's aggregated data) and on 1000 oracle-labelled states of selection mazes it never saw
+(agent at a random free cell's centre +-0.35 cells, at rest). High on the first and low on the second is
+a learner that memorises and does not generalise.
+
 Finished trials are kept in ``--trials-dir`` (one JSON each) and reused, so an interrupted run resumes;
 the summary lists every variant and seed found there for the settings given.
 """
@@ -35,10 +41,12 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, evaluation_sets
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.experts.oracle import plan_subgoal
 
 RESULTS = Path(__file__).parent / "results"
 
@@ -50,6 +58,33 @@ VARIANTS: dict[str, dict[str, Any]] = {
 """HighLevelPolicy settings of each variant (given explicitly, so a later change of default changes none)."""
 
 SELECTION_MAZES = 50
+AGREEMENT_STATES = 1000
+
+
+def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, labels: np.ndarray) -> float:
+    """Fraction of states whose predicted subgoal lies in the same cell (relative to the agent's) as the label."""
+    inner = policy.policy
+    return float(np.mean(np.all(inner.cell_steps(agent_xy, predicted) == inner.cell_steps(agent_xy, labels), axis=1)))
+
+
+def held_out_agreement(policy: Any, seed: int = 0) -> float:
+    """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
+    env = SplitMazeEnv("point", split="selection", maze_size=5, low_level=lambda *_: None)
+    geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
+    walls, agents, goals, labels = [], [], [], []
+    while len(agents) < AGREEMENT_STATES:
+        task = env.unwrapped.sample_task(rng)
+        free = np.argwhere(~task.layout.walls)
+        cell = tuple(free[rng.integers(len(free))])
+        if cell == geometry.xy_to_cell(task.goal_xy):
+            continue
+        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
+        label = plan_subgoal(task.layout.walls, geometry, agent, task.goal_xy, max_distance=1.0, clearance=0.2)
+        walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
+    env.close()
+    batch = policy.encoder.encode(walls, agents, goals, [np.zeros(2)] * len(agents))
+    agents = np.stack(agents)
+    return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
 
 
 def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict[str, Any]:
@@ -59,6 +94,12 @@ def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict
     trainer = make_trainer("dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
+    data = trainer.dataset
+    own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
+    agreement = {
+        "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
+        "held_out_states": held_out_agreement(trainer.policy),
+    }
     evaluations = {}
     for name, (split, first_seed, mazes) in (
         ("selection", ("selection", SELECTION_SEED, SELECTION_MAZES)),
@@ -82,6 +123,7 @@ def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict
         "labels": trainer.total_expert_cost,
         "training_successes": int(sum(record.success for record in records)),
         "gradient_steps": trainer.policy.gradient_steps,
+        "oracle_cell_agreement": agreement,
         "train_seconds": round(train_seconds, 1),
         "trial_seconds": round(time.perf_counter() - start, 1),
         **{f"{name}_success": figures for name, figures in evaluations.items()},
@@ -100,6 +142,7 @@ def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
             "seeds": [t["seed"] for t in mine],
             "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
             "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
+            "held_out_agreement_median": statistics.median(t["oracle_cell_agreement"]["held_out_states"] for t in mine),
             "labels_median": statistics.median(t["labels"] for t in mine),
             "trial_seconds_median": statistics.median(t["trial_seconds"] for t in mine),
             "trials": mine,
@@ -132,7 +175,7 @@ def main() -> None:
             print(
                 f"{variant} seed {seed}: final {trial['final_success']['rate']:.2f} "
                 f"{trial['final_success']['wilson_95']}, selection {trial['selection_success']['rate']:.2f}, "
-                f"{trial['labels']} labels, {trial['trial_seconds']:.0f} s",
+                f"{trial['labels']} labels, agreement {trial['oracle_cell_agreement']}, {trial['trial_seconds']:.0f} s",
                 flush=True,
             )
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
@@ -153,6 +196,7 @@ def main() -> None:
                 "final_mazes": config.final_eval_episodes,
                 "interval": "95% Wilson",
                 "torch_threads": 1,
+                "agreement_states": AGREEMENT_STATES,
             },
             "variants": summary,
         },
