@@ -87,13 +87,20 @@ def held_out_agreement(policy: Any, seed: int = 0) -> float:
     return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
 
 
-def run_variant_trial(variant: str, seed: int, config: ExperimentConfig) -> dict[str, Any]:
-    """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success."""
+def run_variant_trial(
+    variant: str, seed: int, config: ExperimentConfig, policy_path: Path | None = None
+) -> dict[str, Any]:
+    """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success.
+
+    With ``policy_path``, the trained policy is saved there (to look at its failures later).
+    """
     start = time.perf_counter()
     env = make_env(config, split="train")
     trainer = make_trainer("dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
+    if policy_path is not None:
+        trainer.policy.save(policy_path)
     data = trainer.dataset
     own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
     agreement = {
@@ -170,7 +177,7 @@ def main() -> None:
         for variant in variants:
             path = args.trials_dir / f"{variant}_e{args.episodes}_seed{seed}.json"
             if not path.exists():
-                atomic_write_json(path, run_variant_trial(variant, seed, config))
+                atomic_write_json(path, run_variant_trial(variant, seed, config, path.with_suffix(".zip")))
             trial = json.loads(path.read_text())
             print(
                 f"{variant} seed {seed}: final {trial['final_success']['rate']:.2f} "
