@@ -236,11 +236,11 @@ def test_dagger_learns_small_mazes_end_to_end():
     assert trained["success_rate"] >= untrained["success_rate"] + 0.4, (untrained, trained)
 
 
-@pytest.mark.parametrize("planning_iterations", [0, 4])
-def test_policy_save_load_round_trip_and_bad_files(tmp_path, planning_iterations):
+@pytest.mark.parametrize(("head", "planning_iterations"), [("heading", 0), ("heading", 4), ("next_cell", 0)])
+def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iterations):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, planning_iterations=planning_iterations)
+    policy = HighLevelPolicy.for_env(env, rng=rng, head=head, planning_iterations=planning_iterations)
     trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
     path = trainer.policy.save(tmp_path / "high.zip")

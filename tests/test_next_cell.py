@@ -7,6 +7,7 @@ import torch as th
 
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, SubgoalPolicy
 from antmaze_hirl.dagger.features import EncodedBatch, augment
+from antmaze_hirl.dagger.high_level_policy import body_policy_defaults
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration, next_cell_classes
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -139,3 +140,24 @@ def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations):
     np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
     spawned = trainer.policy.spawn(np.random.default_rng(1))
     assert spawned.config() == trainer.policy.config()
+
+
+def test_the_point_defaults_to_the_planning_next_cell_head_and_the_ant_keeps_headings():
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=5, low_level=PointGoToController())
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
+    assert (policy.config()["head"], policy.config()["planning_iterations"]) == ("next_cell", 16)
+    previous = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), head="heading", planning_iterations=0)
+    assert (previous.config()["head"], previous.config()["planning_iterations"]) == ("heading", 0)
+    assert body_policy_defaults("ant", MazeGeometry(5, 5, 4.0)) == {}
+
+
+def test_an_ant_policy_keeps_the_heading_head_and_trains(still_controller):
+    env = gym.make("antmaze_hirl/AntMaze-v0", maze_size=3, low_level=still_controller, max_steps=300)
+    rng = np.random.default_rng(0)
+    policy = HighLevelPolicy.for_env(env, rng=rng)
+    assert (policy.config()["head"], policy.config()["planning_iterations"]) == ("heading", 0)
+    trainer = DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env, max_distance=2.0), policy=policy, rng=rng, gradient_steps=5
+    )
+    trainer.run_episode()  # labels, then the update
+    assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
