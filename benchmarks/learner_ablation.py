@@ -11,6 +11,7 @@ Variants:
 * ``heading_cnn``: the previous default (CNN + MLP, 16 heading bins plus a distance).
 * ``next_cell_cnn``: the same CNN classifying the next cell of the path (3x3 around the agent's cell).
 * ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell.
+* ``next_cell_vin_walls``: the same, with moves into walls (or diagonally between two) ruled out.
 
 Usage: python benchmarks/learner_ablation.py [--variants heading_cnn,next_cell_vin] [--seeds 0,1]
            [--episodes 100] [--trials-dir /tmp/ablation] [--out benchmarks/results/learner_ablation.json]
@@ -54,6 +55,7 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "heading_cnn": {"head": "heading", "planning_iterations": 0},
     "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0},
     "next_cell_vin": {"head": "next_cell", "planning_iterations": 16},
+    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": 16, "block_walls": True},
 }
 """HighLevelPolicy settings of each variant (given explicitly, so a later change of default changes none)."""
 

@@ -49,6 +49,7 @@ class HighLevelPolicy:
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
         head: ``"heading"`` or ``"next_cell"`` (:class:`~antmaze_hirl.dagger.policy.SubgoalPolicy`).
+        block_walls: The next-cell planner rules out moves the walls block (``SubgoalPolicy``).
     """
 
     def __init__(
@@ -67,6 +68,7 @@ class HighLevelPolicy:
         channels: int = 16,
         hidden: int = 128,
         head: str = "heading",
+        block_walls: bool = False,
     ) -> None:
         self.policy = SubgoalPolicy(
             geometry,
@@ -79,6 +81,7 @@ class HighLevelPolicy:
             channels=channels,
             hidden=hidden,
             head=head,
+            block_walls=block_walls,
         )
         self.learner = SubgoalLearner(
             self.policy,

@@ -133,6 +133,24 @@ def next_cell_classes(steps: np.ndarray) -> np.ndarray:
 UNREACHED = -1.0e3
 """Value of a cell the propagation has not reached from the goal (and of everything outside the grid)."""
 
+BLOCKED_COST = 1.0e4
+"""Cost of a move the walls rule out (with ``block_walls``): more than any path's, so none is ever taken."""
+
+
+def blocked_moves(walls: th.Tensor) -> th.Tensor:
+    """``(B, 9, S, S)`` 1.0 where a move leads into a wall (or off the grid) or squeezes between two walls.
+
+    A diagonal whose two orthogonal cells are both walls passes only through the walls' shared corner.
+    """
+    size = walls.shape[-1]
+    ahead = shifted(walls, size, fill=1.0)
+    blocked = [ahead[:, index] for index in range(len(NEXT_CELL_MOVES))]
+    for index, (dx, dy) in enumerate(NEXT_CELL_MOVES):
+        if dx and dy:
+            side_x, side_y = NEXT_CELL_MOVES.index((dx, 0)), NEXT_CELL_MOVES.index((0, dy))
+            blocked[index] = th.maximum(blocked[index], ahead[:, side_x] * ahead[:, side_y])
+    return th.stack(blocked, dim=1)
+
 
 class CellValueIteration(nn.Module):
     """Value iteration over the agent-centred grid whose actions are the moves to the 3x3 neighbour cells.
@@ -146,19 +164,25 @@ class CellValueIteration(nn.Module):
     the values bounded (a learned reward kernel over ~20 rounds blew up in training), and the weights are
     shared across positions, so a shortest-path rule learnt on a few mazes holds on any.
 
+    With ``block_walls`` the walls of the grid also rule moves out (:func:`blocked_moves`: into a wall, or
+    diagonally between two), the grid world's known dynamics, so the learned costs need only rank free
+    moves: without it, rare wall shapes near the agent were learned too cheap and the point walked into them.
+
     Args:
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
+        block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
 
     Raises:
         ValueError: If ``iterations`` is below 1.
     """
 
-    def __init__(self, iterations: int, channels: int = 16) -> None:
+    def __init__(self, iterations: int, channels: int = 16, *, block_walls: bool = False) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
         self.iterations = iterations
+        self.block_walls = block_walls
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -169,6 +193,8 @@ class CellValueIteration(nn.Module):
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
         cost = self.cost(grids)
+        if self.block_walls:
+            cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
@@ -181,13 +207,13 @@ class CellValueIteration(nn.Module):
         return ahead - cost[:, :, centre, centre]
 
 
-def shifted(value: th.Tensor, size: int) -> th.Tensor:
+def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
     """``(B, 9, S, S)``: for each move of :data:`NEXT_CELL_MOVES`, the value of the cell one move away.
 
     Rows run top (+y) to bottom, so move ``(dx, dy)`` reads row ``-dy``, column ``+dx``; cells beyond the
-    grid read :data:`UNREACHED`.
+    grid read ``fill``.
     """
-    padded = nn.functional.pad(value, (1, 1, 1, 1), value=UNREACHED)
+    padded = nn.functional.pad(value, (1, 1, 1, 1), value=fill)
     return th.stack([padded[:, 1 - dy : 1 - dy + size, 1 + dx : 1 + dx + size] for dx, dy in NEXT_CELL_MOVES], dim=1)
 
 
@@ -204,15 +230,25 @@ class NextCellNetwork(nn.Module):
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
+        block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
     """
 
     def __init__(
-        self, grid_size: int, vector_dim: int, channels: int = 16, hidden: int = 128, planning_iterations: int = 0
+        self,
+        grid_size: int,
+        vector_dim: int,
+        channels: int = 16,
+        hidden: int = 128,
+        planning_iterations: int = 0,
+        *,
+        block_walls: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
         if planning_iterations > 0:
-            self.planner: CellValueIteration | None = CellValueIteration(planning_iterations, channels)
+            self.planner: CellValueIteration | None = CellValueIteration(
+                planning_iterations, channels, block_walls=block_walls
+            )
             self.head = nn.Sequential(nn.Linear(moves + vector_dim, hidden), nn.ReLU(), nn.Linear(hidden, moves))
             with th.no_grad():  # start as the planner's own readout
                 self.head[-1].weight.zero_()

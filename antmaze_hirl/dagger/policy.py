@@ -42,6 +42,7 @@ POLICY_SETTINGS = (
     "channels",
     "hidden",
     "head",
+    "block_walls",
 )
 """The :class:`SubgoalPolicy` constructor settings stored in a zip's ``config`` (besides ``geometry``)."""
 
@@ -66,10 +67,12 @@ class SubgoalPolicy(nn.Module):
             on the path (a label's class is the cell its subgoal lies in); the subgoal is that cell's
             centre, or the goal where the goal lies in it, pulled back to ``max_offset``. With
             ``planning_iterations > 0`` its logits are a value iteration network's Q at the agent's cell.
+        block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
+            between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
 
     Raises:
         ValueError: If ``n_directions`` is not a positive multiple of 4, ``head`` is unknown, or
-            ``planning_iterations`` is negative.
+            ``planning_iterations`` is negative, or ``block_walls`` is set without the planning next-cell head.
     """
 
     def __init__(
@@ -85,6 +88,7 @@ class SubgoalPolicy(nn.Module):
         channels: int = 16,
         hidden: int = 128,
         head: str = "heading",
+        block_walls: bool = False,
     ) -> None:
         super().__init__()
         if n_directions < 4 or n_directions % 4:
@@ -93,6 +97,8 @@ class SubgoalPolicy(nn.Module):
             raise ValueError(f"head must be one of {list(HEADS)}, got {head!r}")
         if planning_iterations < 0:
             raise ValueError(f"planning_iterations must be >= 0, got {planning_iterations}")
+        if block_walls and (head != "next_cell" or planning_iterations == 0):
+            raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
         self.geometry = geometry
         self.pixels_per_cell = pixels_per_cell
         self.body_dim = body_dim
@@ -102,13 +108,19 @@ class SubgoalPolicy(nn.Module):
         self.channels = channels
         self.hidden = hidden
         self.head = head
+        self.block_walls = bool(block_walls)
         self.encoder = ObservationEncoder(geometry, pixels_per_cell)
         vector_dim = STATE_LAYOUT.state_dim(body_dim)
         with th.random.fork_rng(devices=[]):  # seed the initialisation without touching torch's global RNG
             th.manual_seed(int(rng.integers(2**31)))
             if head == "next_cell":
                 self.network: nn.Module = NextCellNetwork(
-                    self.encoder.grid_size, vector_dim, channels, hidden, self.planning_iterations
+                    self.encoder.grid_size,
+                    vector_dim,
+                    channels,
+                    hidden,
+                    self.planning_iterations,
+                    block_walls=self.block_walls,
                 )
             else:
                 self.network = SubgoalNetwork(
@@ -185,6 +197,7 @@ class SubgoalPolicy(nn.Module):
             "channels": self.channels,
             "hidden": self.hidden,
             "head": self.head,
+            "block_walls": self.block_walls,
         }
 
     def save(self, path: str | Path, *, learner_config: Mapping[str, Any] | None = None) -> Path:
