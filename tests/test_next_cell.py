@@ -8,7 +8,7 @@ import torch as th
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, SubgoalPolicy
 from antmaze_hirl.dagger.features import EncodedBatch, augment
 from antmaze_hirl.dagger.high_level_policy import body_policy_defaults
-from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration, next_cell_classes
+from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration, blocked_moves, next_cell_classes
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.experts.oracle import PathOracle
@@ -63,6 +63,28 @@ def test_value_iteration_needs_enough_rounds_to_see_the_goal():
     assert float(blind.max()) < -100
     with pytest.raises(ValueError, match="iterations must be >= 1, got 0"):
         CellValueIteration(0)
+
+
+def test_walls_block_moves_into_them_and_diagonals_between_two():
+    walls = th.zeros(1, 5, 5)
+    walls[0, 1, 2] = 1.0  # north of the centre (2, 2)
+    walls[0, 2, 1] = 1.0  # and west of it
+    blocked = blocked_moves(walls)[0, :, 2, 2]
+    assert {NEXT_CELL_MOVES[k] for k in np.flatnonzero(blocked.numpy())} == {(0, 1), (-1, 0), (-1, 1)}
+    assert blocked_moves(walls)[0, NEXT_CELL_MOVES.index((1, 1)), 0, 4] == 1.0  # off the grid counts as wall
+
+
+def test_blocking_walls_keeps_a_learnt_planner_off_a_cheap_wall():
+    planner = unit_cost_planner()
+    with th.no_grad():
+        planner.cost[2].weight.zero_()  # walls cost no more than free cells: the shortcut runs through one
+    free = [(CENTRE, CENTRE), (CENTRE, CENTRE + 1), (CENTRE - 1, CENTRE + 1), (CENTRE - 2, CENTRE + 1)]
+    free += [(CENTRE - 2, CENTRE)]
+    grid = crafted_grid(free, (CENTRE - 2, CENTRE))
+    dx, dy = NEXT_CELL_MOVES[int(planner(grid)[0].argmax())]
+    assert grid[0, 0, CENTRE - dy, CENTRE + dx] == 1.0  # a shortest "path" through the walls
+    planner.block_walls = True
+    assert NEXT_CELL_MOVES[int(planner(grid)[0].argmax())] == (1, 1)  # round it, past one wall's corner
 
 
 def point_policy(**kwargs):
@@ -123,19 +145,23 @@ def test_unknown_head_and_negative_iterations_are_refused():
         point_policy(head="cells")
     with pytest.raises(ValueError, match="planning_iterations must be >= 0, got -1"):
         point_policy(planning_iterations=-1)
+    with pytest.raises(ValueError, match="block_walls needs head='next_cell' and planning_iterations > 0"):
+        point_policy(head="next_cell", block_walls=True)
 
 
-@pytest.mark.parametrize("planning_iterations", [0, 6])
-def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations):
+@pytest.mark.parametrize(("planning_iterations", "block_walls"), [(0, False), (6, False), (6, True)])
+def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations, block_walls):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, head="next_cell", planning_iterations=planning_iterations)
+    policy = HighLevelPolicy.for_env(
+        env, rng=rng, head="next_cell", planning_iterations=planning_iterations, block_walls=block_walls
+    )
     trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
     assert trainer.policy.gradient_steps == 10
     loaded = HighLevelPolicy.load(trainer.policy.save(tmp_path / "high.zip"))
     assert loaded.config() == trainer.policy.config()
-    assert loaded.config()["head"] == "next_cell"
+    assert (loaded.config()["head"], loaded.config()["block_walls"]) == ("next_cell", block_walls)
     obs, _ = env.reset(seed=3)
     np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
     spawned = trainer.policy.spawn(np.random.default_rng(1))
