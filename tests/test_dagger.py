@@ -230,7 +230,7 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
 @pytest.mark.parametrize(
     ("settings", "gain", "least"),
     [
-        ({"head": "heading", "planning_iterations": 0}, 0.4, 0.0),
+        ({"head": "heading", "planning_iterations": 0, "block_walls": False}, 0.4, 0.0),
         # The point's default plans from the start: with any positive move costs, value iteration already
         # routes round walls on these 3x3 mazes (87% untrained), so what it must show is reaching ~all.
         ({}, 0.0, 0.95),
@@ -249,7 +249,9 @@ def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
 def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iterations):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, head=head, planning_iterations=planning_iterations)
+    policy = HighLevelPolicy.for_env(
+        env, rng=rng, head=head, planning_iterations=planning_iterations, block_walls=False
+    )
     trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
     path = trainer.policy.save(tmp_path / "high.zip")

@@ -172,7 +172,10 @@ def test_the_point_defaults_to_the_planning_next_cell_head_and_the_ant_keeps_hea
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=5, low_level=PointGoToController())
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
     assert (policy.config()["head"], policy.config()["planning_iterations"]) == ("next_cell", 16)
-    previous = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), head="heading", planning_iterations=0)
+    assert policy.config()["block_walls"]
+    previous = HighLevelPolicy.for_env(
+        env, rng=np.random.default_rng(0), head="heading", planning_iterations=0, block_walls=False
+    )
     assert (previous.config()["head"], previous.config()["planning_iterations"]) == ("heading", 0)
     assert body_policy_defaults("ant", MazeGeometry(5, 5, 4.0)) == {}
 
@@ -181,7 +184,11 @@ def test_an_ant_policy_keeps_the_heading_head_and_trains(still_controller):
     env = gym.make("antmaze_hirl/AntMaze-v0", maze_size=3, low_level=still_controller, max_steps=300)
     rng = np.random.default_rng(0)
     policy = HighLevelPolicy.for_env(env, rng=rng)
-    assert (policy.config()["head"], policy.config()["planning_iterations"]) == ("heading", 0)
+    assert (policy.config()["head"], policy.config()["planning_iterations"], policy.config()["block_walls"]) == (
+        "heading",
+        0,
+        False,
+    )
     trainer = DAggerTrainer(
         env=env, expert=PathOracle.for_env(env, max_distance=2.0), policy=policy, rng=rng, gradient_steps=5
     )

@@ -18,14 +18,18 @@ from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     """The settings :meth:`HighLevelPolicy.for_env` gives a body's policy unless told otherwise.
 
-    The point mass gets the next-cell head read out of value iteration, with ``rows + cols + 2`` rounds
-    (16 on the 7x7 map of its 5x5 mazes, whose longest shortest path is 15 moves): on the point's 5x5
-    held-out mazes it lifted learner-only success from 74% to 94% on seed 0
-    (``benchmarks/results/learner_ablation.json``). The ant keeps the heading head: its 2 m subgoals
-    are half a 4 m cell, which a next cell's centre would overshoot, and nothing measured it there.
+    The point mass gets the next-cell head read out of value iteration that rules out moves the walls
+    block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest shortest
+    path is 15 moves): the winner of ``benchmarks/learner_ablation.py`` on the point's held-out 5x5 mazes
+    (``benchmarks/results/learner_ablation.json``). The ant keeps the heading head: its 2 m subgoals are
+    half a 4 m cell, which a next cell's centre would overshoot, and nothing measured it there.
     """
     if body == "point":
-        return {"head": "next_cell", "planning_iterations": geometry.n_rows + geometry.n_cols + 2}
+        return {
+            "head": "next_cell",
+            "planning_iterations": geometry.n_rows + geometry.n_cols + 2,
+            "block_walls": True,
+        }
     return {}
 
 
@@ -95,8 +99,8 @@ class HighLevelPolicy:
     def for_env(cls, env: Any, *, rng: np.random.Generator, **kwargs: Any) -> HighLevelPolicy:
         """A policy shaped for a (wrapped) high-level env, with its body's defaults (:func:`body_policy_defaults`).
 
-        ``kwargs`` override those defaults (``head="heading", planning_iterations=0`` for the point's
-        previous default).
+        ``kwargs`` override those defaults (``head="heading", planning_iterations=0, block_walls=False``
+        for the point's previous default).
         """
         inner = env.unwrapped
         settings = {**body_policy_defaults(getattr(inner, "body", ""), inner.geometry), **kwargs}
