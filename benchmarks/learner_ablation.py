@@ -189,11 +189,15 @@ def main() -> None:
                 flush=True,
             )
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
+    # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
+    command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
+    earlier = json.loads(args.out.read_text()).get("commands", []) if args.out.exists() else []
     summary = summarise([t for t in trials if t["variant"] in VARIANTS])
     atomic_write_json(
         args.out,
         {
-            "command": shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]]),
+            "command": command,
+            "commands": [*[c for c in earlier if c != command], command],
             "protocol": {
                 "body": "point",
                 "maze_size": config.maze_size,
@@ -212,10 +216,10 @@ def main() -> None:
             "variants": summary,
         },
     )
-    print(f"\n{'variant':<16}{'final (median)':>16}{'selection (median)':>20}{'labels':>8}{'trial s':>9}")
+    print(f"\n{'variant':<21}{'final (median)':>16}{'selection (median)':>20}{'labels':>8}{'trial s':>9}")
     for name, figures in summary.items():
         print(
-            f"{name:<16}{figures['final_success_median']:>16.2f}{figures['selection_success_median']:>20.2f}"
+            f"{name:<21}{figures['final_success_median']:>16.2f}{figures['selection_success_median']:>20.2f}"
             f"{figures['labels_median']:>8.0f}{figures['trial_seconds_median']:>9.0f}"
         )
     print(f"wrote {args.out}")
