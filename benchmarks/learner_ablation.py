@@ -191,7 +191,8 @@ def main() -> None:
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
     # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
     command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
-    earlier = json.loads(args.out.read_text()).get("commands", []) if args.out.exists() else []
+    previous = json.loads(args.out.read_text()) if args.out.exists() else {}
+    earlier = previous.get("commands") or ([previous["command"]] if "command" in previous else [])
     summary = summarise([t for t in trials if t["variant"] in VARIANTS])
     atomic_write_json(
         args.out,
