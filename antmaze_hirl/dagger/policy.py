@@ -57,16 +57,19 @@ class SubgoalPolicy(nn.Module):
         rng: Seeds the network initialisation (one draw; torch's global RNG is left as it was).
         max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's reach).
         n_directions: Heading bins of the network (a positive multiple of 4).
-        planning_iterations: Value-iteration rounds of an added planning module (0, the default: CNN
-            only). Twice the larger map side propagates values along any corridor; on 5x5 point mazes it
-            did not beat the CNN within 30 episodes (70% vs 70% learner-only success on 20 mazes).
+        planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
+            value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN within
+            30 episodes: 70% vs 70% learner-only success on 20 mazes); with the next-cell head, the planner
+            whose Q gives the logits, which needs at least the longest path's moves
+            (``HighLevelPolicy.for_env`` gives the point ``rows + cols + 2``).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
-        head: ``"heading"`` (the default): classify a heading among ``n_directions`` and regress a
-            distance. ``"next_cell"``: classify which of the 3x3 cells around the agent's cell comes next
-            on the path (a label's class is the cell its subgoal lies in); the subgoal is that cell's
-            centre, or the goal where the goal lies in it, pulled back to ``max_offset``. With
-            ``planning_iterations > 0`` its logits are a value iteration network's Q at the agent's cell.
+        head: ``"heading"`` (this class's default; ``HighLevelPolicy.for_env`` picks per body): classify a
+            heading among ``n_directions`` and regress a distance. ``"next_cell"``: classify which of the 3x3
+            cells around the agent's cell comes next on the path (a label's class is the cell its subgoal lies
+            in); the subgoal is that cell's centre, or the goal where the goal lies in it, pulled back to
+            ``max_offset``. With ``planning_iterations > 0`` its logits are a value iteration network's Q at the
+            agent's cell.
         block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
             between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
 
