@@ -141,10 +141,10 @@ def test_augmentation_keeps_grid_vector_and_label_consistent():
     assert len({tuple(v[:2]) for v in augmented.vectors}) == 4  # the four diagonal directions all appear
 
 
-def make_trainer(seed=0, **kwargs):
+def make_trainer(seed=0, policy_settings=None, **kwargs):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(seed)
-    policy = HighLevelPolicy.for_env(env, rng=rng)
+    policy = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {}))
     return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, **kwargs), env
 
 
@@ -227,20 +227,31 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
 
 
 @pytest.mark.slow
-def test_dagger_learns_small_mazes_end_to_end():
-    trainer, _ = make_trainer(seed=0, gradient_steps=300)
+@pytest.mark.parametrize(
+    ("settings", "gain", "least"),
+    [
+        ({"head": "heading", "planning_iterations": 0, "block_walls": False}, 0.4, 0.0),
+        # The point's default plans from the start: with any positive move costs, value iteration already
+        # routes round walls on these 3x3 mazes (87% untrained), so what it must show is reaching ~all.
+        ({}, 0.0, 0.95),
+    ],
+)
+def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
+    trainer, _ = make_trainer(seed=0, policy_settings=settings, gradient_steps=300)
     eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     untrained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
     trainer.train(20)
     trained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
-    assert trained["success_rate"] >= untrained["success_rate"] + 0.4, (untrained, trained)
+    assert trained["success_rate"] >= max(untrained["success_rate"] + gain, least), (untrained, trained)
 
 
-@pytest.mark.parametrize("planning_iterations", [0, 4])
-def test_policy_save_load_round_trip_and_bad_files(tmp_path, planning_iterations):
+@pytest.mark.parametrize(("head", "planning_iterations"), [("heading", 0), ("heading", 4), ("next_cell", 0)])
+def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iterations):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, planning_iterations=planning_iterations)
+    policy = HighLevelPolicy.for_env(
+        env, rng=rng, head=head, planning_iterations=planning_iterations, block_walls=False
+    )
     trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
     path = trainer.policy.save(tmp_path / "high.zip")

@@ -15,6 +15,24 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
+def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
+    """The settings :meth:`HighLevelPolicy.for_env` gives a body's policy unless told otherwise.
+
+    The point mass gets the next-cell head read out of value iteration that rules out moves the walls
+    block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest shortest
+    path is 15 moves): the winner of ``benchmarks/learner_ablation.py`` on the point's held-out 5x5 mazes
+    (``benchmarks/results/learner_ablation.json``). The ant keeps the heading head: its 2 m subgoals are
+    half a 4 m cell, which a next cell's centre would overshoot, and nothing measured it there.
+    """
+    if body == "point":
+        return {
+            "head": "next_cell",
+            "planning_iterations": geometry.n_rows + geometry.n_cols + 2,
+            "block_walls": True,
+        }
+    return {}
+
+
 class HighLevelPolicy:
     """The high-level learner of :class:`~antmaze_hirl.dagger.DAggerTrainer`: a policy and how it is trained.
 
@@ -34,6 +52,8 @@ class HighLevelPolicy:
         planning_iterations: Value-iteration rounds of an added planning module (0: CNN only).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
+        head: ``"heading"`` or ``"next_cell"`` (:class:`~antmaze_hirl.dagger.policy.SubgoalPolicy`).
+        block_walls: The next-cell planner rules out moves the walls block (``SubgoalPolicy``).
     """
 
     def __init__(
@@ -51,6 +71,8 @@ class HighLevelPolicy:
         planning_iterations: int = 0,
         channels: int = 16,
         hidden: int = 128,
+        head: str = "heading",
+        block_walls: bool = False,
     ) -> None:
         self.policy = SubgoalPolicy(
             geometry,
@@ -62,6 +84,8 @@ class HighLevelPolicy:
             planning_iterations=planning_iterations,
             channels=channels,
             hidden=hidden,
+            head=head,
+            block_walls=block_walls,
         )
         self.learner = SubgoalLearner(
             self.policy,
@@ -73,14 +97,19 @@ class HighLevelPolicy:
 
     @classmethod
     def for_env(cls, env: Any, *, rng: np.random.Generator, **kwargs: Any) -> HighLevelPolicy:
-        """A policy shaped for a (wrapped) high-level env."""
+        """A policy shaped for a (wrapped) high-level env, with its body's defaults (:func:`body_policy_defaults`).
+
+        ``kwargs`` override those defaults (``head="heading", planning_iterations=0, block_walls=False``
+        for the point's previous default).
+        """
         inner = env.unwrapped
+        settings = {**body_policy_defaults(getattr(inner, "body", ""), inner.geometry), **kwargs}
         return cls(
             inner.geometry,
             pixels_per_cell=inner.renderer.pixels_per_cell,
             body_dim=STATE_LAYOUT.body_dim(inner.observation_space["state"].shape[0]),
             rng=rng,
-            **kwargs,
+            **settings,
         )
 
     @property

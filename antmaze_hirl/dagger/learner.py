@@ -10,7 +10,7 @@ from torch import nn
 
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
 from antmaze_hirl.dagger.features import EncodedBatch, augment
-from antmaze_hirl.dagger.network import direction_bins
+from antmaze_hirl.dagger.network import direction_bins, next_cell_classes
 from antmaze_hirl.dagger.policy import SubgoalPolicy
 
 LEARNER_SETTINGS = ("learning_rate", "batch_size", "augment_symmetries")
@@ -50,6 +50,8 @@ class EncodingCache:
 
 class SubgoalLearner:
     """Adam on heading cross-entropy plus squared distance error, with random symmetries of the square.
+
+    A ``"next_cell"`` policy is trained on cross-entropy over the cell each label's subgoal lies in instead.
 
     Args:
         policy: The policy it trains.
@@ -93,7 +95,13 @@ class SubgoalLearner:
         }
 
     def targets(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
-        """Training targets: expert offsets in units of ``max_offset``, shortened to length 1 at most."""
+        """Training targets: expert offsets in units of ``max_offset``, shortened to length 1 at most.
+
+        For a ``"next_cell"`` policy: the ``(dx, dy)`` cell steps to the labels' cells
+        (:meth:`SubgoalPolicy.cell_steps`), which the square's symmetries map as they map xy offsets.
+        """
+        if self.policy.head == "next_cell":
+            return self.policy.cell_steps(agent_xy, subgoals)
         offsets = (subgoals - agent_xy) / self.policy.max_offset
         lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
         return (offsets / np.maximum(lengths, 1.0)).astype(np.float32)
@@ -115,10 +123,14 @@ class SubgoalLearner:
             labels = targets[index]
             if self.augment_symmetries:
                 minibatch, labels = augment(minibatch, labels, self.rng, planar_dim=self.policy.planar_dim)
-            logits, distance = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
-            bins = th.from_numpy(direction_bins(labels, self.policy.n_directions))
-            lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
-            loss = nn.functional.cross_entropy(logits, bins) + th.mean((distance - lengths) ** 2)
+            outputs = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
+            if self.policy.head == "next_cell":
+                loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))
+            else:
+                logits, distance = outputs
+                bins = th.from_numpy(direction_bins(labels, self.policy.n_directions))
+                lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
+                loss = nn.functional.cross_entropy(logits, bins) + th.mean((distance - lengths) ** 2)
             self.optimizer.zero_grad()
             loss.backward()
             self.optimizer.step()

@@ -1,4 +1,9 @@
-"""The high-level policy's networks: a CNN (optionally with value iteration) that outputs subgoal headings."""
+"""The high-level policy's networks: subgoal headings from a CNN, or the next cell of the path from a planner.
+
+:class:`SubgoalNetwork` classifies a free heading (plus a distance); :class:`NextCellNetwork` classifies
+which of the 3x3 cells around the agent to walk to next, its logits read straight out of a value
+iteration network's Q at the agent's cell (Tamar et al., 2016) when it plans.
+"""
 
 from __future__ import annotations
 
@@ -112,3 +117,151 @@ def direction_bins(offsets: np.ndarray, n_directions: int) -> np.ndarray:
     """Index of the heading bin nearest to each xy offset."""
     angles = np.arctan2(offsets[:, 1], offsets[:, 0])
     return np.round(angles / (2 * np.pi / n_directions)).astype(np.int64) % n_directions
+
+
+NEXT_CELL_MOVES: tuple[tuple[int, int], ...] = tuple((dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1))
+"""The classes of :class:`NextCellNetwork`: cell steps ``(dx, dy)`` (``+x`` east, ``+y`` north; ``(0, 0)`` the
+agent's own cell), class ``(dy + 1) * 3 + (dx + 1)``."""
+
+
+def next_cell_classes(steps: np.ndarray) -> np.ndarray:
+    """Class index of each ``(dx, dy)`` cell step in ``{-1, 0, 1}^2`` (rounded, then clipped to it)."""
+    steps = np.clip(np.rint(np.asarray(steps, dtype=np.float64)), -1, 1).astype(np.int64)
+    return (steps[:, 1] + 1) * 3 + (steps[:, 0] + 1)
+
+
+UNREACHED = -1.0e3
+"""Value of a cell the propagation has not reached from the goal (and of everything outside the grid)."""
+
+BLOCKED_COST = 1.0e4
+"""Cost of a move the walls rule out (with ``block_walls``): more than any path's, so none is ever taken."""
+
+
+def blocked_moves(walls: th.Tensor) -> th.Tensor:
+    """``(B, 9, S, S)`` 1.0 where a move leads into a wall (or off the grid) or squeezes between two walls.
+
+    A diagonal whose two orthogonal cells are both walls passes only through the walls' shared corner.
+    """
+    size = walls.shape[-1]
+    ahead = shifted(walls, size, fill=1.0)
+    blocked = [ahead[:, index] for index in range(len(NEXT_CELL_MOVES))]
+    for index, (dx, dy) in enumerate(NEXT_CELL_MOVES):
+        if dx and dy:
+            side_x, side_y = NEXT_CELL_MOVES.index((dx, 0)), NEXT_CELL_MOVES.index((0, dy))
+            blocked[index] = th.maximum(blocked[index], ahead[:, side_x] * ahead[:, side_y])
+    return th.stack(blocked, dim=1)
+
+
+class CellValueIteration(nn.Module):
+    """Value iteration over the agent-centred grid whose actions are the moves to the 3x3 neighbour cells.
+
+    A differentiable Bellman-Ford (a value iteration network, Tamar et al., 2016, with the grid world's
+    deterministic moves as its transitions): a convolution turns walls and goal into a learned cost
+    ``c_a(s) > 0`` of each move from each cell (walls learn to cost much; the 3x3 view lets a diagonal
+    past a wall corner cost more), then ``iterations`` rounds of ``Q_a(s) = V(s + a) - c_a(s)``,
+    ``V = max_a Q_a`` with ``V = 0`` held on the goal's cell (the grid's goal channel). The output is
+    Q at the agent's cell (the grid centre): one value per move, used as logits. Costs, not rewards, keep
+    the values bounded (a learned reward kernel over ~20 rounds blew up in training), and the weights are
+    shared across positions, so a shortest-path rule learnt on a few mazes holds on any.
+
+    With ``block_walls`` the walls of the grid also rule moves out (:func:`blocked_moves`: into a wall, or
+    diagonally between two), the grid world's known dynamics, so the learned costs need only rank free
+    moves: without it, rare wall shapes near the agent were learned too cheap and the point walked into them.
+
+    Args:
+        iterations: Rounds of value propagation (at least the longest path, in cells).
+        channels: Hidden channels of the cost map's convolutions.
+        block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
+
+    Raises:
+        ValueError: If ``iterations`` is below 1.
+    """
+
+    def __init__(self, iterations: int, channels: int = 16, *, block_walls: bool = False) -> None:
+        super().__init__()
+        if iterations < 1:
+            raise ValueError(f"iterations must be >= 1, got {iterations}")
+        self.iterations = iterations
+        self.block_walls = block_walls
+        self.cost = nn.Sequential(
+            nn.Conv2d(2, channels, 3, padding=1),
+            nn.ReLU(),
+            nn.Conv2d(channels, len(NEXT_CELL_MOVES), 3, padding=1),
+            nn.Softplus(),
+        )
+
+    def forward(self, grids: th.Tensor) -> th.Tensor:
+        """``(B, 9)`` Q-values of the moves from the agent's cell."""
+        cost = self.cost(grids)
+        if self.block_walls:
+            cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
+        not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
+        value = UNREACHED * not_goal
+        size = grids.shape[-1]
+        for _ in range(self.iterations - 1):
+            # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
+            value = (shifted(value, size) - cost).amax(dim=1) * not_goal
+        centre = size // 2
+        # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
+        ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
+        return ahead - cost[:, :, centre, centre]
+
+
+def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
+    """``(B, 9, S, S)``: for each move of :data:`NEXT_CELL_MOVES`, the value of the cell one move away.
+
+    Rows run top (+y) to bottom, so move ``(dx, dy)`` reads row ``-dy``, column ``+dx``; cells beyond the
+    grid read ``fill``.
+    """
+    padded = nn.functional.pad(value, (1, 1, 1, 1), value=fill)
+    return th.stack([padded[:, 1 - dy : 1 - dy + size, 1 + dx : 1 + dx + size] for dx, dy in NEXT_CELL_MOVES], dim=1)
+
+
+class NextCellNetwork(nn.Module):
+    """Logits over the 3x3 cells around the agent (:data:`NEXT_CELL_MOVES`): which one to walk to next.
+
+    With ``planning_iterations > 0`` the logits are the Q-values of a :class:`CellValueIteration` at the
+    agent's cell plus a small correction from the feature vector (in-cell offset, velocity) and those
+    Q-values, which starts at zero; with 0, a CNN and an MLP over grid and vector give them.
+
+    Args:
+        grid_size: Side of the agent-centred grid.
+        vector_dim: Length of the feature vector.
+        channels: Convolution channels.
+        hidden: Width of the fully connected layers.
+        planning_iterations: Value-iteration rounds; 0: the CNN instead.
+        block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
+    """
+
+    def __init__(
+        self,
+        grid_size: int,
+        vector_dim: int,
+        channels: int = 16,
+        hidden: int = 128,
+        planning_iterations: int = 0,
+        *,
+        block_walls: bool = False,
+    ) -> None:
+        super().__init__()
+        moves = len(NEXT_CELL_MOVES)
+        if planning_iterations > 0:
+            self.planner: CellValueIteration | None = CellValueIteration(
+                planning_iterations, channels, block_walls=block_walls
+            )
+            self.head = nn.Sequential(nn.Linear(moves + vector_dim, hidden), nn.ReLU(), nn.Linear(hidden, moves))
+            with th.no_grad():  # start as the planner's own readout
+                self.head[-1].weight.zero_()
+                self.head[-1].bias.zero_()
+        else:
+            self.planner = None
+            self.head = SubgoalNetwork(grid_size, vector_dim, moves, channels, hidden)
+
+    def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
+        """Logits ``(B, 9)`` over the next cell."""
+        if self.planner is None:
+            return self.head(grids, vectors)[0]
+        q = self.planner(grids)
+        # The correction sees Q relative to its best move: the scale of Q grows with the iterations.
+        relative = q - q.max(dim=1, keepdim=True).values.detach()
+        return q + self.head(th.cat([relative, vectors], dim=1))

@@ -19,11 +19,19 @@ from torch import nn
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.dagger.features import PLANAR_DIM, EncodedBatch, ObservationEncoder
-from antmaze_hirl.dagger.network import SubgoalNetwork, offsets_from_outputs
+from antmaze_hirl.dagger.network import (
+    NEXT_CELL_MOVES,
+    NextCellNetwork,
+    SubgoalNetwork,
+    offsets_from_outputs,
+)
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 FORMAT = "antmaze_hirl.high_level_policy/2"
+
+HEADS = ("heading", "next_cell")
+"""What the network outputs: a free heading and distance, or the next cell of the path (3x3 around the agent)."""
 
 POLICY_SETTINGS = (
     "pixels_per_cell",
@@ -33,6 +41,8 @@ POLICY_SETTINGS = (
     "planning_iterations",
     "channels",
     "hidden",
+    "head",
+    "block_walls",
 )
 """The :class:`SubgoalPolicy` constructor settings stored in a zip's ``config`` (besides ``geometry``)."""
 
@@ -47,14 +57,25 @@ class SubgoalPolicy(nn.Module):
         rng: Seeds the network initialisation (one draw; torch's global RNG is left as it was).
         max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's reach).
         n_directions: Heading bins of the network (a positive multiple of 4).
-        planning_iterations: Value-iteration rounds of an added planning module (0, the default: CNN
-            only). Twice the larger map side propagates values along any corridor; on 5x5 point mazes it
-            did not beat the CNN within 30 episodes (70% vs 70% learner-only success on 20 mazes).
+        planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
+            value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN within
+            30 episodes: 70% vs 70% learner-only success on 20 mazes); with the next-cell head, the planner
+            whose Q gives the logits, which needs at least the longest path's moves
+            (``HighLevelPolicy.for_env`` gives the point ``rows + cols + 2``).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
+        head: ``"heading"`` (this class's default; ``HighLevelPolicy.for_env`` picks per body): classify a
+            heading among ``n_directions`` and regress a distance. ``"next_cell"``: classify which of the 3x3
+            cells around the agent's cell comes next on the path (a label's class is the cell its subgoal lies
+            in); the subgoal is that cell's centre, or the goal where the goal lies in it, pulled back to
+            ``max_offset``. With ``planning_iterations > 0`` its logits are a value iteration network's Q at the
+            agent's cell.
+        block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
+            between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
 
     Raises:
-        ValueError: If ``n_directions`` is not a positive multiple of 4.
+        ValueError: If ``n_directions`` is not a positive multiple of 4, ``head`` is unknown, or
+            ``planning_iterations`` is negative, or ``block_walls`` is set without the planning next-cell head.
     """
 
     def __init__(
@@ -69,10 +90,18 @@ class SubgoalPolicy(nn.Module):
         planning_iterations: int = 0,
         channels: int = 16,
         hidden: int = 128,
+        head: str = "heading",
+        block_walls: bool = False,
     ) -> None:
         super().__init__()
         if n_directions < 4 or n_directions % 4:
             raise ValueError(f"n_directions must be a positive multiple of 4, got {n_directions}")
+        if head not in HEADS:
+            raise ValueError(f"head must be one of {list(HEADS)}, got {head!r}")
+        if planning_iterations < 0:
+            raise ValueError(f"planning_iterations must be >= 0, got {planning_iterations}")
+        if block_walls and (head != "next_cell" or planning_iterations == 0):
+            raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
         self.geometry = geometry
         self.pixels_per_cell = pixels_per_cell
         self.body_dim = body_dim
@@ -81,33 +110,74 @@ class SubgoalPolicy(nn.Module):
         self.planning_iterations = int(planning_iterations)
         self.channels = channels
         self.hidden = hidden
+        self.head = head
+        self.block_walls = bool(block_walls)
         self.encoder = ObservationEncoder(geometry, pixels_per_cell)
+        vector_dim = STATE_LAYOUT.state_dim(body_dim)
         with th.random.fork_rng(devices=[]):  # seed the initialisation without touching torch's global RNG
             th.manual_seed(int(rng.integers(2**31)))
-            self.network = SubgoalNetwork(
-                self.encoder.grid_size,
-                STATE_LAYOUT.state_dim(body_dim),
-                n_directions,
-                channels,
-                hidden,
-                self.planning_iterations,
-            )
+            if head == "next_cell":
+                self.network: nn.Module = NextCellNetwork(
+                    self.encoder.grid_size,
+                    vector_dim,
+                    channels,
+                    hidden,
+                    self.planning_iterations,
+                    block_walls=self.block_walls,
+                )
+            else:
+                self.network = SubgoalNetwork(
+                    self.encoder.grid_size, vector_dim, n_directions, channels, hidden, self.planning_iterations
+                )
 
     @property
     def planar_dim(self) -> int:
         """Leading world-frame xy features: goal and in-cell offsets, and a 2-D body state (the point's velocity)."""
         return PLANAR_DIM + (2 if self.body_dim == 2 else 0)
 
-    def forward(self, grids: th.Tensor, vectors: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
-        """Heading logits ``(B, n_directions)`` and distances ``(B,)`` for an encoded batch."""
+    def forward(self, grids: th.Tensor, vectors: th.Tensor) -> Any:
+        """The network's outputs for an encoded batch.
+
+        ``"heading"``: heading logits ``(B, n_directions)`` and distances ``(B,)``; ``"next_cell"``:
+        logits ``(B, 9)`` over :data:`~antmaze_hirl.dagger.network.NEXT_CELL_MOVES`.
+        """
         return self.network(grids, vectors)
 
     def offsets(self, batch: EncodedBatch) -> np.ndarray:
         """Normalised offsets (``[-1, 1]^2``) for an encoded batch."""
         self.network.eval()
         with th.no_grad():
-            logits, distance = self.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors))
-            return offsets_from_outputs(logits, distance).numpy().astype(np.float64)
+            outputs = self.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors))
+        if self.head == "next_cell":
+            return self.cell_offsets(batch, outputs.argmax(dim=1).numpy())
+        return offsets_from_outputs(*outputs).numpy().astype(np.float64)
+
+    def cell_offsets(self, batch: EncodedBatch, classes: np.ndarray) -> np.ndarray:
+        """Normalised offsets to the chosen next cells: each cell's centre, or the goal where it lies there.
+
+        Everything comes from the encoding: the in-cell and goal offsets from the vector, the goal's
+        cell from the grid's goal channel (the agent's cell is the grid's centre).
+        """
+        steps = np.asarray(NEXT_CELL_MOVES, dtype=np.float64)[classes]
+        in_cell, to_goal = batch.vectors[:, 2:4].astype(np.float64), batch.vectors[:, 0:2].astype(np.float64)
+        centre = batch.grids.shape[-1] // 2
+        rows, cols = centre - steps[:, 1].astype(int), centre + steps[:, 0].astype(int)
+        holds_goal = batch.grids[np.arange(len(batch)), 1, rows, cols] > 0.5
+        offsets = np.where(holds_goal[:, None], to_goal, steps - in_cell) * self.geometry.scale
+        lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
+        offsets = offsets * np.minimum(1.0, self.max_offset / np.maximum(lengths, 1e-12))  # the oracle's reach
+        return offsets / self.max_offset
+
+    def cell_steps(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
+        """The ``(dx, dy)`` cell step from each agent's cell to its subgoal's, clipped to ``{-1, 0, 1}^2``.
+
+        The agent's cell is clipped to the map as the encoder clips it (a body pressed into the border).
+        """
+        last = np.array([self.geometry.n_rows - 1, self.geometry.n_cols - 1])
+        agent = np.clip([self.geometry.xy_to_cell(xy) for xy in agent_xy], 0, last)
+        target = np.clip([self.geometry.xy_to_cell(xy) for xy in subgoals], 0, last)
+        rows, cols = (target - agent).T
+        return np.clip(np.stack([cols, -rows], axis=1), -1, 1).astype(np.float32)
 
     def predict_batch(self, observations: list[dict[str, np.ndarray]]) -> np.ndarray:
         """Subgoals (metres) for a list of observations."""
@@ -129,6 +199,8 @@ class SubgoalPolicy(nn.Module):
             "planning_iterations": self.planning_iterations,
             "channels": self.channels,
             "hidden": self.hidden,
+            "head": self.head,
+            "block_walls": self.block_walls,
         }
 
     def save(self, path: str | Path, *, learner_config: Mapping[str, Any] | None = None) -> Path:

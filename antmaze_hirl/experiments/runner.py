@@ -136,10 +136,19 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
     return rows
 
 
-def make_trainer(method: str, seed: int, config: ExperimentConfig, env: Any, expert: Expert) -> DAggerTrainer:
+def make_trainer(
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    env: Any,
+    expert: Expert,
+    *,
+    policy_settings: dict[str, Any] | None = None,
+) -> DAggerTrainer:
     """The trainer of one trial: a fresh learner seeded by ``seed``, ``method``'s strategy, ``config``'s settings.
 
     The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
+    ``policy_settings`` are :class:`HighLevelPolicy` constructor settings (an ablation's variant).
     """
     rng = np.random.default_rng(seed)
     strategy = make_strategy(method)
@@ -148,7 +157,7 @@ def make_trainer(method: str, seed: int, config: ExperimentConfig, env: Any, exp
     return DAggerTrainer(
         env=env,
         expert=expert,
-        policy=HighLevelPolicy.for_env(env, rng=rng),
+        policy=HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})),
         rng=rng,
         strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),

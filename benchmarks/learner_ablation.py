@@ -1,0 +1,231 @@
+"""Which change to the high-level learner closes the point's gap to its teacher (issue 13): an ablation.
+
+Each variant is a set of :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings. Each trial runs plain
+DAgger with the oracle for ``--episodes`` episodes on the point's 5x5 training mazes (held-out layouts,
+``ExperimentConfig.held_out_layouts``), then measures learner-only success (beta = 0, no expert) on the
+50 mazes of the selection part (what a choice between variants may read) and on the 100 mazes of the
+final evaluation part (what the README quotes), each with its 95% Wilson interval.
+
+Variants:
+
+* ``heading_cnn``: the previous default (CNN + MLP, 16 heading bins plus a distance).
+* ``next_cell_cnn``: the same CNN classifying the next cell of the path (3x3 around the agent's cell).
+* ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell.
+* ``next_cell_vin_walls``: the same, with moves into walls (or diagonally between two) ruled out.
+
+Usage: python benchmarks/learner_ablation.py [--variants heading_cnn,next_cell_vin] [--seeds 0,1]
+           [--episodes 100] [--trials-dir /tmp/ablation] [--out benchmarks/results/learner_ablation.json]
+
+Each trial also measures the learner's agreement with the oracle, the fraction of states where its
+subgoal lies in the same cell as the oracle's label (one measure for both heads): on its own training
+labels (DAgger's aggregated data) and on 1000 oracle-labelled states of selection mazes it never saw
+(agent at a random free cell's centre +-0.35 cells, at rest). High on the first and low on the second is
+a learner that memorises and does not generalise.
+
+Finished trials are kept in ``--trials-dir`` (one JSON each) and reused, so an interrupted run resumes;
+the summary lists every variant and seed found there for the settings given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, evaluation_sets
+from antmaze_hirl.experiments.runner import make_env, make_trainer
+from antmaze_hirl.experiments.uncertainty import rate_with_interval
+from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.experts.oracle import plan_subgoal
+
+RESULTS = Path(__file__).parent / "results"
+
+VARIANTS: dict[str, dict[str, Any]] = {
+    "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
+    "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
+    "next_cell_vin": {"head": "next_cell", "planning_iterations": 16, "block_walls": False},
+    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": 16, "block_walls": True},
+}
+"""HighLevelPolicy settings of each variant: every setting the point's default sets (``body_policy_defaults``),
+given explicitly, so a change of default changes no variant. ``next_cell_vin_walls`` is the point's default."""
+
+SELECTION_MAZES = 50
+AGREEMENT_STATES = 1000
+
+
+def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, labels: np.ndarray) -> float:
+    """Fraction of states whose predicted subgoal lies in the same cell (relative to the agent's) as the label."""
+    inner = policy.policy
+    return float(np.mean(np.all(inner.cell_steps(agent_xy, predicted) == inner.cell_steps(agent_xy, labels), axis=1)))
+
+
+def held_out_agreement(policy: Any, seed: int = 0) -> float:
+    """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
+    env = SplitMazeEnv("point", split="selection", maze_size=5, low_level=lambda *_: None)
+    geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
+    walls, agents, goals, labels = [], [], [], []
+    while len(agents) < AGREEMENT_STATES:
+        task = env.unwrapped.sample_task(rng)
+        free = np.argwhere(~task.layout.walls)
+        cell = tuple(free[rng.integers(len(free))])
+        if cell == geometry.xy_to_cell(task.goal_xy):
+            continue
+        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
+        label = plan_subgoal(task.layout.walls, geometry, agent, task.goal_xy, max_distance=1.0, clearance=0.2)
+        walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
+    env.close()
+    batch = policy.encoder.encode(walls, agents, goals, [np.zeros(2)] * len(agents))
+    agents = np.stack(agents)
+    return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
+
+
+def run_variant_trial(
+    variant: str, seed: int, config: ExperimentConfig, policy_path: Path | None = None
+) -> dict[str, Any]:
+    """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success.
+
+    With ``policy_path``, the trained policy is saved there (to look at its failures later).
+    """
+    start = time.perf_counter()
+    env = make_env(config, split="train")
+    trainer = make_trainer("dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant])
+    records = [trainer.run_episode() for _ in range(config.episodes)]
+    train_seconds = time.perf_counter() - start
+    if policy_path is not None:
+        trainer.policy.save(policy_path)
+    data = trainer.dataset
+    own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
+    agreement = {
+        "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
+        "held_out_states": held_out_agreement(trainer.policy),
+    }
+    evaluations = {}
+    for name, (split, first_seed, mazes) in (
+        ("selection", ("selection", SELECTION_SEED, SELECTION_MAZES)),
+        ("final", evaluation_sets(config)["final"]),
+    ):
+        eval_env = make_env(config, split=split)
+        result = evaluate_high_level(trainer.policy, eval_env, episodes=mazes, seed=first_seed)
+        eval_env.close()
+        evaluations[name] = {
+            **rate_with_interval(result["success_rate"], mazes),
+            "mean_attempts": result["mean_attempts"],
+            "split": split,
+            "first_seed": first_seed,
+        }
+    env.close()
+    return {
+        "variant": variant,
+        "seed": seed,
+        "policy_settings": VARIANTS[variant],
+        "episodes": config.episodes,
+        "labels": trainer.total_expert_cost,
+        "training_successes": int(sum(record.success for record in records)),
+        "gradient_steps": trainer.policy.gradient_steps,
+        "oracle_cell_agreement": agreement,
+        "train_seconds": round(train_seconds, 1),
+        "trial_seconds": round(time.perf_counter() - start, 1),
+        **{f"{name}_success": figures for name, figures in evaluations.items()},
+    }
+
+
+def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
+    """Per variant: each seed's figures and the medians of final and selection success."""
+    summary: dict[str, Any] = {}
+    for variant in VARIANTS:
+        mine = sorted((t for t in trials if t["variant"] == variant), key=lambda t: t["seed"])
+        if not mine:
+            continue
+        summary[variant] = {
+            "policy_settings": VARIANTS[variant],
+            "seeds": [t["seed"] for t in mine],
+            "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
+            "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
+            "held_out_agreement_median": statistics.median(t["oracle_cell_agreement"]["held_out_states"] for t in mine),
+            "labels_median": statistics.median(t["labels"] for t in mine),
+            "trial_seconds_median": statistics.median(t["trial_seconds"] for t in mine),
+            "trials": mine,
+        }
+    return summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--seeds", default="0,1", help="comma-separated trial seeds")
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--trials-dir", type=Path, default=Path("/tmp/learner_ablation"))
+    parser.add_argument("--out", type=Path, default=RESULTS / "learner_ablation.json")
+    args = parser.parse_args()
+    torch.set_num_threads(1)  # one core per trial, as paper_experiment's --cpus-per-trial 1
+    variants = [name.strip() for name in args.variants.split(",") if name.strip()]
+    unknown = sorted(set(variants) - set(VARIANTS))
+    if unknown:
+        parser.error(f"unknown variants {unknown}; choose from {sorted(VARIANTS)}")
+    seeds = [int(seed) for seed in args.seeds.split(",")]
+    config = ExperimentConfig(body="point", episodes=args.episodes, held_out_layouts=True, eval_episodes=50)
+    args.trials_dir.mkdir(parents=True, exist_ok=True)
+    for seed in seeds:  # seed-major: every variant of a seed before the next seed
+        for variant in variants:
+            path = args.trials_dir / f"{variant}_e{args.episodes}_seed{seed}.json"
+            if not path.exists():
+                atomic_write_json(path, run_variant_trial(variant, seed, config, path.with_suffix(".zip")))
+            trial = json.loads(path.read_text())
+            print(
+                f"{variant} seed {seed}: final {trial['final_success']['rate']:.2f} "
+                f"{trial['final_success']['wilson_95']}, selection {trial['selection_success']['rate']:.2f}, "
+                f"{trial['labels']} labels, agreement {trial['oracle_cell_agreement']}, {trial['trial_seconds']:.0f} s",
+                flush=True,
+            )
+    trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
+    # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
+    command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
+    previous = json.loads(args.out.read_text()) if args.out.exists() else {}
+    earlier = previous.get("commands") or ([previous["command"]] if "command" in previous else [])
+    summary = summarise([t for t in trials if t["variant"] in VARIANTS])
+    atomic_write_json(
+        args.out,
+        {
+            "command": command,
+            "commands": [*[c for c in earlier if c != command], command],
+            "protocol": {
+                "body": "point",
+                "maze_size": config.maze_size,
+                "method": "dagger",
+                "expert": "PathOracle",
+                "episodes": config.episodes,
+                "gradient_steps_per_update": config.gradient_steps,
+                "held_out_layouts": True,
+                "selection_mazes": SELECTION_MAZES,
+                "final_mazes": config.final_eval_episodes,
+                "interval": "95% Wilson",
+                "torch_threads": 1,
+                "agreement_states": AGREEMENT_STATES,
+                "note": "trials recorded before block_walls existed list no block_walls: it was False",
+            },
+            "variants": summary,
+        },
+    )
+    print(f"\n{'variant':<21}{'final (median)':>16}{'selection (median)':>20}{'labels':>8}{'trial s':>9}")
+    for name, figures in summary.items():
+        print(
+            f"{name:<21}{figures['final_success_median']:>16.2f}{figures['selection_success_median']:>20.2f}"
+            f"{figures['labels_median']:>8.0f}{figures['trial_seconds_median']:>9.0f}"
+        )
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=3)
+    main()
