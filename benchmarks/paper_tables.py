@@ -94,6 +94,34 @@ def per_label_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def effort_table(summary: dict[str, Any]) -> str:
+    """Each method's labels over a trial against plain DAgger's, and whether its final success is DAgger's.
+
+    The [ask-less] goal reads off it: ``gated`` at <= 0.3x DAgger's labels, its median final success
+    inside DAgger's pooled 95% Wilson interval (or above it).
+    """
+    dagger = summary["methods"].get("dagger", {})
+    if not dagger.get("seeds") or not dagger["final_success"].get("pooled"):
+        return "(no plain DAgger trials with counted evaluations to compare with)"
+    low, _ = dagger["final_success"]["pooled"]["wilson_95"]
+    dagger_labels = dagger["total_labels"]["median"]
+    lines = [
+        "| method | labels per trial, median | ratio to DAgger | final success, median "
+        "| DAgger's success (median >= its pooled lower bound) |",
+        "|---|---|---|---|---|",
+    ]
+    for name, method in summary["methods"].items():
+        if not method.get("seeds"):
+            continue
+        labels, final = method["total_labels"]["median"], method["final_success"]["median"]
+        matched = "yes" if final >= low else "no"
+        lines.append(
+            f"| {name} | {labels:.0f} | {labels / dagger_labels:.2f}x | {_percent(final)} "
+            f"| {matched} (bound {100 * low:.1f}%) |"
+        )
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folder", type=Path, help="a results folder with summary.json")
@@ -105,7 +133,8 @@ def main() -> None:
     if any(method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()):
         parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
     print(cost_table(summary), end="\n\n")
-    print(per_label_table(summary))
+    print(per_label_table(summary), end="\n\n")
+    print(effort_table(summary))
     print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
 
 
