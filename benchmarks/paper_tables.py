@@ -12,10 +12,16 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
+
+
+def _methods_run(summary: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
+    # Methods named but without trials (seeds 0) have no figures to print.
+    return ((name, method) for name, method in summary["methods"].items() if method.get("seeds"))
 
 
 def _percent(value: float | None) -> str:
@@ -45,9 +51,7 @@ def cost_table(summary: dict[str, Any]) -> str:
         "| labels per trial, median (min-max) | trial time |",
         "|---|---|---|---|---|---|---|",
     ]
-    for name, method in summary["methods"].items():
-        if not method.get("seeds"):
-            continue
+    for name, method in _methods_run(summary):
         pooled = method["final_success"]["pooled"]
         interval = (
             f"{100 * pooled['rate']:.1f}% [{100 * pooled['wilson_95'][0]:.1f}, {100 * pooled['wilson_95'][1]:.1f}]"
@@ -78,9 +82,7 @@ def per_label_table(summary: dict[str, Any]) -> str:
         f"| method | {budgets} | normalised AUC | labels to match DAgger, median (seeds reaching) | ratio to DAgger |",
         "|---|" + "---|" * (len(LABEL_BUDGETS) + 3),
     ]
-    for name, method in summary["methods"].items():
-        if not method.get("seeds"):
-            continue
+    for name, method in _methods_run(summary):
         cells = [
             _spread(method["success_at_labels"][str(budget)]) + _p_value(method, f"success_at_{budget}_labels")
             for budget in LABEL_BUDGETS
@@ -110,9 +112,7 @@ def effort_table(summary: dict[str, Any]) -> str:
         "| DAgger's success (median >= its pooled lower bound) |",
         "|---|---|---|---|---|",
     ]
-    for name, method in summary["methods"].items():
-        if not method.get("seeds"):
-            continue
+    for name, method in _methods_run(summary):
         labels, final = method["total_labels"]["median"], method["final_success"]["median"]
         matched = "yes" if final >= low else "no"
         lines.append(
