@@ -1,26 +1,31 @@
-"""Which change to the high-level learner closes the point's gap to its teacher (issue 13): an ablation.
+"""Which change to the high-level learner closes a body's gap to its teacher (issue 13): an ablation.
 
 Each variant is a set of :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings. Each trial runs plain
-DAgger with the oracle for ``--episodes`` episodes on the point's 5x5 training mazes (held-out layouts,
-``ExperimentConfig.held_out_layouts``), then measures learner-only success (beta = 0, no expert) on the
+DAgger with the oracle for ``--episodes`` episodes on the body's training mazes of the held-out-layouts
+protocol (``ExperimentConfig.held_out_layouts``: the point's 5x5 family, the ant's 4x4 with the shipped low
+level and 2 m oracle subgoals), then measures learner-only success (beta = 0, no expert) on the
 50 mazes of the selection part (what a choice between variants may read) and on the 100 mazes of the
 final evaluation part (what the README quotes), each with its 95% Wilson interval.
 
 Variants:
 
-* ``heading_cnn``: the previous default (CNN + MLP, 16 heading bins plus a distance).
+* ``heading_cnn``: the point's previous default and the ant's (CNN + MLP, 16 heading bins plus a distance).
 * ``next_cell_cnn``: the same CNN classifying the next cell of the path (3x3 around the agent's cell).
-* ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell.
+* ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell,
+  with ``rows + cols + 2`` rounds (16 on the point's 7x7 map, 14 on the ant's 6x6).
 * ``next_cell_vin_walls``: the same, with moves into walls (or diagonally between two) ruled out.
 
-Usage: python benchmarks/learner_ablation.py [--variants heading_cnn,next_cell_vin] [--seeds 0,1]
-           [--episodes 100] [--trials-dir /tmp/ablation] [--out benchmarks/results/learner_ablation.json]
+Usage: python benchmarks/learner_ablation.py [--body point|ant] [--variants heading_cnn,next_cell_vin]
+           [--seeds 0,1] [--episodes 100] [--trials-dir /tmp/ablation] [--out FILE]
+
+``--out`` defaults to ``benchmarks/results/learner_ablation.json`` for the point and
+``learner_ablation_ant.json`` beside it for the ant.
 
 Each trial also measures the learner's agreement with the oracle, the fraction of states where its
 subgoal lies in the same cell as the oracle's label (one measure for both heads): on its own training
 labels (DAgger's aggregated data) and on 1000 oracle-labelled states of selection mazes it never saw
-(agent at a random free cell's centre +-0.35 cells, at rest). High on the first and low on the second is
-a learner that memorises and does not generalise.
+(agent at a random free cell's centre +-0.35 cells, at rest, labelled with the trial's oracle reach).
+High on the first and low on the second is a learner that memorises and does not generalise.
 
 Finished trials are kept in ``--trials-dir`` (one JSON each) and reused, so an interrupted run resumes;
 the summary lists every variant and seed found there for the settings given.
@@ -43,7 +48,9 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.envs.split_env import SplitMazeEnv
-from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, evaluation_sets
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, body_settings, evaluation_sets
+from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.experts import PathOracle
@@ -51,14 +58,30 @@ from antmaze_hirl.experts.oracle import plan_subgoal
 
 RESULTS = Path(__file__).parent / "results"
 
+PLANS = -1
+"""Stands for ``rows + cols + 2`` value-iteration rounds on the trial's map (:func:`variant_settings`)."""
+
 VARIANTS: dict[str, dict[str, Any]] = {
     "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
     "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
-    "next_cell_vin": {"head": "next_cell", "planning_iterations": 16, "block_walls": False},
-    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": 16, "block_walls": True},
+    "next_cell_vin": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False},
+    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
 }
-"""HighLevelPolicy settings of each variant: every setting the point's default sets (``body_policy_defaults``),
+"""HighLevelPolicy settings of each variant: every setting a body's default sets (``body_policy_defaults``),
 given explicitly, so a change of default changes no variant. ``next_cell_vin_walls`` is the point's default."""
+
+BODY_FILE_PREFIX = {"point": "", "ant": "ant_"}
+"""Trial files of the ant start ``ant_``; the point's keep the names they had before the ant joined."""
+
+
+def variant_settings(variant: str, config: ExperimentConfig) -> dict[str, Any]:
+    """The variant's settings on the trial's map: :data:`PLANS` becomes ``rows + cols + 2`` rounds."""
+    settings = dict(VARIANTS[variant])
+    if settings["planning_iterations"] == PLANS:
+        side = config.maze_size + 2  # the border adds a row and a column on each side
+        settings["planning_iterations"] = 2 * side + 2
+    return settings
+
 
 SELECTION_MAZES = 50
 AGREEMENT_STATES = 1000
@@ -70,10 +93,13 @@ def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, lab
     return float(np.mean(np.all(inner.cell_steps(agent_xy, predicted) == inner.cell_steps(agent_xy, labels), axis=1)))
 
 
-def held_out_agreement(policy: Any, seed: int = 0) -> float:
+def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> float:
     """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
-    env = SplitMazeEnv("point", split="selection", maze_size=5, low_level=lambda *_: None)
+    env = SplitMazeEnv(config.body, split="selection", maze_size=config.maze_size, low_level=lambda *_: None)
     geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
+    reach = config.expert_max_distance or geometry.scale
+    # The body at rest as a reset leaves it (the point's is zero velocity; the ant's is not all zeros).
+    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=seed)[0]["state"])
     walls, agents, goals, labels = [], [], [], []
     while len(agents) < AGREEMENT_STATES:
         task = env.unwrapped.sample_task(rng)
@@ -82,10 +108,12 @@ def held_out_agreement(policy: Any, seed: int = 0) -> float:
         if cell == geometry.xy_to_cell(task.goal_xy):
             continue
         agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
-        label = plan_subgoal(task.layout.walls, geometry, agent, task.goal_xy, max_distance=1.0, clearance=0.2)
+        label = plan_subgoal(
+            task.layout.walls, geometry, agent, task.goal_xy, max_distance=reach, clearance=0.2 * geometry.scale
+        )
         walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
     env.close()
-    batch = policy.encoder.encode(walls, agents, goals, [np.zeros(2)] * len(agents))
+    batch = policy.encoder.encode(walls, agents, goals, [at_rest] * len(agents))
     agents = np.stack(agents)
     return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
 
@@ -99,7 +127,8 @@ def run_variant_trial(
     """
     start = time.perf_counter()
     env = make_env(config, split="train")
-    trainer = make_trainer("dagger", seed, config, env, PathOracle.for_env(env), policy_settings=VARIANTS[variant])
+    oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    trainer = make_trainer("dagger", seed, config, env, oracle, policy_settings=variant_settings(variant, config))
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
     if policy_path is not None:
@@ -108,7 +137,7 @@ def run_variant_trial(
     own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
     agreement = {
         "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
-        "held_out_states": held_out_agreement(trainer.policy),
+        "held_out_states": held_out_agreement(trainer.policy, config),
     }
     evaluations = {}
     for name, (split, first_seed, mazes) in (
@@ -128,7 +157,8 @@ def run_variant_trial(
     return {
         "variant": variant,
         "seed": seed,
-        "policy_settings": VARIANTS[variant],
+        "body": config.body,
+        "policy_settings": variant_settings(variant, config),
         "episodes": config.episodes,
         "labels": trainer.total_expert_cost,
         "training_successes": int(sum(record.success for record in records)),
@@ -136,8 +166,15 @@ def run_variant_trial(
         "oracle_cell_agreement": agreement,
         "train_seconds": round(train_seconds, 1),
         "trial_seconds": round(time.perf_counter() - start, 1),
+        "machine": machine(),
         **{f"{name}_success": figures for name, figures in evaluations.items()},
     }
+
+
+def machine() -> dict[str, Any]:
+    """Where a trial ran: trials of one summary may come from different machines, so each says which."""
+    provenance = code_provenance()
+    return {key: provenance[key] for key in ("git_commit", "git_dirty", "packages", "python", "cpu_model")}
 
 
 def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
@@ -148,7 +185,7 @@ def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
         if not mine:
             continue
         summary[variant] = {
-            "policy_settings": VARIANTS[variant],
+            "policy_settings": mine[0]["policy_settings"],
             "seeds": [t["seed"] for t in mine],
             "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
             "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
@@ -162,23 +199,32 @@ def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--body", choices=sorted(BODY_FILE_PREFIX), default="point")
     parser.add_argument("--variants", default=",".join(VARIANTS))
     parser.add_argument("--seeds", default="0,1", help="comma-separated trial seeds")
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--trials-dir", type=Path, default=Path("/tmp/learner_ablation"))
-    parser.add_argument("--out", type=Path, default=RESULTS / "learner_ablation.json")
+    parser.add_argument("--out", type=Path, default=None, help="default: see the module docstring")
     args = parser.parse_args()
+    prefix = BODY_FILE_PREFIX[args.body]
+    args.out = args.out or RESULTS / ("learner_ablation.json" if args.body == "point" else "learner_ablation_ant.json")
     torch.set_num_threads(1)  # one core per trial, as paper_experiment's --cpus-per-trial 1
     variants = [name.strip() for name in args.variants.split(",") if name.strip()]
     unknown = sorted(set(variants) - set(VARIANTS))
     if unknown:
         parser.error(f"unknown variants {unknown}; choose from {sorted(VARIANTS)}")
     seeds = [int(seed) for seed in args.seeds.split(",")]
-    config = ExperimentConfig(body="point", episodes=args.episodes, held_out_layouts=True, eval_episodes=50)
+    config = ExperimentConfig(
+        body=args.body,
+        episodes=args.episodes,
+        held_out_layouts=True,
+        eval_episodes=50,
+        **body_settings(args.body, held_out_layouts=True),
+    )
     args.trials_dir.mkdir(parents=True, exist_ok=True)
     for seed in seeds:  # seed-major: every variant of a seed before the next seed
         for variant in variants:
-            path = args.trials_dir / f"{variant}_e{args.episodes}_seed{seed}.json"
+            path = args.trials_dir / f"{prefix}{variant}_e{args.episodes}_seed{seed}.json"
             if not path.exists():
                 atomic_write_json(path, run_variant_trial(variant, seed, config, path.with_suffix(".zip")))
             trial = json.loads(path.read_text())
@@ -189,21 +235,23 @@ def main() -> None:
                 flush=True,
             )
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
+    trials = [t for t in trials if t.get("body", "point") == args.body and t["variant"] in VARIANTS]
     # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
     command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
     previous = json.loads(args.out.read_text()) if args.out.exists() else {}
     earlier = previous.get("commands") or ([previous["command"]] if "command" in previous else [])
-    summary = summarise([t for t in trials if t["variant"] in VARIANTS])
+    summary = summarise(trials)
     atomic_write_json(
         args.out,
         {
             "command": command,
             "commands": [*[c for c in earlier if c != command], command],
             "protocol": {
-                "body": "point",
+                "body": args.body,
                 "maze_size": config.maze_size,
                 "method": "dagger",
                 "expert": "PathOracle",
+                "expert_max_distance": config.expert_max_distance,
                 "episodes": config.episodes,
                 "gradient_steps_per_update": config.gradient_steps,
                 "held_out_layouts": True,

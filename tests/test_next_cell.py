@@ -194,3 +194,36 @@ def test_an_ant_policy_keeps_the_heading_head_and_trains(still_controller):
     )
     trainer.run_episode()  # labels, then the update
     assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
+
+
+def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
+    # The ant's oracle gives 2 m subgoals in 4 m cells: one from near a cell's centre ends inside that cell.
+    geometry = MazeGeometry(6, 6, 4.0)
+    policy = SubgoalPolicy(
+        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), max_offset=2.0, head="next_cell"
+    )
+    centre = geometry.cell_to_xy((2, 2))
+    agents = np.stack([centre] * 4 + [centre + np.array([0.5, 0.0])])
+    subgoals = np.stack(
+        [
+            centre + np.array([2.0, 0.0]),  # at the reach, east: the path goes on east
+            centre + np.array([1.2, 1.2]) * 1.1,  # at the reach, north-east (1.87 m, a little short of 2 m)
+            centre + np.array([1.0, 0.0]),  # well short of the reach: a point in its own cell (the goal, say)
+            centre + np.array([0.0, -1.7]),  # below 0.9 of the reach: stays a point in its own cell
+            centre,  # back to its own cell's centre from 0.5 m east of it
+        ]
+    )
+    np.testing.assert_array_equal(policy.cell_steps(agents, subgoals), [[1, 0], [1, 1], [0, 0], [0, 0], [0, 0]])
+
+
+def test_the_experiment_gives_the_learner_its_oracles_reach():
+    from antmaze_hirl.experiments.config import ExperimentConfig
+    from antmaze_hirl.experiments.runner import make_trainer
+
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
+    oracle = PathOracle.for_env(env, max_distance=0.6)
+    trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", expert_max_distance=0.6), env, oracle)
+    assert trainer.policy.max_offset == pytest.approx(0.6)
+    default = make_trainer("dagger", 0, ExperimentConfig(body="point"), env, PathOracle.for_env(env))
+    assert default.policy.max_offset == pytest.approx(env.unwrapped.geometry.scale)
+    env.close()

@@ -151,13 +151,16 @@ def make_trainer(
     ``policy_settings`` are :class:`HighLevelPolicy` constructor settings (an ablation's variant).
     """
     rng = np.random.default_rng(seed)
+    # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
+    # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
+    reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
     strategy = make_strategy(method)
     if strategy.updates_every_step:
         strategy.step_gradient_steps = config.step_gradient_steps
     return DAggerTrainer(
         env=env,
         expert=expert,
-        policy=HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})),
+        policy=HighLevelPolicy.for_env(env, rng=rng, **{**reach, **(policy_settings or {})}),
         rng=rng,
         strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),
