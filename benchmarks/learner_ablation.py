@@ -177,6 +177,15 @@ def machine() -> dict[str, Any]:
     return {key: provenance[key] for key in ("git_commit", "git_dirty", "packages", "python", "cpu_model")}
 
 
+def machines(trials: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Each distinct machine the trials ran on (trials recorded before machines were recorded say nothing)."""
+    seen: dict[str, dict[str, Any]] = {}
+    for trial in trials:
+        if "machine" in trial:
+            seen.setdefault(json.dumps(trial["machine"], sort_keys=True), trial["machine"])
+    return list(seen.values())
+
+
 def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
     """Per variant: each seed's figures and the medians of final and selection success."""
     summary: dict[str, Any] = {}
@@ -189,6 +198,7 @@ def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
             "seeds": [t["seed"] for t in mine],
             "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
             "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
+            "selection_success_mean": round(statistics.mean(t["selection_success"]["rate"] for t in mine), 4),
             "held_out_agreement_median": statistics.median(t["oracle_cell_agreement"]["held_out_states"] for t in mine),
             "labels_median": statistics.median(t["labels"] for t in mine),
             "trial_seconds_median": statistics.median(t["trial_seconds"] for t in mine),
@@ -205,6 +215,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--trials-dir", type=Path, default=Path("/tmp/learner_ablation"))
     parser.add_argument("--out", type=Path, default=None, help="default: see the module docstring")
+    parser.add_argument("--note", default=None, help="a line stored in the summary (where and how the trials ran)")
     args = parser.parse_args()
     prefix = BODY_FILE_PREFIX[args.body]
     args.out = args.out or RESULTS / ("learner_ablation.json" if args.body == "point" else "learner_ablation_ant.json")
@@ -262,6 +273,8 @@ def main() -> None:
                 "agreement_states": AGREEMENT_STATES,
                 "note": "trials recorded before block_walls existed list no block_walls: it was False",
             },
+            "machines": machines(trials),
+            **({"note": args.note} if args.note else {}),
             "variants": summary,
         },
     )

@@ -11,6 +11,7 @@ from antmaze_hirl.dagger.high_level_policy import body_policy_defaults
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration, blocked_moves, next_cell_classes
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experts.oracle import PathOracle
 
 SIZE = 13
@@ -168,7 +169,7 @@ def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations, 
     assert spawned.config() == trainer.policy.config()
 
 
-def test_the_point_defaults_to_the_planning_next_cell_head_and_the_ant_keeps_headings():
+def test_each_body_defaults_to_its_ablations_next_cell_head():
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=5, low_level=PointGoToController())
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
     assert (policy.config()["head"], policy.config()["planning_iterations"]) == ("next_cell", 16)
@@ -177,15 +178,15 @@ def test_the_point_defaults_to_the_planning_next_cell_head_and_the_ant_keeps_hea
         env, rng=np.random.default_rng(0), head="heading", planning_iterations=0, block_walls=False
     )
     assert (previous.config()["head"], previous.config()["planning_iterations"]) == ("heading", 0)
-    assert body_policy_defaults("ant", MazeGeometry(5, 5, 4.0)) == {}
+    assert body_policy_defaults("ant", MazeGeometry(6, 6, 4.0)) == {"head": "next_cell"}
 
 
-def test_an_ant_policy_keeps_the_heading_head_and_trains(still_controller):
+def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller):
     env = gym.make("antmaze_hirl/AntMaze-v0", maze_size=3, low_level=still_controller, max_steps=300)
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng)
+    policy = HighLevelPolicy.for_env(env, rng=rng, max_offset=2.0)
     assert (policy.config()["head"], policy.config()["planning_iterations"], policy.config()["block_walls"]) == (
-        "heading",
+        "next_cell",
         0,
         False,
     )
@@ -194,6 +195,9 @@ def test_an_ant_policy_keeps_the_heading_head_and_trains(still_controller):
     )
     trainer.run_episode()  # labels, then the update
     assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
+    observation, _ = env.reset(seed=1)
+    subgoal = trainer.policy.predict(observation)
+    assert np.linalg.norm(subgoal - STATE_LAYOUT.agent_xy(observation["state"])) <= 2.0 + 1e-6  # within the oracle's reach
 
 
 def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
