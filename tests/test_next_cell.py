@@ -197,7 +197,8 @@ def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller)
     assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
     observation, _ = env.reset(seed=1)
     subgoal = trainer.policy.predict(observation)
-    assert np.linalg.norm(subgoal - STATE_LAYOUT.agent_xy(observation["state"])) <= 2.0 + 1e-6  # within the oracle's reach
+    # within the oracle's reach
+    assert np.linalg.norm(subgoal - STATE_LAYOUT.agent_xy(observation["state"])) <= 2.0 + 1e-6
 
 
 def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
