@@ -9,7 +9,7 @@ final evaluation part (what the README quotes), each with its 95% Wilson interva
 
 Variants:
 
-* ``heading_cnn``: the point's previous default and the ant's (CNN + MLP, 16 heading bins plus a distance).
+* ``heading_cnn``: each body's previous default (CNN + MLP, 16 heading bins plus a distance).
 * ``next_cell_cnn``: the same CNN classifying the next cell of the path (3x3 around the agent's cell).
 * ``next_cell_vin``: the next cell read straight out of a value iteration module's Q at the agent's cell,
   with ``rows + cols + 2`` rounds (16 on the point's 7x7 map, 14 on the ant's 6x6).
@@ -186,7 +186,7 @@ def machines(trials: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return list(seen.values())
 
 
-def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
+def summarise(trials: list[dict[str, Any]], config: ExperimentConfig) -> dict[str, Any]:
     """Per variant: each seed's figures and the medians of final and selection success."""
     summary: dict[str, Any] = {}
     for variant in VARIANTS:
@@ -194,7 +194,7 @@ def summarise(trials: list[dict[str, Any]]) -> dict[str, Any]:
         if not mine:
             continue
         summary[variant] = {
-            "policy_settings": mine[0]["policy_settings"],
+            "policy_settings": variant_settings(variant, config),
             "seeds": [t["seed"] for t in mine],
             "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
             "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
@@ -251,7 +251,8 @@ def main() -> None:
     command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
     previous = json.loads(args.out.read_text()) if args.out.exists() else {}
     earlier = previous.get("commands") or ([previous["command"]] if "command" in previous else [])
-    summary = summarise(trials)
+    summary = summarise(trials, config)
+    note = args.note or previous.get("note")  # a rerun that only re-summarises keeps the note
     atomic_write_json(
         args.out,
         {
@@ -274,7 +275,7 @@ def main() -> None:
                 "note": "trials recorded before block_walls existed list no block_walls: it was False",
             },
             "machines": machines(trials),
-            **({"note": args.note} if args.note else {}),
+            **({"note": note} if note else {}),
             "variants": summary,
         },
     )

@@ -49,7 +49,8 @@ class HighLevelPolicy:
         pixels_per_cell: The env's image resolution.
         body_dim: Length of the body observation in the env's ``state``.
         rng: Seeds the network initialisation, then draws minibatches and augmentations.
-        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's reach).
+        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
+            the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m).
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.

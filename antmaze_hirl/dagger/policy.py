@@ -59,7 +59,8 @@ class SubgoalPolicy(nn.Module):
         pixels_per_cell: The env's image resolution.
         body_dim: Length of the body observation in the env's ``state``.
         rng: Seeds the network initialisation (one draw; torch's global RNG is left as it was).
-        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's reach).
+        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
+            the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m).
         n_directions: Heading bins of the network (a positive multiple of 4).
         planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
             value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN within
@@ -179,8 +180,8 @@ class SubgoalPolicy(nn.Module):
         Where the reach (``max_offset``) is shorter than a cell, a subgoal at the reach (at least
         :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
         before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
-        near its cell's centre end in its own cell, and 59% of the oracle's labels on 4x4 ant mazes
-        would teach "stay" where the path moves on.
+        near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
+        would teach "stay" (``benchmarks/next_cell_labels.py``).
         """
         agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
         if self.max_offset < self.geometry.scale:

@@ -1,0 +1,59 @@
+"""``benchmarks/learner_ablation.py``: variant settings per map, machine records and which trials a summary reads."""
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+import learner_ablation
+
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+
+
+def test_planning_variants_get_rows_plus_cols_plus_two_rounds_on_each_bodys_map():
+    point = ExperimentConfig(body="point", held_out_layouts=True)
+    ant = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
+    assert learner_ablation.variant_settings("next_cell_vin_walls", point)["planning_iterations"] == 16  # 7x7 map
+    assert learner_ablation.variant_settings("next_cell_vin", ant)["planning_iterations"] == 14  # 6x6 map
+    assert learner_ablation.variant_settings("next_cell_cnn", ant)["planning_iterations"] == 0
+    assert learner_ablation.VARIANTS["next_cell_vin"]["planning_iterations"] == learner_ablation.PLANS  # untouched
+
+
+def test_machines_lists_each_distinct_machine_once_and_skips_trials_without_one():
+    here = {"cpu_model": "A", "packages": {"torch": "2.13.0"}}
+    there = {"cpu_model": "B", "packages": {"torch": "2.11.0"}}
+    trials = [{"machine": here}, {"machine": dict(here)}, {"machine": there}, {}]
+    assert learner_ablation.machines(trials) == [here, there]
+
+
+def trial(variant, seed, body=None, final=0.5):
+    figures = {"rate": final, "wilson_95": [0.4, 0.6]}
+    record = {
+        "variant": variant,
+        "seed": seed,
+        "final_success": figures,
+        "selection_success": figures,
+        "oracle_cell_agreement": {"training_labels": 1.0, "held_out_states": 0.7},
+        "labels": 100,
+        "trial_seconds": 60.0,
+    }
+    return record if body is None else {**record, "body": body}
+
+
+def test_a_summary_reads_its_own_bodys_trials_and_a_rerun_keeps_the_note(tmp_path, monkeypatch):
+    trials = tmp_path / "trials"
+    trials.mkdir()
+    # A trial that names no body is the point's (written before the ant joined).
+    (trials / "heading_cnn_e100_seed0.json").write_text(json.dumps(trial("heading_cnn", 0, final=0.9)))
+    (trials / "ant_heading_cnn_e100_seed0.json").write_text(json.dumps(trial("heading_cnn", 0, "ant", final=0.3)))
+    out = tmp_path / "ant.json"
+    argv = ["learner_ablation.py", "--body", "ant", "--variants", "heading_cnn", "--seeds", "0"]
+    argv += ["--trials-dir", str(trials), "--out", str(out)]
+    monkeypatch.setattr(sys, "argv", [*argv, "--note", "ran elsewhere"])
+    learner_ablation.main()
+    monkeypatch.setattr(sys, "argv", argv)
+    learner_ablation.main()
+    summary = json.loads(out.read_text())
+    assert summary["variants"]["heading_cnn"]["final_success_median"] == 0.3  # the ant's trial, not the point's
+    assert summary["protocol"]["body"] == "ant" and summary["protocol"]["maze_size"] == 4
+    assert summary["note"] == "ran elsewhere" and len(summary["commands"]) == 2
