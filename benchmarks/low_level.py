@@ -14,24 +14,48 @@
 
 Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
 Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
+
+**Algorithms side by side** (issue 16), a separate mode: ``--algorithms td3=FILE,sac=FILE`` trains one ant low
+level per algorithm from scratch, each with its hyperparameter file (``train-low --hyperparams``), the same
+seed and the same step budget, in alternating chunks (``--chunk``), so machine load and an interrupted
+session hit every algorithm alike; each run lives in ``--runs-dir/<algo>`` and resumes from its checkpoint,
+so the comparison can span sessions. At the budget it scores every final policy beside the shipped one in
+one pass: eval-low (``--episodes`` free-space subgoals from seed 0, up to 4 m) and in-maze success
+(``in_maze.py``'s families, ``--maze-episodes`` each), with 95% Wilson intervals, plus each algorithm's
+training steps/s (median over its chunks) and its ratio to the first algorithm's.
+
+Usage: python benchmarks/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
+           [--runs-dir runs/algorithms] [--maze-episodes 100] [--families ant4,u,medium,large]
+           [--out benchmarks/results/low_level_algorithms.json]
+(for instance td3=benchmarks/configs/ant_maze.yml,sac=benchmarks/configs/ant_maze_sac.yml: the maze setting).
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import json
+import shlex
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import torch
+from in_maze import FAMILIES
+from in_maze import run as in_maze_run
 
 import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.plotting import plot_learning_curves
 from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
+from antmaze_hirl.sb3_ext.checkpoint import POINTER, latest_checkpoint
+from antmaze_hirl.sb3_ext.config import ALGOS
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 RESULTS = Path(__file__).parent / "results"
@@ -141,14 +165,148 @@ def learning_curve_png() -> str:
     return str(Path(path).resolve().relative_to(RESULTS.resolve().parent.parent))  # repo-relative: JSON is committed
 
 
+def parse_algorithms(text: str) -> dict[str, Path]:
+    """``td3=FILE,sac=FILE`` as ``{algo: hyperparameter file}``, in the order given.
+
+    Raises:
+        ValueError: On an entry without ``=``, an unknown or repeated algorithm, a missing file, or fewer than two.
+    """
+    algorithms: dict[str, Path] = {}
+    for entry in filter(None, (part.strip() for part in text.split(","))):
+        algo, separator, file = entry.partition("=")
+        if not separator or algo not in ALGOS or algo in algorithms:
+            raise ValueError(f"--algorithms entry {entry!r} must be ALGO=FILE, ALGO one of {list(ALGOS)}, each once")
+        if not Path(file).is_file():
+            raise ValueError(f"--algorithms {algo}: no hyperparameter file at {file}")
+        algorithms[algo] = Path(file)
+    if len(algorithms) < 2:
+        raise ValueError(f"--algorithms needs at least two algorithms to compare, got {text!r}")
+    return algorithms
+
+
+def steps_done(run_dir: Path) -> int:
+    """Environment steps of a run's latest checkpoint (0 before its first)."""
+    if not (run_dir / "checkpoints" / POINTER).exists():
+        return 0
+    return int(latest_checkpoint(run_dir / "checkpoints")[1]["num_timesteps"])
+
+
+def train_side_by_side(
+    algorithms: dict[str, Path], *, budget: int, chunk: int, runs_dir: Path, seed: int, eval_episodes: int
+) -> dict[str, list[dict[str, float]]]:
+    """Trains every algorithm to ``budget`` steps, taking turns chunk by chunk; resumes where runs stand.
+
+    Returns each algorithm's timed chunks (``runs_dir/timing.json``, written after every chunk): a chunk is
+    timed from one checkpoint to the next, so one cut short by a kill is redone and never timed.
+    """
+    timing_file = runs_dir / "timing.json"
+    timing = json.loads(timing_file.read_text()) if timing_file.exists() else {}
+    for end in range(chunk, budget + chunk, chunk):
+        for algo, hyperparams in algorithms.items():
+            run_dir, target = runs_dir / algo, min(end, budget)
+            before = steps_done(run_dir)
+            if before >= target:
+                continue
+            start = time.perf_counter()
+            train_low_level(
+                "ant",
+                algo,
+                target,
+                run_dir,
+                seed=seed,
+                resume=before > 0,
+                config=load_config("ant", hyperparams, algo=algo),
+                checkpoint_freq=chunk,
+                eval_freq=chunk,
+                eval_episodes=eval_episodes,
+                progress_bar=False,
+            )
+            seconds = time.perf_counter() - start
+            timing.setdefault(algo, []).append(
+                {"from": before, "to": steps_done(run_dir), "seconds": round(seconds, 1)}
+            )
+            atomic_write_json(timing_file, timing)
+            print(f"{algo}: {before} -> {target} steps in {seconds:.0f} s", flush=True)
+    return timing
+
+
+def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
+    """The ``--algorithms`` mode (module docstring): train side by side, then score every final policy."""
+    algorithms = parse_algorithms(args.algorithms)
+    families = [family.strip() for family in args.families.split(",") if family.strip()]
+    unknown = [family for family in families if family not in FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown --families {unknown}; choose from {list(FAMILIES)}")
+    timing = train_side_by_side(
+        algorithms,
+        budget=args.budget,
+        chunk=args.chunk,
+        runs_dir=args.runs_dir,
+        seed=args.seed,
+        eval_episodes=args.curve_episodes,
+    )
+    policies = {algo: args.runs_dir / algo / "policy.zip" for algo in algorithms}
+    training: dict[str, Any] = {}
+    for algo, chunks in timing.items():
+        rates = [(chunk["to"] - chunk["from"]) / chunk["seconds"] for chunk in chunks if chunk["seconds"] > 0]
+        training[algo] = {"steps": steps_done(args.runs_dir / algo), "chunks": chunks}
+        training[algo]["median_steps_per_s"] = round(statistics.median(rates), 1) if rates else None
+    first = training[next(iter(algorithms))]["median_steps_per_s"]
+    for figures in training.values():
+        speed = figures["median_steps_per_s"]
+        figures["steps_per_s_ratio_to_first"] = round(speed / first, 3) if speed and first else None
+    eval_low = {}
+    for name, path in {"shipped": None, **policies}.items():
+        result = evaluate_reach(load_low_level("ant", path), ReachEnv("ant"), episodes=args.episodes, seed=0)
+        eval_low[name] = {**result, **rate_with_interval(result["success_rate"], args.episodes)}
+        print(f"eval-low {name}: {eval_low[name]}", flush=True)
+    in_maze = in_maze_run([None, *policies.values()], families, episodes=args.maze_episodes, seed=HELD_OUT_SEED)
+    curves = {algo: read_curve(args.runs_dir / algo / "learning_curve.csv") for algo in algorithms}
+    png = plot_learning_curves(curves, args.out.with_suffix(".png"), title="Ant low level by algorithm, same budget")
+    return {
+        "command": shlex.join(["python", "benchmarks/low_level.py", *sys.argv[1:]]),
+        "version": antmaze_hirl.__version__,
+        "hyperparams": {algo: str(file) for algo, file in algorithms.items()},
+        "budget_steps": args.budget,
+        "chunk_steps": args.chunk,
+        "seed": args.seed,
+        "training": training,
+        "eval_low": eval_low,
+        "in_maze": in_maze,
+        "learning_curves_png": str(png),
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
     parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--episodes", type=int, default=200, help="eval-low subgoals per set")
     parser.add_argument("--sets", type=int, default=4, help="disjoint eval-low sets per shipped policy (seed 0 first)")
+    side = parser.add_argument_group("algorithms side by side (module docstring)")
+    side.add_argument("--algorithms", default=None, help="ALGO=HYPERPARAMS.yml,ALGO=...: run this mode instead")
+    side.add_argument("--budget", type=int, default=500_000, help="environment steps per algorithm")
+    side.add_argument("--chunk", type=int, default=25_000, help="steps per turn (and between checkpoints)")
+    side.add_argument("--runs-dir", type=Path, default=Path("runs/algorithms"))
+    side.add_argument("--seed", type=int, default=0)
+    side.add_argument("--curve-episodes", type=int, default=50, help="held-out subgoals per learning-curve point")
+    side.add_argument("--maze-episodes", type=int, default=100, help="in-maze episodes per family")
+    side.add_argument("--families", default="ant4,u,medium,large")
+    side.add_argument("--out", type=Path, default=RESULTS / "low_level_algorithms.json")
     args = parser.parse_args()
     torch.set_num_threads(1)
+    if args.algorithms is not None:
+        for name in ("budget", "chunk", "episodes", "curve_episodes", "maze_episodes"):
+            if getattr(args, name) < 1:
+                parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+        try:
+            result = compare_algorithms(args)
+        except ValueError as error:
+            parser.error(str(error))
+        atomic_write_json(args.out, result)
+        print(f"training: {json.dumps({a: f['median_steps_per_s'] for a, f in result['training'].items()})}")
+        print(f"wrote {args.out}")
+        return
     result = {
         "version": antmaze_hirl.__version__,
         "training_throughput": training_ratio(args.steps, args.blocks),
