@@ -52,6 +52,10 @@ def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     lines = (tmp_path / "episodes.csv").read_text().splitlines()
     assert lines[0].startswith("method,seed,episode,success,expert_cost,cumulative_expert_cost")
     assert len(lines) == 1 + 2 * 2 * 3
+    assert lines[1].startswith("dagger,0,0,")  # counts as the trial CSVs write them, not "0.0"
+    assert (
+        lines[1].split(",")[:3] == (tmp_path / "trials" / "dagger_seed0.csv").read_text().splitlines()[1].split(",")[:3]
+    )
     assert (tmp_path / "panels.png").read_bytes()[:4] == b"\x89PNG"
     assert json.loads((tmp_path / "summary.json").read_text())["methods"]["dagger"]["seeds"] == 2
     before = trial.stat().st_mtime_ns

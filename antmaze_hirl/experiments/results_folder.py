@@ -64,7 +64,10 @@ def _parse(column: str, value: str) -> Any:
         return value
     if column == "success":
         return value == "True"
-    return float(value) if value else math.nan
+    if not value:
+        return math.nan
+    # Counts stay whole numbers, so episodes.csv writes them back as the trial CSVs have them ("8", not "8.0").
+    return int(value) if value.lstrip("-").isdigit() else float(value)
 
 
 def check_resumable(
