@@ -33,6 +33,7 @@ Usage: python benchmarks/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--bu
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
 import shlex
@@ -54,7 +55,7 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.plotting import plot_learning_curves
 from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
-from antmaze_hirl.sb3_ext.checkpoint import POINTER, latest_checkpoint
+from antmaze_hirl.sb3_ext.checkpoint import POINTER, CheckpointError, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
@@ -191,16 +192,33 @@ def steps_done(run_dir: Path) -> int:
     return int(latest_checkpoint(run_dir / "checkpoints")[1]["num_timesteps"])
 
 
+def latest_model(run_dir: Path) -> Path:
+    """The model of a run's latest checkpoint: what is scored, so a kill before ``policy.zip`` is written
+    (or a ``policy.zip`` left from an earlier chunk) cannot put another step count's policy in the table."""
+    return latest_checkpoint(run_dir / "checkpoints")[0] / "model.zip"
+
+
 def train_side_by_side(
     algorithms: dict[str, Path], *, budget: int, chunk: int, runs_dir: Path, seed: int, eval_episodes: int
 ) -> dict[str, list[dict[str, float]]]:
     """Trains every algorithm to ``budget`` steps, taking turns chunk by chunk; resumes where runs stand.
 
     Returns each algorithm's timed chunks (``runs_dir/timing.json``, written after every chunk): a chunk is
-    timed from one checkpoint to the next, so one cut short by a kill is redone and never timed.
+    timed from one checkpoint to the next, so one cut short by a kill is redone and never timed. A chunk's
+    time holds its training steps and also loading the checkpoint, the learning-curve evaluation and the
+    saves, so the steps/s figures compare whole runs, not update speed alone.
+
+    Raises:
+        ValueError: If ``runs_dir`` holds runs of other settings (another seed, chunk or hyperparameter file).
     """
+    settings = {"seed": seed, "chunk": chunk, "hyperparams": {algo: str(file) for algo, file in algorithms.items()}}
     timing_file = runs_dir / "timing.json"
-    timing = json.loads(timing_file.read_text()) if timing_file.exists() else {}
+    saved = json.loads(timing_file.read_text()) if timing_file.exists() else {"settings": settings, "chunks": {}}
+    mine = {algo: saved["settings"]["hyperparams"].get(algo) for algo in algorithms}
+    if {**saved["settings"], "hyperparams": mine} != settings:
+        raise ValueError(f"{runs_dir} holds runs of {saved['settings']}, not {settings}; use another --runs-dir")
+    saved["settings"]["hyperparams"].update(settings["hyperparams"])
+    timing = saved["chunks"]
     for end in range(chunk, budget + chunk, chunk):
         for algo, hyperparams in algorithms.items():
             run_dir, target = runs_dir / algo, min(end, budget)
@@ -225,9 +243,9 @@ def train_side_by_side(
             timing.setdefault(algo, []).append(
                 {"from": before, "to": steps_done(run_dir), "seconds": round(seconds, 1)}
             )
-            atomic_write_json(timing_file, timing)
+            atomic_write_json(timing_file, saved)
             print(f"{algo}: {before} -> {target} steps in {seconds:.0f} s", flush=True)
-    return timing
+    return {algo: timing.get(algo, []) for algo in algorithms}
 
 
 def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
@@ -237,6 +255,8 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     unknown = [family for family in families if family not in FAMILIES]
     if unknown:
         raise ValueError(f"unknown --families {unknown}; choose from {list(FAMILIES)}")
+    if args.budget < args.chunk:
+        raise ValueError(f"--budget {args.budget} is below --chunk {args.chunk}: no chunk would be evaluated")
     timing = train_side_by_side(
         algorithms,
         budget=args.budget,
@@ -245,13 +265,13 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
         seed=args.seed,
         eval_episodes=args.curve_episodes,
     )
-    policies = {algo: args.runs_dir / algo / "policy.zip" for algo in algorithms}
+    policies = {algo: latest_model(args.runs_dir / algo) for algo in algorithms}
     training: dict[str, Any] = {}
     for algo, chunks in timing.items():
         rates = [(chunk["to"] - chunk["from"]) / chunk["seconds"] for chunk in chunks if chunk["seconds"] > 0]
         training[algo] = {"steps": steps_done(args.runs_dir / algo), "chunks": chunks}
         training[algo]["median_steps_per_s"] = round(statistics.median(rates), 1) if rates else None
-    first = training[next(iter(algorithms))]["median_steps_per_s"]
+    first = training[next(iter(algorithms))]["median_steps_per_s"]  # None before any timed chunk
     for figures in training.values():
         speed = figures["median_steps_per_s"]
         figures["steps_per_s_ratio_to_first"] = round(speed / first, 3) if speed and first else None
@@ -260,9 +280,12 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
         result = evaluate_reach(load_low_level("ant", path), ReachEnv("ant"), episodes=args.episodes, seed=0)
         eval_low[name] = {**result, **rate_with_interval(result["success_rate"], args.episodes)}
         print(f"eval-low {name}: {eval_low[name]}", flush=True)
-    in_maze = in_maze_run([None, *policies.values()], families, episodes=args.maze_episodes, seed=HELD_OUT_SEED)
+    by_path = in_maze_run([None, *policies.values()], families, episodes=args.maze_episodes, seed=HELD_OUT_SEED)
+    in_maze = dict(zip(["shipped", *policies], by_path.values(), strict=True))  # keyed as eval_low is
     curves = {algo: read_curve(args.runs_dir / algo / "learning_curve.csv") for algo in algorithms}
     png = plot_learning_curves(curves, args.out.with_suffix(".png"), title="Ant low level by algorithm, same budget")
+    with contextlib.suppress(ValueError):  # repo-relative where it lies in the repo: the JSON is committed
+        png = Path(png).resolve().relative_to(RESULTS.resolve().parent.parent)
     return {
         "command": shlex.join(["python", "benchmarks/low_level.py", *sys.argv[1:]]),
         "version": antmaze_hirl.__version__,
@@ -270,6 +293,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
         "budget_steps": args.budget,
         "chunk_steps": args.chunk,
         "seed": args.seed,
+        "policies": {algo: str(path) for algo, path in policies.items()},
         "training": training,
         "eval_low": eval_low,
         "in_maze": in_maze,
@@ -301,7 +325,7 @@ def main() -> None:
                 parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
         try:
             result = compare_algorithms(args)
-        except ValueError as error:
+        except (ValueError, CheckpointError) as error:  # a run folder of other settings included
             parser.error(str(error))
         atomic_write_json(args.out, result)
         print(f"training: {json.dumps({a: f['median_steps_per_s'] for a, f in result['training'].items()})}")

@@ -31,6 +31,17 @@ def test_bad_algorithm_lists_get_one_line_errors(tmp_path):
     assert run.returncode == 2 and run.stderr.strip().splitlines()[-1].endswith(f"got 'td3={config}'")
 
 
+def test_a_runs_dir_of_other_settings_is_refused_before_any_training(tmp_path):
+    config = tmp_path / "a.yml"
+    config.write_text("ant: {}\n")
+    algorithms = low_level.parse_algorithms(f"td3={config},sac={config}")
+    saved = {"settings": {"seed": 1, "chunk": 100, "hyperparams": {"td3": str(config)}}, "chunks": {}}
+    (tmp_path / "timing.json").write_text(json.dumps(saved))
+    with pytest.raises(ValueError, match=r"holds runs of .*'seed': 1.*use another --runs-dir"):
+        low_level.train_side_by_side(algorithms, budget=200, chunk=100, runs_dir=tmp_path, seed=0, eval_episodes=1)
+    assert not (tmp_path / "td3").exists()
+
+
 @pytest.mark.slow
 def test_two_algorithms_train_in_turns_resume_and_are_scored_beside_the_shipped_ant(tmp_path):
     config = tmp_path / "tiny.yml"
