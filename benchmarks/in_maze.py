@@ -165,6 +165,19 @@ def evaluate_family(env: MazeEpisodeRecorder, oracle: Any, *, episodes: int, see
     }
 
 
+def parse_families(text: str) -> list[str]:
+    """Comma-separated family names, each one of :data:`FAMILIES`.
+
+    Raises:
+        ValueError: Naming every unknown (or empty) entry, in one line.
+    """
+    families = [family.strip() for family in text.split(",")]
+    unknown = [family for family in families if family not in FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown families {unknown}; choose from {list(FAMILIES)}")
+    return families
+
+
 def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
     """The high-level ant env of ``family`` driving ``low_level`` (``None``: the shipped policy).
 
@@ -236,10 +249,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=HELD_OUT_SEED, help="maze seed of episode 0")
     parser.add_argument("--out", type=Path, default=RESULTS / "in_maze.json")
     args = parser.parse_args()
-    families = [family.strip() for family in args.families.split(",")]
-    unknown = [family for family in families if family not in FAMILIES]
-    if unknown:
-        parser.error(f"unknown families {unknown}; choose from {list(FAMILIES)}")
+    try:
+        families = parse_families(args.families)
+    except ValueError as error:
+        parser.error(str(error))
     if args.episodes < 1:
         parser.error(f"--episodes must be >= 1, got {args.episodes}")
     missing = [str(path) for path in args.low_level or [] if not path.is_file()]

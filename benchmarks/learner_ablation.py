@@ -47,6 +47,7 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.dagger.high_level_policy import planning_rounds
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, body_settings, evaluation_sets
@@ -79,7 +80,7 @@ def variant_settings(variant: str, config: ExperimentConfig) -> dict[str, Any]:
     settings = dict(VARIANTS[variant])
     if settings["planning_iterations"] == PLANS:
         side = config.maze_size + 2  # the border adds a row and a column on each side
-        settings["planning_iterations"] = 2 * side + 2
+        settings["planning_iterations"] = planning_rounds(side, side)
     return settings
 
 

@@ -45,7 +45,7 @@ from pathlib import Path
 from typing import Any
 
 import torch
-from in_maze import FAMILIES
+from in_maze import parse_families
 from in_maze import run as in_maze_run
 
 import antmaze_hirl
@@ -251,10 +251,7 @@ def train_side_by_side(
 def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     """The ``--algorithms`` mode (module docstring): train side by side, then score every final policy."""
     algorithms = parse_algorithms(args.algorithms)
-    families = [family.strip() for family in args.families.split(",") if family.strip()]
-    unknown = [family for family in families if family not in FAMILIES]
-    if unknown:
-        raise ValueError(f"unknown --families {unknown}; choose from {list(FAMILIES)}")
+    families = parse_families(args.families)
     if args.budget < args.chunk:
         raise ValueError(f"--budget {args.budget} is below --chunk {args.chunk}: no chunk would be evaluated")
     timing = train_side_by_side(

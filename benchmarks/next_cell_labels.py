@@ -4,7 +4,8 @@ The next-cell head classifies a label by the cell its subgoal lies in (``Subgoal
 ant's oracle gives 2 m subgoals in 4 m cells, so from near a cell's centre most land in the agent's own
 cell. The old rule read that as "stay"; the new one carries a label at the reach (at least
 ``AT_REACH`` of it) one cell side along its direction first. This script samples oracle-labelled states
-on held-out-family 4x4 ant mazes, no simulation: the agent uniformly within ``--spread`` metres of a
+on freshly generated 4x4 ant mazes (the size of the held-out-layouts family; no learner is trained or
+scored here, so no split applies), no simulation: the agent uniformly within ``--spread`` metres of a
 free cell's centre (in that cell), the goal in another cell, off its centre by up to ``position_noise``
 (0.25 cells, the high-level env's default), and counts per rule:
 

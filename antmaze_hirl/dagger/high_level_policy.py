@@ -15,6 +15,14 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
+def planning_rounds(n_rows: int, n_cols: int) -> int:
+    """Value-iteration rounds of a planning next-cell head on an ``n_rows x n_cols`` map (border included).
+
+    ``rows + cols + 2``: enough moves for the map's longest shortest path.
+    """
+    return n_rows + n_cols + 2
+
+
 def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     """The settings :meth:`HighLevelPolicy.for_env` gives a body's policy unless told otherwise.
 
@@ -30,7 +38,7 @@ def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     if body == "point":
         return {
             "head": "next_cell",
-            "planning_iterations": geometry.n_rows + geometry.n_cols + 2,
+            "planning_iterations": planning_rounds(geometry.n_rows, geometry.n_cols),
             "block_walls": True,
         }
     if body == "ant":
