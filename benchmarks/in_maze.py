@@ -38,12 +38,11 @@ import gymnasium as gym
 import numpy as np
 import torch
 from paper_experiment import RESULTS
-from statsmodels.stats.proportion import proportion_confint
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
-from antmaze_hirl.experiments import ExperimentConfig
+from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
@@ -128,12 +127,6 @@ def outcome(info: dict[str, Any], paths: list[np.ndarray]) -> str:
     return "frozen" if is_frozen(paths) else "timeout"
 
 
-def wilson_interval(successes: int, episodes: int) -> list[float]:
-    """95% Wilson score interval of a success rate."""
-    low, high = proportion_confint(successes, episodes, alpha=0.05, method="wilson")
-    return [float(low), float(high)]
-
-
 def evaluate_family(env: MazeEpisodeRecorder, oracle: Any, *, episodes: int, seed: int) -> dict[str, Any]:
     """The oracle's episodes ``seed .. seed + episodes - 1`` on ``env``: outcome counts, interval, flips per subgoal.
 
@@ -155,7 +148,7 @@ def evaluate_family(env: MazeEpisodeRecorder, oracle: Any, *, episodes: int, see
         "episodes": episodes,
         "maze_seed": seed,
         "success_rate": counts["success"] / episodes,
-        "success_ci95": wilson_interval(counts["success"], episodes),
+        "success_ci95": list(wilson_interval(counts["success"], episodes)),
         **{COUNT_KEYS[name]: count for name, count in counts.items()},
         "subgoals": subgoals,
         "flips_per_subgoal": counts["flip"] / subgoals,

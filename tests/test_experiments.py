@@ -122,6 +122,16 @@ def test_results_written_before_a_setting_existed_still_resume(tmp_path):
         run_experiment(["dagger"], 1, dataclasses.replace(TINY, expert_max_distance=0.5), tmp_path, progress_bar=False)
 
 
+def test_trials_written_before_eval_mazes_existed_get_whole_counts_filled():
+    from antmaze_hirl.experiments.results_folder import rows_to_csv, with_eval_mazes
+
+    trial = [row("a", 0, 0, 5), row("a", 0, 1, 10, 0.5), row("a", 0, 2, 15, 1.0)]
+    filled = with_eval_mazes(trial, TINY)
+    assert [r.get("eval_mazes") for r in filled] == [None, TINY.eval_episodes, TINY.final_eval_episodes]
+    last_line = rows_to_csv(filled).strip().splitlines()[-1]
+    assert last_line.split(",")[-2] == str(TINY.final_eval_episodes)  # "3", not "3.0"
+
+
 def test_expert_max_distance_reaches_the_oracle(monkeypatch):
     from antmaze_hirl.experiments import runner
 

@@ -1,4 +1,4 @@
-"""benchmarks/in_maze.py: step limits, outcome classes, Wilson intervals and a scaled-limit episode."""
+"""benchmarks/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
 
 import sys
 from pathlib import Path
@@ -37,14 +37,6 @@ def test_outcomes_are_exclusive_success_first_then_flip():
     assert in_maze.outcome({"is_success": False, "flipped": True}, still) == "flip"
     assert in_maze.outcome({"is_success": False, "flipped": False}, still) == "frozen"
     assert in_maze.outcome({"is_success": False, "flipped": False}, moving) == "timeout"
-
-
-def test_wilson_interval_matches_the_closed_form():
-    z2 = 1.959963984540054**2
-    low, high = in_maze.wilson_interval(0, 10)
-    assert low == pytest.approx(0.0, abs=1e-12) and high == pytest.approx(z2 / (10 + z2))
-    low, high = in_maze.wilson_interval(84, 100)
-    assert low < 0.84 < high and high - low == pytest.approx(0.1437, abs=1e-3)
 
 
 def test_a_still_ant_on_the_u_map_runs_out_of_its_scaled_budget_frozen():

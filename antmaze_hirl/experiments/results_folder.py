@@ -135,7 +135,7 @@ def with_eval_mazes(trial: list[dict[str, Any]], config: ExperimentConfig) -> li
     for index, row in enumerate(trial):
         if not math.isnan(row["eval_success"]) and math.isnan(row.get("eval_mazes", math.nan)):
             final = index == len(trial) - 1
-            row["eval_mazes"] = float(config.final_eval_episodes if final else config.eval_episodes)
+            row["eval_mazes"] = config.final_eval_episodes if final else config.eval_episodes
     return trial
 
 
