@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from antmaze_hirl.envs import ReachEnv
+from antmaze_hirl.envs.layout_splits import wall_grid_split
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.envs.reach import flipped_flags
 from antmaze_hirl.sb3_ext import load_config, make_model
@@ -53,6 +54,16 @@ def test_maze_resets_are_seeded_and_mix_with_the_base_map():
     assert seen_open and seen_maze
 
 
+def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
+    def splits(**kwargs):
+        env = ReachEnv("point", maze_probability=1.0, maze_sizes=[4], **kwargs)
+        env.reset(seed=3)
+        return [wall_grid_split(env.walls) for _ in range(40) if env.reset() is not None]
+
+    assert set(splits(maze_split="train")) == {"train"}
+    assert set(splits()) > {"train"}  # without the split, held-out wall grids come up in 40 draws
+
+
 def test_mazes_off_keep_the_random_stream():
     plain, off = ReachEnv("point"), ReachEnv("point", maze_probability=0.0)
     for seed in range(3):
@@ -87,6 +98,7 @@ def test_chained_and_placed_resets_keep_the_current_walls():
         ({"maze_sizes": [True]}, r"maze_sizes must be .* got \[True\]"),
         ({"maze_wall_fraction": 1.0}, r"maze_wall_fraction must lie in \[0, 1\), got 1.0"),
         ({"flip_penalty": -0.5}, "flip_penalty must be >= 0, got -0.5"),
+        ({"maze_split": "test"}, "unknown layout split 'test'"),
     ],
 )
 def test_maze_training_bad_arguments(kwargs, message):
@@ -172,3 +184,13 @@ def test_her_relabelled_flip_steps_carry_the_penalty(penalty, relabelled_reward)
     rewards = batch.rewards[:, 0].numpy()[is_flip_step & relabelled]
     assert len(rewards) > 0
     np.testing.assert_array_equal(rewards, relabelled_reward)
+
+
+def test_the_held_out_maze_config_trains_only_on_training_wall_grids_of_other_sizes_than_ant3():
+    config = load_config("ant", ANT_MAZE_YML.with_name("ant_maze_held_out.yml"))
+    env = ReachEnv("ant", **config.env_kwargs)
+    env.reset(seed=0)
+    mazes = [env.walls.copy() for _ in range(30) if env.reset() is not None]
+    drawn = [walls for walls in mazes if walls.shape != env._base_walls.shape or (walls != env._base_walls).any()]
+    assert drawn and {walls.shape for walls in drawn} <= {(6, 6), (7, 7)}  # 4x4 and 5x5 free cells, never 3x3
+    assert {wall_grid_split(walls) for walls in drawn} == {"train"}

@@ -13,7 +13,8 @@ from gymnasium_robotics.core import GoalEnv
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
-from antmaze_hirl.envs.layouts import MazeMap, generate_layout, validate_maze_map
+from antmaze_hirl.envs.layout_splits import LayoutSplit, check_split, sample_layout_in_split
+from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, validate_maze_map
 from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
 
 REWARD_TYPES = ("sparse", "dense")
@@ -130,6 +131,10 @@ class ReachEnv(GoalEnv, EzPickle):
             (the ant experiment's mazes are 3x3). Each at least 2.
         maze_wall_fraction: Share of interior cells that random layouts turn into walls, in ``[0, 1)``
             (default 0.3, as :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv`).
+        maze_split: Draw random layouts only from this part of the fixed layout partition
+            (:mod:`~antmaze_hirl.envs.layout_splits`, by wall grid): ``"train"`` keeps every wall grid of
+            the held-out evaluation and selection mazes out of training, by construction. Default
+            ``None``: any layout (the 3x3 family's 48 wall grids then overlap its evaluation mazes).
         flip_penalty: Ant only: subtracted from the reward of every step on which the body is flipped
             (``info["flipped"]``), so a flip costs more than a timeout. With ``terminate_on_flip`` that
             is the terminal step only. HER relabelling needs the infos kept (SB3's
@@ -157,6 +162,7 @@ class ReachEnv(GoalEnv, EzPickle):
         maze_probability: float = 0.0,
         maze_sizes: tuple[int, ...] | list[int] = (3,),
         maze_wall_fraction: float = 0.3,
+        maze_split: LayoutSplit | None = None,
         flip_penalty: float = 0.0,
     ) -> None:
         EzPickle.__init__(
@@ -176,6 +182,7 @@ class ReachEnv(GoalEnv, EzPickle):
             maze_probability=maze_probability,
             maze_sizes=maze_sizes,
             maze_wall_fraction=maze_wall_fraction,
+            maze_split=maze_split,
             flip_penalty=flip_penalty,
         )
         spec = body_spec(body)
@@ -217,6 +224,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self.maze_probability = float(maze_probability)
         self.maze_sizes = tuple(int(n) for n in sizes)
         self.maze_wall_fraction = float(maze_wall_fraction)
+        self.maze_split = check_split(maze_split) if maze_split is not None else None
         self.flip_penalty = float(flip_penalty)
         self.reward_type = reward_type
         self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
@@ -325,9 +333,14 @@ class ReachEnv(GoalEnv, EzPickle):
             return
         if self.np_random.random() < self.maze_probability:
             size = self.maze_sizes[self.np_random.integers(len(self.maze_sizes))]
-            layout = generate_layout(
-                self.np_random, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
-            )
+
+            def sample(rng: np.random.Generator) -> MazeLayout:
+                return generate_layout(
+                    rng, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
+                )
+
+            split = self.maze_split
+            layout = sample(self.np_random) if split is None else sample_layout_in_split(sample, self.np_random, split)
             self._load_walls(np.asarray(layout.walls))
         else:
             self._load_walls(self._base_walls)
