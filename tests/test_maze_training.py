@@ -14,6 +14,15 @@ from antmaze_hirl.sb3_ext import load_config, make_model
 ANT_MAZE_YML = Path(__file__).parents[1] / "benchmarks" / "configs" / "ant_maze.yml"
 
 
+def walls_after_resets(env, resets):
+    """The wall grid after each of ``resets`` plain resets (the env seeded already)."""
+    walls = []
+    for _ in range(resets):
+        env.reset()
+        walls.append(env.walls.copy())
+    return walls
+
+
 def flip(env):
     """Puts the ant on its back, at rest (torso above 0.2 m: only the orientation says it flipped)."""
     qpos = env.sim.data.qpos.copy()
@@ -58,7 +67,7 @@ def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
     def splits(**kwargs):
         env = ReachEnv("point", maze_probability=1.0, maze_sizes=[4], **kwargs)
         env.reset(seed=3)
-        return [wall_grid_split(env.walls) for _ in range(40) if env.reset() is not None]
+        return [wall_grid_split(walls) for walls in walls_after_resets(env, 40)]
 
     assert set(splits(maze_split="train")) == {"train"}
     assert set(splits()) > {"train"}  # without the split, held-out wall grids come up in 40 draws
@@ -151,7 +160,7 @@ def test_the_committed_maze_config_loads_and_trains_in_mazes():
     env = ReachEnv("ant", **config.env_kwargs)
     assert env.maze_probability > 0 and env.flip_penalty > 0 and env.chain_probability >= 0.5
     env.reset(seed=0)
-    shapes = {env.reset()[0] and env.walls.shape for _ in range(20)}
+    shapes = {walls.shape for walls in walls_after_resets(env, 20)}
     assert len(shapes) > 1
 
 
@@ -190,7 +199,7 @@ def test_the_held_out_maze_config_trains_only_on_training_wall_grids_of_other_si
     config = load_config("ant", ANT_MAZE_YML.with_name("ant_maze_held_out.yml"))
     env = ReachEnv("ant", **config.env_kwargs)
     env.reset(seed=0)
-    mazes = [env.walls.copy() for _ in range(30) if env.reset() is not None]
+    mazes = walls_after_resets(env, 30)
     drawn = [walls for walls in mazes if walls.shape != env._base_walls.shape or (walls != env._base_walls).any()]
     assert drawn and {walls.shape for walls in drawn} <= {(6, 6), (7, 7)}  # 4x4 and 5x5 free cells, never 3x3
     assert {wall_grid_split(walls) for walls in drawn} == {"train"}

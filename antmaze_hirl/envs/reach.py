@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import numbers
 import warnings
 from typing import Any, ClassVar
@@ -14,7 +15,7 @@ from gymnasium_robotics.core import GoalEnv
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layout_splits import LayoutSplit, check_split, sample_layout_in_split
-from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, validate_maze_map
+from antmaze_hirl.envs.layouts import MazeMap, generate_layout, validate_maze_map
 from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
 
 REWARD_TYPES = ("sparse", "dense")
@@ -333,12 +334,9 @@ class ReachEnv(GoalEnv, EzPickle):
             return
         if self.np_random.random() < self.maze_probability:
             size = self.maze_sizes[self.np_random.integers(len(self.maze_sizes))]
-
-            def sample(rng: np.random.Generator) -> MazeLayout:
-                return generate_layout(
-                    rng, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
-                )
-
+            sample = functools.partial(
+                generate_layout, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
+            )
             split = self.maze_split
             layout = sample(self.np_random) if split is None else sample_layout_in_split(sample, self.np_random, split)
             self._load_walls(np.asarray(layout.walls))
