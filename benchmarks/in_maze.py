@@ -20,7 +20,14 @@ Each episode ends in exactly one outcome: ``success``, ``flip`` (the ant turned 
 :data:`FROZEN_RADIUS` m from where it stood when the first of them was set) or ``timeout`` (any other truncation).
 Success rates carry a 95% Wilson interval; ``flips_per_subgoal`` is flips over subgoals set.
 
+Inference-time candidates against flips, measured without retraining: ``--action-smoothing 0,0.3,0.5`` adds a row
+per weight, each low level's actions smoothed exponentially (:class:`~antmaze_hirl.envs.SmoothedController`);
+``--subgoal-distance D`` changes the oracle's farthest subgoal for every row. ``--jobs N`` plays chunks of
+``--chunk-episodes`` episodes in N processes; every episode resets with its own seed, so the figures do not
+depend on N (``seconds`` then sums the workers' time).
+
 Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
+           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25]
 Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
@@ -28,10 +35,12 @@ from __future__ import annotations
 
 import argparse
 import math
+import multiprocessing
 import shlex
 import sys
 import time
 from pathlib import Path
+from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 import gymnasium as gym
@@ -41,6 +50,7 @@ from paper_experiment import RESULTS
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
+from antmaze_hirl.envs.controllers import SmoothedController
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
@@ -127,6 +137,61 @@ def outcome(info: dict[str, Any], paths: list[np.ndarray]) -> str:
     return "frozen" if is_frozen(paths) else "timeout"
 
 
+def play_episodes(env: MazeEpisodeRecorder, oracle: Any, seeds: range) -> dict[str, Any]:
+    """The oracle's episodes with ``seeds`` on ``env``: raw outcome counts, subgoals, steps and step limits.
+
+    The raw form of :func:`evaluate_family`'s figures, so that chunks of one family run in separate
+    processes add up (:func:`merge_raw`) to what one process would give.
+    """
+    counts = dict.fromkeys(OUTCOMES, 0)
+    subgoals, steps, limits = 0, [], []
+    started = time.perf_counter()
+    for seed in seeds:
+        info = play_episode(env, oracle, seed=seed).info
+        counts[outcome(info, env.paths)] += 1
+        subgoals += info["attempts"]
+        steps.append(int(info["total_low_level_steps"]))
+        limits.append(env.max_steps)
+    return {
+        "counts": counts,
+        "subgoals": subgoals,
+        "steps": steps,
+        "limits": limits,
+        "seconds": time.perf_counter() - started,
+        "first_seed": seeds.start,
+    }
+
+
+def merge_raw(chunks: list[dict[str, Any]]) -> dict[str, Any]:
+    """One family's raw figures from its chunks, in episode order whatever order the chunks finished in."""
+    chunks = sorted(chunks, key=lambda chunk: chunk["first_seed"])
+    return {
+        "counts": {name: sum(chunk["counts"][name] for chunk in chunks) for name in OUTCOMES},
+        "subgoals": sum(chunk["subgoals"] for chunk in chunks),
+        "steps": [step for chunk in chunks for step in chunk["steps"]],
+        "limits": [limit for chunk in chunks for limit in chunk["limits"]],
+        "seconds": sum(chunk["seconds"] for chunk in chunks),
+        "first_seed": chunks[0]["first_seed"],
+    }
+
+
+def summarise(raw: dict[str, Any]) -> dict[str, Any]:
+    """Outcome counts, success rate with its 95% Wilson interval and flips per subgoal, from raw figures."""
+    counts, episodes = raw["counts"], len(raw["steps"])
+    return {
+        "episodes": episodes,
+        "maze_seed": raw["first_seed"],
+        "success_rate": counts["success"] / episodes,
+        "success_ci95": list(wilson_interval(counts["success"], episodes)),
+        **{COUNT_KEYS[name]: count for name, count in counts.items()},
+        "subgoals": raw["subgoals"],
+        "flips_per_subgoal": counts["flip"] / raw["subgoals"],
+        "mean_low_level_steps": float(np.mean(raw["steps"])),
+        "step_limit_range": [int(min(raw["limits"])), int(max(raw["limits"]))],
+        "seconds": round(raw["seconds"], 1),
+    }
+
+
 def evaluate_family(env: MazeEpisodeRecorder, oracle: Any, *, episodes: int, seed: int) -> dict[str, Any]:
     """The oracle's episodes ``seed .. seed + episodes - 1`` on ``env``: outcome counts, interval, flips per subgoal.
 
@@ -135,27 +200,7 @@ def evaluate_family(env: MazeEpisodeRecorder, oracle: Any, *, episodes: int, see
     """
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    counts = dict.fromkeys(OUTCOMES, 0)
-    subgoals, steps, limits = 0, [], []
-    started = time.perf_counter()
-    for episode in range(episodes):
-        info = play_episode(env, oracle, seed=seed + episode).info
-        counts[outcome(info, env.paths)] += 1
-        subgoals += info["attempts"]
-        steps.append(info["total_low_level_steps"])
-        limits.append(env.max_steps)
-    return {
-        "episodes": episodes,
-        "maze_seed": seed,
-        "success_rate": counts["success"] / episodes,
-        "success_ci95": list(wilson_interval(counts["success"], episodes)),
-        **{COUNT_KEYS[name]: count for name, count in counts.items()},
-        "subgoals": subgoals,
-        "flips_per_subgoal": counts["flip"] / subgoals,
-        "mean_low_level_steps": float(np.mean(steps)),
-        "step_limit_range": [int(min(limits)), int(max(limits))],
-        "seconds": round(time.perf_counter() - started, 1),
-    }
+    return summarise(play_episodes(env, oracle, range(seed, seed + episodes)))
 
 
 def parse_families(text: str) -> list[str]:
@@ -191,21 +236,98 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
     )
 
 
-def run(low_levels: list[Path | None], families: list[str], *, episodes: int, seed: int) -> dict[str, Any]:
-    """Figures per low level (``None``: shipped) and family, with each family's success ratio to the first."""
-    max_distance = BODY_DEFAULTS["ant"]["expert_max_distance"]
+def row_name(path: Path | None, smoothing: float) -> str:
+    """A result row's name: ``shipped`` or the candidate's path, with ``smoothing=A`` unless ``A`` is 0."""
+    name = "shipped" if path is None else str(path)
+    return name if smoothing == 0 else f"{name} smoothing={smoothing:g}"
+
+
+def parse_smoothing(text: str) -> list[float]:
+    """Comma-separated action-smoothing weights, each in ``[0, 1)``.
+
+    Raises:
+        ValueError: Naming the first entry that is not a number in ``[0, 1)``, in one line.
+    """
+    values = []
+    for entry in text.split(","):
+        try:
+            value = float(entry)
+        except ValueError:
+            raise ValueError(f"action smoothing {entry.strip()!r} is not a number") from None
+        if not 0.0 <= value < 1.0:
+            raise ValueError(f"action smoothing must lie in [0, 1), got {entry.strip()}")
+        values.append(value)
+    return values
+
+
+_MODELS: dict[Path | None, Any] = {}
+"""Each worker process loads a low level once, however many chunks it plays with it."""
+
+
+def run_chunk(
+    path: Path | None, smoothing: float, family: str, seeds: range, max_distance: float
+) -> tuple[str, str, dict[str, Any], str]:
+    """One chunk of episodes: ``(row name, family, raw figures, low-level id)``; runs in a worker process."""
+    torch.set_num_threads(1)
+    if path not in _MODELS:
+        _MODELS[path] = load_low_level("ant", path)  # None: the shipped policy's file
+    model = _MODELS[path]
+    controller = model if smoothing == 0 else SmoothedController(model, smoothing)
+    env = family_env(family, controller)
+    try:
+        raw = play_episodes(env, PathOracle.for_env(env, max_distance=max_distance), seeds)
+    finally:
+        env.close()
+    return row_name(path, smoothing), family, raw, low_level_identity("ant", model)
+
+
+def chunks_of(episodes: int, seed: int, size: int) -> list[range]:
+    """Episode seeds ``seed .. seed + episodes - 1`` cut into consecutive ranges of at most ``size``."""
+    return [range(first, min(first + size, seed + episodes)) for first in range(seed, seed + episodes, size)]
+
+
+def run(
+    low_levels: list[Path | None],
+    families: list[str],
+    *,
+    episodes: int,
+    seed: int,
+    smoothing: tuple[float, ...] = (0.0,),
+    max_distance: float | None = None,
+    jobs: int = 1,
+    chunk_episodes: int = 25,
+) -> dict[str, Any]:
+    """Figures per low level (``None``: shipped), action smoothing and family, with success ratios to the first row.
+
+    With ``jobs`` > 1 the episodes of every family are cut into chunks of ``chunk_episodes`` and played by a
+    pool of processes; each episode resets with its own seed, so the figures are the same as with one.
+    """
+    max_distance = BODY_DEFAULTS["ant"]["expert_max_distance"] if max_distance is None else max_distance
+    tasks = [
+        (path, alpha, family, seeds, max_distance)
+        for path in low_levels
+        for alpha in smoothing
+        for family in families
+        for seeds in (chunks_of(episodes, seed, chunk_episodes) if jobs > 1 else [range(seed, seed + episodes)])
+    ]
+    if jobs > 1:
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+            done = list(pool.map(run_chunk, *zip(*tasks, strict=True)))
+    else:
+        done = [run_chunk(*task) for task in tasks]
+    raw: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    identities: dict[str, str] = {}
+    for name, family, chunk, identity in done:
+        raw.setdefault(name, {}).setdefault(family, []).append(chunk)
+        identities[name] = identity
     results: dict[str, Any] = {}
     for path in low_levels:
-        model = None if path is None else load_low_level("ant", path)
-        name = "shipped" if path is None else str(path)
-        figures: dict[str, Any] = {"low_level_id": low_level_identity("ant", model), "families": {}}
-        for family in families:
-            env = family_env(family, model)
-            oracle = PathOracle.for_env(env, max_distance=max_distance)
-            figures["families"][family] = evaluate_family(env, oracle, episodes=episodes, seed=seed)
-            env.close()
-            print(f"{name} {family}: {figures['families'][family]}", flush=True)
-        results[name] = figures
+        for alpha in smoothing:
+            name = row_name(path, alpha)
+            figures = {family: summarise(merge_raw(raw[name][family])) for family in families}
+            for family, row in figures.items():
+                print(f"{name} {family}: {row}", flush=True)
+            results[name] = {"low_level_id": identities[name], "action_smoothing": alpha, "families": figures}
     first = next(iter(results.values()))["families"]
     for figures in results.values():
         for family, row in figures["families"].items():
@@ -240,24 +362,52 @@ def main() -> None:
         help="candidate policy .zip (repeatable); the shipped policy always runs first",
     )
     parser.add_argument("--seed", type=int, default=HELD_OUT_SEED, help="maze seed of episode 0")
+    parser.add_argument(
+        "--action-smoothing",
+        default="0",
+        help="comma-separated weights A of the previous action (a_t = A a_t-1 + (1 - A) raw_t), each a row; 0: none",
+    )
+    parser.add_argument(
+        "--subgoal-distance",
+        type=float,
+        default=None,
+        help=f"the oracle's farthest subgoal, metres (default {BODY_DEFAULTS['ant']['expert_max_distance']}: "
+        "the ant experiment's)",
+    )
+    parser.add_argument("--jobs", type=int, default=1, help="worker processes (chunks of --chunk-episodes episodes)")
+    parser.add_argument("--chunk-episodes", type=int, default=25, help="episodes per worker task with --jobs > 1")
     parser.add_argument("--out", type=Path, default=RESULTS / "in_maze.json")
     args = parser.parse_args()
     try:
         families = parse_families(args.families)
+        smoothing = parse_smoothing(args.action_smoothing)
     except ValueError as error:
         parser.error(str(error))
-    if args.episodes < 1:
-        parser.error(f"--episodes must be >= 1, got {args.episodes}")
+    for name in ("episodes", "jobs", "chunk_episodes"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    if args.subgoal_distance is not None and not args.subgoal_distance > 0:
+        parser.error(f"--subgoal-distance must be > 0 metres, got {args.subgoal_distance}")
     missing = [str(path) for path in args.low_level or [] if not path.is_file()]
     if missing:
         parser.error(f"--low-level files not found: {missing}")
     torch.set_num_threads(1)
-    results = run([None, *(args.low_level or [])], families, episodes=args.episodes, seed=args.seed)
+    max_distance = args.subgoal_distance or BODY_DEFAULTS["ant"]["expert_max_distance"]
+    results = run(
+        [None, *(args.low_level or [])],
+        families,
+        episodes=args.episodes,
+        seed=args.seed,
+        smoothing=tuple(smoothing),
+        max_distance=max_distance,
+        jobs=args.jobs,
+        chunk_episodes=args.chunk_episodes,
+    )
     atomic_write_json(
         args.out,
         {
             "command": shlex.join(["python", "benchmarks/in_maze.py", *sys.argv[1:]]),
-            "expert_max_distance": BODY_DEFAULTS["ant"]["expert_max_distance"],
+            "expert_max_distance": max_distance,
             "step_limit": (
                 f"ant3, ant4: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))"
             ),

@@ -57,3 +57,46 @@ def test_a_still_ant_on_the_u_map_runs_out_of_its_scaled_budget_frozen():
 def test_unknown_family_is_named():
     with pytest.raises(ValueError, match="unknown maze family 'open'"):
         in_maze.family_env("open", StillController())
+
+
+def test_chunks_cover_every_seed_once_in_order():
+    chunks = in_maze.chunks_of(7, 100, 3)
+    assert [list(chunk) for chunk in chunks] == [[100, 101, 102], [103, 104, 105], [106]]
+
+
+def test_parse_smoothing_names_the_bad_entry():
+    assert in_maze.parse_smoothing("0,0.25") == [0.0, 0.25]
+    with pytest.raises(ValueError, match="must lie in \\[0, 1\\), got 1"):
+        in_maze.parse_smoothing("0,1")
+    with pytest.raises(ValueError, match="'x' is not a number"):
+        in_maze.parse_smoothing("0.2,x")
+
+
+def test_chunked_episodes_merge_to_the_single_run(monkeypatch):
+    # Chunks given in reverse order: the merge puts them back by seed, adding up to what one process gives.
+    monkeypatch.setattr(in_maze, "load_low_level", lambda body, path: WalkController())
+    whole = in_maze.run([None], ["u"], episodes=3, seed=5, jobs=1)
+    parts = [in_maze.run_chunk(None, 0.0, "u", seeds, 2.0)[2] for seeds in reversed(in_maze.chunks_of(3, 5, 2))]
+    merged = in_maze.summarise(in_maze.merge_raw(parts))
+    single = whole["shipped"]["families"]["u"]
+    timing_free = {key for key in single if key not in ("seconds", "success_ratio_to_first")}
+    assert {key: merged[key] for key in timing_free} == {key: single[key] for key in timing_free}
+    assert merged["maze_seed"] == 5 and merged["episodes"] == 3
+
+
+class WalkController:
+    """The same torques at every step (a picklable stand-in for a policy)."""
+
+    def __call__(self, observation):
+        return np.full(8, 0.7)
+
+
+@pytest.mark.slow
+def test_a_pool_of_workers_gives_the_figures_of_one_process():
+    one = in_maze.run([None], ["ant3"], episodes=2, seed=0, smoothing=(0.0, 0.5), jobs=1)
+    pool = in_maze.run([None], ["ant3"], episodes=2, seed=0, smoothing=(0.0, 0.5), jobs=2, chunk_episodes=1)
+    assert list(pool) == ["shipped", "shipped smoothing=0.5"]
+    for name in one:
+        a, b = one[name]["families"]["ant3"], pool[name]["families"]["ant3"]
+        assert {k: v for k, v in a.items() if k != "seconds"} == {k: v for k, v in b.items() if k != "seconds"}
+    assert pool["shipped smoothing=0.5"]["action_smoothing"] == 0.5

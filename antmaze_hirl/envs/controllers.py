@@ -11,7 +11,11 @@ GoalObservation = dict[str, np.ndarray]
 
 @runtime_checkable
 class LowLevelController(Protocol):
-    """Maps a goal observation (``observation``, ``achieved_goal``, ``desired_goal``) to an action."""
+    """Maps a goal observation (``observation``, ``achieved_goal``, ``desired_goal``) to an action.
+
+    A controller with state across steps may also define ``reset()``: the high-level env calls it at the
+    start of every episode, so that one episode's actions never depend on the one before.
+    """
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
         """Returns the action for ``observation``."""
@@ -51,6 +55,45 @@ def as_controller(low_level: Any) -> LowLevelController:
     raise TypeError(
         f"low_level must be an SB3 model (with .predict) or a callable obs -> action, got {type(low_level).__name__}"
     )
+
+
+class SmoothedController:
+    """Exponential smoothing of another controller's actions: ``a_t = alpha * a_{t-1} + (1 - alpha) * raw_t``.
+
+    An inference-time candidate against flips (issue 16): it damps the step-to-step torque jumps of a
+    policy trained without smoothing, at the price of a slower response. The smoothing carries across
+    subgoals (a new subgoal mid-stride does not reset the legs' torques) and restarts at :meth:`reset`,
+    which the high-level env calls at each episode start; the first action of an episode is the raw one.
+
+    Args:
+        controller: The controller (or SB3 model) whose actions are smoothed.
+        alpha: Weight of the previous action, in ``[0, 1)``; ``0`` passes actions through unchanged.
+
+    Raises:
+        ValueError: If ``alpha`` is outside ``[0, 1)``.
+
+    """
+
+    def __init__(self, controller: Any, alpha: float) -> None:
+        if not 0.0 <= alpha < 1.0:
+            raise ValueError(f"action smoothing alpha must lie in [0, 1), got {alpha}")
+        self.controller = as_controller(controller)
+        self.alpha = float(alpha)
+        self._previous: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forgets the previous action (and resets the inner controller, if it has state)."""
+        self._previous = None
+        inner_reset = getattr(self.controller, "reset", None)
+        if callable(inner_reset):
+            inner_reset()
+
+    def __call__(self, observation: GoalObservation) -> np.ndarray:
+        """Returns the smoothed action for ``observation``."""
+        raw = np.asarray(self.controller(observation), dtype=np.float64)
+        action = raw if self._previous is None else self.alpha * self._previous + (1.0 - self.alpha) * raw
+        self._previous = action
+        return action
 
 
 class PointGoToController:

@@ -237,6 +237,11 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         )
         self.attempts = 0
         self.total_low_level_steps = 0
+        # A stateful controller (action smoothing, say) starts every episode afresh, so that episode
+        # figures do not depend on the order episodes ran in.
+        controller_reset = getattr(self.controller, "reset", None)
+        if callable(controller_reset):
+            controller_reset()
         return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:

@@ -1,0 +1,58 @@
+"""SmoothedController: exponential action smoothing, reset at every episode by the high-level env."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from antmaze_hirl.envs import SmoothedController
+
+
+class Sequence:
+    """Returns the given actions in turn and counts its resets."""
+
+    def __init__(self, actions):
+        self.actions, self.calls, self.resets = [np.asarray(a, dtype=float) for a in actions], 0, 0
+
+    def __call__(self, observation):
+        action = self.actions[self.calls % len(self.actions)]
+        self.calls += 1
+        return action
+
+    def reset(self):
+        self.resets += 1
+
+
+def test_actions_are_an_exponential_average_of_the_raw_ones():
+    controller = SmoothedController(Sequence([[1.0, -1.0], [0.0, 0.0], [0.0, 1.0]]), alpha=0.5)
+    actions = [controller({}) for _ in range(3)]
+    np.testing.assert_allclose(actions, [[1.0, -1.0], [0.5, -0.5], [0.25, 0.25]])
+
+
+def test_reset_forgets_the_previous_action_and_resets_the_inner_controller():
+    inner = Sequence([[1.0], [0.0]])
+    controller = SmoothedController(inner, alpha=0.9)
+    controller({})
+    controller.reset()
+    assert inner.resets == 1
+    np.testing.assert_allclose(controller({}), [0.0])  # raw, not 0.9 * 1.0
+
+
+def test_zero_alpha_passes_actions_through():
+    controller = SmoothedController(Sequence([[0.3], [-0.7]]), alpha=0.0)
+    np.testing.assert_allclose([controller({}), controller({})], [[0.3], [-0.7]])
+
+
+@pytest.mark.parametrize("alpha", [-0.1, 1.0, float("nan")])
+def test_alpha_outside_zero_one_is_named(alpha):
+    with pytest.raises(ValueError, match=f"alpha must lie in \\[0, 1\\), got {alpha}"):
+        SmoothedController(Sequence([[0.0]]), alpha=alpha)
+
+
+def test_the_high_level_env_resets_the_controller_at_every_episode():
+    inner = Sequence([np.zeros(2)])
+    env = gym.make("antmaze_hirl/PointMaze-v0", low_level=SmoothedController(inner, alpha=0.5))
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    env.reset(seed=1)
+    env.close()
+    assert inner.resets == 2 and inner.calls > 0
