@@ -9,11 +9,17 @@ reported figures never use:
   (seeds 0-199: the README and ``benchmarks/low_level.py``) and from train-low's held-out curve (10,000-);
 * ``ceiling``: the scripted oracle driving the snapshot through ``--mazes`` random mazes of the ant protocol
   (3x3, 2 m subgoals) drawn from maze seed 2,000,000 (the experiment's held-out mazes start at 1,000,000).
+  With ``--held-out-layouts``, the held-out-layouts protocol's ant mazes instead (4x4, 2 m subgoals), drawn
+  from maze seed 2,000,000 in the ``selection`` part of the layout partition: no wall grid of the reported
+  ``eval`` part (``in_maze.py``'s ``ant4``, the paper experiment's final evaluation) nor of the ``train`` part
+  (``ReachEnv(maze_split="train")``), and seeds apart from the paper experiment's periodic evaluation
+  (3,000,000-).
 
 The pick is the snapshot with the best mean of the two (what the high level needs and what the issue's
 target measures). Scores are cached in the JSON, so a rerun while training goes on scores only new snapshots.
 
 Usage: python benchmarks/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
+           [--held-out-layouts]
 Writes benchmarks/results/low_level_selection.json.
 """
 
@@ -29,7 +35,7 @@ from paper_experiment import RESULTS, oracle_success
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments import ExperimentConfig
-from antmaze_hirl.experiments.config import BODY_DEFAULTS
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
@@ -39,10 +45,15 @@ SELECTION_MAZE_SEED = 2_000_000
 RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
 
 
-def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int) -> dict:
+def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int, held_out_layouts: bool = False) -> dict:
+    """A snapshot's selection figures: eval-low, the oracle's success through it, and their mean."""
     eval_low = evaluate_reach(load_low_level(body, path), ReachEnv(body), episodes=episodes, seed=seed)
-    config = ExperimentConfig(body=body, **BODY_DEFAULTS[body])
-    ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes)
+    if held_out_layouts:
+        config = ExperimentConfig(body=body, held_out_layouts=True, **body_settings(body, held_out_layouts=True))
+        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, split="selection")
+    else:
+        config = ExperimentConfig(body=body, **BODY_DEFAULTS[body])
+        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes)
     return {
         "low_level_id": ceiling["low_level_id"],
         "eval_low": eval_low["success_rate"],
@@ -60,6 +71,11 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--mazes", type=int, default=50)
     parser.add_argument("--min-step", type=int, default=0, help="skip snapshots before this step")
+    parser.add_argument(
+        "--held-out-layouts",
+        action="store_true",
+        help="ceiling on the held-out-layouts protocol's mazes, from the selection part of the layout partition",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS / "low_level_selection.json")
     args = parser.parse_args()
     chosen = range(args.seed, args.seed + args.episodes)
@@ -71,6 +87,8 @@ def main() -> None:
         parser.error(f"no snapshots/ folder in {missing}")
     torch.set_num_threads(1)
     settings = {"body": args.body, "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes}
+    if args.held_out_layouts:  # only then, so that the cache of a run without the flag stays valid
+        settings["held_out_layouts"] = True
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}
     scores = cached.get("scores", {}) if cached.get("settings") == settings else {}
     steps = {p: snapshot_step(p) for run in args.runs for p in (run / "snapshots").glob("step_*.zip")}
@@ -83,7 +101,14 @@ def main() -> None:
     for path in snapshots:
         known = scores.get(str(path), {}).get("low_level_id")
         if known != low_level_identity(args.body, load_low_level(args.body, path)):  # new, or a rerun's file
-            scores[str(path)] = score(path, args.body, seed=args.seed, episodes=args.episodes, mazes=args.mazes)
+            scores[str(path)] = score(
+                path,
+                args.body,
+                seed=args.seed,
+                episodes=args.episodes,
+                mazes=args.mazes,
+                held_out_layouts=args.held_out_layouts,
+            )
             atomic_write_json(args.out, {"settings": settings, "scores": scores})  # keep what is done if stopped
         print(f"{path}: {scores[str(path)]}")
     best = max((str(p) for p in snapshots), key=lambda p: scores[p]["score"])
