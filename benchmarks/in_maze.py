@@ -34,6 +34,7 @@ Writes benchmarks/results/in_maze.json (or ``--out``), with the command that mad
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import multiprocessing
 import shlex
@@ -47,6 +48,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 from paper_experiment import RESULTS
+from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
@@ -310,11 +312,13 @@ def run(
         for family in families
         for seeds in (chunks_of(episodes, seed, chunk_episodes) if jobs > 1 else [range(seed, seed + episodes)])
     ]
-    if jobs > 1:
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-            done = list(pool.map(run_chunk, *zip(*tasks, strict=True)))
-    else:
-        done = [run_chunk(*task) for task in tasks]
+    with contextlib.ExitStack() as stack:
+        if jobs > 1:
+            pool = stack.enter_context(ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")))
+            finished = pool.map(run_chunk, *zip(*tasks, strict=True))
+        else:
+            finished = (run_chunk(*task) for task in tasks)
+        done = list(tqdm(finished, total=len(tasks), desc="in-maze chunks", unit="chunk"))
     raw: dict[str, dict[str, list[dict[str, Any]]]] = {}
     identities: dict[str, str] = {}
     for name, family, chunk, identity in done:
