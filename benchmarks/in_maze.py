@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import itertools
 import math
 import multiprocessing
 import shlex
@@ -70,6 +71,12 @@ FROZEN_SUBGOALS = 5
 FROZEN_RADIUS = 1.0
 """Metres: a walking ant covers this in ~1 s (20 steps); 5 subgoals give it up to 500 steps."""
 OUTCOMES = ("success", "flip", "frozen", "timeout")
+TURN_BINS_DEG = (0, 45, 90, 135, 180)
+"""Bins of the turn a subgoal asks for (heading to subgoal direction when set), for :func:`flip_diagnostics`."""
+EARLY_FLIP_STEPS = 10
+"""Half a second: a flip this soon after a new subgoal is counted as one at the hand-off."""
+LISTS = ("steps", "limits", "turns", "subgoal_flipped", "flip_steps")
+"""The per-episode and per-subgoal lists of the raw figures, concatenated in episode order by :func:`merge_raw`."""
 COUNT_KEYS = {"success": "successes", "flip": "flips", "frozen": "frozen", "timeout": "timeouts"}
 """The JSON key of each outcome's count."""
 
@@ -95,6 +102,8 @@ class MazeEpisodeRecorder(gym.Wrapper):
         super().__init__(env)
         self.scale_step_limit = scale_step_limit
         self.paths: list[np.ndarray] = []
+        self.turns: list[float] = []
+        """Per subgoal of the episode: degrees between the torso's heading and the subgoal, when it was set."""
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         """Resets the env, then (if asked) sets its step budget from the new layout's start and goal."""
@@ -103,19 +112,55 @@ class MazeEpisodeRecorder(gym.Wrapper):
         if self.scale_step_limit:
             layout = inner.layout
             inner.max_steps = step_limit(layout.walls, layout.start_cell, layout.goal_cell, inner.geometry.scale)
-        self.paths = []
+        self.paths, self.turns = [], []
         return obs, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        """One subgoal; its low-level path is kept in :attr:`paths`."""
+        """One subgoal; its low-level path is kept in :attr:`paths`, its turn in :attr:`turns`."""
+        yaw = self.env.unwrapped.reach.sim.torso_yaw
         obs, reward, terminated, truncated, info = self.env.step(action)
-        self.paths.append(np.asarray(info["agent_path"]))
+        path = np.asarray(info["agent_path"])
+        self.paths.append(path)
+        self.turns.append(turn_degrees(yaw, path[0], info["subgoal"]))
         return obs, reward, terminated, truncated, info
 
     @property
     def max_steps(self) -> int:
         """The current episode's step budget."""
         return int(self.env.unwrapped.max_steps)
+
+
+def turn_degrees(yaw: float | None, start_xy: np.ndarray, subgoal: np.ndarray) -> float:
+    """Degrees (0-180) from heading ``yaw`` to the direction ``start_xy`` -> ``subgoal``; 0 with no heading."""
+    if yaw is None:
+        return 0.0
+    offset = np.asarray(subgoal, dtype=float) - np.asarray(start_xy, dtype=float)
+    difference = np.arctan2(offset[1], offset[0]) - yaw
+    return float(abs(np.degrees(np.arctan2(np.sin(difference), np.cos(difference)))))
+
+
+def flip_diagnostics(raw: dict[str, Any]) -> dict[str, Any]:
+    """Where flips happen: flips per subgoal by the turn the subgoal asked for, and how far into a subgoal.
+
+    A flip soon after a subgoal is set points at the hand-off (a new goal mid-stride); a flip rate that grows
+    with the turn points at turning.
+    """
+    turns, flipped = np.asarray(raw["turns"], dtype=float), np.asarray(raw["subgoal_flipped"], dtype=bool)
+    by_turn = {}
+    for low, high in itertools.pairwise(TURN_BINS_DEG):
+        inside = (turns >= low) & ((turns < high) if high < TURN_BINS_DEG[-1] else (turns <= high))
+        subgoals, flips = int(inside.sum()), int((inside & flipped).sum())
+        by_turn[f"{low}-{high}"] = {
+            "subgoals": subgoals,
+            "flips": flips,
+            "flips_per_subgoal": flips / subgoals if subgoals else None,
+        }
+    steps = np.asarray(raw["flip_steps"], dtype=float)
+    return {
+        "by_turn_degrees": by_turn,
+        "flip_steps_into_subgoal_median": float(np.median(steps)) if steps.size else None,
+        f"flips_within_{EARLY_FLIP_STEPS}_steps_of_a_new_subgoal": int((steps <= EARLY_FLIP_STEPS).sum()),
+    }
 
 
 def is_frozen(paths: list[np.ndarray], subgoals: int = FROZEN_SUBGOALS, radius: float = FROZEN_RADIUS) -> bool:
@@ -146,7 +191,7 @@ def play_episodes(env: MazeEpisodeRecorder, oracle: Any, seeds: range) -> dict[s
     processes add up (:func:`merge_raw`) to what one process would give.
     """
     counts = dict.fromkeys(OUTCOMES, 0)
-    subgoals, steps, limits = 0, [], []
+    subgoals, steps, limits, turns, subgoal_flipped, flip_steps = 0, [], [], [], [], []
     started = time.perf_counter()
     for seed in seeds:
         info = play_episode(env, oracle, seed=seed).info
@@ -154,11 +199,18 @@ def play_episodes(env: MazeEpisodeRecorder, oracle: Any, seeds: range) -> dict[s
         subgoals += info["attempts"]
         steps.append(int(info["total_low_level_steps"]))
         limits.append(env.max_steps)
+        turns.extend(env.turns)
+        subgoal_flipped.extend([False] * (len(env.turns) - 1) + [bool(info["flipped"])])
+        if info["flipped"]:
+            flip_steps.append(int(info["low_level_steps"]))
     return {
         "counts": counts,
         "subgoals": subgoals,
         "steps": steps,
         "limits": limits,
+        "turns": turns,
+        "subgoal_flipped": subgoal_flipped,
+        "flip_steps": flip_steps,
         "seconds": time.perf_counter() - started,
         "first_seed": seeds.start,
     }
@@ -170,8 +222,7 @@ def merge_raw(chunks: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "counts": {name: sum(chunk["counts"][name] for chunk in chunks) for name in OUTCOMES},
         "subgoals": sum(chunk["subgoals"] for chunk in chunks),
-        "steps": [step for chunk in chunks for step in chunk["steps"]],
-        "limits": [limit for chunk in chunks for limit in chunk["limits"]],
+        **{key: [value for chunk in chunks for value in chunk[key]] for key in LISTS},
         "seconds": sum(chunk["seconds"] for chunk in chunks),
         "first_seed": chunks[0]["first_seed"],
     }
@@ -190,6 +241,7 @@ def summarise(raw: dict[str, Any]) -> dict[str, Any]:
         "flips_per_subgoal": counts["flip"] / raw["subgoals"],
         "mean_low_level_steps": float(np.mean(raw["steps"])),
         "step_limit_range": [int(min(raw["limits"])), int(max(raw["limits"]))],
+        "flip_diagnostics": flip_diagnostics(raw),
         "seconds": round(raw["seconds"], 1),
     }
 

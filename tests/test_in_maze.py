@@ -100,3 +100,41 @@ def test_a_pool_of_workers_gives_the_figures_of_one_process():
         a, b = one[name]["families"]["ant3"], pool[name]["families"]["ant3"]
         assert {k: v for k, v in a.items() if k != "seconds"} == {k: v for k, v in b.items() if k != "seconds"}
     assert pool["shipped smoothing=0.5"]["action_smoothing"] == 0.5
+
+
+def test_turn_degrees_wraps_around_and_ignores_a_missing_heading():
+    start = np.zeros(2)
+    assert in_maze.turn_degrees(0.0, start, np.array([1.0, 0.0])) == pytest.approx(0.0)
+    assert in_maze.turn_degrees(0.0, start, np.array([0.0, -2.0])) == pytest.approx(90.0)
+    # heading 170 degrees, subgoal at -11.3 degrees: 181.3 degrees one way round, 178.7 the other
+    assert in_maze.turn_degrees(np.radians(170), start, np.array([1.0, -0.2])) == pytest.approx(
+        360 - 170 - np.degrees(np.arctan(0.2))
+    )
+    assert in_maze.turn_degrees(None, start, np.array([0.0, 1.0])) == 0.0
+
+
+def test_flip_diagnostics_bins_flips_by_turn_and_counts_early_ones():
+    raw = {
+        "turns": [10.0, 50.0, 180.0, 170.0, 100.0],
+        "subgoal_flipped": [False, True, True, False, False],
+        "flip_steps": [3, 40],
+    }
+    figures = in_maze.flip_diagnostics(raw)
+    assert figures["by_turn_degrees"]["0-45"] == {"subgoals": 1, "flips": 0, "flips_per_subgoal": 0.0}
+    assert figures["by_turn_degrees"]["45-90"]["flips"] == 1
+    assert figures["by_turn_degrees"]["135-180"] == {"subgoals": 2, "flips": 1, "flips_per_subgoal": 0.5}
+    assert figures["flip_steps_into_subgoal_median"] == 21.5
+    assert figures[f"flips_within_{in_maze.EARLY_FLIP_STEPS}_steps_of_a_new_subgoal"] == 1
+    assert in_maze.flip_diagnostics({"turns": [], "subgoal_flipped": [], "flip_steps": []})["by_turn_degrees"][
+        "0-45"
+    ] == {"subgoals": 0, "flips": 0, "flips_per_subgoal": None}
+
+
+def test_the_recorder_keeps_one_turn_per_subgoal():
+    env = in_maze.MazeEpisodeRecorder(
+        gym.make("antmaze_hirl/AntMaze-v0", maze_map="u", low_level=StillController(), max_steps=60),
+        scale_step_limit=False,
+    )
+    raw = in_maze.play_episodes(env, PathOracle.for_env(env, max_distance=2.0), range(3, 4))
+    assert len(raw["turns"]) == len(raw["subgoal_flipped"]) == raw["subgoals"] == len(env.paths)
+    assert all(0.0 <= turn <= 180.0 for turn in raw["turns"]) and not any(raw["subgoal_flipped"])
