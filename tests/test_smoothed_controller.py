@@ -1,10 +1,10 @@
-"""SmoothedController: exponential action smoothing, reset at every episode by the high-level env."""
+"""Action smoothing: SmoothedController (the controller side) and ReachEnv(action_smoothing) (the env side)."""
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
-from antmaze_hirl.envs import SmoothedController
+from antmaze_hirl.envs import ReachEnv, SmoothedController
 
 
 class Sequence:
@@ -56,3 +56,23 @@ def test_the_high_level_env_resets_the_controller_at_every_episode():
     env.reset(seed=1)
     env.close()
     assert inner.resets == 2 and inner.calls > 0
+
+
+def test_reach_env_applies_the_smoothed_action_and_restarts_it_from_rest():
+    env = ReachEnv("ant", action_smoothing=0.5, chain_probability=1.0)
+    env.reset(seed=0)
+    first, second = np.full(8, 0.8), np.full(8, -0.4)
+    env.step(first)
+    env.step(second)
+    np.testing.assert_allclose(env.sim.data.ctrl, (0.5 * first + 0.5 * second) * env.action_scale)
+    env.reset()  # chained: the legs keep their torques
+    env.step(first)
+    np.testing.assert_allclose(env.sim.data.ctrl, (0.5 * 0.2 + 0.5 * 0.8) * env.action_scale)
+    env.reset(seed=1)  # from rest: the first action is applied as it is
+    env.step(second)
+    np.testing.assert_allclose(env.sim.data.ctrl, second * env.action_scale)
+
+
+def test_reach_env_names_a_bad_smoothing_weight():
+    with pytest.raises(ValueError, match=r"alpha must lie in \[0, 1\), got 1\.5"):
+        ReachEnv("ant", action_smoothing=1.5)

@@ -12,6 +12,7 @@ from antmaze_hirl.envs import _notices  # noqa: F401
 
 _EXPORTS = {
     "STANDARD_MAPS": "antmaze_hirl.envs.layouts",
+    "ActionSmoother": "antmaze_hirl.envs.controllers",
     "BirdseyeRenderer": "antmaze_hirl.envs.birdseye",
     "HighLevelMazeEnv": "antmaze_hirl.envs.high_level",
     "LowLevelController": "antmaze_hirl.envs.controllers",

@@ -57,13 +57,46 @@ def as_controller(low_level: Any) -> LowLevelController:
     )
 
 
+class ActionSmoother:
+    """Exponential smoothing of a stream of actions: ``a_t = alpha * a_{t-1} + (1 - alpha) * raw_t``.
+
+    The one implementation of action smoothing, used on the controller's side (:class:`SmoothedController`,
+    any controller in any env) and on the env's side (``ReachEnv(action_smoothing=...)``, so that a policy
+    is trained under it). The first action after :meth:`reset` is the raw one.
+
+    Args:
+        alpha: Weight of the previous action, in ``[0, 1)``; ``0`` passes actions through unchanged.
+
+    Raises:
+        ValueError: If ``alpha`` is outside ``[0, 1)``.
+
+    """
+
+    def __init__(self, alpha: float) -> None:
+        if not 0.0 <= alpha < 1.0:
+            raise ValueError(f"action smoothing alpha must lie in [0, 1), got {alpha}")
+        self.alpha = float(alpha)
+        self._previous: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Forgets the previous action."""
+        self._previous = None
+
+    def __call__(self, raw: np.ndarray) -> np.ndarray:
+        """Returns the smoothed action for the raw action ``raw``."""
+        raw = np.asarray(raw, dtype=np.float64)
+        action = raw if self._previous is None else self.alpha * self._previous + (1.0 - self.alpha) * raw
+        self._previous = action
+        return action
+
+
 class SmoothedController:
-    """Exponential smoothing of another controller's actions: ``a_t = alpha * a_{t-1} + (1 - alpha) * raw_t``.
+    """Another controller's actions, smoothed exponentially (:class:`ActionSmoother`).
 
     An inference-time candidate against flips (issue 16): it damps the step-to-step torque jumps of a
     policy trained without smoothing, at the price of a slower response. The smoothing carries across
     subgoals (a new subgoal mid-stride does not reset the legs' torques) and restarts at :meth:`reset`,
-    which the high-level env calls at each episode start; the first action of an episode is the raw one.
+    which the high-level env calls at each episode start.
 
     Args:
         controller: The controller (or SB3 model) whose actions are smoothed.
@@ -75,25 +108,24 @@ class SmoothedController:
     """
 
     def __init__(self, controller: Any, alpha: float) -> None:
-        if not 0.0 <= alpha < 1.0:
-            raise ValueError(f"action smoothing alpha must lie in [0, 1), got {alpha}")
+        self.smoother = ActionSmoother(alpha)
         self.controller = as_controller(controller)
-        self.alpha = float(alpha)
-        self._previous: np.ndarray | None = None
+
+    @property
+    def alpha(self) -> float:
+        """Weight of the previous action."""
+        return self.smoother.alpha
 
     def reset(self) -> None:
         """Forgets the previous action (and resets the inner controller, if it has state)."""
-        self._previous = None
+        self.smoother.reset()
         inner_reset = getattr(self.controller, "reset", None)
         if callable(inner_reset):
             inner_reset()
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
         """Returns the smoothed action for ``observation``."""
-        raw = np.asarray(self.controller(observation), dtype=np.float64)
-        action = raw if self._previous is None else self.alpha * self._previous + (1.0 - self.alpha) * raw
-        self._previous = action
-        return action
+        return self.smoother(self.controller(observation))
 
 
 class PointGoToController:

@@ -13,6 +13,7 @@ from gymnasium.utils.ezpickle import EzPickle
 from gymnasium_robotics.core import GoalEnv
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
+from antmaze_hirl.envs.controllers import ActionSmoother
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layout_splits import LayoutSplit, check_split, sample_layout_in_split
 from antmaze_hirl.envs.layouts import MazeMap, generate_layout, validate_maze_map
@@ -140,6 +141,10 @@ class ReachEnv(GoalEnv, EzPickle):
             (``info["flipped"]``), so a flip costs more than a timeout. With ``terminate_on_flip`` that
             is the terminal step only. HER relabelling needs the infos kept (SB3's
             ``copy_info_dict=True``) to see it. Default 0.
+        action_smoothing: Weight ``alpha`` in ``[0, 1)`` of the previous applied action: the body gets
+            ``alpha * previous + (1 - alpha) * action`` (:class:`~antmaze_hirl.envs.controllers.ActionSmoother`),
+            restarting at every from-rest reset and carried through chained ones. Part of the dynamics, so a
+            policy trained with it learns under it; the previous action is not in the observation. Default 0.
 
     """
 
@@ -165,6 +170,7 @@ class ReachEnv(GoalEnv, EzPickle):
         maze_wall_fraction: float = 0.3,
         maze_split: LayoutSplit | None = None,
         flip_penalty: float = 0.0,
+        action_smoothing: float = 0.0,
     ) -> None:
         EzPickle.__init__(
             self,
@@ -185,6 +191,7 @@ class ReachEnv(GoalEnv, EzPickle):
             maze_wall_fraction=maze_wall_fraction,
             maze_split=maze_split,
             flip_penalty=flip_penalty,
+            action_smoothing=action_smoothing,
         )
         spec = body_spec(body)
         self.body = body
@@ -227,6 +234,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self.maze_wall_fraction = float(maze_wall_fraction)
         self.maze_split = check_split(maze_split) if maze_split is not None else None
         self.flip_penalty = float(flip_penalty)
+        self._smoother = ActionSmoother(action_smoothing)
         self.reward_type = reward_type
         self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
         self.terminate_on_flip = terminate_on_flip and body == "ant"
@@ -306,6 +314,7 @@ class ReachEnv(GoalEnv, EzPickle):
         super().reset(seed=seed)
         if self._chains(seed, options):
             return self.set_goal(self.sample_goal()), {"is_success": self._is_success()}
+        self._smoother.reset()  # from rest: no previous torque to carry (a chained reset keeps it)
         options = options or {}
         if all(options.get(key) is None for key in ("start_xy", "goal_xy", "goal")):
             self._draw_walls()  # only a free draw may move it to another maze: given positions are in this one
@@ -376,8 +385,8 @@ class ReachEnv(GoalEnv, EzPickle):
             ValueError: If ``action`` has the wrong shape or holds NaN/inf.
 
         """
-        action = as_finite_vector(action, self.action_space.shape[0], "action")
-        self._body_obs, self._xy = self.sim.step(np.clip(action, -1.0, 1.0) * self.action_scale)
+        action = self._smoother(np.clip(as_finite_vector(action, self.action_space.shape[0], "action"), -1.0, 1.0))
+        self._body_obs, self._xy = self.sim.step(action * self.action_scale)
         self._steps += 1
         obs = self._get_obs()
         info = {"is_success": self._is_success(), "flipped": self.sim.is_flipped}
