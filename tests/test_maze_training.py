@@ -203,3 +203,10 @@ def test_the_held_out_maze_config_trains_only_on_training_wall_grids_of_other_si
     drawn = [walls for walls in mazes if walls.shape != env._base_walls.shape or (walls != env._base_walls).any()]
     assert drawn and {walls.shape for walls in drawn} <= {(6, 6), (7, 7)}  # 4x4 and 5x5 free cells, never 3x3
     assert {wall_grid_split(walls) for walls in drawn} == {"train"}
+
+
+def test_the_smoothed_maze_config_is_the_maze_setting_with_smoothing_in_the_dynamics():
+    smoothed = load_config("ant", ANT_MAZE_YML.with_name("ant_maze_smoothed.yml"))
+    plain = load_config("ant", ANT_MAZE_YML)
+    assert {**smoothed.env_kwargs, "action_smoothing": 0.0} == {**plain.env_kwargs, "action_smoothing": 0.0}
+    assert ReachEnv("ant", **smoothed.env_kwargs)._smoother.alpha == 0.5
