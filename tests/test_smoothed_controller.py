@@ -76,3 +76,9 @@ def test_reach_env_applies_the_smoothed_action_and_restarts_it_from_rest():
 def test_reach_env_names_a_bad_smoothing_weight():
     with pytest.raises(ValueError, match=r"alpha must lie in \[0, 1\), got 1\.5"):
         ReachEnv("ant", action_smoothing=1.5)
+
+
+def test_the_high_level_env_passes_smoothing_to_its_reach_env():
+    env = gym.make("antmaze_hirl/AntMaze-v0", low_level=Sequence([np.zeros(8)]), reach_kwargs={"action_smoothing": 0.5})
+    assert env.unwrapped.reach._smoother.alpha == 0.5
+    env.close()
