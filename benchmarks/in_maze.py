@@ -72,7 +72,11 @@ FROZEN_RADIUS = 1.0
 """Metres: a walking ant covers this in ~1 s (20 steps); 5 subgoals give it up to 500 steps."""
 OUTCOMES = ("success", "flip", "frozen", "timeout")
 TURN_BINS_DEG = (0, 45, 90, 135, 180)
-"""Bins of the turn a subgoal asks for (heading to subgoal direction when set), for :func:`flip_diagnostics`."""
+"""Bins of the turn a subgoal asks for (direction of travel to subgoal direction), for :func:`flip_diagnostics`."""
+TRAVEL_STEPS = 10
+"""Half a second: the direction of travel when a subgoal is set is that of the body's last 10 steps."""
+MIN_TRAVEL = 0.2
+"""Metres: a body that moved less over those steps is at a standstill, and a subgoal then asks for no turn."""
 EARLY_FLIP_STEPS = 10
 """Half a second: a flip this soon after a new subgoal is counted as one at the hand-off."""
 LISTS = ("steps", "limits", "turns", "subgoal_flipped", "flip_steps")
@@ -103,7 +107,7 @@ class MazeEpisodeRecorder(gym.Wrapper):
         self.scale_step_limit = scale_step_limit
         self.paths: list[np.ndarray] = []
         self.turns: list[float] = []
-        """Per subgoal of the episode: degrees between the torso's heading and the subgoal, when it was set."""
+        """Per subgoal of the episode: :func:`turn_degrees` when it was set (NaN from a standstill)."""
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         """Resets the env, then (if asked) sets its step budget from the new layout's start and goal."""
@@ -117,11 +121,11 @@ class MazeEpisodeRecorder(gym.Wrapper):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """One subgoal; its low-level path is kept in :attr:`paths`, its turn in :attr:`turns`."""
-        yaw = self.env.unwrapped.reach.sim.torso_yaw
         obs, reward, terminated, truncated, info = self.env.step(action)
         path = np.asarray(info["agent_path"])
+        walked = np.concatenate([*self.paths, path[:1]])[-(TRAVEL_STEPS + 1) :]  # the steps before this subgoal
+        self.turns.append(turn_degrees(walked[0], walked[-1], info["subgoal"]))
         self.paths.append(path)
-        self.turns.append(turn_degrees(yaw, path[0], info["subgoal"]))
         return obs, reward, terminated, truncated, info
 
     @property
@@ -130,12 +134,17 @@ class MazeEpisodeRecorder(gym.Wrapper):
         return int(self.env.unwrapped.max_steps)
 
 
-def turn_degrees(yaw: float | None, start_xy: np.ndarray, subgoal: np.ndarray) -> float:
-    """Degrees (0-180) from heading ``yaw`` to the direction ``start_xy`` -> ``subgoal``; 0 with no heading."""
-    if yaw is None:
-        return 0.0
-    offset = np.asarray(subgoal, dtype=float) - np.asarray(start_xy, dtype=float)
-    difference = np.arctan2(offset[1], offset[0]) - yaw
+def turn_degrees(walked_from: np.ndarray, position: np.ndarray, subgoal: np.ndarray) -> float:
+    """Degrees (0-180) between the direction of travel ``walked_from -> position`` and ``position -> subgoal``.
+
+    NaN when the body travelled less than :data:`MIN_TRAVEL` (a standstill has no direction). The ant's torso
+    heading would not do: it walks sideways and backwards as readily as forwards.
+    """
+    travel = np.asarray(position, dtype=float) - np.asarray(walked_from, dtype=float)
+    if np.linalg.norm(travel) < MIN_TRAVEL:
+        return float("nan")
+    offset = np.asarray(subgoal, dtype=float) - np.asarray(position, dtype=float)
+    difference = np.arctan2(offset[1], offset[0]) - np.arctan2(travel[1], travel[0])
     return float(abs(np.degrees(np.arctan2(np.sin(difference), np.cos(difference)))))
 
 
@@ -143,14 +152,17 @@ def flip_diagnostics(raw: dict[str, Any]) -> dict[str, Any]:
     """Where flips happen: flips per subgoal by the turn the subgoal asked for, and how far into a subgoal.
 
     A flip soon after a subgoal is set points at the hand-off (a new goal mid-stride); a flip rate that grows
-    with the turn points at turning.
+    with the turn points at turning. Subgoals set at a standstill (:func:`turn_degrees` NaN, the first of
+    an episode among them) form their own bin.
     """
     turns, flipped = np.asarray(raw["turns"], dtype=float), np.asarray(raw["subgoal_flipped"], dtype=bool)
+    standing = np.isnan(turns)
+    bins = {f"{low}-{high}": (turns >= low) & (turns < high) for low, high in itertools.pairwise(TURN_BINS_DEG)}
+    bins[f"{TURN_BINS_DEG[-2]}-{TURN_BINS_DEG[-1]}"] |= turns == TURN_BINS_DEG[-1]
     by_turn = {}
-    for low, high in itertools.pairwise(TURN_BINS_DEG):
-        inside = (turns >= low) & ((turns < high) if high < TURN_BINS_DEG[-1] else (turns <= high))
+    for name, inside in {**bins, "standstill": standing}.items():
         subgoals, flips = int(inside.sum()), int((inside & flipped).sum())
-        by_turn[f"{low}-{high}"] = {
+        by_turn[name] = {
             "subgoals": subgoals,
             "flips": flips,
             "flips_per_subgoal": flips / subgoals if subgoals else None,
@@ -296,6 +308,20 @@ def row_name(path: Path | None, smoothing: float) -> str:
     return name if smoothing == 0 else f"{name} smoothing={smoothing:g}"
 
 
+def row_names(low_levels: list[Path | None], smoothing: tuple[float, ...]) -> list[str]:
+    """The result rows' names, low level by low level, weight by weight.
+
+    Raises:
+        ValueError: If a name repeats (the same low level or weight given twice): its chunks would merge
+            into one row, every maze counted twice.
+    """
+    names = [row_name(path, alpha) for path in low_levels for alpha in smoothing]
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ValueError(f"rows {repeated} are asked for twice: give each low level and smoothing weight once")
+    return names
+
+
 def parse_smoothing(text: str) -> list[float]:
     """Comma-separated action-smoothing weights, each in ``[0, 1)``.
 
@@ -356,6 +382,7 @@ def run(
     With ``jobs`` > 1 the episodes of every family are cut into chunks of ``chunk_episodes`` and played by a
     pool of processes; each episode resets with its own seed, so the figures are the same as with one.
     """
+    row_names(low_levels, smoothing)
     max_distance = BODY_DEFAULTS["ant"]["expert_max_distance"] if max_distance is None else max_distance
     tasks = [
         (path, alpha, family, seeds, max_distance)
@@ -437,6 +464,7 @@ def main() -> None:
     try:
         families = parse_families(args.families)
         smoothing = parse_smoothing(args.action_smoothing)
+        row_names([None, *(args.low_level or [])], tuple(smoothing))
     except ValueError as error:
         parser.error(str(error))
     for name in ("episodes", "jobs", "chunk_episodes"):

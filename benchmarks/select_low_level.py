@@ -18,15 +18,22 @@ reported figures never use:
 The pick is the snapshot with the best mean of the two (what the high level needs and what the issue's
 target measures). Scores are cached in the JSON, so a rerun while training goes on scores only new snapshots.
 
+A policy trained under action smoothing (``ReachEnv(action_smoothing=...)``, e.g.
+``benchmarks/configs/ant_maze_smoothed.yml``) is scored with ``--action-smoothing`` at its weight: both
+figures then run with the same smoothing (the saved zip does not record it).
+
 Usage: python benchmarks/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
-           [--held-out-layouts]
-Writes benchmarks/results/low_level_selection.json.
+           [--held-out-layouts] [--action-smoothing A]
+Writes benchmarks/results/low_level_selection.json (``low_level_selection_held_out.json`` with
+``--held-out-layouts``), with the command that made it.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shlex
+import sys
 from pathlib import Path
 
 import torch
@@ -45,15 +52,26 @@ SELECTION_MAZE_SEED = 2_000_000
 RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
 
 
-def score(path: Path, body: str, *, seed: int, episodes: int, mazes: int, held_out_layouts: bool = False) -> dict:
+def score(
+    path: Path,
+    body: str,
+    *,
+    seed: int,
+    episodes: int,
+    mazes: int,
+    held_out_layouts: bool = False,
+    action_smoothing: float = 0.0,
+) -> dict:
     """A snapshot's selection figures: eval-low, the oracle's success through it, and their mean."""
-    eval_low = evaluate_reach(load_low_level(body, path), ReachEnv(body), episodes=episodes, seed=seed)
+    reach = ReachEnv(body, action_smoothing=action_smoothing)
+    eval_low = evaluate_reach(load_low_level(body, path), reach, episodes=episodes, seed=seed)
+    smoothing = {"action_smoothing": action_smoothing}
     if held_out_layouts:
         config = ExperimentConfig(body=body, held_out_layouts=True, **body_settings(body, held_out_layouts=True))
-        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, split="selection")
+        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, split="selection", **smoothing)
     else:
         config = ExperimentConfig(body=body, **BODY_DEFAULTS[body])
-        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes)
+        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, **smoothing)
     return {
         "low_level_id": ceiling["low_level_id"],
         "eval_low": eval_low["success_rate"],
@@ -76,8 +94,20 @@ def main() -> None:
         action="store_true",
         help="ceiling on the held-out-layouts protocol's mazes, from the selection part of the layout partition",
     )
-    parser.add_argument("--out", type=Path, default=RESULTS / "low_level_selection.json")
+    parser.add_argument(
+        "--action-smoothing",
+        type=float,
+        default=0.0,
+        help="smooth the policies' actions with this weight in [0, 1) in both figures (for policies trained so)",
+    )
+    parser.add_argument("--out", type=Path, default=None, help="default: see Usage")
     args = parser.parse_args()
+    if args.out is None:
+        args.out = RESULTS / (
+            "low_level_selection_held_out.json" if args.held_out_layouts else "low_level_selection.json"
+        )
+    if not 0.0 <= args.action_smoothing < 1.0:
+        parser.error(f"--action-smoothing must lie in [0, 1), got {args.action_smoothing}")
     chosen = range(args.seed, args.seed + args.episodes)
     for reserved in RESERVED_SUBGOAL_SEEDS:
         if chosen.start < reserved.stop and reserved.start < chosen.stop:
@@ -86,9 +116,13 @@ def main() -> None:
     if missing:
         parser.error(f"no snapshots/ folder in {missing}")
     torch.set_num_threads(1)
+    command = shlex.join(["python", "benchmarks/select_low_level.py", *sys.argv[1:]])
     settings = {"body": args.body, "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes}
-    if args.held_out_layouts:  # only then, so that the cache of a run without the flag stays valid
+    # Only when set, so that the cache of a run without them stays valid.
+    if args.held_out_layouts:
         settings["held_out_layouts"] = True
+    if args.action_smoothing:
+        settings["action_smoothing"] = args.action_smoothing
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}
     scores = cached.get("scores", {}) if cached.get("settings") == settings else {}
     steps = {p: snapshot_step(p) for run in args.runs for p in (run / "snapshots").glob("step_*.zip")}
@@ -108,11 +142,12 @@ def main() -> None:
                 episodes=args.episodes,
                 mazes=args.mazes,
                 held_out_layouts=args.held_out_layouts,
+                action_smoothing=args.action_smoothing,
             )
-            atomic_write_json(args.out, {"settings": settings, "scores": scores})  # keep what is done if stopped
+            atomic_write_json(args.out, {"command": command, "settings": settings, "scores": scores})  # if stopped
         print(f"{path}: {scores[str(path)]}")
     best = max((str(p) for p in snapshots), key=lambda p: scores[p]["score"])
-    atomic_write_json(args.out, {"settings": settings, "scores": scores, "best": best})
+    atomic_write_json(args.out, {"command": command, "settings": settings, "scores": scores, "best": best})
     print("best:", best, scores[best])
 
 

@@ -291,17 +291,6 @@ def test_terminate_on_flip_catches_an_ant_on_its_back():
     assert env.step(np.zeros(8))[2]
 
 
-@pytest.mark.parametrize("yaw", [0.3, 2.0, -2.5])
-def test_torso_yaw_reads_the_heading_of_a_turned_ant(yaw):
-    env = ReachEnv("ant")
-    env.reset(seed=0)
-    qpos = env.sim.data.qpos.copy()
-    qpos[3:7] = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]  # a rotation by yaw about the world z axis
-    env.sim._mujoco_env.set_state(qpos, np.zeros_like(env.sim.data.qvel))
-    assert env.sim.torso_yaw == pytest.approx(yaw)
-    assert ReachEnv("point").sim.torso_yaw is None
-
-
 def test_chained_reset_keeps_the_moving_body_and_draws_a_new_goal():
     env = ReachEnv("ant", chain_probability=1.0)
     env.reset(seed=0)

@@ -75,6 +75,7 @@ def test_parse_smoothing_names_the_bad_entry():
 def test_chunked_episodes_merge_to_the_single_run(monkeypatch):
     # Chunks given in reverse order: the merge puts them back by seed, adding up to what one process gives.
     monkeypatch.setattr(in_maze, "load_low_level", lambda body, path: WalkController())
+    monkeypatch.setattr(in_maze, "_MODELS", {})  # the stand-in must not stay cached for later tests
     whole = in_maze.run([None], ["u"], episodes=3, seed=5, jobs=1)
     parts = [in_maze.run_chunk(None, 0.0, "u", seeds, 2.0)[2] for seeds in reversed(in_maze.chunks_of(3, 5, 2))]
     merged = in_maze.summarise(in_maze.merge_raw(parts))
@@ -102,28 +103,29 @@ def test_a_pool_of_workers_gives_the_figures_of_one_process():
     assert pool["shipped smoothing=0.5"]["action_smoothing"] == 0.5
 
 
-def test_turn_degrees_wraps_around_and_ignores_a_missing_heading():
-    start = np.zeros(2)
-    assert in_maze.turn_degrees(0.0, start, np.array([1.0, 0.0])) == pytest.approx(0.0)
-    assert in_maze.turn_degrees(0.0, start, np.array([0.0, -2.0])) == pytest.approx(90.0)
-    # heading 170 degrees, subgoal at -11.3 degrees: 181.3 degrees one way round, 178.7 the other
-    assert in_maze.turn_degrees(np.radians(170), start, np.array([1.0, -0.2])) == pytest.approx(
-        360 - 170 - np.degrees(np.arctan(0.2))
+def test_turn_degrees_measures_against_the_direction_of_travel():
+    here = np.array([1.0, 0.0])
+    walked_from = np.zeros(2)  # travelling along +x
+    assert in_maze.turn_degrees(walked_from, here, np.array([3.0, 0.0])) == pytest.approx(0.0)
+    assert in_maze.turn_degrees(walked_from, here, np.array([1.0, -2.0])) == pytest.approx(90.0)
+    assert in_maze.turn_degrees(walked_from, here, np.array([-1.0, 0.1])) == pytest.approx(
+        180 - np.degrees(np.arctan(0.05))
     )
-    assert in_maze.turn_degrees(None, start, np.array([0.0, 1.0])) == 0.0
+    assert np.isnan(in_maze.turn_degrees(here, here + 0.1, np.array([5.0, 5.0])))  # 0.14 m: a standstill
 
 
 def test_flip_diagnostics_bins_flips_by_turn_and_counts_early_ones():
     raw = {
-        "turns": [10.0, 50.0, 180.0, 170.0, 100.0],
-        "subgoal_flipped": [False, True, True, False, False],
-        "flip_steps": [3, 40],
+        "turns": [10.0, 50.0, 180.0, 170.0, 100.0, float("nan")],
+        "subgoal_flipped": [False, True, True, False, False, True],
+        "flip_steps": [3, 40, 12],
     }
     figures = in_maze.flip_diagnostics(raw)
     assert figures["by_turn_degrees"]["0-45"] == {"subgoals": 1, "flips": 0, "flips_per_subgoal": 0.0}
     assert figures["by_turn_degrees"]["45-90"]["flips"] == 1
     assert figures["by_turn_degrees"]["135-180"] == {"subgoals": 2, "flips": 1, "flips_per_subgoal": 0.5}
-    assert figures["flip_steps_into_subgoal_median"] == 21.5
+    assert figures["by_turn_degrees"]["standstill"] == {"subgoals": 1, "flips": 1, "flips_per_subgoal": 1.0}
+    assert figures["flip_steps_into_subgoal_median"] == 12.0
     assert figures[f"flips_within_{in_maze.EARLY_FLIP_STEPS}_steps_of_a_new_subgoal"] == 1
     assert in_maze.flip_diagnostics({"turns": [], "subgoal_flipped": [], "flip_steps": []})["by_turn_degrees"][
         "0-45"
@@ -137,4 +139,12 @@ def test_the_recorder_keeps_one_turn_per_subgoal():
     )
     raw = in_maze.play_episodes(env, PathOracle.for_env(env, max_distance=2.0), range(3, 4))
     assert len(raw["turns"]) == len(raw["subgoal_flipped"]) == raw["subgoals"] == len(env.paths)
-    assert all(0.0 <= turn <= 180.0 for turn in raw["turns"]) and not any(raw["subgoal_flipped"])
+    assert np.isnan(raw["turns"]).all()  # a still ant never travels: every subgoal is set at a standstill
+    assert not any(raw["subgoal_flipped"])
+
+
+def test_a_row_asked_for_twice_is_refused_before_any_episode():
+    with pytest.raises(ValueError, match=r"rows \['shipped'\] are asked for twice"):
+        in_maze.run([None], ["u"], episodes=1, seed=0, smoothing=(0.0, 0.0))
+    with pytest.raises(ValueError, match=r"a\.zip smoothing=0\.5"):
+        in_maze.row_names([Path("a.zip"), Path("a.zip")], (0.0, 0.5))

@@ -209,4 +209,4 @@ def test_the_smoothed_maze_config_is_the_maze_setting_with_smoothing_in_the_dyna
     smoothed = load_config("ant", ANT_MAZE_YML.with_name("ant_maze_smoothed.yml"))
     plain = load_config("ant", ANT_MAZE_YML)
     assert {**smoothed.env_kwargs, "action_smoothing": 0.0} == {**plain.env_kwargs, "action_smoothing": 0.0}
-    assert ReachEnv("ant", **smoothed.env_kwargs)._smoother.alpha == 0.5
+    assert ReachEnv("ant", **smoothed.env_kwargs).action_smoothing == 0.5

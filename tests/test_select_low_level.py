@@ -25,9 +25,15 @@ def test_score_asks_for_the_selection_part_only_with_held_out_layouts(monkeypatc
 
     monkeypatch.setattr(select_low_level, "oracle_success", fake_oracle_success)
     monkeypatch.setattr(select_low_level, "load_low_level", lambda body, path: None)
-    monkeypatch.setattr(select_low_level, "evaluate_reach", lambda *a, **k: {"success_rate": 1.0, "mean_steps": 9})
+    reach_envs = []
+
+    def fake_evaluate_reach(model, env, **kwargs):
+        reach_envs.append(env)
+        return {"success_rate": 1.0, "mean_steps": 9}
+
+    monkeypatch.setattr(select_low_level, "evaluate_reach", fake_evaluate_reach)
     scores = select_low_level.score(
-        Path("p.zip"), "ant", seed=100_000, episodes=2, mazes=3, held_out_layouts=held_out_layouts
+        Path("p.zip"), "ant", seed=100_000, episodes=2, mazes=3, held_out_layouts=held_out_layouts, action_smoothing=0.3
     )
     ((config, kwargs),) = calls
     assert scores["score"] == 0.75
@@ -35,6 +41,7 @@ def test_score_asks_for_the_selection_part_only_with_held_out_layouts(monkeypatc
     assert kwargs["seed"] == select_low_level.SELECTION_MAZE_SEED and kwargs["episodes"] == 3
     assert kwargs.get("split") == ("selection" if held_out_layouts else None)
     assert config.maze_size == (4 if held_out_layouts else 3)
+    assert kwargs["action_smoothing"] == 0.3 and reach_envs[0].action_smoothing == 0.3  # both figures smoothed
 
 
 def test_held_out_selection_mazes_share_no_wall_grid_with_the_reported_ant4_mazes():
@@ -49,3 +56,21 @@ def test_held_out_selection_mazes_share_no_wall_grid_with_the_reported_ant4_maze
             walls[split].add(env.unwrapped.layout.walls.tobytes())
         env.close()
     assert walls["selection"] and walls["eval"] and not walls["selection"] & walls["eval"]
+
+
+def test_oracle_success_drives_the_low_level_through_the_smoothing(monkeypatch):
+    import paper_experiment
+
+    from antmaze_hirl.envs import SmoothedController
+
+    controllers = []
+    real_make_env = paper_experiment.make_env
+
+    def recording_make_env(config, low_level=None, **kwargs):
+        controllers.append(low_level)
+        return real_make_env(config, low_level, **kwargs)
+
+    monkeypatch.setattr(paper_experiment, "make_env", recording_make_env)
+    result = paper_experiment.oracle_success(ExperimentConfig(body="point"), episodes=1, action_smoothing=0.4)
+    assert isinstance(controllers[0], SmoothedController) and controllers[0].alpha == 0.4
+    assert result["action_smoothing"] == 0.4 and result["low_level_id"].startswith("sha256:")

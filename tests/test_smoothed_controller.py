@@ -1,10 +1,12 @@
 """Action smoothing: SmoothedController (the controller side) and ReachEnv(action_smoothing) (the env side)."""
 
+import re
+
 import gymnasium as gym
 import numpy as np
 import pytest
 
-from antmaze_hirl.envs import ReachEnv, SmoothedController
+from antmaze_hirl.envs import ActionSmoother, ReachEnv, SmoothedController
 
 
 class Sequence:
@@ -42,10 +44,22 @@ def test_zero_alpha_passes_actions_through():
     np.testing.assert_allclose([controller({}), controller({})], [[0.3], [-0.7]])
 
 
-@pytest.mark.parametrize("alpha", [-0.1, 1.0, float("nan")])
+@pytest.mark.parametrize("alpha", [-0.1, 1.0, float("nan"), "0.5"])
 def test_alpha_outside_zero_one_is_named(alpha):
-    with pytest.raises(ValueError, match=f"alpha must lie in \\[0, 1\\), got {alpha}"):
+    with pytest.raises(ValueError, match=re.escape(f"alpha must lie in [0, 1), got {alpha!r}")):
         SmoothedController(Sequence([[0.0]]), alpha=alpha)
+
+
+def test_the_smoother_keeps_its_own_copy_of_the_previous_action():
+    smoother, buffer = ActionSmoother(0.5), np.ones(2)
+    smoother(buffer)
+    buffer[:] = 0.0  # a controller reusing its output buffer
+    np.testing.assert_allclose(smoother(np.zeros(2)), [0.5, 0.5])
+
+
+def test_the_controller_side_clips_before_smoothing_as_the_env_side_does():
+    controller = SmoothedController(Sequence([[3.0], [-3.0]]), alpha=0.5)
+    np.testing.assert_allclose([controller({}), controller({})], [[1.0], [0.0]])
 
 
 def test_the_high_level_env_resets_the_controller_at_every_episode():
@@ -80,5 +94,5 @@ def test_reach_env_names_a_bad_smoothing_weight():
 
 def test_the_high_level_env_passes_smoothing_to_its_reach_env():
     env = gym.make("antmaze_hirl/AntMaze-v0", low_level=Sequence([np.zeros(8)]), reach_kwargs={"action_smoothing": 0.5})
-    assert env.unwrapped.reach._smoother.alpha == 0.5
+    assert env.unwrapped.reach.action_smoothing == 0.5
     env.close()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -13,8 +14,8 @@ GoalObservation = dict[str, np.ndarray]
 class LowLevelController(Protocol):
     """Maps a goal observation (``observation``, ``achieved_goal``, ``desired_goal``) to an action.
 
-    A controller with state across steps may also define ``reset()``: the high-level env calls it at the
-    start of every episode, so that one episode's actions never depend on the one before.
+    A controller with state across steps may also define ``reset()``, taking no arguments: the high-level
+    env calls it at the start of every episode, so that one episode's actions never depend on the one before.
     """
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
@@ -73,8 +74,8 @@ class ActionSmoother:
     """
 
     def __init__(self, alpha: float) -> None:
-        if not 0.0 <= alpha < 1.0:
-            raise ValueError(f"action smoothing alpha must lie in [0, 1), got {alpha}")
+        if not isinstance(alpha, numbers.Real) or not 0.0 <= alpha < 1.0:
+            raise ValueError(f"action smoothing alpha must lie in [0, 1), got {alpha!r}")
         self.alpha = float(alpha)
         self._previous: np.ndarray | None = None
 
@@ -84,14 +85,17 @@ class ActionSmoother:
 
     def __call__(self, raw: np.ndarray) -> np.ndarray:
         """Returns the smoothed action for the raw action ``raw``."""
-        raw = np.asarray(raw, dtype=np.float64)
+        raw = np.array(raw, dtype=np.float64)  # a copy: a caller reusing its buffer must not change the past
         action = raw if self._previous is None else self.alpha * self._previous + (1.0 - self.alpha) * raw
         self._previous = action
         return action
 
 
 class SmoothedController:
-    """Another controller's actions, smoothed exponentially (:class:`ActionSmoother`).
+    """Another controller's actions, clipped to ``[-1, 1]`` and smoothed exponentially (:class:`ActionSmoother`).
+
+    Clipping first makes it the smoothing ``ReachEnv(action_smoothing=alpha)`` applies (which clips each
+    action before smoothing), for controllers whose raw output leaves the action range too.
 
     An inference-time candidate against flips (issue 16): it damps the step-to-step torque jumps of a
     policy trained without smoothing, at the price of a slower response. The smoothing carries across
@@ -125,7 +129,7 @@ class SmoothedController:
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
         """Returns the smoothed action for ``observation``."""
-        return self.smoother(self.controller(observation))
+        return self.smoother(np.clip(self.controller(observation), -1.0, 1.0))
 
 
 class PointGoToController:

@@ -76,17 +76,6 @@ class MazeSimulator:
         return float(self._mujoco_env.data.qpos[2]) if self.body == "ant" else 0.0
 
     @property
-    def torso_yaw(self) -> float | None:
-        """Ant only: the heading of the torso's x axis in the world xy plane, radians; ``None`` for the point.
-
-        From quaternion ``(qw, qx, qy, qz)``: ``atan2(2 (qw qz + qx qy), 1 - 2 (qy^2 + qz^2))``.
-        """
-        if self.body != "ant":
-            return None
-        qw, qx, qy, qz = self._mujoco_env.data.qpos[3:7]
-        return float(np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz)))
-
-    @property
     def is_flipped(self) -> bool:
         """Ant only: whether the torso faces down or lies on the floor.
 
