@@ -42,7 +42,7 @@ from paper_experiment import RESULTS, oracle_success
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments import ExperimentConfig
-from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings
+from antmaze_hirl.experiments.config import body_settings
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
@@ -65,13 +65,17 @@ def score(
     """A snapshot's selection figures: eval-low, the oracle's success through it, and their mean."""
     reach = ReachEnv(body, action_smoothing=action_smoothing)
     eval_low = evaluate_reach(load_low_level(body, path), reach, episodes=episodes, seed=seed)
-    smoothing = {"action_smoothing": action_smoothing}
-    if held_out_layouts:
-        config = ExperimentConfig(body=body, held_out_layouts=True, **body_settings(body, held_out_layouts=True))
-        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, split="selection", **smoothing)
-    else:
-        config = ExperimentConfig(body=body, **BODY_DEFAULTS[body])
-        ceiling = oracle_success(config, path, seed=SELECTION_MAZE_SEED, episodes=mazes, **smoothing)
+    config = ExperimentConfig(
+        body=body, held_out_layouts=held_out_layouts, **body_settings(body, held_out_layouts=held_out_layouts)
+    )
+    ceiling = oracle_success(
+        config,
+        path,
+        seed=SELECTION_MAZE_SEED,
+        episodes=mazes,
+        split="selection" if held_out_layouts else None,  # the split counts only with held-out layouts
+        action_smoothing=action_smoothing,
+    )
     return {
         "low_level_id": ceiling["low_level_id"],
         "eval_low": eval_low["success_rate"],

@@ -42,6 +42,13 @@ class PredictController:
         return np.asarray(action)
 
 
+def reset_controller(controller: Any) -> None:
+    """Calls ``controller.reset()`` if it has one (a stateful controller, see :class:`LowLevelController`)."""
+    reset = getattr(controller, "reset", None)
+    if callable(reset):
+        reset()
+
+
 def as_controller(low_level: Any) -> LowLevelController:
     """Wraps ``low_level`` as a controller: SB3-style models via ``predict``, callables as they are.
 
@@ -123,9 +130,7 @@ class SmoothedController:
     def reset(self) -> None:
         """Forgets the previous action (and resets the inner controller, if it has state)."""
         self.smoother.reset()
-        inner_reset = getattr(self.controller, "reset", None)
-        if callable(inner_reset):
-            inner_reset()
+        reset_controller(self.controller)
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
         """Returns the smoothed action for ``observation``."""

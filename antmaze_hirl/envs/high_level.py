@@ -11,7 +11,7 @@ from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
-from antmaze_hirl.envs.controllers import as_controller
+from antmaze_hirl.envs.controllers import as_controller, reset_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
@@ -239,9 +239,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.total_low_level_steps = 0
         # A stateful controller (action smoothing, say) starts every episode afresh, so that episode
         # figures do not depend on the order episodes ran in.
-        controller_reset = getattr(self.controller, "reset", None)
-        if callable(controller_reset):
-            controller_reset()
+        reset_controller(self.controller)
         return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
