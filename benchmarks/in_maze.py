@@ -63,6 +63,12 @@ from antmaze_hirl.rollout import play_episode
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 FAMILIES = ("ant3", "ant4", "u", "medium", "large")
+"""The reported families (``--families``)."""
+SELECTION_FAMILIES = {"select4": 4, "select6": 6}
+"""Families for picking a policy, never reported: random layouts of this many free cells per side from the
+``selection`` part of the layout partition (no wall grid of ``ant4``'s ``eval`` part or of training's ``train``
+part). ``select4`` is ``ant4``'s family (500 steps); ``select6`` has ``medium``'s 8x8 grid and, like the standard
+maps, a step limit scaled to the path. ``benchmarks/select_low_level.py`` plays them from maze seed 2,000,000."""
 STEPS_PER_METRE = 40
 """Step budget per metre of shortest cell path: a 0.5 m/s average, half the ~1 m/s of a straight walk."""
 MIN_STEPS = 500
@@ -286,7 +292,7 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
     """The high-level ant env of ``family`` driving ``low_level`` (``None``: the shipped policy).
 
     Raises:
-        ValueError: For a family not in :data:`FAMILIES`.
+        ValueError: For a family in neither :data:`FAMILIES` nor :data:`SELECTION_FAMILIES`.
     """
     if family == "ant3":
         config = ExperimentConfig(body="ant", **BODY_DEFAULTS["ant"])
@@ -295,8 +301,13 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
         config = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
         split = evaluation_sets(config)["final"][0]
         return MazeEpisodeRecorder(make_env(config, low_level, split=split), scale_step_limit=False)
+    if family in SELECTION_FAMILIES:
+        size = SELECTION_FAMILIES[family]
+        settings = body_settings("ant", held_out_layouts=True, maze_size=size)
+        config = ExperimentConfig(body="ant", held_out_layouts=True, **settings)
+        return MazeEpisodeRecorder(make_env(config, low_level, split="selection"), scale_step_limit=size > 4)
     if family not in STANDARD_MAPS or family == "open":
-        raise ValueError(f"unknown maze family {family!r}; choose from {list(FAMILIES)}")
+        raise ValueError(f"unknown maze family {family!r}; choose from {[*FAMILIES, *SELECTION_FAMILIES]}")
     return MazeEpisodeRecorder(
         gym.make("antmaze_hirl/AntMaze-v0", maze_map=family, low_level=low_level), scale_step_limit=True
     )

@@ -40,8 +40,6 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
-from antmaze_hirl.envs.controllers import SmoothedController
-from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import DEFAULT_METHODS, body_settings, evaluation_sets
@@ -88,32 +86,12 @@ def goals(summary: dict, body: str) -> dict:
     }
 
 
-def oracle_success(
-    config: ExperimentConfig,
-    low_level_path: Path | None = None,
-    *,
-    seed: int | None = None,
-    episodes: int | None = None,
-    split: LayoutSplit | None = None,
-    action_smoothing: float = 0.0,
-) -> dict:
-    """The oracle itself driving the same low level on the same held-out mazes, with its 95% Wilson interval.
-
-    ``seed``, ``episodes`` and ``split`` default to the learners' final evaluation (its first seed,
-    ``config.final_eval_episodes`` mazes and its part of the layout partition; the part matters only with
-    ``config.held_out_layouts``). ``action_smoothing`` > 0 smooths the low level's actions
-    (:class:`~antmaze_hirl.envs.SmoothedController`), for a policy trained under that smoothing.
-    """
+def oracle_success(config: ExperimentConfig, low_level_path: Path | None = None) -> dict:
+    """The oracle itself driving the same low level on the final-evaluation mazes, with its 95% Wilson interval."""
     low_level = load_low_level(config.body, low_level_path) if low_level_path is not None else None
-    final_split, first_seed, mazes = evaluation_sets(config)["final"]
-    split = final_split if split is None else split
-    controller = low_level
-    if action_smoothing > 0:
-        controller = SmoothedController(low_level or load_low_level(config.body), action_smoothing)
-    env = make_env(config, controller, split=split)
+    split, seed, episodes = evaluation_sets(config)["final"]
+    env = make_env(config, low_level, split=split)
     oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
-    seed = first_seed if seed is None else seed
-    episodes = mazes if episodes is None else episodes
     result = evaluate_high_level(oracle, env, episodes=episodes, seed=seed)
     return {
         "low_level": "shipped" if low_level_path is None else str(low_level_path),
@@ -123,7 +101,6 @@ def oracle_success(
         "maze_seed": seed,
         "held_out_layouts": config.held_out_layouts,
         "layout_split": split if config.held_out_layouts else None,
-        "action_smoothing": action_smoothing,
         **result,
         "wilson_95": rate_with_interval(result["success_rate"], episodes)["wilson_95"],
     }

@@ -1,5 +1,6 @@
-"""benchmarks/select_low_level.py: with --held-out-layouts its mazes are the layout partition's selection part."""
+"""benchmarks/select_low_level.py: its mazes are selection sets, apart from every reported family."""
 
+import json
 import sys
 from pathlib import Path
 
@@ -7,70 +8,119 @@ import pytest
 from conftest import StillController
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+import in_maze
 import select_low_level
 
 from antmaze_hirl.envs.layout_splits import layout_split
-from antmaze_hirl.experiments import ExperimentConfig
-from antmaze_hirl.experiments.config import body_settings
-from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.envs.layouts import validate_maze_map
+
+SHIPPED = Path(__file__).parents[1] / "antmaze_hirl" / "policies" / "ant_td3.zip"
 
 
-@pytest.mark.parametrize("held_out_layouts", [False, True])
-def test_score_asks_for_the_selection_part_only_with_held_out_layouts(monkeypatch, held_out_layouts):
-    calls = []
-
-    def fake_oracle_success(config, path, **kwargs):
-        calls.append((config, kwargs))
-        return {"low_level_id": "id", "success_rate": 0.5}
-
-    monkeypatch.setattr(select_low_level, "oracle_success", fake_oracle_success)
-    monkeypatch.setattr(select_low_level, "load_low_level", lambda body, path: None)
-    reach_envs = []
-
-    def fake_evaluate_reach(model, env, **kwargs):
-        reach_envs.append(env)
-        return {"success_rate": 1.0, "mean_steps": 9}
-
-    monkeypatch.setattr(select_low_level, "evaluate_reach", fake_evaluate_reach)
-    scores = select_low_level.score(
-        Path("p.zip"), "ant", seed=100_000, episodes=2, mazes=3, held_out_layouts=held_out_layouts, action_smoothing=0.3
-    )
-    ((config, kwargs),) = calls
-    assert scores["score"] == 0.75
-    assert config.held_out_layouts is held_out_layouts
-    assert kwargs["seed"] == select_low_level.SELECTION_MAZE_SEED and kwargs["episodes"] == 3
-    assert kwargs.get("split") == ("selection" if held_out_layouts else None)
-    assert config.maze_size == (4 if held_out_layouts else 3)
-    assert kwargs["action_smoothing"] == 0.3 and reach_envs[0].action_smoothing == 0.3  # both figures smoothed
+def test_the_families_follow_the_protocol_flags():
+    assert select_low_level.selection_families(held_out_layouts=False, large_mazes=False) == ["ant3"]
+    assert select_low_level.selection_families(held_out_layouts=True, large_mazes=False) == ["select4"]
+    assert select_low_level.selection_families(held_out_layouts=True, large_mazes=True) == ["select4", "select6"]
+    with pytest.raises(ValueError, match="--large-mazes needs --held-out-layouts"):
+        select_low_level.selection_families(held_out_layouts=False, large_mazes=True)
 
 
-def test_held_out_selection_mazes_share_no_wall_grid_with_the_reported_ant4_mazes():
-    config = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
-    walls = {}
-    for split, first_seed in (("selection", select_low_level.SELECTION_MAZE_SEED), ("eval", 1_000_000)):
-        env = make_env(config, StillController(), split=split)
-        walls[split] = set()
-        for seed in range(first_seed, first_seed + 15):
-            env.reset(seed=seed)
-            assert layout_split(env.unwrapped.layout) == split
-            walls[split].add(env.unwrapped.layout.walls.tobytes())
-        env.close()
-    assert walls["selection"] and walls["eval"] and not walls["selection"] & walls["eval"]
+def test_a_row_is_scored_on_the_selection_seeds_at_its_smoothing(monkeypatch):
+    played = []
+
+    def fake_play(paths, families, *, episodes, seed, smoothing, jobs):
+        played.append((families, episodes, seed, smoothing))
+        success = {"select4": 0.5, "select6": 0.25}
+        return {
+            in_maze.row_name(path, smoothing[0]): {
+                "low_level_id": "id",
+                "families": {f: {"success_rate": success[f], "flips_per_subgoal": 0.0} for f in families},
+            }
+            for path in paths
+        }
+
+    smoothed = []
+
+    def fake_eval_low(path, smoothing, seed, episodes):
+        smoothed.append((smoothing, seed, episodes))
+        return {"eval_low": 0.75, "eval_low_mean_steps": 9.0}
+
+    monkeypatch.setattr(select_low_level, "play_families", fake_play)
+    monkeypatch.setattr(select_low_level, "eval_low", fake_eval_low)
+    rows = select_low_level.score_rows([Path("p.zip")], 0.3, ["select4", "select6"], seed=100_000, episodes=2, mazes=3)
+    assert played == [(["select4", "select6"], 3, select_low_level.SELECTION_MAZE_SEED, (0.3,))]
+    assert smoothed == [(0.3, 100_000, 2)]  # both figures smoothed
+    row = rows["p.zip smoothing=0.3"]
+    assert row["score"] == pytest.approx((0.75 + 0.5 + 0.25) / 3)
+    assert row["success"] == {"select4": 0.5, "select6": 0.25} and row["action_smoothing"] == 0.3
 
 
-def test_oracle_success_drives_the_low_level_through_the_smoothing(monkeypatch):
-    import paper_experiment
+def walls_of(family, first_seed, count):
+    env = in_maze.family_env(family, StillController())
+    grids = []
+    for seed in range(first_seed, first_seed + count):
+        env.reset(seed=seed)
+        grids.append(env.unwrapped.layout)
+    env.close()
+    return env, grids
 
-    from antmaze_hirl.envs import SmoothedController
 
-    controllers = []
-    real_make_env = paper_experiment.make_env
+def test_selection_mazes_share_no_wall_grid_with_the_reported_ant4_mazes():
+    _, selection = walls_of("select4", select_low_level.SELECTION_MAZE_SEED, 15)
+    _, reported = walls_of("ant4", 1_000_000, 15)
+    assert {layout_split(layout) for layout in selection} == {"selection"}
+    assert {layout_split(layout) for layout in reported} == {"eval"}
+    assert not {layout.walls.tobytes() for layout in selection} & {layout.walls.tobytes() for layout in reported}
 
-    def recording_make_env(config, low_level=None, **kwargs):
-        controllers.append(low_level)
-        return real_make_env(config, low_level, **kwargs)
 
-    monkeypatch.setattr(paper_experiment, "make_env", recording_make_env)
-    result = paper_experiment.oracle_success(ExperimentConfig(body="point"), episodes=1, action_smoothing=0.4)
-    assert isinstance(controllers[0], SmoothedController) and controllers[0].alpha == 0.4
-    assert result["action_smoothing"] == 0.4 and result["low_level_id"].startswith("sha256:")
+def test_the_large_selection_mazes_have_medium_s_grid_and_a_path_scaled_limit():
+    env, layouts = walls_of("select6", select_low_level.SELECTION_MAZE_SEED, 5)
+    assert {layout_split(layout) for layout in layouts} == {"selection"}
+    assert {layout.walls.shape for layout in layouts} == {validate_maze_map("medium").shape}
+    last = layouts[-1]
+    assert env.max_steps == in_maze.step_limit(last.walls, last.start_cell, last.goal_cell, 4.0)
+    small = in_maze.family_env("select4", StillController())
+    small.reset(seed=select_low_level.SELECTION_MAZE_SEED)
+    assert small.max_steps == 500  # ant4's budget, unscaled
+
+
+def run_main(monkeypatch, *args):
+    monkeypatch.setattr(sys, "argv", ["select_low_level.py", *map(str, args)])
+    select_low_level.main()
+
+
+def test_main_scores_each_row_once_and_reuses_the_cache(monkeypatch, tmp_path, capsys):
+    out = tmp_path / "selection.json"
+    flags = [SHIPPED, "--held-out-layouts", "--episodes", 2, "--mazes", 1, "--action-smoothing", "0,0.5", "--out", out]
+    run_main(monkeypatch, *flags)
+    saved = json.loads(out.read_text())
+    assert sorted(saved["scores"]) == [str(SHIPPED), f"{SHIPPED} smoothing=0.5"]
+    assert saved["settings"]["families"] == ["select4"] and saved["best"] in saved["scores"]
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a cached row was scored again")
+
+    monkeypatch.setattr(select_low_level, "score_rows", refuse)
+    run_main(monkeypatch, *flags)
+    assert json.loads(out.read_text())["scores"] == saved["scores"]
+
+
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (["--large-mazes"], "--large-mazes needs --held-out-layouts"),
+        (["--action-smoothing", "0,1.5"], "action smoothing must lie in [0, 1), got 1.5"),
+        (["--mazes", "0"], "--mazes must be >= 1, got 0"),
+        (["--seed", "0"], "overlap range(0, 1000)"),
+    ],
+)
+def test_bad_flags_are_refused_in_one_line(monkeypatch, capsys, flags, message):
+    with pytest.raises(SystemExit):
+        run_main(monkeypatch, SHIPPED, *flags)
+    assert message in capsys.readouterr().err
+
+
+def test_a_path_that_is_neither_policy_nor_run_is_named(monkeypatch, capsys, tmp_path):
+    with pytest.raises(SystemExit):
+        run_main(monkeypatch, tmp_path / "nothing")
+    assert "nothing" in capsys.readouterr().err
