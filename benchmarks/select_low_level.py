@@ -20,8 +20,9 @@ Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, a
     limit scaled to the path as on the standard maps, so that the pick also weighs long walks.
 
 A row's score is the mean of its figures (eval-low and one success rate per family): what the high level needs
-and what issue 16's targets measure. The pick is the best row, a (snapshot, smoothing weight) pair. Scores are
-cached per row in the JSON, so a rerun while training goes on scores only new snapshots.
+and what issue 16's targets measure. The pick is the best row, a (snapshot, smoothing weight) pair; a tie
+keeps the row listed first, so name the shipped policy first. Scores are cached per row in the JSON, so a rerun
+while training goes on scores only new snapshots.
 
 A policy trained under action smoothing (``ReachEnv(action_smoothing=...)``, e.g.
 ``benchmarks/configs/ant_maze_smoothed.yml``) is scored at its weight: every figure of a row runs with the same
