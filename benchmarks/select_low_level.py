@@ -21,8 +21,8 @@ Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, a
 
 A row's score is the mean of its figures (eval-low and one success rate per family): what the high level needs
 and what issue 16's targets measure. The pick is the best row, a (snapshot, smoothing weight) pair; a tie
-keeps the row listed first, so name the shipped policy first. Scores are cached per row in the JSON, so a rerun
-while training goes on scores only new snapshots.
+keeps the row listed first (policy files come before run snapshots, in the order given). Scores are cached per
+row in the JSON, so a rerun while training goes on scores only new snapshots.
 
 A policy trained under action smoothing (``ReachEnv(action_smoothing=...)``, e.g.
 ``benchmarks/configs/ant_maze_smoothed.yml``) is scored at its weight: every figure of a row runs with the same
@@ -31,7 +31,8 @@ smoothing (the saved zip does not record it).
 Usage: python benchmarks/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
            [--held-out-layouts [--large-mazes]] [--action-smoothing 0[,A...]] [--jobs N]
 Writes benchmarks/results/low_level_selection.json (``low_level_selection_held_out.json`` with
-``--held-out-layouts``), with the command that made it.
+``--held-out-layouts``, ``low_level_selection_held_out_large.json`` with ``--large-mazes`` too), with the command
+that made it.
 """
 
 from __future__ import annotations
@@ -75,11 +76,13 @@ def selection_families(*, held_out_layouts: bool, large_mazes: bool) -> list[str
 
 
 def eval_low(path: Path, smoothing: float, seed: int, episodes: int) -> dict[str, float]:
-    """Free-space reaching of the policy at ``path`` under ``smoothing``; runs in a worker process."""
+    """Free-space reaching of the policy at ``path`` under ``smoothing`` (a worker process's task with ``--jobs``)."""
     torch.set_num_threads(1)
-    result = evaluate_reach(
-        load_low_level("ant", path), ReachEnv("ant", action_smoothing=smoothing), episodes=episodes, seed=seed
-    )
+    reach = ReachEnv("ant", action_smoothing=smoothing)
+    try:
+        result = evaluate_reach(load_low_level("ant", path), reach, episodes=episodes, seed=seed)
+    finally:
+        reach.close()
     return {"eval_low": result["success_rate"], "eval_low_mean_steps": result["mean_steps"]}
 
 
@@ -146,9 +149,8 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=None, help="default: see Usage")
     args = parser.parse_args()
     if args.out is None:
-        args.out = RESULTS / (
-            "low_level_selection_held_out.json" if args.held_out_layouts else "low_level_selection.json"
-        )
+        suffix = ("_held_out" if args.held_out_layouts else "") + ("_large" if args.large_mazes else "")
+        args.out = RESULTS / f"low_level_selection{suffix}.json"
     try:
         smoothing = parse_smoothing(args.action_smoothing)
         families = selection_families(held_out_layouts=args.held_out_layouts, large_mazes=args.large_mazes)

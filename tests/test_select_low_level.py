@@ -95,7 +95,8 @@ def test_main_scores_each_row_once_and_reuses_the_cache(monkeypatch, tmp_path, c
     run_main(monkeypatch, *flags)
     saved = json.loads(out.read_text())
     assert sorted(saved["scores"]) == [str(SHIPPED), f"{SHIPPED} smoothing=0.5"]
-    assert saved["settings"]["families"] == ["select4"] and saved["best"] in saved["scores"]
+    assert saved["settings"]["families"] == ["select4"]
+    assert saved["scores"][saved["best"]]["score"] == max(row["score"] for row in saved["scores"].values())
 
     def refuse(*args, **kwargs):
         raise AssertionError("a cached row was scored again")
@@ -124,3 +125,33 @@ def test_a_path_that_is_neither_policy_nor_run_is_named(monkeypatch, capsys, tmp
     with pytest.raises(SystemExit):
         run_main(monkeypatch, tmp_path / "nothing")
     assert "nothing" in capsys.readouterr().err
+
+
+def test_eval_low_plays_free_space_under_the_row_s_smoothing(monkeypatch):
+    seen = []
+
+    def fake_evaluate_reach(model, env, *, episodes, seed):
+        seen.append((env.action_smoothing, episodes, seed))
+        return {"success_rate": 0.5, "mean_steps": 7.0}
+
+    monkeypatch.setattr(select_low_level, "load_low_level", lambda body, path: None)
+    monkeypatch.setattr(select_low_level, "evaluate_reach", fake_evaluate_reach)
+    assert select_low_level.eval_low(Path("p.zip"), 0.4, 100_000, 3) == {"eval_low": 0.5, "eval_low_mean_steps": 7.0}
+    assert seen == [(0.4, 3, 100_000)]
+
+
+def test_the_best_row_wins_a_tie_goes_to_the_first_and_large_mazes_get_their_own_file(monkeypatch, tmp_path):
+    first, second, third = (tmp_path / f"{name}.zip" for name in ("first", "second", "third"))
+    for path in (first, second, third):
+        path.write_bytes(SHIPPED.read_bytes())
+    scores = {"first": 0.8, "second": 0.8, "third": 0.7}
+
+    def fake_score_rows(paths, smoothing, families, **kwargs):
+        assert families == ["select4", "select6"]
+        return {in_maze.row_name(p, smoothing): {"low_level_id": "x", "score": scores[p.stem]} for p in paths}
+
+    monkeypatch.setattr(select_low_level, "score_rows", fake_score_rows)
+    monkeypatch.setattr(select_low_level, "RESULTS", tmp_path)
+    run_main(monkeypatch, first, second, third, "--held-out-layouts", "--large-mazes")
+    saved = json.loads((tmp_path / "low_level_selection_held_out_large.json").read_text())
+    assert saved["best"] == str(first)
