@@ -4,16 +4,19 @@ For each low level (default the shipped ant; ``--low-level ZIP`` for candidates,
 the same mazes) and each maze family:
 
 * ``ant3``: the ant experiment's family (random 3x3 layouts, 500-step limit), the mazes of
-  ``paper_experiment.py --ceiling-only``;
+  ``paper_experiment.py --body ant --oracle-only``;
 * ``ant4``: the held-out-layouts protocol's ant family (random 4x4 layouts from the ``eval`` part of the layout
   partition, 500-step limit), the mazes of ``paper_experiment.py --body ant --oracle-only --held-out-layouts``;
 * ``u``, ``medium``, ``large``: gymnasium-robotics' standard maps, random start corner and goal (at least 3 grid
   steps apart), with the step limit scaled to the episode's shortest path (:func:`step_limit`).
 
+``select4`` and ``select6`` (:data:`SELECTION_FAMILIES`) are for ``select_low_level.py`` only: ``--families`` takes
+the reported ones above.
+
 The oracle's subgoals are at most 2 m away (the ant experiment's ``expert_max_distance``). Episode ``i`` of every
 family resets with seed ``HELD_OUT_SEED + i`` (1,000,000 + i, as every held-out figure): for ``ant3`` these are the
-ceiling's mazes. Note the 3x3 family has only 48 distinct wall grids, so a training run that sees random 3x3
-layouts (``ReachEnv(maze_probability=...)``) has seen these grids; only the seeds are held out.
+mazes of ``oracle_success_ant_3.json``. Note the 3x3 family has only 48 distinct wall grids, so a training run that
+sees random 3x3 layouts (``ReachEnv(maze_probability=...)``) has seen these grids; only the seeds are held out.
 
 Each episode ends in exactly one outcome: ``success``, ``flip`` (the ant turned over: the env ends the episode),
 ``frozen`` (truncated, and over its last :data:`FROZEN_SUBGOALS` subgoals the body never got
