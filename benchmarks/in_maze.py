@@ -37,13 +37,13 @@ Writes benchmarks/results/in_maze.json (or ``--out``), with the command that mad
 from __future__ import annotations
 
 import argparse
-import contextlib
 import itertools
 import math
 import multiprocessing
 import shlex
 import sys
 import time
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -59,7 +59,7 @@ from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.controllers import SmoothedController
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
-from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE, body_settings, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
@@ -300,15 +300,12 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
     if family == "ant3":
         config = ExperimentConfig(body="ant", **BODY_DEFAULTS["ant"])
         return MazeEpisodeRecorder(make_env(config, low_level), scale_step_limit=False)
-    if family == "ant4":
-        config = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
-        split = evaluation_sets(config)["final"][0]
-        return MazeEpisodeRecorder(make_env(config, low_level, split=split), scale_step_limit=False)
-    if family in SELECTION_FAMILIES:
-        size = SELECTION_FAMILIES[family]
-        settings = body_settings("ant", held_out_layouts=True, maze_size=size)
+    if family == "ant4" or family in SELECTION_FAMILIES:
+        settings = body_settings("ant", held_out_layouts=True, maze_size=SELECTION_FAMILIES.get(family))
         config = ExperimentConfig(body="ant", held_out_layouts=True, **settings)
-        return MazeEpisodeRecorder(make_env(config, low_level, split="selection"), scale_step_limit=size > 4)
+        split = "selection" if family in SELECTION_FAMILIES else evaluation_sets(config)["final"][0]
+        scaled = config.maze_size > HELD_OUT_MAZE_SIZE["ant"]  # ant4's 500 steps; larger mazes scale to the path
+        return MazeEpisodeRecorder(make_env(config, low_level, split=split), scale_step_limit=scaled)
     if family not in STANDARD_MAPS or family == "open":
         raise ValueError(f"unknown maze family {family!r}; choose from {[*FAMILIES, *SELECTION_FAMILIES]}")
     return MazeEpisodeRecorder(
@@ -375,6 +372,15 @@ def run_chunk(
     return row_name(path, smoothing), family, raw, low_level_identity("ant", model)
 
 
+def map_tasks(function: Any, tasks: list[tuple[Any, ...]], jobs: int) -> Iterator[Any]:
+    """``function(*task)`` for every task, in order; in ``jobs`` spawned processes when ``jobs`` > 1."""
+    if jobs <= 1:
+        yield from (function(*task) for task in tasks)
+        return
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        yield from pool.map(function, *zip(*tasks, strict=True))
+
+
 def chunks_of(episodes: int, seed: int, size: int) -> list[range]:
     """Episode seeds ``seed .. seed + episodes - 1`` cut into consecutive ranges of at most ``size``."""
     return [range(first, min(first + size, seed + episodes)) for first in range(seed, seed + episodes, size)]
@@ -405,13 +411,7 @@ def run(
         for family in families
         for seeds in (chunks_of(episodes, seed, chunk_episodes) if jobs > 1 else [range(seed, seed + episodes)])
     ]
-    with contextlib.ExitStack() as stack:
-        if jobs > 1:
-            pool = stack.enter_context(ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")))
-            finished = pool.map(run_chunk, *zip(*tasks, strict=True))
-        else:
-            finished = (run_chunk(*task) for task in tasks)
-        done = list(tqdm(finished, total=len(tasks), desc="in-maze chunks", unit="chunk"))
+    done = list(tqdm(map_tasks(run_chunk, tasks, jobs), total=len(tasks), desc="in-maze chunks", unit="chunk"))
     raw: dict[str, dict[str, list[dict[str, Any]]]] = {}
     identities: dict[str, str] = {}
     for name, family, chunk, identity in done:

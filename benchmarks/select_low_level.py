@@ -39,15 +39,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing
 import shlex
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import torch
-from in_maze import parse_smoothing, row_name, row_names
+from in_maze import map_tasks, parse_smoothing, row_name, row_names
 from in_maze import run as play_families
 from paper_experiment import RESULTS
 
@@ -101,13 +99,7 @@ def score_rows(
     Keyed by :func:`in_maze.row_name`. With ``jobs`` > 1, eval-low runs one policy per process and the mazes in
     chunks over processes; the figures do not depend on ``jobs``.
     """
-    if jobs > 1:
-        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-            free = list(
-                pool.map(eval_low, paths, [smoothing] * len(paths), [seed] * len(paths), [episodes] * len(paths))
-            )
-    else:
-        free = [eval_low(path, smoothing, seed, episodes) for path in paths]
+    free = list(map_tasks(eval_low, [(path, smoothing, seed, episodes) for path in paths], jobs))
     mazes_played = play_families(
         list(paths), families, episodes=mazes, seed=SELECTION_MAZE_SEED, smoothing=(smoothing,), jobs=jobs
     )

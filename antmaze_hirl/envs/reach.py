@@ -235,7 +235,6 @@ class ReachEnv(GoalEnv, EzPickle):
         self.maze_split = check_split(maze_split) if maze_split is not None else None
         self.flip_penalty = float(flip_penalty)
         self._smoother = ActionSmoother(action_smoothing)
-        self.action_smoothing = self._smoother.alpha
         self.reward_type = reward_type
         self.action_scale = float(action_scale if action_scale is not None else spec.default_action_scale)
         self.terminate_on_flip = terminate_on_flip and body == "ant"
@@ -259,6 +258,11 @@ class ReachEnv(GoalEnv, EzPickle):
         self._goal = np.zeros(2)
         self._steps = 0
         self._started = False
+
+    @property
+    def action_smoothing(self) -> float:
+        """Weight of the previous applied action (``action_smoothing`` of the constructor)."""
+        return self._smoother.alpha
 
     @property
     def walls(self) -> np.ndarray:
