@@ -107,6 +107,10 @@ def test_chained_and_placed_resets_keep_the_current_walls():
         ({"maze_sizes": [True]}, r"maze_sizes must be .* got \[True\]"),
         ({"maze_wall_fraction": 1.0}, r"maze_wall_fraction must lie in \[0, 1\), got 1.0"),
         ({"flip_penalty": -0.5}, "flip_penalty must be >= 0, got -0.5"),
+        ({"tilt_penalty": -1.0}, "tilt_penalty must be >= 0, got -1.0"),
+        ({"tilt_penalty": float("nan")}, "tilt_penalty must be >= 0, got nan"),
+        ({"upright_threshold": -1.0}, r"upright_threshold must lie in \(-1, 1\], got -1.0"),
+        ({"upright_threshold": 1.5}, r"upright_threshold must lie in \(-1, 1\], got 1.5"),
         ({"maze_split": "test"}, "unknown layout split 'test'"),
     ],
 )
@@ -147,14 +151,6 @@ def test_flipped_flags_bad_info(info, message):
         flipped_flags(info, (3,))
 
 
-@pytest.mark.parametrize(("penalty", "copies"), [(0.0, False), (1.0, True)])
-def test_her_keeps_infos_only_when_a_flip_penalty_needs_them(penalty, copies):
-    config = load_config("ant").replace(
-        buffer_size=1000, env_kwargs={"terminate_on_flip": True, "flip_penalty": penalty}
-    )
-    assert make_model("ant", "td3", config, seed=0).replay_buffer.copy_info_dict is copies
-
-
 def test_the_committed_maze_config_loads_and_trains_in_mazes():
     config = load_config("ant", ANT_MAZE_YML)
     env = ReachEnv("ant", **config.env_kwargs)
@@ -169,6 +165,41 @@ def test_the_sac_maze_config_trains_in_the_same_setting_with_the_flip_penalty_re
     assert sac.env_kwargs == load_config("ant", ANT_MAZE_YML).env_kwargs and sac.action_l2 == 0.0
     model = make_model("ant", "sac", sac.replace(buffer_size=1000), seed=0)
     assert model.replay_buffer.copy_info_dict and model.action_noise is None
+
+
+def tilt(env, degrees):
+    """Rolls the ant about x by ``degrees``, at rest, with its torso high enough not to count as flipped."""
+    qpos = env.sim.data.qpos.copy()
+    half = np.radians(degrees) / 2
+    qpos[2], qpos[3:7] = 0.75, [np.cos(half), np.sin(half), 0.0, 0.0]
+    env.sim._mujoco_env.set_state(qpos, np.zeros_like(env.sim.data.qvel))
+
+
+def test_tilt_penalty_grows_below_the_upright_threshold_and_reaches_her_batches():
+    env = ReachEnv("ant", tilt_penalty=2.0, upright_threshold=0.8)
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros(8))
+    assert reward == 0.0 and info["uprightness"] > 0.8  # upright at rest: no penalty
+    tilt(env, 90)  # on its side: uprightness 0, up to the step's own motion
+    assert env.sim.uprightness == pytest.approx(0.0, abs=1e-12) and not env.sim.is_flipped
+    _, reward, _, _, info = env.step(np.zeros(8))
+    assert reward == pytest.approx(-2.0 * (0.8 - info["uprightness"])) and reward < -1.0
+    # HER: the stored infos' uprightness is what counts; a missing entry counts as upright.
+    achieved, desired = np.zeros((3, 2)), np.array([[0.0, 0.0], [5.0, 0.0], [5.0, 0.0]])
+    infos = np.array([{"uprightness": 0.3}, {"uprightness": 0.9}, {}])
+    np.testing.assert_allclose(env.compute_reward(achieved, desired, infos), [1.0 - 1.0, 0.0, 0.0])
+    plain = ReachEnv("ant")
+    plain.reset(seed=0)
+    tilt(plain, 90)
+    assert plain.step(np.zeros(8))[1] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "copies"), [({}, False), ({"tilt_penalty": 1.0}, True), ({"flip_penalty": 1.0}, True)]
+)
+def test_her_keeps_infos_for_either_penalty(kwargs, copies):
+    config = load_config("ant").replace(buffer_size=1000, env_kwargs={"terminate_on_flip": True, **kwargs})
+    assert make_model("ant", "td3", config, seed=0).replay_buffer.copy_info_dict is copies
 
 
 @pytest.mark.parametrize(("penalty", "relabelled_reward"), [(0.0, 1.0), (1.0, 0.0)])

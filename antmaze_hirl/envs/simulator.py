@@ -76,17 +76,26 @@ class MazeSimulator:
         return float(self._mujoco_env.data.qpos[2]) if self.body == "ant" else 0.0
 
     @property
+    def uprightness(self) -> float:
+        """World z component of the torso's up axis: 1 upright, 0 on its side, -1 on its back (point: 1).
+
+        For the torso quaternion ``(qw, qx, qy, qz)`` it is ``1 - 2 (qx^2 + qy^2)``.
+        """
+        if self.body != "ant":
+            return 1.0
+        _, qx, qy, _ = self._mujoco_env.data.qpos[3:7]
+        return float(1 - 2 * (qx * qx + qy * qy))
+
+    @property
     def is_flipped(self) -> bool:
         """Ant only: whether the torso faces down or lies on the floor.
 
         An ant on its back rests at about 0.27 m, above any sensible height threshold, so the torso's
-        up axis is checked too: its world z component is ``1 - 2 (qx^2 + qy^2)`` for quaternion
-        ``(qw, qx, qy, qz)``.
+        up axis (:attr:`uprightness`) is checked too.
         """
         if self.body != "ant":
             return False
-        _, qx, qy, _ = self._mujoco_env.data.qpos[3:7]
-        return bool(1 - 2 * (qx * qx + qy * qy) < 0 or self.torso_height < 0.2)
+        return bool(self.uprightness < 0 or self.torso_height < 0.2)
 
     def close(self) -> None:
         """Frees the MuJoCo renderer, if one was opened."""

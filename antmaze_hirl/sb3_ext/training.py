@@ -13,7 +13,7 @@ from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
-from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.envs.reach import INFO_PENALTIES, ReachEnv
 from antmaze_hirl.sb3_ext.action_penalty import ActionPenaltyPolicy
 from antmaze_hirl.sb3_ext.checkpoint import RunCheckpointCallback, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
@@ -116,8 +116,9 @@ def make_model(
             "n_sampled_goal": config.n_sampled_goal,
             "goal_selection_strategy": "future",
             # HER recomputes relabelled rewards from the stored infos; without a copy it passes empty
-            # dicts and a flip penalty would vanish from 80% of the samples. Copying costs time, so only then.
-            "copy_info_dict": config.env_kwargs.get("flip_penalty", 0) > 0,
+            # dicts and a flip or tilt penalty would vanish from 80% of the samples. Copying costs time,
+            # so only then.
+            "copy_info_dict": any(config.env_kwargs.get(key, 0) > 0 for key in INFO_PENALTIES),
         },
         policy_kwargs=policy_kwargs(config),
         tensorboard_log=tensorboard_log,
