@@ -17,6 +17,12 @@ from antmaze_hirl.envs.layouts import walls_to_maze_map
 __all__ = ["BODY_SPECS", "Body", "BodySpec", "MazeSimulator", "body_spec"]
 
 
+def uprightness(quaternion: np.ndarray) -> float:
+    """World z component of a body's up axis, ``1 - 2 (qx^2 + qy^2)`` for unit quaternion ``(qw, qx, qy, qz)``."""
+    _, qx, qy, _ = quaternion
+    return float(1 - 2 * (qx * qx + qy * qy))
+
+
 class MazeSimulator:
     """Owns the gymnasium-robotics ``AntMazeEnv``/``PointMazeEnv`` for one wall layout.
 
@@ -81,10 +87,7 @@ class MazeSimulator:
 
         For the torso quaternion ``(qw, qx, qy, qz)`` it is ``1 - 2 (qx^2 + qy^2)``.
         """
-        if self.body != "ant":
-            return 1.0
-        _, qx, qy, _ = self._mujoco_env.data.qpos[3:7]
-        return float(1 - 2 * (qx * qx + qy * qy))
+        return uprightness(self._mujoco_env.data.qpos[3:7]) if self.body == "ant" else 1.0
 
     @property
     def is_flipped(self) -> bool:
