@@ -198,6 +198,7 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
 
 def _run_eval_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.envs.reach import ReachEnv
+    from antmaze_hirl.experiments.runner import low_level_identity
     from antmaze_hirl.sb3_ext.evaluation import evaluate_reach
     from antmaze_hirl.sb3_ext.loading import load_low_level
 
@@ -206,7 +207,10 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise ValueError(f"--max-distance {args.max_distance}: {error}") from error
     policy = load_low_level(args.body, path=args.policy)
-    result = evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed)
+    result = {
+        **evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed),
+        "low_level_id": low_level_identity(args.body, policy),  # which weights these figures belong to
+    }
     print(json.dumps(result))
     if args.json is not None:
         atomic_write_json(args.json, result)

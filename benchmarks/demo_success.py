@@ -23,6 +23,7 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.demo import run_demo
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
+from antmaze_hirl.experiments.runner import low_level_identity
 
 RESULTS = Path(__file__).parent / "results"
 OUT = RESULTS / "demo_success.json"
@@ -44,6 +45,7 @@ def measure(body: str, seeds: int) -> dict:
     successes = outcomes.count("success")
     oracle = oracle_success(body)
     return {
+        "low_level_id": low_level_identity(body),  # the shipped policy the demo runs
         "seeds": f"0-{seeds - 1}",
         "settings": BODY_DEFAULTS[body],
         "successes": successes,

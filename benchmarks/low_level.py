@@ -52,6 +52,7 @@ import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.plotting import plot_learning_curves
 from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_checkpoint, train_low_level
@@ -125,6 +126,7 @@ def shipped_figures(episodes: int, sets: int) -> dict[str, dict]:
             for seed in range(0, sets * episodes, episodes)
         }
         figures[body] = {
+            "low_level_id": low_level_identity(body, policy),
             "max_distance_m": env.goal_radius,
             **per_set[0],
             "disjoint_sets": {str(seed): result["success_rate"] for seed, result in per_set.items()},

@@ -102,15 +102,17 @@ def test_train_low_reads_a_hyperparams_override(tmp_path, capsys):
 
 def test_eval_low_prints_and_writes_the_figures_of_seeded_subgoals(tmp_path, capsys):
     from antmaze_hirl.envs.reach import ReachEnv
+    from antmaze_hirl.experiments.runner import low_level_identity
     from antmaze_hirl.sb3_ext import evaluate_reach
 
     out = tmp_path / "deep" / "eval.json"
     args = ["eval-low", "--body", "point", "--episodes", "6", "--seed", "3", "--max-distance", "0.6"]
     assert main([*args, "--json", str(out)]) == 0
     printed = json.loads(capsys.readouterr().out.splitlines()[-1])
-    expected = evaluate_reach(load_low_level("point"), ReachEnv("point", goal_radius=0.6), episodes=6, seed=3)
-    assert printed == json.loads(out.read_text()) == expected
-    assert set(printed) == {"success_rate", "episodes", "mean_steps"}
+    shipped = load_low_level("point")
+    expected = evaluate_reach(shipped, ReachEnv("point", goal_radius=0.6), episodes=6, seed=3)
+    assert printed == json.loads(out.read_text()) == {**expected, "low_level_id": low_level_identity("point", shipped)}
+    assert printed["low_level_id"].startswith("sha256:")
 
 
 def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
