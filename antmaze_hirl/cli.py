@@ -131,6 +131,13 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         "--init-from", type=Path, default=None, help="warm start from this policy .zip's weights (default: none)"
     )
     parser.add_argument(
+        "--init-buffer",
+        type=Path,
+        default=None,
+        help="warm start's replay buffer: another run's checkpoints/ckpt-<n>/replay_buffer.pkl, relabelled with "
+        "this run's reward (default: an empty buffer)",
+    )
+    parser.add_argument(
         "--hyperparams",
         type=Path,
         default=None,
@@ -159,6 +166,7 @@ def _run_train_low(args: argparse.Namespace) -> int:
         resume=args.resume,
         config=load_config(args.body, args.hyperparams, algo=args.algo),
         init_from=args.init_from,
+        init_buffer=args.init_buffer,
         checkpoint_freq=args.checkpoint_freq,
         eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes,

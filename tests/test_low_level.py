@@ -195,6 +195,38 @@ def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
         train_low_level("point", "td3", 500, run, config=config, resume=True, init_from=tmp_path / "other.zip", **TINY)
 
 
+def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_path):
+    config = tiny_config()
+    train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=300, **TINY)
+    folder, _ = latest_checkpoint(tmp_path / "a" / "checkpoints")
+    source = folder / "replay_buffer.pkl"
+    run = tmp_path / "b"
+    warm = train_low_level(
+        "point", "td3", 0, run, config=config, init_from=tmp_path / "a" / "policy.zip", init_buffer=source, **TINY
+    )
+    assert warm.num_timesteps == 0 and warm.replay_buffer.size() == 300
+    assert isinstance(warm.replay_buffer, HerReplayBuffer) and warm.replay_buffer.env is warm.get_env()
+    more = train_low_level("point", "td3", 100, run, config=config, init_buffer=source, checkpoint_freq=100, **TINY)
+    assert more.replay_buffer.size() == 400  # the carried 300, then its own 100
+    state = latest_checkpoint(run / "checkpoints")[1]
+    assert state["init_buffer"] == str(source) and state["init_from"] is None
+    resumed = train_low_level("point", "td3", 200, run, config=config, resume=True, checkpoint_freq=100, **TINY)
+    assert resumed.replay_buffer.size() == 500
+    with pytest.raises(CheckpointError, match=r"made with init_buffer=.*replay_buffer\.pkl', this run has .*other"):
+        train_low_level("point", "td3", 300, run, config=config, resume=True, init_buffer=tmp_path / "other", **TINY)
+
+
+def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path):
+    config = tiny_config()
+    with pytest.raises(FileNotFoundError, match="--init-buffer .*nothing.pkl is not a file"):
+        train_low_level("point", "td3", 0, tmp_path / "a", config=config, init_buffer=tmp_path / "nothing.pkl", **TINY)
+    ant = tiny_config("ant")
+    train_low_level("ant", "td3", 150, tmp_path / "ant", config=ant, checkpoint_freq=150, **TINY)
+    ant_buffer = latest_checkpoint(tmp_path / "ant" / "checkpoints")[0] / "replay_buffer.pkl"
+    with pytest.raises(ValueError, match=r"holds observations .* actions \(8,\); this run needs .* \(2,\)"):
+        train_low_level("point", "td3", 0, tmp_path / "b", config=config, init_buffer=ant_buffer, **TINY)
+
+
 def test_bad_budgets_fail_before_any_training(tmp_path):
     with pytest.raises(ValueError, match="total_timesteps must be >= 0, got -5"):
         train_low_level("point", "td3", -5, tmp_path / "a", config=tiny_config(), **TINY)

@@ -137,6 +137,7 @@ def train_low_level(
     resume: bool = False,
     config: LowLevelConfig | None = None,
     init_from: str | Path | None = None,
+    init_buffer: str | Path | None = None,
     checkpoint_freq: int = 50_000,
     eval_freq: int = 25_000,
     eval_episodes: int = 50,
@@ -164,6 +165,12 @@ def train_low_level(
             networks whose weights and optimiser states the new model starts from (its replay buffer starts
             empty). On resume it may be left out (the checkpoint holds the weights); if given, it must be the
             one the run started from.
+        init_buffer: Warm start's replay buffer: another run's checkpoint ``replay_buffer.pkl`` (a
+            ``HerReplayBuffer`` of the same observation and action shapes), so that a fine-tune's critic
+            does not relearn from an empty buffer. HER relabels its transitions with this run's reward,
+            from their stored infos (an entry they lack counts as its default: a buffer recorded without
+            ``info["uprightness"]`` carries no tilt penalty); its unrelabelled transitions keep their
+            stored rewards. Resume rules as ``init_from``.
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
@@ -186,10 +193,13 @@ def train_low_level(
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
     identity = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
-    run_state = {**identity, "init_from": None if init_from is None else str(init_from)}
+    starts = {"init_from": init_from, "init_buffer": init_buffer}
+    run_state = {**identity, **{key: None if path is None else str(path) for key, path in starts.items()}}
     if resume:
-        folder, state = latest_checkpoint(checkpoint_dir, expected=run_state if init_from is not None else identity)
-        run_state["init_from"] = state.get("init_from")  # later checkpoints keep where the run started from
+        given = {key: run_state[key] for key, path in starts.items() if path is not None}
+        folder, state = latest_checkpoint(checkpoint_dir, expected={**identity, **given})
+        for key in starts:  # later checkpoints keep where the run started from
+            run_state[key] = state.get(key)
         model = algorithm.load(folder / "model.zip", env=make_reach_env(body, config))
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     else:
@@ -207,6 +217,8 @@ def train_low_level(
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
         if init_from is not None:
             model.set_parameters(str(init_from), exact_match=True, device=model.device)
+        if init_buffer is not None:
+            load_warm_buffer(model, init_buffer)
     # The callbacks check their frequencies and episode counts here, before any training step.
     callbacks: list[BaseCallback] = [
         RunCheckpointCallback(checkpoint_dir, checkpoint_freq, run_state),
@@ -228,9 +240,36 @@ def train_low_level(
     return model
 
 
+def load_warm_buffer(model: OffPolicyAlgorithm, path: str | Path) -> None:
+    """Gives ``model`` the HER replay buffer pickled at ``path`` (another run's checkpoint), bound to its env.
+
+    Raises:
+        FileNotFoundError: If ``path`` is not a file.
+        ValueError: If the buffer is not a ``HerReplayBuffer``, or its observation or action shapes differ
+            from the model's.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"--init-buffer {path} is not a file")
+    expected = model.replay_buffer
+    model.load_replay_buffer(path, truncate_last_traj=True)  # the other run's last episode ends here
+    loaded = model.replay_buffer
+    if not isinstance(loaded, HerReplayBuffer):
+        model.replay_buffer = expected
+        raise ValueError(f"--init-buffer {path} holds a {type(loaded).__name__}, not a HerReplayBuffer")
+    shapes = {key: space.shape for key, space in expected.observation_space.spaces.items()}
+    found = {key: space.shape for key, space in loaded.observation_space.spaces.items()}
+    if found != shapes or loaded.action_space.shape != expected.action_space.shape:
+        model.replay_buffer = expected
+        raise ValueError(
+            f"--init-buffer {path} holds observations {found} and actions {loaded.action_space.shape}; "
+            f"this run needs {shapes} and {expected.action_space.shape}"
+        )
+
+
 def set_torch_threads(threads: int) -> None:
     """Limits torch's CPU threads (on 2 cores, 1 thread leaves one for the simulator or other work)."""
     torch.set_num_threads(threads)
 
 
-__all__ = ["algo_class", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
+__all__ = ["algo_class", "load_warm_buffer", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
