@@ -218,7 +218,7 @@ def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_pat
 
 def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path):
     config = tiny_config()
-    with pytest.raises(FileNotFoundError, match="--init-buffer .*nothing.pkl is not a file"):
+    with pytest.raises(FileNotFoundError, match=r"--init-buffer .*nothing\.pkl is not a file"):
         train_low_level("point", "td3", 0, tmp_path / "a", config=config, init_buffer=tmp_path / "nothing.pkl", **TINY)
     ant = tiny_config("ant")
     train_low_level("ant", "td3", 150, tmp_path / "ant", config=ant, checkpoint_freq=150, **TINY)
