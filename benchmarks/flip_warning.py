@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 import torch
-from in_maze import chunks_of, family_env, map_tasks, outcome
+from in_maze import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
 from paper_experiment import RESULTS
 from select_low_level import SELECTION_MAZE_SEED
 from tqdm import tqdm
@@ -45,7 +45,6 @@ from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
-from antmaze_hirl.sb3_ext.loading import load_low_level
 
 FAMILY = "select6"
 QUATERNION = slice(1, 5)
@@ -110,15 +109,12 @@ def parse_reflexes(text: str) -> list[tuple[float, float]]:
     return reflexes
 
 
-_MODELS: dict[Path | None, Any] = {}
-
-
 def play_chunk(path: Path | None, scale: float, threshold: float, seeds: range) -> dict[str, Any]:
-    """One chunk of ``select6`` episodes with a reflex: outcomes, steps the reflex acted, uprightness traces."""
+    """One chunk of ``select6`` episodes with a reflex: outcomes, steps the reflex acted, uprightness traces,
+    and the low level's fingerprint."""
     torch.set_num_threads(1)
-    if path not in _MODELS:
-        _MODELS[path] = load_low_level("ant", path)
-    reflex = TiltReflex(_MODELS[path], threshold, scale)
+    model = worker_low_level(path)
+    reflex = TiltReflex(model, threshold, scale)
     env = family_env(FAMILY, reflex)
     oracle = PathOracle.for_env(env, max_distance=BODY_DEFAULTS["ant"]["expert_max_distance"])
     outcomes, traces = [], []
@@ -129,7 +125,13 @@ def play_chunk(path: Path | None, scale: float, threshold: float, seeds: range) 
             traces.append(reflex.trace)
     finally:
         env.close()
-    return {"first_seed": seeds.start, "outcomes": outcomes, "traces": traces, "acted": reflex.acted}
+    return {
+        "first_seed": seeds.start,
+        "outcomes": outcomes,
+        "traces": traces,
+        "acted": reflex.acted,
+        "low_level_id": low_level_identity("ant", model),
+    }
 
 
 def flip_lead(trace: np.ndarray, threshold: float) -> int:
@@ -165,7 +167,7 @@ def warning_figures(outcomes: list[str], traces: list[list[float]], thresholds: 
 def reflex_row(outcomes: list[str], acted: int, steps: int) -> dict[str, Any]:
     """Success and flips of one reflex over its episodes, with 95% Wilson intervals."""
     episodes = len(outcomes)
-    counts = {name: outcomes.count(name) for name in ("success", "flip", "frozen", "timeout")}
+    counts = {name: outcomes.count(name) for name in OUTCOMES}
     return {
         "episodes": episodes,
         **counts,
@@ -212,12 +214,11 @@ def main() -> None:
     results = {
         name: reflex_row(row["outcomes"], row["acted"], sum(map(len, row["traces"]))) for name, row in by_row.items()
     }
-    model = load_low_level("ant", args.low_level)
     atomic_write_json(
         args.out,
         {
             "command": shlex.join(["python", "benchmarks/flip_warning.py", *sys.argv[1:]]),
-            "low_level_id": low_level_identity("ant", model),
+            "low_level_id": done[0]["low_level_id"],  # every chunk plays the same low level
             "family": FAMILY,
             "maze_seed": SELECTION_MAZE_SEED,
             "warning": warning,

@@ -355,14 +355,19 @@ _MODELS: dict[Path | None, Any] = {}
 """Each worker process loads a low level once, however many chunks it plays with it."""
 
 
+def worker_low_level(path: Path | None) -> Any:
+    """The ant low level at ``path`` (``None``: the shipped policy's file), loaded once per process."""
+    if path not in _MODELS:
+        _MODELS[path] = load_low_level("ant", path)
+    return _MODELS[path]
+
+
 def run_chunk(
     path: Path | None, smoothing: float, family: str, seeds: range, max_distance: float
 ) -> tuple[str, str, dict[str, Any], str]:
     """One chunk of episodes: ``(row name, family, raw figures, low-level id)``; runs in a worker process."""
     torch.set_num_threads(1)
-    if path not in _MODELS:
-        _MODELS[path] = load_low_level("ant", path)  # None: the shipped policy's file
-    model = _MODELS[path]
+    model = worker_low_level(path)
     controller = model if smoothing == 0 else SmoothedController(model, smoothing)
     env = family_env(family, controller)
     try:
