@@ -9,7 +9,7 @@
    the default 50k steps between checkpoints.
 2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies: the reported set
    (seed 0) and, pooled, ``--sets`` disjoint sets of 200 (seeds 0, 200, 400, ...).
-3. The learning curves of the shipped ant's three training stages (``benchmarks/results/ant_learning_curve*.csv``)
+3. The learning curves of the shipped ant's four training stages (``benchmarks/results/ant_learning_curve*.csv``)
    as a PNG, beside the curves of the runs that chose its settings.
 
 Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
@@ -136,8 +136,8 @@ def shipped_figures(episodes: int, sets: int) -> dict[str, dict]:
     return figures
 
 
-# The shipped ant's three stages first (stage 2 warm-starts from stage 1's 500k policy and stage 3 from stage
-# 2's 500k, so their steps are plotted after 500k and 1M), then the runs that chose the settings (README,
+# The shipped ant's four stages first (stage 2 warm-starts from stage 1's 500k policy, stage 3 from stage 2's
+# 500k and stage 4 from stage 3's 700k, so their steps are plotted after 500k, 1M and 1.7M), then the runs that chose the settings (README,
 # "Shipped low-level policies").
 # label -> (CSV in benchmarks/results, steps before the run started)
 ANT_CURVES = {
@@ -146,6 +146,8 @@ ANT_CURVES = {
     "stage 2: chained 0.5, lr 3e-4 (ant_chain_finetune.yml)": ("ant_learning_curve_chain_finetune.csv", 500_000),
     # Stage 3's curve scores its own setting (half the subgoals inside random mazes), not free space.
     "stage 3: in mazes (ant_maze.yml; own setting)": ("ant_learning_curve_maze.csv", 1_000_000),
+    # Stage 4 scores the same setting as stage 3 (its reward adds the tilt term; success does not change).
+    "stage 4: in mazes, tilt penalty 1 (ant_maze_tilt.yml)": ("ant_learning_curve_tilt.csv", 1_700_000),
     "scale 0.5, gamma 0.98, no action penalty": ("ant_learning_curve_scale05_gamma098_no_penalty.csv", 0),
     "scale 0.5, gamma 0.95": ("ant_learning_curve_scale05_gamma095.csv", 0),
     "scale 0.5, warm start from the scale-1 run": ("ant_learning_curve_scale05_warm_start.csv", 0),
