@@ -137,8 +137,8 @@ def shipped_figures(episodes: int, sets: int) -> dict[str, dict]:
 
 
 # The shipped ant's four stages first (stage 2 warm-starts from stage 1's 500k policy, stage 3 from stage 2's
-# 500k and stage 4 from stage 3's 700k, so their steps are plotted after 500k, 1M and 1.7M), then the runs that chose the settings (README,
-# "Shipped low-level policies").
+# 500k and stage 4 from stage 3's 700k, so their steps are plotted after 500k, 1M and 1.7M), then the runs
+# that chose the settings (README, "Shipped low-level policies").
 # label -> (CSV in benchmarks/results, steps before the run started)
 ANT_CURVES = {
     "stage 1: scale 0.5, gamma 0.98, action_l2 1": ("ant_learning_curve.csv", 0),
@@ -147,7 +147,7 @@ ANT_CURVES = {
     # Stage 3's curve scores its own setting (half the subgoals inside random mazes), not free space.
     "stage 3: in mazes (ant_maze.yml; own setting)": ("ant_learning_curve_maze.csv", 1_000_000),
     # Stage 4 scores the same setting as stage 3 (its reward adds the tilt term; success does not change).
-    "stage 4: in mazes, tilt penalty 1 (ant_maze_tilt.yml)": ("ant_learning_curve_tilt.csv", 1_700_000),
+    "stage 4: tilt penalty 1 (ant_maze_tilt.yml; own setting)": ("ant_learning_curve_tilt.csv", 1_700_000),
     "scale 0.5, gamma 0.98, no action penalty": ("ant_learning_curve_scale05_gamma098_no_penalty.csv", 0),
     "scale 0.5, gamma 0.95": ("ant_learning_curve_scale05_gamma095.csv", 0),
     "scale 0.5, warm start from the scale-1 run": ("ant_learning_curve_scale05_warm_start.csv", 0),
