@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, experiment, study.
+"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.
@@ -225,6 +225,33 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_ensemble_low(subparsers: _Subparsers) -> None:
+    parser = _add_parser(
+        subparsers,
+        "ensemble-low",
+        "one low-level policy acting with the mean action of several TD3 policies",
+        "antmaze-hirl ensemble-low --body ant runs/a/snapshots/step_750000.zip runs/b/policy.zip --out ens.zip",
+    )
+    parser.add_argument("--body", choices=_BODIES, required=True, help="body the members walk (required)")
+    parser.add_argument("members", nargs="+", type=Path, help="two or more TD3/DDPG .zip files of that body")
+    parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
+    parser.add_argument("--force", action="store_true", help="replace an existing file at --out")
+    parser.set_defaults(handler=_run_ensemble_low)
+
+
+def _run_ensemble_low(args: argparse.Namespace) -> int:
+    from antmaze_hirl.experiments.runner import low_level_identity
+    from antmaze_hirl.sb3_ext.ensemble import save_ensemble
+    from antmaze_hirl.sb3_ext.loading import load_low_level
+
+    if args.out.exists() and not args.force:
+        raise FileExistsError(f"--out {args.out} exists; pass --force to replace it")
+    path = save_ensemble(args.members, args.out, body=args.body)
+    identity = low_level_identity(args.body, load_low_level(args.body, path))
+    print(json.dumps({"out": str(path), "members": [str(member) for member in args.members], "low_level_id": identity}))
+    return 0
+
+
 def _add_experiment(subparsers: _Subparsers) -> None:
     defaults = ExperimentConfig()
     parser = _add_parser(
@@ -354,6 +381,7 @@ SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
     _add_eval_low,
+    _add_ensemble_low,
     _add_experiment,
     _add_study,
 )

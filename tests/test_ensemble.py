@@ -1,0 +1,102 @@
+"""Action ensembles of TD3 low-level policies: the mean action, one SB3 zip, loading, the CLI, bad members."""
+
+import json
+
+import numpy as np
+import pytest
+from stable_baselines3 import TD3
+
+from antmaze_hirl.cli import main
+from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.runner import low_level_identity
+from antmaze_hirl.sb3_ext import load_config, make_model
+from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy, build_ensemble, save_ensemble
+from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, policy_fingerprint
+
+
+def member(tmp_path, name, *, seed, algo="td3", **changes):
+    """An untrained point policy saved as a zip (members differ by their initial weights)."""
+    config = load_config("point", algo=algo).replace(learning_starts=100, buffer_size=1_000, **changes)
+    path = tmp_path / f"{name}.zip"
+    make_model("point", algo, config, seed=seed).save(path)
+    return path
+
+
+@pytest.fixture
+def members(tmp_path):
+    return [member(tmp_path, f"m{seed}", seed=seed) for seed in range(3)]
+
+
+def observations(count):
+    env = ReachEnv("point")
+    obs, _ = env.reset(seed=0)
+    seen = []
+    rng = np.random.default_rng(0)
+    for _ in range(count):
+        seen.append(obs)
+        obs, *_ = env.step(rng.uniform(-1, 1, size=env.action_space.shape))
+    env.close()
+    return seen
+
+
+def test_the_saved_ensemble_acts_with_the_members_mean_action_and_loads_as_td3(tmp_path, members):
+    path = save_ensemble(members, tmp_path / "ensemble.zip", body="point")
+    assert algorithm_of(path) is TD3
+    ensemble = load_low_level("point", path)
+    assert isinstance(ensemble.policy, EnsemblePolicy) and ensemble.policy.n_members == 3
+    models = [load_low_level("point", path) for path in members]
+    spread = 0.0
+    for obs in observations(15):
+        actions = np.array([model.predict(obs, deterministic=True)[0] for model in models])
+        spread = max(spread, float(np.ptp(actions, axis=0).max()))
+        np.testing.assert_allclose(ensemble.predict(obs, deterministic=True)[0], actions.mean(axis=0), atol=1e-5)
+    assert spread > 0.05  # the members disagree, so the mean is not any one of them
+    fingerprints = {policy_fingerprint(model) for model in models}
+    assert policy_fingerprint(ensemble) not in fingerprints
+    assert low_level_identity("point", ensemble) == f"sha256:{policy_fingerprint(ensemble)}"
+
+
+def test_member_order_changes_nothing_but_the_fingerprint_is_stable_across_saves(tmp_path, members):
+    first = build_ensemble(members, body="point")
+    again = load_low_level("point", save_ensemble(members, tmp_path / "again.zip", body="point"))
+    assert policy_fingerprint(first) == policy_fingerprint(again)
+    swapped = build_ensemble([members[1], members[0], members[2]], body="point")
+    obs = observations(1)[0]
+    np.testing.assert_allclose(
+        first.predict(obs, deterministic=True)[0], swapped.predict(obs, deterministic=True)[0], atol=1e-5
+    )
+
+
+def test_bad_members_are_refused_with_the_member_named(tmp_path, members):
+    with pytest.raises(ValueError, match="at least two member policies, got 1"):
+        build_ensemble(members[:1], body="point")
+    sac = member(tmp_path, "sac", seed=0, algo="sac")
+    with pytest.raises(ValueError, match=f"member {sac} holds a SAC"):
+        build_ensemble([members[0], sac], body="point")
+    wide = member(tmp_path, "wide", seed=0, net_arch=(32, 32))
+    with pytest.raises(ValueError, match=f"member {wide} has policy settings"):
+        build_ensemble([members[0], wide], body="point")
+    nested = save_ensemble(members[:2], tmp_path / "nested.zip", body="point")
+    with pytest.raises(ValueError, match=f"member {nested} is itself an ensemble"):
+        build_ensemble([members[0], nested], body="point")
+    with pytest.raises(ValueError, match="n_members must be an integer >= 1, got 0"):
+        EnsemblePolicy(*policy_spaces(members[0]), n_members=0)
+
+
+def policy_spaces(path):
+    model = load_low_level("point", path)
+    return model.observation_space, model.action_space, model.lr_schedule
+
+
+def test_cli_ensemble_low_writes_the_zip_and_refuses_to_overwrite(tmp_path, members, capsys):
+    out = tmp_path / "ens.zip"
+    assert main(["ensemble-low", "--body", "point", *map(str, members[:2]), "--out", str(out)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["low_level_id"] == low_level_identity("point", load_low_level("point", out))
+    assert printed["members"] == [str(path) for path in members[:2]]
+    with pytest.raises(SystemExit) as exit_info:
+        main(["ensemble-low", "--body", "point", *map(str, members[:2]), "--out", str(out)])
+    assert exit_info.value.code == 2
+    assert f"--out {out} exists; pass --force" in capsys.readouterr().err
+    assert main(["ensemble-low", "--body", "point", *map(str, members), "--out", str(out), "--force"]) == 0
+    assert load_low_level("point", out).policy.n_members == 3
