@@ -118,7 +118,9 @@ def test_multi_policy_members_share_the_learners_gradient_budget(member_steps, e
 def test_beta_schedules_are_exact():
     schedule = InverseDecayBetaSchedule(decay=2.0)
     assert [schedule(k) for k in range(4)] == [1.0, 0.5, 0.25, 0.125]
-    assert InverseDecayBetaSchedule(decay=3.0, beta0=0.9)(2) == 0.9 / 9
+    assert InverseDecayBetaSchedule(decay=3.0, beta0=0.9)(2) == pytest.approx(0.9 / 9, rel=1e-15)
+    # reward_per_step updates after every step: 2.0 ** 1024 overflows a float, beta must reach 0 instead.
+    assert schedule(1023) == 2.0**-1023 and schedule(1100) == 0.0 and schedule(10**6) == 0.0
     assert [LinearBetaSchedule(4)(k) for k in (0, 1, 4, 9)] == [1.0, 0.75, 0.0, 0.0]
     with pytest.raises(ValueError, match="decay d must be >= 1"):
         InverseDecayBetaSchedule(decay=0.5)

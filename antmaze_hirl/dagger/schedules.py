@@ -43,8 +43,13 @@ class InverseDecayBetaSchedule(BetaSchedule):
         self.beta0 = beta0
 
     def __call__(self, updates: int) -> float:
-        """Returns ``beta0 / decay**updates``."""
-        return self.beta0 / self.decay**updates
+        """Returns ``beta0 / decay**updates`` (0.0 once that underflows).
+
+        As ``beta0 * decay**-updates``: ``decay**updates`` itself overflows a float (d = 2 after 1,024
+        updates, which ``reward_per_step``'s update per high-level step reaches within a trial), while the
+        negative power underflows quietly to 0.0, the limit beta has long reached by then.
+        """
+        return self.beta0 * self.decay ** -float(updates)
 
 
 class ExponentialBetaSchedule(InverseDecayBetaSchedule):
