@@ -100,3 +100,12 @@ def test_cli_ensemble_low_writes_the_zip_and_refuses_to_overwrite(tmp_path, memb
     assert f"--out {out} exists; pass --force" in capsys.readouterr().err
     assert main(["ensemble-low", "--body", "point", *map(str, members), "--out", str(out), "--force"]) == 0
     assert load_low_level("point", out).policy.n_members == 3
+
+
+def test_train_low_refuses_to_start_from_an_ensemble_in_one_line(tmp_path, members, capsys):
+    ensemble = save_ensemble(members[:2], tmp_path / "ens.zip", body="point")
+    argv = ["train-low", "--body", "point", "--timesteps", "200", "--out", str(tmp_path / "run")]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--init-from", str(ensemble)])
+    assert exit_info.value.code == 2
+    assert f"--init-from {ensemble} is an action ensemble; start from one of its member zips" in capsys.readouterr().err

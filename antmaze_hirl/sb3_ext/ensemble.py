@@ -1,9 +1,9 @@
 """Action ensembles of TD3 low-level policies, saved as one ordinary SB3 zip.
 
-The ant's flips (issue 16) come from single strides that rear the torso up; snapshots of different
-fine-tunes rear up in different states. Averaging their deterministic actions keeps the gait they agree
-on and damps the strides only one of them takes (on the selection mazes, two snapshots averaged flipped on
-0.13-0.42% of subgoals against 0.54-1.17% for the better one alone; README "The ant in mazes").
+Against the ant's flips (issue 16): averaging the deterministic actions of snapshots of *different*
+fine-tunes cut flips per subgoal 2-4 times on the selection mazes, where two snapshots of one run did
+not help (README "The ant in mazes"). Why is not measured; a guess is that each run rears the torso up
+in its own states, and the mean damps a stride that only one member takes.
 
 :class:`EnsemblePolicy` is SB3's TD3 ``MultiInputPolicy`` (with HER's action penalty, as the shipped
 policies have) whose actor holds ``n_members`` output heads on one features extractor and acts with their

@@ -32,17 +32,11 @@ def off_policy_algorithms() -> tuple[type[OffPolicyAlgorithm], ...]:
     return (TD3, SAC, TQC)
 
 
-def algorithm_of(path: str | Path) -> type[OffPolicyAlgorithm]:
-    """The SB3 algorithm class that saved ``path``, read from the policy class the zip names.
-
-    An SB3 zip does not name its algorithm, but its ``data`` names the policy class, and each algorithm's
-    ``"MlpPolicy"`` alias is the base class of all its policies (``TD3Policy``, ``SACPolicy``, ...), so a
-    subclass such as :class:`~antmaze_hirl.sb3_ext.action_penalty.ActionPenaltyPolicy` is found too.
-    Loading with the wrong class can succeed and fail only when acting, so the class is checked first.
+def policy_class_of(path: str | Path) -> type:
+    """The policy class an SB3 zip names (read from its ``data``, without loading the weights).
 
     Raises:
-        ValueError: If ``path`` is not an SB3 zip, or its policy belongs to none of
-            :func:`off_policy_algorithms` (an on-policy PPO, ...), naming the policy class.
+        ValueError: If ``path`` is not an SB3 zip, or its policy class cannot be imported here.
     """
     try:
         with zipfile.ZipFile(path) as archive:
@@ -59,6 +53,22 @@ def algorithm_of(path: str | Path) -> type[OffPolicyAlgorithm]:
         raise ValueError(f"{path} holds a policy from {module}, which this Python cannot import{hint}") from error
     if not isinstance(policy_class, type):
         raise ValueError(f"{path} holds a policy class from {module} that cannot be unpickled here")
+    return policy_class
+
+
+def algorithm_of(path: str | Path) -> type[OffPolicyAlgorithm]:
+    """The SB3 algorithm class that saved ``path``, read from the policy class the zip names.
+
+    An SB3 zip does not name its algorithm, but its ``data`` names the policy class, and each algorithm's
+    ``"MlpPolicy"`` alias is the base class of all its policies (``TD3Policy``, ``SACPolicy``, ...), so a
+    subclass such as :class:`~antmaze_hirl.sb3_ext.action_penalty.ActionPenaltyPolicy` is found too.
+    Loading with the wrong class can succeed and fail only when acting, so the class is checked first.
+
+    Raises:
+        ValueError: If ``path`` is not an SB3 zip, or its policy belongs to none of
+            :func:`off_policy_algorithms` (an on-policy PPO, ...), naming the policy class.
+    """
+    policy_class = policy_class_of(path)
     algorithms = off_policy_algorithms()
     for algorithm in algorithms:
         if issubclass(policy_class, algorithm.policy_aliases["MlpPolicy"]):

@@ -17,9 +17,10 @@ from antmaze_hirl.envs.reach import INFO_PENALTIES, ReachEnv
 from antmaze_hirl.sb3_ext.action_penalty import ActionPenaltyPolicy
 from antmaze_hirl.sb3_ext.checkpoint import RunCheckpointCallback, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
+from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
-from antmaze_hirl.sb3_ext.loading import algorithm_of, save_policy
+from antmaze_hirl.sb3_ext.loading import algorithm_of, policy_class_of, save_policy
 
 # TQC is looked up on use (algo_class): sb3-contrib is an optional extra.
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG, "sac": SAC}
@@ -214,6 +215,9 @@ def train_low_level(
             raise ValueError(
                 f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
             )
+        if init_from is not None and issubclass(policy_class_of(init_from), EnsemblePolicy):
+            # Its actor has one head per member: no single-actor policy can take its weights.
+            raise ValueError(f"--init-from {init_from} is an action ensemble; start from one of its member zips")
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
         if init_from is not None:
             model.set_parameters(str(init_from), exact_match=True, device=model.device)
