@@ -233,7 +233,7 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
         "antmaze-hirl ensemble-low --body ant runs/a/snapshots/step_750000.zip runs/b/policy.zip --out ens.zip",
     )
     parser.add_argument("--body", choices=_BODIES, required=True, help="body the members walk (required)")
-    parser.add_argument("members", nargs="+", type=Path, help="two or more TD3/DDPG .zip files of that body")
+    parser.add_argument("members", nargs="+", type=Path, help="two or more TD3/DDPG .zip files of that body (required)")
     parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
     parser.add_argument("--force", action="store_true", help="replace an existing file at --out")
     parser.set_defaults(handler=_run_ensemble_low)

@@ -9,7 +9,8 @@
    the default 50k steps between checkpoints.
 2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies: the reported set
    (seed 0) and, pooled, ``--sets`` disjoint sets of 200 (seeds 0, 200, 400, ...).
-3. The learning curves of the shipped ant's four training stages (``benchmarks/results/ant_learning_curve*.csv``)
+3. The learning curves of the ant's four training stages (``benchmarks/results/ant_learning_curve*.csv``; the shipped
+   stage 5 averages snapshots of stages 3-4's runs and has no curve of its own)
    as a PNG, beside the curves of the runs that chose its settings.
 
 Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
