@@ -53,7 +53,9 @@ def test_the_saved_ensemble_acts_with_the_members_mean_action_and_loads_as_td3(t
     assert spread > 0.05  # the members disagree, so the mean is not any one of them
     fingerprints = {policy_fingerprint(model) for model in models}
     assert policy_fingerprint(ensemble) not in fingerprints
-    assert low_level_identity("point", ensemble) == f"sha256:{policy_fingerprint(ensemble)}"
+    # The critic kept (acting never uses it) is the first member's.
+    for kept, first in zip(ensemble.policy.critic.parameters(), models[0].policy.critic.parameters(), strict=True):
+        assert kept.detach().equal(first.detach())
 
 
 def test_member_order_changes_nothing_but_the_fingerprint_is_stable_across_saves(tmp_path, members):
@@ -61,6 +63,8 @@ def test_member_order_changes_nothing_but_the_fingerprint_is_stable_across_saves
     again = load_low_level("point", save_ensemble(members, tmp_path / "again.zip", body="point"))
     assert policy_fingerprint(first) == policy_fingerprint(again)
     swapped = build_ensemble([members[1], members[0], members[2]], body="point")
+    # The same mean action, but other weights per head (and critic): the order is part of the fingerprint.
+    assert policy_fingerprint(swapped) != policy_fingerprint(first)
     obs = observations(1)[0]
     np.testing.assert_allclose(
         first.predict(obs, deterministic=True)[0], swapped.predict(obs, deterministic=True)[0], atol=1e-5

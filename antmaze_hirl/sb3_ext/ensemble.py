@@ -2,7 +2,7 @@
 
 Against the ant's flips (issue 16): on the selection mazes, averaging the deterministic actions of
 snapshots of *different* fine-tunes raised success and cut flips, where two snapshots of one run did not
-help (README "The ant in mazes"). Why is not measured; a guess is that each run rears the torso up
+raise the score (README "The ant in mazes"). Why is not measured; a guess is that each run rears the torso up
 in its own states, and the mean damps a stride that only one member takes.
 
 :class:`EnsemblePolicy` is SB3's TD3 ``MultiInputPolicy`` (with HER's action penalty, as the shipped
