@@ -241,13 +241,14 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
 
 def _run_ensemble_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.experiments.runner import low_level_identity
-    from antmaze_hirl.sb3_ext.ensemble import save_ensemble
-    from antmaze_hirl.sb3_ext.loading import load_low_level
+    from antmaze_hirl.sb3_ext.ensemble import build_ensemble
+    from antmaze_hirl.sb3_ext.loading import save_policy
 
     if args.out.exists() and not args.force:
         raise FileExistsError(f"--out {args.out} exists; pass --force to replace it")
-    path = save_ensemble(args.members, args.out, body=args.body)
-    identity = low_level_identity(args.body, load_low_level(args.body, path))
+    ensemble = build_ensemble(args.members, args.body)
+    path = save_policy(ensemble, args.out)
+    identity = low_level_identity(args.body, ensemble)  # the saved weights: no need to read the zip back
     print(json.dumps({"out": str(path), "members": [str(member) for member in args.members], "low_level_id": identity}))
     return 0
 

@@ -117,9 +117,10 @@ def build_ensemble(members: Sequence[str | Path], body: str = "ant") -> TD3:
     models = [load_low_level(body, path) for path in members]
     first, first_kwargs = models[0], _policy_settings(models[0], members[0])
     for path, model in zip(members[1:], models[1:], strict=True):
-        if _policy_settings(model, path) != first_kwargs:
+        settings = _policy_settings(model, path)
+        if settings != first_kwargs:
             raise ValueError(
-                f"member {path} has policy settings {_policy_settings(model, path)}, unlike {members[0]}'s "
+                f"member {path} has policy settings {settings}, unlike {members[0]}'s "
                 f"{first_kwargs}: every member needs the same networks and features"
             )
     ensemble = EnsemblePolicy(
