@@ -53,6 +53,7 @@ def test_the_saved_ensemble_acts_with_the_members_mean_action_and_loads_as_td3(t
     assert spread > 0.05  # the members disagree, so the mean is not any one of them
     fingerprints = {policy_fingerprint(model) for model in models}
     assert policy_fingerprint(ensemble) not in fingerprints
+    assert low_level_identity("point", ensemble) == f"sha256:{policy_fingerprint(ensemble)}"
     # The critic kept (acting never uses it) is the first member's.
     for kept, first in zip(ensemble.policy.critic.parameters(), models[0].policy.critic.parameters(), strict=True):
         assert kept.detach().equal(first.detach())
