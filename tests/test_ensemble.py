@@ -11,7 +11,7 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext import load_config, make_model
 from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy, build_ensemble, save_ensemble
-from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, policy_fingerprint
+from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, policy_fingerprint, save_policy
 
 
 def member(tmp_path, name, *, seed, algo="td3", **changes):
@@ -72,6 +72,27 @@ def test_member_order_changes_nothing_but_the_fingerprint_is_stable_across_saves
     )
 
 
+def test_an_ensemble_member_contributes_its_heads_in_order(tmp_path, members):
+    nested = save_ensemble(members[:2], tmp_path / "nested.zip", body="point")
+    grown = build_ensemble([members[2], nested], body="point")
+    assert grown.policy.n_members == 3 and grown.policy_kwargs["n_members"] == 3
+    flat = build_ensemble([members[2], members[0], members[1]], body="point")
+    # Heads m2, m0, m1 in that order: the same weights as listing the three members, so the same fingerprint.
+    assert policy_fingerprint(grown) == policy_fingerprint(flat)
+    reloaded = load_low_level("point", save_policy(grown, tmp_path / "grown.zip"))
+    single = load_low_level("point", members[2])
+    for obs in observations(5):
+        np.testing.assert_allclose(
+            reloaded.predict(obs, deterministic=True)[0], flat.predict(obs, deterministic=True)[0], atol=1e-6
+        )
+    assert not np.allclose(reloaded.predict(obs, deterministic=True)[0], single.predict(obs, deterministic=True)[0])
+    # A nested ensemble with differently shaped networks is still refused, naming it.
+    wide = [member(tmp_path, f"w{seed}", seed=seed, net_arch=(32, 32)) for seed in range(2)]
+    wide_ensemble = save_ensemble(wide, tmp_path / "wide_ensemble.zip", body="point")
+    with pytest.raises(ValueError, match=f"member {wide_ensemble} has policy settings"):
+        build_ensemble([members[0], wide_ensemble], body="point")
+
+
 def test_bad_members_are_refused_with_the_member_named(tmp_path, members):
     with pytest.raises(ValueError, match="at least two member policies, got 1"):
         build_ensemble(members[:1], body="point")
@@ -81,9 +102,6 @@ def test_bad_members_are_refused_with_the_member_named(tmp_path, members):
     wide = member(tmp_path, "wide", seed=0, net_arch=(32, 32))
     with pytest.raises(ValueError, match=f"member {wide} has policy settings"):
         build_ensemble([members[0], wide], body="point")
-    nested = save_ensemble(members[:2], tmp_path / "nested.zip", body="point")
-    with pytest.raises(ValueError, match=f"member {nested} is itself an ensemble"):
-        build_ensemble([members[0], nested], body="point")
     with pytest.raises(ValueError, match="n_members must be an integer >= 1, got 0"):
         EnsemblePolicy(*policy_spaces(members[0]), n_members=0)
 

@@ -10,7 +10,8 @@ policies have) whose actor holds ``n_members`` output heads on one features extr
 mean. Because it is a policy class, an ensemble is an SB3 ``TD3`` model like any other:
 :func:`~antmaze_hirl.sb3_ext.loading.load_low_level` loads it, ``predict`` acts with it, and
 :func:`~antmaze_hirl.sb3_ext.loading.policy_fingerprint` names it. :func:`build_ensemble` makes one from
-member zips.
+member zips; a member may itself be an ensemble, whose heads then join the new one (so that a shipped ensemble
+can take in a newly trained member without its own members' zips).
 """
 
 from __future__ import annotations
@@ -102,15 +103,17 @@ def build_ensemble(members: Sequence[str | Path], body: str = "ant") -> TD3:
 
     Args:
         members: Two or more TD3 (or DDPG) zips of ``body``, with the same network shape and features
-            extractor (the critic of the first is kept).
+            extractor (the critic of the first is kept). A member that is itself an ensemble contributes each
+            of its heads in order, so the mean weighs every head alike: ``[a, ensemble(b, c)]`` acts as
+            ``[a, b, c]``.
         body: The body the members were trained for.
 
     Returns:
         The model; save it with :func:`~antmaze_hirl.sb3_ext.loading.save_policy`.
 
     Raises:
-        ValueError: With fewer than two members, a member that is not a TD3 policy, a member that is itself
-            an ensemble, or members whose networks or features differ (naming the member).
+        ValueError: With fewer than two members, a member that is not a TD3 policy, or members whose
+            networks or features differ (naming the member).
     """
     if len(members) < 2:
         raise ValueError(f"an ensemble needs at least two member policies, got {len(members)}")
@@ -123,14 +126,14 @@ def build_ensemble(members: Sequence[str | Path], body: str = "ant") -> TD3:
                 f"member {path} has policy settings {settings}, unlike {members[0]}'s "
                 f"{first_kwargs}: every member needs the same networks and features"
             )
+    heads = [head for model in models for head in _heads(model)]
     ensemble = EnsemblePolicy(
         first.observation_space,
         first.action_space,
         first.lr_schedule,
-        n_members=len(models),
+        n_members=len(heads),
         **first_kwargs,
     )
-    heads = [model.policy.actor.mu for model in models]
     for target, member_head in zip(ensemble.actor.mu.heads, heads, strict=True):
         target.load_state_dict(member_head.state_dict())
     ensemble.actor_target.load_state_dict(ensemble.actor.state_dict())
@@ -138,7 +141,7 @@ def build_ensemble(members: Sequence[str | Path], body: str = "ant") -> TD3:
     ensemble.critic_target.load_state_dict(first.policy.critic_target.state_dict())
     first.policy = ensemble
     first.policy_class = EnsemblePolicy
-    first.policy_kwargs = {**first_kwargs, "n_members": len(models)}
+    first.policy_kwargs = {**first_kwargs, "n_members": len(heads)}
     first._create_aliases()  # TD3's actor/critic attributes point into the new policy
     return first
 
@@ -150,11 +153,17 @@ def _policy_settings(model: Any, path: str | Path) -> dict[str, Any]:
             f"member {path} holds a {type(model).__name__} {type(model.policy).__name__}; "
             "ensembles average the actors of TD3 (or DDPG) MultiInputPolicy policies"
         )
-    if isinstance(model.policy, EnsemblePolicy):
-        raise ValueError(f"member {path} is itself an ensemble: list its members instead")
     if any(True for _ in model.policy.actor.features_extractor.parameters()):
         raise ValueError(f"member {path} has a trained features extractor; the heads of an ensemble share one")
-    return {**model.policy_kwargs, "action_l2": getattr(model.policy, "action_l2", 0.0)}
+    # An ensemble member's head count is not a network setting: its heads are flattened into the new one.
+    settings = {key: value for key, value in model.policy_kwargs.items() if key != "n_members"}
+    return {**settings, "action_l2": getattr(model.policy, "action_l2", 0.0)}
+
+
+def _heads(model: Any) -> list[nn.Module]:
+    # An ensemble's heads in order; an ordinary actor's one output network.
+    mu = model.policy.actor.mu
+    return list(mu.heads) if isinstance(mu, MeanOfHeads) else [mu]
 
 
 def save_ensemble(members: Sequence[str | Path], out: str | Path, body: str = "ant") -> Path:
