@@ -233,9 +233,19 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
         "antmaze-hirl ensemble-low --body ant runs/a/snapshots/step_750000.zip runs/b/policy.zip --out ens.zip",
     )
     parser.add_argument("--body", choices=_BODIES, required=True, help="body the members walk (required)")
-    parser.add_argument("members", nargs="+", type=Path, help="two or more TD3/DDPG .zip files of that body (required)")
+    parser.add_argument(
+        "members",
+        nargs="+",
+        type=Path,
+        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order (required)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
     parser.add_argument("--force", action="store_true", help="replace an existing file at --out")
+    parser.add_argument(
+        "--sequential-heads",
+        action="store_true",
+        help="compute the heads one after another, as stage 5 does (slower; batched heads round differently)",
+    )
     parser.set_defaults(handler=_run_ensemble_low)
 
 
@@ -246,7 +256,7 @@ def _run_ensemble_low(args: argparse.Namespace) -> int:
 
     if args.out.exists() and not args.force:
         raise FileExistsError(f"--out {args.out} exists; pass --force to replace it")
-    ensemble = build_ensemble(args.members, args.body)
+    ensemble = build_ensemble(args.members, args.body, batched_heads=not args.sequential_heads)
     path = save_policy(ensemble, args.out)
     identity = low_level_identity(args.body, ensemble)  # the saved weights: no need to read the zip back
     print(json.dumps({"out": str(path), "members": [str(member) for member in args.members], "low_level_id": identity}))

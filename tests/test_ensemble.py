@@ -10,7 +10,13 @@ from antmaze_hirl.cli import main
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext import load_config, make_model
-from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy, build_ensemble, save_ensemble
+from antmaze_hirl.sb3_ext.ensemble import (
+    BatchedMeanOfHeads,
+    EnsemblePolicy,
+    MeanOfHeads,
+    build_ensemble,
+    save_ensemble,
+)
 from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, policy_fingerprint, save_policy
 
 
@@ -39,11 +45,14 @@ def observations(count):
     return seen
 
 
-def test_the_saved_ensemble_acts_with_the_members_mean_action_and_loads_as_td3(tmp_path, members):
-    path = save_ensemble(members, tmp_path / "ensemble.zip", body="point")
+@pytest.mark.parametrize("batched", [True, False])
+def test_the_saved_ensemble_acts_with_the_members_mean_action_and_loads_as_td3(tmp_path, members, batched):
+    path = save_ensemble(members, tmp_path / "ensemble.zip", body="point", batched_heads=batched)
     assert algorithm_of(path) is TD3
     ensemble = load_low_level("point", path)
     assert isinstance(ensemble.policy, EnsemblePolicy) and ensemble.policy.n_members == 3
+    # The head layout is saved with the zip, so the loaded ensemble computes its mean as it was built.
+    assert isinstance(ensemble.policy.actor.mu, BatchedMeanOfHeads if batched else MeanOfHeads)
     models = [load_low_level("point", path) for path in members]
     spread = 0.0
     for obs in observations(15):
@@ -72,8 +81,9 @@ def test_member_order_changes_nothing_but_the_fingerprint_is_stable_across_saves
     )
 
 
-def test_an_ensemble_member_contributes_its_heads_in_order(tmp_path, members):
-    nested = save_ensemble(members[:2], tmp_path / "nested.zip", body="point")
+@pytest.mark.parametrize("nested_batched", [True, False])
+def test_an_ensemble_member_contributes_its_heads_in_order(tmp_path, members, nested_batched):
+    nested = save_ensemble(members[:2], tmp_path / "nested.zip", body="point", batched_heads=nested_batched)
     grown = build_ensemble([members[2], nested], body="point")
     assert grown.policy.n_members == 3 and grown.policy_kwargs["n_members"] == 3
     flat = build_ensemble([members[2], members[0], members[1]], body="point")
@@ -93,8 +103,39 @@ def test_an_ensemble_member_contributes_its_heads_in_order(tmp_path, members):
         build_ensemble([members[0], wide_ensemble], body="point")
 
 
+def test_batched_and_sequential_heads_hold_the_same_weights_and_act_alike(tmp_path, members):
+    batched = build_ensemble(members, body="point")
+    sequential = build_ensemble(members, body="point", batched_heads=False)
+    for mine, theirs in zip(
+        batched.policy.actor.mu.head_states(), sequential.policy.actor.mu.head_states(), strict=True
+    ):
+        assert mine.keys() == theirs.keys()
+        assert all(mine[key].equal(theirs[key]) for key in mine)
+    # Another layout of the weights: another fingerprint, and the same action up to rounding.
+    assert policy_fingerprint(batched) != policy_fingerprint(sequential)
+    for obs in observations(10):
+        np.testing.assert_allclose(
+            batched.predict(obs, deterministic=True)[0], sequential.predict(obs, deterministic=True)[0], atol=1e-5
+        )
+    # One ensemble alone is rebuilt with the other layout: the same heads, in the same order.
+    relaid = build_ensemble([save_ensemble(members, tmp_path / "seq.zip", body="point", batched_heads=False)], "point")
+    assert policy_fingerprint(relaid) == policy_fingerprint(batched)
+    with pytest.raises(ValueError, match="cannot load 2 head states"):
+        batched.policy.actor.mu.load_head_states(sequential.policy.actor.mu.head_states()[:2])
+    wrong = [{key: tensor[:1] for key, tensor in state.items()} for state in sequential.policy.actor.mu.head_states()]
+    with pytest.raises(ValueError, match="head 0 has layers"):
+        batched.policy.actor.mu.load_head_states(wrong)
+
+
+def test_the_shipped_stage_5_ensemble_keeps_its_sequential_heads():
+    # Saved before batched heads existed: it must load with the layout its committed figures were made with.
+    shipped = load_low_level("ant")
+    assert isinstance(shipped.policy.actor.mu, MeanOfHeads) and shipped.policy.n_members == 5
+    assert low_level_identity("ant", shipped) == "sha256:6ec896536b29b07b"
+
+
 def test_bad_members_are_refused_with_the_member_named(tmp_path, members):
-    with pytest.raises(ValueError, match="at least two member policies, got 1"):
+    with pytest.raises(ValueError, match=r"at least two member policies \(heads\), got 1"):
         build_ensemble(members[:1], body="point")
     sac = member(tmp_path, "sac", seed=0, algo="sac")
     with pytest.raises(ValueError, match=f"member {sac} holds a SAC"):
@@ -123,6 +164,10 @@ def test_cli_ensemble_low_writes_the_zip_and_refuses_to_overwrite(tmp_path, memb
     assert f"--out {out} exists; pass --force" in capsys.readouterr().err
     assert main(["ensemble-low", "--body", "point", *map(str, members), "--out", str(out), "--force"]) == 0
     assert load_low_level("point", out).policy.n_members == 3
+    assert isinstance(load_low_level("point", out).policy.actor.mu, BatchedMeanOfHeads)
+    argv = ["ensemble-low", "--body", "point", *map(str, members), "--out", str(out), "--force", "--sequential-heads"]
+    assert main(argv) == 0
+    assert isinstance(load_low_level("point", out).policy.actor.mu, MeanOfHeads)
 
 
 def test_train_low_refuses_to_start_from_an_ensemble_in_one_line(tmp_path, members, capsys):
