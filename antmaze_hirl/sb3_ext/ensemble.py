@@ -60,11 +60,11 @@ class BatchedMeanOfHeads(nn.Module):
     """The same mean as :class:`MeanOfHeads`, with one batched matrix product per layer for all heads.
 
     An ensemble acts once per low-level step, on a batch of one: one small product per head and layer costs
-    more in call overhead than in arithmetic, so batching the heads makes acting several times faster
-    (``benchmarks/ensemble_speed.py``). The sums are the same but are rounded differently in the last bits,
-    and MuJoCo rollouts amplify such differences (README "The ant in mazes"); so it is a class of its own,
-    chosen when the ensemble is built and recorded in its zip, and an ensemble saved with
-    :class:`MeanOfHeads` (stage 5) acts exactly as before.
+    more in call overhead than in arithmetic, so batching the heads makes acting faster (stage 5's
+    ``predict`` about 1.4x, ``benchmarks/ensemble_speed.py``). The sums are the same but may be rounded
+    differently in the last bits, and MuJoCo rollouts amplify such differences (README "The ant in mazes");
+    so it is a class of its own, chosen when the ensemble is built and recorded in its zip, and an ensemble
+    saved with :class:`MeanOfHeads` (stage 5) acts exactly as before.
 
     Args:
         heads: Two or more heads of one structure: ``nn.Sequential`` of ``nn.Linear`` layers (with bias) and
@@ -225,9 +225,9 @@ def build_ensemble(members: Sequence[str | Path], body: str = "ant", *, batched_
             of its heads in order, so the mean weighs every head alike: ``[a, ensemble(b, c)]`` acts as
             ``[a, b, c]``.
         body: The body the members were trained for.
-        batched_heads: Act with :class:`BatchedMeanOfHeads` (the default: several times faster) or, with
-            ``False``, with :class:`MeanOfHeads`, as ensembles built before the option (stage 5) do. The two
-            give the same mean up to float rounding, which is enough to change MuJoCo rollouts.
+        batched_heads: Act with :class:`BatchedMeanOfHeads` (the default: faster) or, with ``False``, with
+            :class:`MeanOfHeads`, as ensembles built before the option (stage 5) do. The two give the same
+            mean up to float rounding, which can change MuJoCo rollouts.
 
     Returns:
         The model; save it with :func:`~antmaze_hirl.sb3_ext.loading.save_policy`.
