@@ -80,13 +80,15 @@ class BatchedMeanOfHeads(nn.Module):
         if not isinstance(template, nn.Sequential):
             raise ValueError(f"batched heads must be nn.Sequential, got {type(template).__name__}")
         self.n_heads = len(heads)
-        self.order = [name for name, _ in template.named_children()]
-        self.linear_names = [name for name, layer in template.named_children() if isinstance(layer, nn.Linear)]
+        self.order: list[str] = []
+        self.linear_names: list[str] = []
         self.activations = nn.ModuleDict()
         for name, layer in template.named_children():
+            self.order.append(name)
             if isinstance(layer, nn.Linear):
                 if layer.bias is None:
                     raise ValueError(f"batched heads need Linear layers with bias; layer {name} has none")
+                self.linear_names.append(name)
             elif any(True for _ in layer.parameters()):
                 raise ValueError(f"batched heads hold only Linear layers and activations; layer {name} is {layer}")
             else:
@@ -115,19 +117,19 @@ class BatchedMeanOfHeads(nn.Module):
 
     def head_states(self) -> list[dict[str, th.Tensor]]:
         """Each head's weights, as the state dict of one member's output network."""
-        return [
-            {
-                key: tensor[index].detach().clone()
-                for name, weight, bias in zip(self.linear_names, self.weights, self.biases, strict=True)
-                for key, tensor in ((f"{name}.weight", weight), (f"{name}.bias", bias))
-            }
-            for index in range(self.n_heads)
-        ]
+        return [self._head_state(index) for index in range(self.n_heads)]
+
+    def _head_state(self, index: int) -> dict[str, th.Tensor]:
+        return {
+            key: tensor[index].detach().clone()
+            for name, weight, bias in zip(self.linear_names, self.weights, self.biases, strict=True)
+            for key, tensor in ((f"{name}.weight", weight), (f"{name}.bias", bias))
+        }
 
     def load_head_states(self, states: Sequence[dict[str, th.Tensor]]) -> None:
         """Loads one member output network's state dict into each head, in order."""
         _check_head_count(self.n_heads, states)
-        _check_head_keys(self.head_states()[0], states)
+        _check_head_keys(self._head_state(0), states)  # one head's layout, not a copy of every head
         with th.no_grad():
             for name, weight, bias in zip(self.linear_names, self.weights, self.biases, strict=True):
                 weight.copy_(th.stack([state[f"{name}.weight"] for state in states]))
