@@ -127,11 +127,12 @@ def test_batched_and_sequential_heads_hold_the_same_weights_and_act_alike(tmp_pa
         batched.policy.actor.mu.load_head_states(wrong)
 
 
-def test_the_shipped_stage_5_ensemble_keeps_its_sequential_heads():
-    # Saved before batched heads existed: it must load with the layout its committed figures were made with.
+def test_the_shipped_ant_is_stage_6_with_batched_heads():
+    # The shipped zip records its layout: stage 6 loads as seven batched heads, with the fingerprint every
+    # committed ant figure since it shipped names (stage 5 was five sequential heads, sha256:6ec896536b29b07b).
     shipped = load_low_level("ant")
-    assert isinstance(shipped.policy.actor.mu, MeanOfHeads) and shipped.policy.n_members == 5
-    assert low_level_identity("ant", shipped) == "sha256:6ec896536b29b07b"
+    assert isinstance(shipped.policy.actor.mu, BatchedMeanOfHeads) and shipped.policy.n_members == 7
+    assert low_level_identity("ant", shipped) == "sha256:8ae38455d9435335"
 
 
 def test_bad_members_are_refused_with_the_member_named(tmp_path, members):
