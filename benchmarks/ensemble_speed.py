@@ -1,9 +1,10 @@
 """Acting speed of an action ensemble: batched heads against sequential ones, same heads, same run.
 
-The shipped ant (stage 5) is a five-head :class:`~antmaze_hirl.sb3_ext.ensemble.EnsemblePolicy` that computes
-its heads one after another (:class:`~antmaze_hirl.sb3_ext.ensemble.MeanOfHeads`). This rebuilds it with
-:class:`~antmaze_hirl.sb3_ext.ensemble.BatchedMeanOfHeads` (``build_ensemble([shipped])``: the same weights)
-and times, alternating in rounds so that a slow spell of a shared machine hits both:
+An action ensemble (:class:`~antmaze_hirl.sb3_ext.ensemble.EnsemblePolicy`; by default the shipped ant, stage 6,
+seven heads) is rebuilt in both layouts with ``build_ensemble([policy], batched_heads=...)``, the same weights:
+heads computed one after another (:class:`~antmaze_hirl.sb3_ext.ensemble.MeanOfHeads`, the layout of stage 5)
+and all heads in one batched product per layer (:class:`~antmaze_hirl.sb3_ext.ensemble.BatchedMeanOfHeads`).
+It times them alternating in rounds, so that a slow spell of a shared machine hits both:
 
 * ``predict``: one deterministic ``model.predict`` on one observation, as the high-level env calls it once
   per low-level step;
@@ -13,8 +14,8 @@ Observations come from seeded random-action rollouts of the env. It prints the m
 (sequential over batched ``predict``, and over a whole low-level step ``predict + env_step``) and checks that
 both layouts give the same action up to float rounding. Goal: batched ``predict`` at least 1.5x faster.
 
-Usage: python benchmarks/ensemble_speed.py [--rounds 7] [--calls 300] [--seed 0]
-Writes benchmarks/results/ensemble_speed.json.
+Usage: python benchmarks/ensemble_speed.py [--policy ENSEMBLE.zip] [--rounds 7] [--calls 300] [--seed 0] [--out FILE]
+Writes benchmarks/results/ensemble_speed.json by default.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import torch as th
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext.ensemble import build_ensemble
-from antmaze_hirl.sb3_ext.loading import load_low_level, policy_fingerprint
+from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
 RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "ensemble_speed.json"
@@ -50,13 +51,18 @@ def microseconds(call: Callable[[], object], calls: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--policy", type=Path, default=None, help="an ensemble zip (default: the shipped ant)")
     parser.add_argument("--rounds", type=int, default=7, help="alternating timing rounds")
     parser.add_argument("--calls", type=int, default=300, help="calls per timing")
     parser.add_argument("--seed", type=int, default=0, help="seed of the env and its random actions")
+    parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args()
     th.set_num_threads(1)  # as the experiment workers run
-    shipped_path = shipped_policy_path("ant")
-    models = {"sequential": load_low_level("ant", shipped_path), "batched": build_ensemble([shipped_path], "ant")}
+    path = args.policy if args.policy is not None else shipped_policy_path("ant")
+    models = {
+        "sequential": build_ensemble([path], "ant", batched_heads=False),
+        "batched": build_ensemble([path], "ant", batched_heads=True),
+    }
     env = ReachEnv("ant")
     obs, _ = env.reset(seed=args.seed)
     rng = np.random.default_rng(args.seed)
@@ -88,7 +94,7 @@ def main() -> None:
     medians = {name: statistics.median(values) for name, values in times.items()}
     step = {name: medians[name] + medians["env_step"] for name in models}
     result = {
-        "policy": str(shipped_path.name),
+        "policy": str(path.name) if args.policy is None else str(path),
         "fingerprints": {name: policy_fingerprint(model) for name, model in models.items()},
         "heads": models["batched"].policy.n_members,
         "median_microseconds": {name: round(value, 1) for name, value in medians.items()},
@@ -97,13 +103,13 @@ def main() -> None:
         "low_level_step_speedup": round(step["sequential"] / step["batched"], 3),
         "max_action_gap": gap,
         "goal_predict_speedup_at_least": GOAL,
-        "settings": vars(args),
+        "settings": {key: str(value) if isinstance(value, Path) else value for key, value in vars(args).items()},
         "machine": {"platform": platform.platform(), "processor": platform.processor(), "torch": th.__version__},
         "command": "python benchmarks/ensemble_speed.py "
-        + " ".join(f"--{key} {value}" for key, value in vars(args).items()),
+        + " ".join(f"--{key} {value}" for key, value in vars(args).items() if value is not None),
     }
     print(json.dumps(result, indent=1))
-    atomic_write_json(RESULTS, result)
+    atomic_write_json(args.out, result)
 
 
 if __name__ == "__main__":
