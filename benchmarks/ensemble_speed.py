@@ -23,7 +23,9 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import shlex
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -105,8 +107,7 @@ def main() -> None:
         "goal_predict_speedup_at_least": GOAL,
         "settings": {key: str(value) if isinstance(value, Path) else value for key, value in vars(args).items()},
         "machine": {"platform": platform.platform(), "processor": platform.processor(), "torch": th.__version__},
-        "command": "python benchmarks/ensemble_speed.py "
-        + " ".join(f"--{key} {value}" for key, value in vars(args).items() if value is not None),
+        "command": shlex.join(["python", "benchmarks/ensemble_speed.py", *sys.argv[1:]]),
     }
     print(json.dumps(result, indent=1))
     atomic_write_json(args.out, result)
