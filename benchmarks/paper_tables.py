@@ -3,9 +3,13 @@
 Every figure of the README's experiment tables comes from this command, so each is traceable to a committed
 file. Two tables: final success and expert cost, then learning per label (success at label budgets, the
 normalised area under the success-vs-labels curve, labels to match plain DAgger), each paired by seed
-against DAgger (Wilcoxon signed-rank p; with 5 seeds it cannot go below 0.0625).
+against DAgger (Wilcoxon signed-rank p; with 5 seeds it cannot go below 0.0625). With ``--beside`` a third
+table sets each method's final success beside another run's of the same methods and seeds (the same
+experiment with another low level, say), paired by seed: per method and pooled over every method.
 
 Usage: python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point
+       python benchmarks/paper_tables.py benchmarks/results/paper_experiment_ant \
+           --beside benchmarks/results/paper_experiment_ant_stage5 --names "stage 6,stage 5"
 """
 
 from __future__ import annotations
@@ -16,7 +20,10 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
+from antmaze_hirl.experiments.uncertainty import paired_comparison
 
 
 def _methods_run(summary: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
@@ -122,19 +129,91 @@ def effort_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("folder", type=Path, help="a results folder with summary.json")
-    args = parser.parse_args()
-    path = args.folder / "summary.json"
+def _rates_by_seed(method: dict[str, Any]) -> dict[int, float]:
+    return {entry["seed"]: entry["rate"] for entry in method["final_success"].get("per_seed", [])}
+
+
+def _paired_cell(values: list[float], baseline: list[float]) -> str:
+    test = paired_comparison(values, baseline)
+    if not test["pairs"]:
+        return "| n/a | |"
+    p_value = "n/a" if test["wilcoxon_p"] is None else f"{test['wilcoxon_p']:.3g}"
+    wins = sum(d > 0 for d in test["differences"]), sum(d < 0 for d in test["differences"])
+    return (
+        f"| {100 * test['median_difference']:+.0f} pts ({wins[0]} up, {wins[1]} down of {test['pairs']}) | {p_value} |"
+    )
+
+
+def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[str, str]) -> str:
+    """Final success of each method in ``summary`` beside ``other``'s, paired by seed.
+
+    Only seeds both runs hold are paired (a seed is the same evaluation mazes and random streams in each);
+    the medians are over those seeds. The last row pools every method's pairs into one signed-rank test.
+
+    Raises:
+        ValueError: If the two summaries share no method with trials.
+    """
+    lines = [
+        f"| method | {names[0]}, median (min-max) | {names[1]}, median (min-max) "
+        f"| paired difference, median | Wilcoxon p |",
+        "|---|---|---|---|---|",
+    ]
+    pooled: tuple[list[float], list[float]] = ([], [])
+    for name, method in _methods_run(summary):
+        if not other["methods"].get(name, {}).get("seeds"):
+            continue
+        mine, theirs = _rates_by_seed(method), _rates_by_seed(other["methods"][name])
+        seeds = sorted(mine.keys() & theirs.keys())
+        values, baseline = [mine[seed] for seed in seeds], [theirs[seed] for seed in seeds]
+        pooled[0].extend(values)
+        pooled[1].extend(baseline)
+        spreads = [
+            _spread({"median": float(np.median(v)), "min": min(v), "max": max(v)}) if v else "n/a"
+            for v in (values, baseline)
+        ]
+        lines.append(f"| {name} | {spreads[0]} | {spreads[1]} {_paired_cell(values, baseline)}")
+    if len(lines) == 2:
+        raise ValueError("the two summaries share no method with trials")
+    lines.append(f"| every method pooled | | {_paired_cell(*pooled)}")
+    oracles = [run.get("oracle_success") for run in (summary, other)]
+    if all(oracles):
+        cells = [f"{100 * oracle['success_rate']:.0f}% of {oracle['episodes']}" for oracle in oracles]
+        lines.append(f"| oracle success | {cells[0]} | {cells[1]} | | |")
+    return "\n".join(lines)
+
+
+def _load_summary(parser: argparse.ArgumentParser, folder: Path) -> dict[str, Any]:
+    path = folder / "summary.json"
     if not path.is_file():
-        parser.error(f"no summary.json in {args.folder}")
+        parser.error(f"no summary.json in {folder}")
     summary = json.loads(path.read_text())
     if any(method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()):
         parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
+    return summary
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folder", type=Path, help="a results folder with summary.json")
+    parser.add_argument(
+        "--beside", type=Path, default=None, help="another results folder to set final success beside (default: none)"
+    )
+    parser.add_argument(
+        "--names", default="this run,beside", help="the two runs' column names, comma-separated (default: %(default)s)"
+    )
+    args = parser.parse_args()
+    names = tuple(part.strip() for part in args.names.split(","))
+    if len(names) != 2 or not all(names):
+        parser.error(f"--names takes two comma-separated names, got {args.names!r}")
+    summary = _load_summary(parser, args.folder)
     print(cost_table(summary), end="\n\n")
     print(per_label_table(summary), end="\n\n")
     print(effort_table(summary))
+    if args.beside is not None:
+        try:
+            print("", beside_table(summary, _load_summary(parser, args.beside), names), sep="\n")
+        except ValueError as error:
+            parser.error(f"--beside {args.beside}: {error}")
     print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
 
 

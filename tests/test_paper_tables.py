@@ -1,5 +1,6 @@
 """The README's experiment tables come from ``benchmarks/paper_tables.py``: checked on crafted curves."""
 
+import copy
 import json
 import sys
 from pathlib import Path
@@ -35,3 +36,36 @@ def test_tables_refuse_a_summary_from_before_the_per_label_figures(tmp_path, mon
     with pytest.raises(SystemExit) as stop:
         paper_tables.main()
     assert stop.value.code == 2 and "predates the per-label figures" in capsys.readouterr().err
+
+
+def test_beside_table_pairs_final_success_by_seed_and_pools_every_method():
+    summary = {"methods": summarise(crafted_rows(), ["dagger", "noise"])}
+    other = copy.deepcopy(summary)
+    for method in other["methods"].values():  # the other run: 10 points lower on every seed but the last
+        for entry in method["final_success"]["per_seed"][:-1]:
+            entry["rate"] -= 0.1
+    other["methods"]["noise"]["final_success"]["per_seed"].append({"seed": 99, "rate": 0.0})  # unpaired: dropped
+    lines = paper_tables.beside_table(summary, other, ("new", "old")).splitlines()
+    assert lines[0].startswith("| method | new, median (min-max) | old, median (min-max) |")
+    # DAgger's seeds score 80% and 70% (crafted); the other run 70% and 70%: one up, one tie.
+    assert lines[2] == "| dagger | 75% (70%-80%) | 70% (70%-70%) | +5 pts (1 up, 0 down of 2) | 1 |"
+    assert "of 2)" in lines[3], "a seed only one run holds is not paired"
+    assert lines[4].startswith("| every method pooled | | | +5 pts (2 up, 0 down of 4) |")
+    with pytest.raises(ValueError, match="share no method"):
+        paper_tables.beside_table(summary, {"methods": {}}, ("new", "old"))
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--names", "only one"], "--names takes two comma-separated names, got 'only one'"),
+        (["--beside", "nowhere"], "no summary.json in nowhere"),
+    ],
+)
+def test_bad_beside_arguments_get_one_line_errors(tmp_path, monkeypatch, capsys, extra, message):
+    summary = {"methods": summarise(crafted_rows(), ["dagger"])}
+    (tmp_path / "summary.json").write_text(json.dumps(summary))
+    monkeypatch.setattr(sys, "argv", ["paper_tables.py", str(tmp_path), *extra])
+    with pytest.raises(SystemExit) as stop:
+        paper_tables.main()
+    assert stop.value.code == 2 and message in capsys.readouterr().err
