@@ -138,29 +138,32 @@ def _paired_cell(values: list[float], baseline: list[float]) -> str:
     if not test["pairs"]:
         return "| n/a | |"
     p_value = "n/a" if test["wilcoxon_p"] is None else f"{test['wilcoxon_p']:.3g}"
-    wins = sum(d > 0 for d in test["differences"]), sum(d < 0 for d in test["differences"])
-    return (
-        f"| {100 * test['median_difference']:+.0f} pts ({wins[0]} up, {wins[1]} down of {test['pairs']}) | {p_value} |"
-    )
+    ups, downs = sum(d > 0 for d in test["differences"]), sum(d < 0 for d in test["differences"])
+    points = round(100 * test["median_difference"], 1) + 0.0  # + 0.0 turns -0.0 into 0.0
+    return f"| {points:+g} ({ups} up, {downs} down of {test['pairs']}) | {p_value} |"
 
 
 def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[str, str]) -> str:
     """Final success of each method in ``summary`` beside ``other``'s, paired by seed.
 
     Only seeds both runs hold are paired (a seed is the same evaluation mazes and random streams in each);
-    the medians are over those seeds. The last row pools every method's pairs into one signed-rank test.
+    the medians are over those seeds. The pooled row puts every method's pairs into one signed-rank test;
+    the methods of one seed share its mazes, so those pairs are not independent and its p is optimistic.
+    Notes under the table name the methods only one run holds and the settings the two configs differ in.
 
     Raises:
         ValueError: If the two summaries share no method with trials.
     """
     lines = [
         f"| method | {names[0]}, median (min-max) | {names[1]}, median (min-max) "
-        f"| paired difference, median | Wilcoxon p |",
+        "| paired difference, median (points) | Wilcoxon p |",
         "|---|---|---|---|---|",
     ]
     pooled: tuple[list[float], list[float]] = ([], [])
+    alone = [name for name, _ in _methods_run(summary) if not other["methods"].get(name, {}).get("seeds")]
+    alone += [name for name, _ in _methods_run(other) if not summary["methods"].get(name, {}).get("seeds")]
     for name, method in _methods_run(summary):
-        if not other["methods"].get(name, {}).get("seeds"):
+        if name in alone:
             continue
         mine, theirs = _rates_by_seed(method), _rates_by_seed(other["methods"][name])
         seeds = sorted(mine.keys() & theirs.keys())
@@ -179,15 +182,24 @@ def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[st
     if all(oracles):
         cells = [f"{100 * oracle['success_rate']:.0f}% of {oracle['episodes']}" for oracle in oracles]
         lines.append(f"| oracle success | {cells[0]} | {cells[1]} | | |")
+    configs = summary.get("config", {}), other.get("config", {})
+    differing = sorted(
+        key for key in configs[0].keys() | configs[1].keys() if configs[0].get(key) != configs[1].get(key)
+    )
+    lines.append("")
+    lines.append(f"Methods in one run only (not compared): {', '.join(alone) or 'none'}.")
+    lines.append(f"The configs differ in: {', '.join(differing) or 'nothing'}.")
     return "\n".join(lines)
 
 
-def _load_summary(parser: argparse.ArgumentParser, folder: Path) -> dict[str, Any]:
+def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: bool = True) -> dict[str, Any]:
     path = folder / "summary.json"
     if not path.is_file():
         parser.error(f"no summary.json in {folder}")
     summary = json.loads(path.read_text())
-    if any(method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()):
+    if per_label and any(
+        method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()
+    ):
         parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
     return summary
 
@@ -206,14 +218,18 @@ def main() -> None:
     if len(names) != 2 or not all(names):
         parser.error(f"--names takes two comma-separated names, got {args.names!r}")
     summary = _load_summary(parser, args.folder)
+    # Both summaries are read before anything is printed, so a bad --beside fails alone on one line.
+    beside = None
+    if args.beside is not None:
+        try:
+            beside = beside_table(summary, _load_summary(parser, args.beside, per_label=False), names)
+        except ValueError as error:
+            parser.error(f"--beside {args.beside}: {error}")
     print(cost_table(summary), end="\n\n")
     print(per_label_table(summary), end="\n\n")
     print(effort_table(summary))
-    if args.beside is not None:
-        try:
-            print("", beside_table(summary, _load_summary(parser, args.beside), names), sep="\n")
-        except ValueError as error:
-            parser.error(f"--beside {args.beside}: {error}")
+    if beside is not None:
+        print("", beside, sep="\n")
     print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
 
 

@@ -5,6 +5,7 @@ import math
 
 import pytest
 import torch as th
+from scipy.stats import wilcoxon
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments import ExperimentConfig, cost_to_reach, run_experiment, summarise
@@ -338,6 +339,11 @@ def test_wilson_intervals_and_paired_test_against_known_values():
     better = paired_comparison([0.9, 0.8, 0.7, 0.95, 0.85], [0.8, 0.6, 0.67, 0.9, 0.5])
     assert better["wilcoxon_p"] == pytest.approx(0.0625)
     assert paired_comparison([0.5, 0.6], [0.5, 0.6])["wilcoxon_p"] == 1.0
+    # 0.94 - 0.92 and 0.86 - 0.88 are not opposites in floating point; their ranks must tie all the same, as
+    # for the integer differences (2, -2, 2, 1) points: unrounded, scipy gives 0.875 here instead of 0.625.
+    tied = paired_comparison([0.94, 0.86, 0.30, 0.61], [0.92, 0.88, 0.28, 0.60])
+    assert tied["wilcoxon_p"] == pytest.approx(float(wilcoxon([2, -2, 2, 1]).pvalue))
+    assert tied["differences"] == [0.02, -0.02, 0.02, 0.01]
     with pytest.raises(ValueError, match="equal lengths, got 2 and 1"):
         paired_comparison([0.5, 0.6], [0.5])
 

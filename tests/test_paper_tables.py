@@ -39,20 +39,42 @@ def test_tables_refuse_a_summary_from_before_the_per_label_figures(tmp_path, mon
 
 
 def test_beside_table_pairs_final_success_by_seed_and_pools_every_method():
-    summary = {"methods": summarise(crafted_rows(), ["dagger", "noise"])}
+    summary = {"methods": summarise(crafted_rows(), ["dagger", "noise"]), "config": {"low_level": "new", "seeds": 2}}
+    summary["oracle_success"] = {"success_rate": 0.97, "episodes": 100}
     other = copy.deepcopy(summary)
-    for method in other["methods"].values():  # the other run: 10 points lower on every seed but the last
-        for entry in method["final_success"]["per_seed"][:-1]:
-            entry["rate"] -= 0.1
-    other["methods"]["noise"]["final_success"]["per_seed"].append({"seed": 99, "rate": 0.0})  # unpaired: dropped
+    other["config"]["low_level"] = "old"
+    other["oracle_success"]["success_rate"] = 0.93
+    for method in other["methods"].values():  # the other run: 10 points lower on the first seed only
+        method["final_success"]["per_seed"][0]["rate"] -= 0.1
+        method["final_success"]["per_seed"].reverse()  # pairs are matched by seed, not by position
+    other["methods"]["noise"]["final_success"]["per_seed"].insert(0, {"seed": 99, "rate": 0.0})  # unpaired
+    other["methods"]["gated"] = {"seeds": 1, "final_success": {"per_seed": [{"seed": 0, "rate": 0.5}]}}
     lines = paper_tables.beside_table(summary, other, ("new", "old")).splitlines()
     assert lines[0].startswith("| method | new, median (min-max) | old, median (min-max) |")
-    # DAgger's seeds score 80% and 70% (crafted); the other run 70% and 70%: one up, one tie.
-    assert lines[2] == "| dagger | 75% (70%-80%) | 70% (70%-70%) | +5 pts (1 up, 0 down of 2) | 1 |"
-    assert "of 2)" in lines[3], "a seed only one run holds is not paired"
-    assert lines[4].startswith("| every method pooled | | | +5 pts (2 up, 0 down of 4) |")
+    # DAgger's crafted seeds score 80% and 70%; the other run 70% and 70%: one up, one tie.
+    assert lines[2] == "| dagger | 75% (70%-80%) | 70% (70%-70%) | +5 (1 up, 0 down of 2) | 1 |"
+    # Noise's seeds score 90% and 60%, the other run's 80% and 60%; its seed 99 (0%) is in no figure.
+    assert lines[3] == "| noise | 75% (60%-90%) | 70% (60%-80%) | +5 (1 up, 0 down of 2) | 1 |"
+    assert lines[4] == "| every method pooled | | | +5 (2 up, 0 down of 4) | 0.5 |"
+    assert lines[5] == "| oracle success | 97% of 100 | 93% of 100 | | |"
+    assert lines[7:] == ["Methods in one run only (not compared): gated.", "The configs differ in: low_level."]
     with pytest.raises(ValueError, match="share no method"):
         paper_tables.beside_table(summary, {"methods": {}}, ("new", "old"))
+
+
+def test_main_prints_the_beside_table_after_the_three_tables(tmp_path, monkeypatch, capsys):
+    summary = {"methods": summarise(crafted_rows(), ["dagger", "noise"])}
+    for name in ("new", "old"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "summary.json").write_text(json.dumps(summary))
+    argv = ["paper_tables.py", str(tmp_path / "new"), "--beside", str(tmp_path / "old"), "--names", "A, B"]
+    monkeypatch.setattr(sys, "argv", argv)
+    paper_tables.main()
+    out = capsys.readouterr().out
+    assert out.index("| method | A, median (min-max) | B, median (min-max) |") > out.index(
+        "| labels per trial, median |"
+    )
+    assert "| dagger | 75% (70%-80%) | 75% (70%-80%) | +0 (0 up, 0 down of 2) | 1 |" in out  # a run beside itself
 
 
 @pytest.mark.parametrize(
