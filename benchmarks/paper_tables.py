@@ -5,11 +5,13 @@ file. Two tables: final success and expert cost, then learning per label (succes
 normalised area under the success-vs-labels curve, labels to match plain DAgger), each paired by seed
 against DAgger (Wilcoxon signed-rank p; with 5 seeds it cannot go below 0.0625). With ``--beside`` a third
 table sets each method's final success beside another run's of the same methods and seeds (the same
-experiment with another low level, say), paired by seed: per method and pooled over every method.
+experiment with another low level, say), paired by seed: per method and pooled over every method, over
+the seeds both runs hold. The two runs must share the final mazes (body, maze size, layout split and
+episodes); a note names every other setting they differ in.
 
-Usage: python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point
-       python benchmarks/paper_tables.py benchmarks/results/paper_experiment_ant \
-           --beside benchmarks/results/paper_experiment_ant_stage5 --names "stage 6,stage 5"
+Usage:
+  python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point
+  cd benchmarks/results && python ../paper_tables.py paper_experiment_ant --beside paper_experiment_ant_stage5
 """
 
 from __future__ import annotations
@@ -24,6 +26,9 @@ import numpy as np
 
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.uncertainty import paired_comparison
+
+# The settings that fix a seed's final evaluation mazes: two runs are paired by seed only when they agree.
+SAME_MAZES = ("body", "maze_size", "held_out_layouts", "final_eval_episodes")
 
 
 def _methods_run(summary: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
@@ -152,8 +157,15 @@ def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[st
     Notes under the table name the methods only one run holds and the settings the two configs differ in.
 
     Raises:
-        ValueError: If the two summaries share no method with trials.
+        ValueError: If the two runs' final mazes differ (a setting of :data:`SAME_MAZES`), or they share no
+            method with per-seed final success on a common seed.
     """
+    configs = summary.get("config", {}), other.get("config", {})
+    differing = sorted(
+        key for key in configs[0].keys() | configs[1].keys() if configs[0].get(key) != configs[1].get(key)
+    )
+    if mazes := [f"{key} {configs[0].get(key)!r} vs {configs[1].get(key)!r}" for key in SAME_MAZES if key in differing]:
+        raise ValueError(f"the runs' final mazes differ ({'; '.join(mazes)}), so their seeds do not pair")
     lines = [
         f"| method | {names[0]}, median (min-max) | {names[1]}, median (min-max) "
         "| paired difference, median (points) | Wilcoxon p |",
@@ -175,31 +187,34 @@ def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[st
             for v in (values, baseline)
         ]
         lines.append(f"| {name} | {spreads[0]} | {spreads[1]} {_paired_cell(values, baseline)}")
-    if len(lines) == 2:
-        raise ValueError("the two summaries share no method with trials")
+    if not pooled[0]:
+        raise ValueError("the two summaries share no method with per-seed final success on a common seed")
     lines.append(f"| every method pooled | | {_paired_cell(*pooled)}")
     oracles = [run.get("oracle_success") for run in (summary, other)]
     if all(oracles):
         cells = [f"{100 * oracle['success_rate']:.0f}% of {oracle['episodes']}" for oracle in oracles]
         lines.append(f"| oracle success | {cells[0]} | {cells[1]} | | |")
-    configs = summary.get("config", {}), other.get("config", {})
-    differing = sorted(
-        key for key in configs[0].keys() | configs[1].keys() if configs[0].get(key) != configs[1].get(key)
-    )
+    settings = [f"{key} ({configs[0].get(key)!r} vs {configs[1].get(key)!r})" for key in differing]
     lines.append("")
     lines.append(f"Methods in one run only (not compared): {', '.join(alone) or 'none'}.")
-    lines.append(f"The configs differ in: {', '.join(differing) or 'nothing'}.")
+    lines.append(f"The configs differ in: {', '.join(settings) or 'nothing'}.")
     return "\n".join(lines)
 
 
 def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: bool = True) -> dict[str, Any]:
     path = folder / "summary.json"
     if not path.is_file():
-        parser.error(f"no summary.json in {folder}")
-    summary = json.loads(path.read_text())
-    if per_label and any(
-        method.get("seeds") and "success_at_labels" not in method for method in summary["methods"].values()
-    ):
+        parser.error(f"no summary.json in {folder} (a paper-experiment results folder)")
+    try:
+        summary = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        parser.error(f"{path} is not JSON: {error}")
+    if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
+        parser.error(f"{path} has no 'methods' object: not a paper-experiment summary")
+    runs = [method for method in summary["methods"].values() if isinstance(method, dict) and method.get("seeds")]
+    if any("final_success" not in method for method in runs):
+        parser.error(f"{path} has a method with trials but no 'final_success': not a paper-experiment summary")
+    if per_label and any("success_at_labels" not in method for method in runs):
         parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
     return summary
 
@@ -217,6 +232,8 @@ def main() -> None:
     names = tuple(part.strip() for part in args.names.split(","))
     if len(names) != 2 or not all(names):
         parser.error(f"--names takes two comma-separated names, got {args.names!r}")
+    if args.beside is None and args.names != parser.get_default("names"):
+        parser.error(f"--names {args.names!r} names the --beside columns: pass --beside too")
     summary = _load_summary(parser, args.folder)
     # Both summaries are read before anything is printed, so a bad --beside fails alone on one line.
     beside = None

@@ -57,9 +57,19 @@ def test_beside_table_pairs_final_success_by_seed_and_pools_every_method():
     assert lines[3] == "| noise | 75% (60%-90%) | 70% (60%-80%) | +5 (1 up, 0 down of 2) | 1 |"
     assert lines[4] == "| every method pooled | | | +5 (2 up, 0 down of 4) | 0.5 |"
     assert lines[5] == "| oracle success | 97% of 100 | 93% of 100 | | |"
-    assert lines[7:] == ["Methods in one run only (not compared): gated.", "The configs differ in: low_level."]
+    assert lines[7:] == [
+        "Methods in one run only (not compared): gated.",
+        "The configs differ in: low_level ('new' vs 'old').",
+    ]
     with pytest.raises(ValueError, match="share no method"):
         paper_tables.beside_table(summary, {"methods": {}}, ("new", "old"))
+    for method in other["methods"].values():  # trials, but no per-seed rates: nothing pairs
+        method["final_success"]["per_seed"] = []
+    with pytest.raises(ValueError, match="share no method with per-seed final success"):
+        paper_tables.beside_table(summary, other, ("new", "old"))
+    elsewhere = {**summary, "config": {**summary["config"], "maze_size": 5}}
+    with pytest.raises(ValueError, match=r"final mazes differ \(maze_size 5 vs None\)"):
+        paper_tables.beside_table(elsewhere, summary, ("new", "old"))
 
 
 def test_main_prints_the_beside_table_after_the_three_tables(tmp_path, monkeypatch, capsys):
@@ -82,11 +92,18 @@ def test_main_prints_the_beside_table_after_the_three_tables(tmp_path, monkeypat
     [
         (["--names", "only one"], "--names takes two comma-separated names, got 'only one'"),
         (["--beside", "nowhere"], "no summary.json in nowhere"),
+        (["--names", "a,b"], "--names 'a,b' names the --beside columns: pass --beside too"),
+        (["--beside", "{bad}"], "summary.json is not JSON: Expecting value"),
+        (["--beside", "{listed}"], "summary.json has no 'methods' object: not a paper-experiment summary"),
     ],
 )
 def test_bad_beside_arguments_get_one_line_errors(tmp_path, monkeypatch, capsys, extra, message):
     summary = {"methods": summarise(crafted_rows(), ["dagger"])}
     (tmp_path / "summary.json").write_text(json.dumps(summary))
+    for name, text in (("bad", "not json"), ("listed", "[1, 2]")):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "summary.json").write_text(text)
+    extra = [part.format(bad=tmp_path / "bad", listed=tmp_path / "listed") for part in extra]
     monkeypatch.setattr(sys, "argv", ["paper_tables.py", str(tmp_path), *extra])
     with pytest.raises(SystemExit) as stop:
         paper_tables.main()
