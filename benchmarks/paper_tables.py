@@ -22,9 +22,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
+from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
 # The settings that fix a seed's final evaluation mazes: two runs are paired by seed only when they agree.
@@ -182,10 +181,7 @@ def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[st
         values, baseline = [mine[seed] for seed in seeds], [theirs[seed] for seed in seeds]
         pooled[0].extend(values)
         pooled[1].extend(baseline)
-        spreads = [
-            _spread({"median": float(np.median(v)), "min": min(v), "max": max(v)}) if v else "n/a"
-            for v in (values, baseline)
-        ]
+        spreads = [_spread(median_range(v)) for v in (values, baseline)]
         lines.append(f"| {name} | {spreads[0]} | {spreads[1]} {_paired_cell(values, baseline)}")
     if not pooled[0]:
         raise ValueError("the two summaries share no method with per-seed final success on a common seed")

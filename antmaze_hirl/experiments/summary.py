@@ -45,7 +45,8 @@ BASELINE = "dagger"
 Trial = list[dict[str, Any]]
 
 
-def _spread(values: Sequence[float | None]) -> dict[str, float | None]:
+def median_range(values: Sequence[float | None]) -> dict[str, float | None]:
+    """``{"median", "min", "max"}`` of the values that are not ``None`` (all three ``None`` when none is)."""
     present = [value for value in values if value is not None]
     if not present:
         return {"median": None, "min": None, "max": None}
@@ -92,7 +93,7 @@ def final_success(trials: dict[int, Trial]) -> dict[str, Any]:
     pooled = None
     if counted:
         pooled = pooled_rate(sum(seed["successes"] for seed in per_seed), sum(int(n) for n in mazes.values()))
-    return {**_spread([seed["rate"] for seed in per_seed]), "per_seed": per_seed, "pooled": pooled}
+    return {**median_range([seed["rate"] for seed in per_seed]), "per_seed": per_seed, "pooled": pooled}
 
 
 def _per_seed_figures(trial: Trial, horizon: float) -> dict[str, float | None]:
@@ -134,14 +135,14 @@ def summarise(
             "final_success": final_success(trials),
             "success_at_labels": {str(budget): _budget_figure(per_seed, budget) for budget in LABEL_BUDGETS},
             "normalised_auc": {
-                **_spread([seed["normalised_auc"] for seed in per_seed.values()]),
+                **median_range([seed["normalised_auc"] for seed in per_seed.values()]),
                 "per_seed": [seed["normalised_auc"] for seed in per_seed.values()],
                 "label_horizon": horizon,
             },
             "mean_expert_cost_per_episode": float(np.mean([row["expert_cost"] for row in method_rows])),
             "mean_attempts_per_episode": float(np.mean([row["attempts"] for row in method_rows])),
             "cost_to_60_percent": {"median": float(np.median(costs)) if costs else None, "seeds_reached": len(costs)},
-            "total_labels": _spread([float(trial[-1]["cumulative_expert_cost"]) for trial in trials.values()]),
+            "total_labels": median_range([float(trial[-1]["cumulative_expert_cost"]) for trial in trials.values()]),
         }
         if method != baseline and figures.get(baseline):
             summary[method][f"vs_{baseline}"] = _compare(per_seed, figures[baseline])
@@ -173,7 +174,7 @@ def _labels_to_match(trials: dict[int, Trial], target: float) -> dict[str, Any]:
 
 def _budget_figure(per_seed: dict[int, dict[str, float | None]], budget: int) -> dict[str, Any]:
     values = [seed[f"success_at_{budget}_labels"] for seed in per_seed.values()]
-    return {**_spread(values), "per_seed": values, "seeds_reached": sum(value is not None for value in values)}
+    return {**median_range(values), "per_seed": values, "seeds_reached": sum(value is not None for value in values)}
 
 
 def _compare(per_seed: dict[int, dict[str, float | None]], baseline: dict[int, dict[str, float | None]]) -> dict:
