@@ -91,6 +91,7 @@ def test_main_prints_the_beside_table_after_the_three_tables(tmp_path, monkeypat
     ("extra", "message"),
     [
         (["--names", "only one"], "--names takes two comma-separated names, got 'only one'"),
+        (["--names", "a,"], "--names takes two comma-separated names, got 'a,'"),
         (["--beside", "nowhere"], "no summary.json in nowhere"),
         (["--names", "a,b"], "--names 'a,b' names the --beside columns: pass --beside too"),
         (["--beside", "{bad}"], "summary.json is not JSON: Expecting value"),
