@@ -76,8 +76,9 @@ def durable_append(path: str | Path, text: str) -> Path:
     """Appends ``text`` (UTF-8) to ``path`` and fsyncs it before returning.
 
     For logs written as events happen (a study's clicks and answers): once this returns, the line
-    survives a ``kill -9`` or a power cut. A crash mid-call can leave at most a partial last line,
-    which readers of such logs skip. A new file's folder entry is fsynced too.
+    survives a ``kill -9`` or a power cut. A crash mid-call can leave at most a partial last line
+    (no final newline): :func:`trim_torn_tail` cuts it off before the next append, and the readers in
+    :mod:`antmaze_hirl.study.logs` skip it with a warning. A new file's folder entry is fsynced too.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -89,3 +90,42 @@ def durable_append(path: str | Path, text: str) -> Path:
     if new:
         fsync_path(path.parent)
     return path
+
+
+def trim_torn_tail(path: str | Path) -> bytes:
+    """Cuts a partial last line (the bytes after the last newline) off ``path``, durably.
+
+    A crash inside :func:`durable_append` can leave such a tail; appending after it would glue the
+    next record onto it. Call this before appending to a log that a crash may have torn.
+
+    Returns:
+        The bytes removed (``b""`` when the file is missing, empty or ends with a newline), so that
+        the caller can log what was cut.
+    """
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        return b""
+    if size == 0:
+        return b""
+    with path.open("r+b") as handle:
+        handle.seek(size - 1)
+        if handle.read(1) == b"\n":
+            return b""
+        # Read back from the end in blocks until a newline (logs are small; a block is usually enough).
+        end, tail = size, b""
+        while end > 0:
+            start = max(end - 65_536, 0)
+            handle.seek(start)
+            block = handle.read(end - start)
+            cut = block.rfind(b"\n")
+            if cut >= 0:
+                tail = block[cut + 1 :] + tail
+                break
+            tail = block + tail
+            end = start
+        handle.truncate(size - len(tail))
+        handle.flush()
+        os.fsync(handle.fileno())
+    return tail

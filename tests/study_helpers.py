@@ -20,3 +20,40 @@ def make_tiny_study(
 def snapshot(folder: Path) -> dict[str, bytes]:
     """Every file under ``folder`` with its bytes (to show a refused request changed nothing)."""
     return {str(path.relative_to(folder)): path.read_bytes() for path in sorted(folder.rglob("*")) if path.is_file()}
+
+
+class FakeClock:
+    """Wall-clock seconds that move only when a test says so."""
+
+    def __init__(self, now: float = 1000.0) -> None:
+        self.now = now
+
+    def __call__(self) -> float:
+        return self.now
+
+    def advance(self, seconds: float) -> None:
+        self.now += seconds
+
+
+def open_session(folder: Path, participant_id: str = "P01", clock=None):
+    """A participant's session built straight from the folder (no server), with an injectable clock."""
+    import time
+
+    from antmaze_hirl.study.plan import load_plan
+    from antmaze_hirl.study.session import ParticipantSession
+    from antmaze_hirl.study.settings import load_settings
+
+    plan = load_plan(folder)
+    participant = next(p for p in plan.participants if p.id == participant_id)
+    return ParticipantSession(folder, plan, participant, load_settings(folder), clock=clock or time.time)
+
+
+def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) -> dict:
+    """Answers the open query with the oracle's click, ``seconds`` after it was shown."""
+    from antmaze_hirl.study.simulate import oracle_click
+
+    state = session.state()
+    if clock is not None:
+        clock.advance(seconds)
+    x, y = oracle_click(state)
+    return session.label(state["query"]["id"], float(x), float(y))

@@ -17,7 +17,7 @@ from antmaze_hirl.dagger import GatedQuery
 from antmaze_hirl.experiments.runner import run_trial
 from antmaze_hirl.study.analysis import analyze
 from antmaze_hirl.study.plan import load_plan
-from antmaze_hirl.study.server import StudyServer, bind_socket
+from antmaze_hirl.study.server import TOKEN_ENV, StudyServer, bind_socket
 from antmaze_hirl.study.settings import load_settings
 from antmaze_hirl.study.simulate import SimulatedParticipant, StudyClient, oracle_click, simulate_study
 
@@ -79,9 +79,9 @@ def test_a_noise_free_simulated_participant_gives_the_oracle_experiments_numbers
 
 
 def _serve(folder, port, token):
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", TOKEN_ENV: token}  # from the environment: not visible in `ps`
     command = [sys.executable, "-m", "antmaze_hirl.cli", "study", "serve", str(folder), "--port", str(port)]
-    process = subprocess.Popen([*command, "--token", token], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     deadline = time.time() + 120
     while time.time() < deadline:
         try:
@@ -100,7 +100,7 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
     probe = bind_socket("127.0.0.1", 0)
     port = probe.getsockname()[1]
     probe.close()
-    token = "kill-test-token"
+    token = "kill-test-token-0123456789"
     client = StudyClient(f"http://127.0.0.1:{port}/?token={token}")
     server = _serve(folder, port, token)
     try:

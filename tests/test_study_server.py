@@ -11,7 +11,7 @@ from antmaze_hirl.study.session import BadInput
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
     folder = make_tiny_study(tmp_path_factory.mktemp("study"), participants=2)
-    server = StudyServer(folder, token="secret-token")
+    server = StudyServer(folder, token="secret-token-0123456789")
     with server.running():
         yield server, folder
 
@@ -29,7 +29,8 @@ def test_the_page_and_the_api_need_the_token(served):
         assert anonymous.get("/").status_code == 403
         assert anonymous.get("/api/study").status_code == 403
         assert anonymous.get("/api/study", params={"token": "wrong"}).status_code == 403
-        assert anonymous.get("/api/study", headers={"X-Study-Token": "secret-token-but-longer"}).status_code == 403
+        longer = {"X-Study-Token": server.token + "-but-longer"}
+        assert anonymous.get("/api/study", headers=longer).status_code == 403
         page = anonymous.get("/", params={"token": server.token})
         assert page.status_code == 200 and "<canvas" in page.text
         study = anonymous.get("/api/study", params={"token": server.token}).json()

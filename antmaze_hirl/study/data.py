@@ -3,16 +3,18 @@
 The files (one folder per participant, ``DIR/participants/<pid>/``) are described in
 :mod:`antmaze_hirl.study.analysis`. Missing folders and files mean a participant has not started
 (or not reached) that part; a file that contradicts the plan or cannot be parsed is an error.
+The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`): a torn last line is skipped with
+a warning, any other damaged line is an error naming the file and line.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pandas as pd
 
 from antmaze_hirl.experiments.runner import COLUMNS
+from antmaze_hirl.study.logs import read_csv_rows, read_json_records
 from antmaze_hirl.study.plan import StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
 
@@ -92,13 +94,12 @@ def _episodes_file(study_dir: str | Path, participant: str) -> Path | None:
 
 def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
     try:
-        frame = pd.read_csv(path, dtype=str, keep_default_na=False)
-    except pd.errors.EmptyDataError:
-        return pd.DataFrame()  # created but nothing written yet
-    except (OSError, UnicodeDecodeError, pd.errors.ParserError) as error:
+        rows = read_csv_rows(path, EPISODE_COLUMNS)
+    except (OSError, UnicodeDecodeError) as error:
         raise ValueError(f"{path} is not a readable CSV: {' '.join(str(error).split())}") from None
-    if tuple(frame.columns) != EPISODE_COLUMNS:
-        raise ValueError(f"{path} has columns {list(frame.columns)}; expected {list(EPISODE_COLUMNS)}")
+    if not rows:
+        return pd.DataFrame()  # created but nothing written yet
+    frame = pd.DataFrame(rows, columns=list(EPISODE_COLUMNS), dtype=str)
     for column in _BOOLEAN_COLUMNS:
         bad = frame.loc[~frame[column].isin(["True", "False"]), column]
         if len(bad):
@@ -172,14 +173,9 @@ def load_answers(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:
 
 def _read_answers(path: Path, plan: StudyPlan, participant: str) -> list[dict[str, object]]:
     records = []
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
-        if not line.strip():
-            continue
+    for number, entry in read_json_records(path):
         where = f"{path}:{number}"
         try:
-            entry = json.loads(line)
-            if not isinstance(entry, dict):
-                raise ValueError(f"expected a JSON object, got {entry!r}")
             answers = validate_answers({key: entry[key] for key in ("ratings", "comment") if key in entry})
             if entry.get("participant") != participant:
                 raise ValueError(f"participant {entry.get('participant')!r} in {participant}'s file")

@@ -3,16 +3,23 @@
 Security follows the Jupyter server's model: it binds the loopback interface by default, every API
 request and the page itself need the random token printed in the start-up URL (``?token=``, or the
 ``X-Study-Token`` header), and requests with a foreign ``Host`` header (DNS rebinding) or a cross-site
-``Origin`` are refused. Bodies are JSON objects of at most :data:`MAX_BODY_BYTES`.
+``Origin`` are refused. Bodies are JSON objects of at most :data:`MAX_BODY_BYTES` (counted while the
+body streams in, so a chunked body is cut off, not read whole), nested at most :data:`MAX_JSON_DEPTH`
+deep, with only the fields the route names. Every response carries ``X-Content-Type-Options: nosniff``,
+a ``Content-Security-Policy`` with ``frame-ancestors 'self'`` and ``Referrer-Policy: no-referrer`` (the
+URL holds the token); the page and the API also ``Cache-Control: no-store``. Refused requests are
+logged as warnings (logger ``antmaze_hirl.study.server``), without the token. One server per study
+folder: :class:`~antmaze_hirl.study.store.StudyLock` holds an OS lock on ``DIR/server.lock``.
 
-API (all under ``/api``, JSON in and out; errors are ``{"error": "..."}`` with a 4xx status):
+API (all under ``/api``, JSON in and out; errors, unknown paths and methods included, are
+``{"error": "..."}`` with a 4xx status; a participant whose files are damaged gets 409 naming the file):
 
 * ``GET /api/study``: body, participants and where each one is;
 * ``GET /api/questionnaire``: the questionnaire items;
 * ``GET /api/participants/{id}/state``: what the page shows;
-* ``POST /api/participants/{id}/start``: start the next trial;
+* ``POST /api/participants/{id}/start`` ``{}``: start the next trial;
 * ``POST /api/participants/{id}/label`` ``{"query", "x", "y", "response_seconds"}``: a click;
-* ``POST /api/participants/{id}/next``: after a click that ended an episode, close it (the learner's
+* ``POST /api/participants/{id}/next`` ``{}``: after a click that ended an episode, close it (the learner's
   update) and open the next maze; the page sends it while it animates the last walk;
 * ``POST /api/participants/{id}/questionnaire`` ``{"trial", "ratings", "comment"}``;
 * ``POST /api/participants/{id}/pause`` ``{"paused": true|false}``;
@@ -24,6 +31,8 @@ from __future__ import annotations
 import contextlib
 import hmac
 import json
+import logging
+import os
 import secrets
 import socket
 import sys
@@ -39,17 +48,52 @@ from fastapi import FastAPI, Request
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
 
 from antmaze_hirl.study.camera import CameraUnavailable
 from antmaze_hirl.study.questionnaire import SCALE_MAX, TLX_ITEMS
-from antmaze_hirl.study.session import BadInput, ProtocolError
-from antmaze_hirl.study.store import Study, UnknownParticipant
+from antmaze_hirl.study.session import BadInput, DamagedRecords, ProtocolError
+from antmaze_hirl.study.store import Study, StudyLock, UnknownParticipant
 
 MAX_BODY_BYTES = 16_384
 """Largest request body accepted (a click or a questionnaire is far smaller)."""
 
+MAX_JSON_DEPTH = 8
+"""Deepest nesting of objects and arrays accepted in a body (a questionnaire needs 2)."""
+
+MIN_TOKEN_CHARS = 16
+"""Shortest token accepted (a random one has 32 characters)."""
+
+TOKEN_ENV = "ANTMAZE_HIRL_STUDY_TOKEN"
+"""Environment variable the token is read from when no ``--token`` is given (not visible in ``ps``)."""
+
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 TOKEN_HEADER = "X-Study-Token"
+
+SECURITY_HEADERS = {
+    "X-Content-Type-Options": "nosniff",
+    "Content-Security-Policy": (
+        "default-src 'self'; img-src 'self' data:; object-src 'none'; base-uri 'none'; form-action 'self'; "
+        "frame-ancestors 'self'"
+    ),
+    "Referrer-Policy": "no-referrer",
+}
+"""Headers on every response (as the Jupyter server sends them)."""
+
+ROUTE_FIELDS = {
+    "start": frozenset(),
+    "next": frozenset(),
+    "pause": frozenset({"paused"}),
+    "label": frozenset({"query", "x", "y", "response_seconds"}),
+    "questionnaire": frozenset({"trial", "ratings", "comment"}),
+}
+"""The fields each POST route accepts; any other is refused."""
+
+logger = logging.getLogger(__name__)
+
+
+class BodyTooLarge(BadInput):
+    """A request body over :data:`MAX_BODY_BYTES` (answered with HTTP 413)."""
 
 
 def _reject_constant(name: str) -> Any:
@@ -63,14 +107,85 @@ def parse_json_object(body: bytes) -> dict[str, Any]:
         BadInput: If the body is too large, not UTF-8 JSON (``NaN``/``Infinity`` included), or not an object.
     """
     if len(body) > MAX_BODY_BYTES:
-        raise BadInput(f"request body of {len(body)} bytes is larger than {MAX_BODY_BYTES}")
+        raise BodyTooLarge(f"request body of {len(body)} bytes is larger than {MAX_BODY_BYTES}")
     try:
-        payload = json.loads(body.decode("utf-8"), parse_constant=_reject_constant)
-    except (UnicodeDecodeError, ValueError) as error:
-        raise BadInput(f"request body is not valid JSON: {error}") from error
+        text = body.decode("utf-8")
+        depth = _nesting_depth(text)
+        if depth > MAX_JSON_DEPTH:
+            raise BadInput(f"request body is nested more than {MAX_JSON_DEPTH} deep")
+        payload = json.loads(text, parse_constant=_reject_constant)
+    except (UnicodeDecodeError, ValueError, RecursionError) as error:
+        if isinstance(error, BadInput):
+            raise
+        # ValueError covers integers of more than sys.get_int_max_str_digits() digits too
+        raise BadInput(f"request body is not valid JSON: {str(error)[:200]}") from None
     if not isinstance(payload, dict):
         raise BadInput(f"request body must be a JSON object, got {type(payload).__name__}")
     return payload
+
+
+def _nesting_depth(text: str, stop: int = MAX_JSON_DEPTH) -> int:
+    """How deep ``[`` and ``{`` nest in JSON ``text`` (outside strings), counted up to ``stop + 1``."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for char in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif char == "\\":
+                escaped = True
+            elif char == '"':
+                in_string = False
+        elif char == '"':
+            in_string = True
+        elif char in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+                if deepest > stop:
+                    break
+        elif char in "]}":
+            depth -= 1
+    return deepest
+
+
+async def read_body(request: Request, limit: int = MAX_BODY_BYTES) -> bytes:
+    """The request's body, read chunk by chunk and refused as soon as it passes ``limit`` bytes.
+
+    Raises:
+        BodyTooLarge: Without reading the rest (a chunked body has no Content-Length to check first).
+    """
+    chunks, size = [], 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > limit:
+            raise BodyTooLarge(f"request body of more than {limit} bytes is larger than {limit}")
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def check_fields(payload: dict[str, Any], route: str) -> dict[str, Any]:
+    """``payload``, if it has only the fields :data:`ROUTE_FIELDS` allows for ``route``.
+
+    Raises:
+        BadInput: Naming the unknown fields.
+    """
+    unknown = sorted(set(payload) - ROUTE_FIELDS[route], key=str)
+    if unknown:
+        allowed = sorted(ROUTE_FIELDS[route]) or "none"
+        raise BadInput(f"unknown field(s) {unknown[:5]} in a {route} request (allowed: {allowed})"[:300])
+    return payload
+
+
+def check_token(token: str) -> str:
+    """``token`` if it is long enough to guess at no better than chance.
+
+    Raises:
+        ValueError: If it is shorter than :data:`MIN_TOKEN_CHARS` characters.
+    """
+    if len(token) < MIN_TOKEN_CHARS:
+        raise ValueError(f"the study token must have at least {MIN_TOKEN_CHARS} characters, got {len(token)}")
+    return token
 
 
 def _host_name(netloc: str) -> str:
@@ -86,52 +201,67 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         token: Secret every request to the page or the API must carry.
         allowed_hosts: Host names accepted in the ``Host`` header (and as same-site ``Origin``).
     """
-    if not token:
-        raise ValueError("the study server needs a non-empty token")
+    check_token(token)
     hosts = {host.lower().strip("[]") for host in allowed_hosts}
     static = resources.files("antmaze_hirl.study") / "static"
     app = FastAPI(title="antmaze_hirl study", docs_url=None, redoc_url=None, openapi_url=None)
     app.state.study = study
 
-    def error(status: int, message: str) -> Any:
+    def refuse(request: Request, status: int, message: str) -> Any:
+        client = request.client.host if request.client else "?"
+        logger.warning("refused %s %s from %s: %d %s", request.method, request.url.path, client, status, message)
         return JSONResponse({"error": message}, status_code=status)
+
+    statuses = {BodyTooLarge: 413, BadInput: 400, ProtocolError: 409, DamagedRecords: 409, UnknownParticipant: 404}
+    for kind, status in statuses.items():
+        app.add_exception_handler(kind, lambda request, exc, status=status: refuse(request, status, str(exc)))
+    app.add_exception_handler(
+        HTTPException,
+        lambda request, exc: refuse(request, exc.status_code, str(exc.detail)),  # 404, 405
+    )
 
     @app.middleware("http")
     async def guard(request: Request, call_next: Callable[[Request], Awaitable[Any]]) -> Any:
+        started = time.perf_counter()
+        response = _check_request(request)
+        if response is None:
+            response = await call_next(request)
+            # The server's own time, apart from the network and the browser (benchmarks/study_latency.py reads it).
+            response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - started) * 1000:.1f}"
+        response.headers.update(SECURITY_HEADERS)
+        if request.url.path == "/" or request.url.path.startswith("/api/"):
+            response.headers["Cache-Control"] = "no-store"
+        return response
+
+    def _check_request(request: Request) -> Any:
         host = request.headers.get("host", "")
         if _host_name(host) not in hosts:
-            return error(403, f"Host header {host!r} is not allowed (allowed: {sorted(hosts)})")
+            return refuse(request, 403, f"Host header {host!r} is not allowed (allowed: {sorted(hosts)})")
         origin = request.headers.get("origin")
         if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
-            return error(403, f"cross-site request from Origin {origin!r} refused")
+            return refuse(request, 403, f"cross-site request from Origin {origin!r} refused")
         path = request.url.path
         if path == "/" or path.startswith("/api/"):
             given = request.headers.get(TOKEN_HEADER) or request.query_params.get("token") or ""
             if not hmac.compare_digest(given.encode(), token.encode()):
                 if path == "/":
+                    refuse(request, 403, "missing or wrong token on the page")
                     return HTMLResponse(
                         "<h1>403</h1><p>Open the study with the URL the server printed (it ends with ?token=...).</p>",
                         status_code=403,
                     )
-                return error(403, "missing or wrong token: use the URL the server printed")
+                return refuse(request, 403, "missing or wrong token: use the URL the server printed")
         length = request.headers.get("content-length")
         if length is not None and (not length.isdigit() or int(length) > MAX_BODY_BYTES):
-            return error(413, f"request body of {length} bytes is larger than {MAX_BODY_BYTES}")
-        started = time.perf_counter()
-        try:
-            response = await call_next(request)
-        except BadInput as bad:
-            return error(400, str(bad))
-        except ProtocolError as conflict:
-            return error(409, str(conflict))
-        except UnknownParticipant as unknown:
-            return error(404, str(unknown))
-        # The server's own time, apart from the network and the browser (benchmarks/study_latency.py reads it).
-        response.headers["Server-Timing"] = f"app;dur={(time.perf_counter() - started) * 1000:.1f}"
-        return response
+            return refuse(request, 413, f"request body of {length[:20]} bytes is larger than {MAX_BODY_BYTES}")
+        return None
 
-    async def body_of(request: Request) -> dict[str, Any]:
-        return parse_json_object(await request.body())
+    async def body_of(request: Request, route: str) -> dict[str, Any]:
+        return check_fields(parse_json_object(await read_body(request)), route)
+
+    async def session_of(participant_id: str) -> Any:
+        # Restoring a session builds simulators and reads a checkpoint (seconds): off the event loop.
+        return await run_in_threadpool(study.session, participant_id)
 
     @app.get("/")
     async def page() -> Any:
@@ -142,9 +272,15 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         # From the saved progress: the participant picker must not build every participant's simulators.
         participants = []
         for participant in study.plan.participants:
-            index, phase = study.progress(participant.id)
-            number = index + 1 if index < len(participant.trials) else None  # None once every trial is done
-            participants.append({"id": participant.id, "phase": phase, "trial": number})
+            entry: dict[str, Any] = {"id": participant.id}
+            try:
+                index, phase = study.progress(participant.id)
+            except (ValueError, OSError, DamagedRecords) as damaged:  # one participant's damage is theirs alone
+                entry.update(phase="damaged", trial=None, error=str(damaged))
+            else:
+                number = index + 1 if index < len(participant.trials) else None  # None once every trial is done
+                entry.update(phase=phase, trial=number)
+            participants.append(entry)
         return {"body": study.plan.body, "participants": participants}
 
     @app.get("/api/questionnaire")
@@ -164,47 +300,45 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
 
     @app.get("/api/participants/{participant_id}/state")
     async def state(participant_id: str) -> Any:
-        return await run_in_threadpool(study.session(participant_id).state)
+        return await run_in_threadpool((await session_of(participant_id)).state)
 
     @app.post("/api/participants/{participant_id}/start")
     async def start(participant_id: str, request: Request) -> Any:
-        await body_of(request)
-        return await run_in_threadpool(study.session(participant_id).start_trial)
+        await body_of(request, "start")
+        return await run_in_threadpool((await session_of(participant_id)).start_trial)
 
     @app.post("/api/participants/{participant_id}/label")
     async def label(participant_id: str, request: Request) -> Any:
-        payload = await body_of(request)
-        unknown = sorted(set(payload) - {"query", "x", "y", "response_seconds"})
-        if unknown:
-            raise BadInput(f"unknown field(s) {unknown} in a click")
-        session = study.session(participant_id)
+        payload = await body_of(request, "label")
+        session = await session_of(participant_id)
         return await run_in_threadpool(
             session.label, payload.get("query"), payload.get("x"), payload.get("y"), payload.get("response_seconds")
         )
 
     @app.post("/api/participants/{participant_id}/next")
     async def next_episode(participant_id: str, request: Request) -> Any:
-        await body_of(request)
-        return await run_in_threadpool(study.session(participant_id).next_episode)
+        await body_of(request, "next")
+        return await run_in_threadpool((await session_of(participant_id)).next_episode)
 
     @app.post("/api/participants/{participant_id}/questionnaire")
     async def answers(participant_id: str, request: Request) -> Any:
-        payload = await body_of(request)
+        payload = await body_of(request, "questionnaire")
         trial = payload.pop("trial", None)
-        return await run_in_threadpool(study.session(participant_id).submit_questionnaire, trial, payload)
+        session = await session_of(participant_id)
+        return await run_in_threadpool(session.submit_questionnaire, trial, payload)
 
     @app.post("/api/participants/{participant_id}/pause")
     async def pause(participant_id: str, request: Request) -> Any:
-        payload = await body_of(request)
-        return await run_in_threadpool(study.session(participant_id).set_paused, payload.get("paused"))
+        payload = await body_of(request, "pause")
+        return await run_in_threadpool((await session_of(participant_id)).set_paused, payload.get("paused"))
 
     @app.get("/api/participants/{participant_id}/frame.png")
-    async def frame(participant_id: str) -> Any:
-        session = study.session(participant_id)
+    async def frame(participant_id: str, request: Request) -> Any:
+        session = await session_of(participant_id)
         try:
             png = await run_in_threadpool(session.camera_frame)
         except CameraUnavailable as missing:
-            return error(404, str(missing))
+            return refuse(request, 404, str(missing))
         return Response(png, media_type="image/png", headers={"Cache-Control": "no-store"})
 
     app.mount("/static", StaticFiles(directory=str(static)), name="static")
@@ -249,17 +383,28 @@ class StudyServer:
         host: Interface to bind (loopback by default).
         port: TCP port; 0 picks a free one.
         token: The token; a random one by default.
+
+    Raises:
+        StudyInUse: If another server holds the folder's lock (names its PID).
+        ValueError: If the token is shorter than :data:`MIN_TOKEN_CHARS`.
     """
 
     def __init__(self, study_dir: str | Path, *, host: str = "127.0.0.1", port: int = 0, token: str | None = None):
         import uvicorn
 
-        self.study = Study(study_dir)
-        self.token = token or new_token()
-        self.host = host
-        self.socket = bind_socket(host, port)
+        self.token = check_token(token or new_token())
+        self.lock = StudyLock(study_dir)
+        try:
+            self.study = Study(study_dir)
+            self.host = host
+            self.socket = bind_socket(host, port)
+        except BaseException:
+            self.lock.release()
+            raise
         self.port = int(self.socket.getsockname()[1])
-        app = create_app(self.study, token=self.token, allowed_hosts=allowed_hosts_for(host))
+        url_host, hosts = url_host_and_allowed(host)
+        self._url_host = url_host
+        app = create_app(self.study, token=self.token, allowed_hosts=hosts)
         config = uvicorn.Config(app, log_level="warning", lifespan="off")
         self._server = uvicorn.Server(config)
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
@@ -267,7 +412,7 @@ class StudyServer:
     @property
     def url(self) -> str:
         """The participant's URL, token included."""
-        return study_url(self.host, self.port, self.token)
+        return study_url(self._url_host, self.port, self.token)
 
     @property
     def base_url(self) -> str:
@@ -284,11 +429,13 @@ class StudyServer:
         return self
 
     def stop(self) -> None:
-        """Stops serving and releases the simulators."""
+        """Stops serving, releases the simulators and the folder's lock."""
         self._server.should_exit = True
-        self._thread.join(10)
+        if self._thread.is_alive():
+            self._thread.join(10)
         self.socket.close()
         self.study.close()
+        self.lock.release()
 
     @contextlib.contextmanager
     def running(self) -> Iterator[StudyServer]:
@@ -300,12 +447,45 @@ class StudyServer:
             self.stop()
 
 
-def allowed_hosts_for(host: str) -> list[str]:
-    """Host names the ``Host`` header may carry: loopback names, plus ``host`` when it is a specific address."""
+_WILDCARD_HOSTS = ("0.0.0.0", "::", "")
+
+
+def url_host_and_allowed(host: str) -> tuple[str, list[str]]:
+    """The host name to print in the URL for a server bound to ``host``, and the ``Host`` names to accept.
+
+    Loopback names are always accepted. A specific address is accepted as itself. A wildcard address
+    (``0.0.0.0``, ``::``) is no address a browser can open, so the URL names this machine
+    (``socket.gethostname()``), and its name, full name and addresses are accepted.
+    """
     hosts = list(LOOPBACK_HOSTS)
-    if host not in ("0.0.0.0", "::", "") and host not in hosts:
-        hosts.append(host)
-    return hosts
+    if host not in _WILDCARD_HOSTS:
+        if host not in hosts:
+            hosts.append(host)
+        return host, hosts
+    name = socket.gethostname()
+    names = {name, socket.getfqdn()}
+    with contextlib.suppress(OSError):
+        for found in (name, socket.getfqdn()):
+            _, aliases, addresses = socket.gethostbyname_ex(found)
+            names.update(aliases)
+            names.update(addresses)
+    hosts.extend(sorted(candidate.lower() for candidate in names if candidate and candidate.lower() not in hosts))
+    return name, hosts
+
+
+def allowed_hosts_for(host: str) -> list[str]:
+    """Host names the ``Host`` header may carry for a server bound to ``host`` (see :func:`url_host_and_allowed`)."""
+    return url_host_and_allowed(host)[1]
+
+
+def resolve_token(token: str | None) -> str:
+    """The token to serve with: ``token``, else :data:`TOKEN_ENV`, else a new random one.
+
+    Raises:
+        ValueError: If the one given is shorter than :data:`MIN_TOKEN_CHARS`.
+    """
+    chosen = token if token is not None else os.environ.get(TOKEN_ENV) or None
+    return check_token(chosen) if chosen is not None else new_token()
 
 
 def serve(
@@ -316,23 +496,38 @@ def serve(
     token: str | None = None,
     extra_hosts: Sequence[str] = (),
 ) -> None:
-    """Serves a study until interrupted (``antmaze-hirl study serve``), printing the participants' URL."""
+    """Serves a study until interrupted (``antmaze-hirl study serve``), printing the participants' URL.
+
+    Raises:
+        StudyInUse: If another server holds the folder (names its PID).
+        ValueError: If the token (given, or from :data:`TOKEN_ENV`) is too short.
+        OSError: If the address cannot be bound.
+    """
     import uvicorn
 
-    study = Study(study_dir)
-    token = token or new_token()
-    if host not in LOOPBACK_HOSTS:
-        print(
-            f"warning: serving on {host}, not loopback: anyone who can reach this machine and knows the token "
-            "can use the study",
-            file=sys.stderr,
-        )
-    sock = bind_socket(host, port)
+    token = resolve_token(token)
+    lock = StudyLock(study_dir)
+    try:
+        study = Study(study_dir)
+        if host not in LOOPBACK_HOSTS:
+            print(
+                f"warning: serving on {host}, not loopback: anyone who can reach this machine and knows the token "
+                "can use the study",
+                file=sys.stderr,
+            )
+        sock = bind_socket(host, port)
+    except BaseException:
+        lock.release()
+        raise
     port = int(sock.getsockname()[1])  # the one picked, when port 0 asked for any
-    app = create_app(study, token=token, allowed_hosts=[*allowed_hosts_for(host), *extra_hosts])
-    print(f"study {study.folder} ({len(study.participant_ids)} participants): open {study_url(host, port, token)}")
+    url_host, hosts = url_host_and_allowed(host)
+    app = create_app(study, token=token, allowed_hosts=[*hosts, *extra_hosts])
+    print(f"study {study.folder} ({len(study.participant_ids)} participants): open {study_url(url_host, port, token)}")
+    if url_host != "127.0.0.1" and host not in LOOPBACK_HOSTS:
+        print(f"  or, on this machine: {study_url('127.0.0.1', port, token)}")
     try:
         uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off")).run(sockets=[sock])
     finally:
         sock.close()
         study.close()
+        lock.release()

@@ -17,13 +17,18 @@ On disk, per participant (``DIR/participants/<id>/``), everything is written whe
 * ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
 * ``trial<k>/learner.zip``: the learner's weights after the trial.
 
-A server killed mid-episode (even ``kill -9``) restarts the participant from the checkpoint: only the
-episode in progress is lost, and it is replayed on the same maze (the trainer's random state is saved).
+The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`); the checkpoint starts with a
+SHA-256 of its content. A server killed mid-episode (even ``kill -9``) restarts the participant from the
+checkpoint: only the episode in progress is lost, and it is replayed on the same maze (the trainer's
+random state is saved). On that restart a partial last line of a log (a crash inside an append) is cut
+off and the cut logged as a ``torn_tail_trimmed`` event. A damaged or missing checkpoint, a damaged log
+or progress file stops that participant with :class:`DamagedRecords` naming the file: a trial is never
+silently restarted, and the other participants go on.
 """
 
 from __future__ import annotations
 
-import csv
+import hashlib
 import io
 import json
 import math
@@ -37,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, durable_append
+from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, trim_torn_tail
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
@@ -45,6 +50,7 @@ from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
+from antmaze_hirl.study.logs import DamagedLog, append_csv_row, append_json_record, csv_cell, read_csv_rows
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
 from antmaze_hirl.study.settings import StudySettings
@@ -56,6 +62,20 @@ class ProtocolError(Exception):
 
 class BadInput(ValueError):
     """A malformed or out-of-range value from a participant's page (answered with HTTP 400)."""
+
+
+class DamagedRecords(Exception):
+    """A participant's saved files are damaged or missing, so their session cannot go on (HTTP 409).
+
+    The message names the file; the experimenter repairs or removes it. Other participants are not affected.
+    """
+
+
+LOGS = ("events.jsonl", "clicks.jsonl", "answers.jsonl", "episodes.csv")
+"""A participant's append-only logs (events first: it records the trims of the others)."""
+
+PHASES = ("intro", "label", "questionnaire", "done")
+"""The phases ``progress.json`` may hold (``episode_over`` is saved as ``label``: the episode is replayed)."""
 
 
 class PageExpert:
@@ -177,7 +197,11 @@ class ParticipantSession:
         self._trail: list[list[float]] = []
         self._walk: list[dict[str, Any]] = []  # the learner's unasked steps the page has not shown yet
         self._camera: AntCamera | None = None
-        self._restore()
+        try:
+            self._restore()
+        except BaseException:
+            self.close()
+            raise
 
     # ----------------------------------------------------------------------------------- queries
     @property
@@ -268,6 +292,8 @@ class ParticipantSession:
     def start_trial(self) -> dict[str, Any]:
         """Starts the current trial (phase ``intro`` -> ``label``)."""
         with self.lock:
+            if self.paused_since is not None:
+                raise ProtocolError("the study is paused: resume before starting")
             if self.phase != "intro":
                 raise ProtocolError(f"no trial to start: participant {self.participant.id} is at {self.phase!r}")
             trial = self.trial
@@ -306,23 +332,20 @@ class ParticipantSession:
             server_seconds = max(now - self._query_shown_at, 0.0)
             assert self._run is not None and self._run.request is not None and self._trial is not None
             request = self._run.request
-            durable_append(
+            append_json_record(
                 self.folder / "clicks.jsonl",
-                json.dumps(
-                    {
-                        "participant": self.participant.id,
-                        "trial": self.trial.index,
-                        "episode": request.episode,
-                        "step": request.step,
-                        "query": query_id,
-                        "time": now,
-                        "x": subgoal[0],
-                        "y": subgoal[1],
-                        "response_seconds": seconds,
-                        "server_seconds": server_seconds,
-                    }
-                )
-                + "\n",
+                {
+                    "participant": self.participant.id,
+                    "trial": self.trial.index,
+                    "episode": request.episode,
+                    "step": request.step,
+                    "query": query_id,
+                    "time": now,
+                    "x": subgoal[0],
+                    "y": subgoal[1],
+                    "response_seconds": seconds,
+                    "server_seconds": server_seconds,
+                },
             )
             self._episode_label_seconds.append(seconds if seconds is not None else server_seconds)
             executed = self._run.answer(np.asarray(subgoal))
@@ -345,9 +368,11 @@ class ParticipantSession:
         runs while it animates the last walk.
 
         Raises:
-            ProtocolError: If no episode has just ended.
+            ProtocolError: If no episode has just ended, or the study is paused.
         """
         with self.lock:
+            if self.paused_since is not None:
+                raise ProtocolError("the study is paused: resume before the next maze")
             if self.phase != "episode_over":
                 raise ProtocolError(
                     f"no episode has just ended (participant {self.participant.id} is at {self.phase!r})"
@@ -389,12 +414,17 @@ class ParticipantSession:
                 "comment": answers.comment,
                 "time": self.clock(),
             }
-            durable_append(self.folder / "answers.jsonl", json.dumps(record) + "\n")
+            append_json_record(self.folder / "answers.jsonl", record)
             self._next_trial()
             return self.state()
 
     def set_paused(self, paused: Any) -> dict[str, Any]:
-        """Pauses or resumes (a key on the page): no clicks meanwhile, and paused time is not time on task."""
+        """Pauses or resumes (a key on the page): no clicks, starts or next mazes meanwhile.
+
+        Paused time is not time on task: since nothing can start or end an episode while paused, a
+        pause lies wholly inside an episode (phase ``label``) or wholly outside one, and only the first
+        kind is taken off the episode's time.
+        """
         with self.lock:
             if not isinstance(paused, bool):
                 raise BadInput(f"paused must be true or false, got {paused!r}")
@@ -403,8 +433,10 @@ class ParticipantSession:
                 self.paused_since = now
                 self._log_event("pause")
             elif not paused and self.paused_since is not None:
-                self._episode_paused += now - self.paused_since
-                self._query_shown_at += now - self.paused_since  # a pause is not thinking time
+                if self.phase == "label" and self._run is not None:  # inside an episode
+                    pause = max(now - max(self.paused_since, self._episode_started_at), 0.0)
+                    self._episode_paused += pause
+                    self._query_shown_at += pause  # a pause is not thinking time
                 self.paused_since = None
                 self._log_event("resume")
             return self.state()
@@ -470,6 +502,12 @@ class ParticipantSession:
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
             self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
+        elif resume and (written := len(self._written_rows())):
+            raise DamagedRecords(
+                f"{checkpoint} is missing, but {self.folder / 'episodes.csv'} has {written} episode(s) of trial "
+                f"{trial.index}: participant {self.participant.id} cannot go on without it (restore it from a "
+                "backup; a trial is never restarted silently)"
+            )
         else:
             self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
         if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
@@ -539,7 +577,9 @@ class ParticipantSession:
             "seconds_per_label": (
                 round(float(np.mean(self._episode_label_seconds)), 4) if self._episode_label_seconds else ""
             ),
-            "time_on_task": round(self._episode_ended_at - self._episode_started_at - self._episode_paused, 3),
+            "time_on_task": round(
+                max(self._episode_ended_at - self._episode_started_at - self._episode_paused, 0.0), 3
+            ),
         }
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:
@@ -578,23 +618,31 @@ class ParticipantSession:
         self._save_progress()
 
     def _append_row(self, row: dict[str, Any]) -> None:
+        append_csv_row(self.folder / "episodes.csv", EPISODE_COLUMNS, row)
+
+    def _written_rows(self) -> list[dict[str, str]]:
+        # This trial's rows in episodes.csv (a damaged file stops the participant, naming the line).
+        assert self.trial is not None
         path = self.folder / "episodes.csv"
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, fieldnames=EPISODE_COLUMNS)
         if not path.exists():
-            writer.writeheader()
-        writer.writerow(row)
-        durable_append(path, buffer.getvalue())
+            return []
+        try:
+            rows = read_csv_rows(path, EPISODE_COLUMNS)
+        except DamagedLog as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
+        return [row for row in rows if row["trial"] == str(self.trial.index)]
 
     def _repair_rows(self) -> None:
         # Rows the checkpoint has but the CSV lacks (killed between the two writes) are appended again.
         assert self._trial is not None
-        path = self.folder / "episodes.csv"
-        written = 0
-        if path.exists():
-            with path.open() as handle:
-                written = sum(1 for row in csv.DictReader(handle) if row.get("trial") == str(self.trial.index))
-        for row in self._trial.rows[written:]:
+        written = self._written_rows()
+        saved = [{column: csv_cell(row.get(column)) for column in EPISODE_COLUMNS} for row in self._trial.rows]
+        if written != saved[: len(written)]:
+            raise DamagedRecords(
+                f"{self.folder / 'episodes.csv'} has {len(written)} row(s) of trial {self.trial.index} that do not "
+                f"match the first {len(written)} of the {len(saved)} in its checkpoint: repeated or changed rows"
+            )
+        for row in self._trial.rows[len(written) :]:
             self._append_row(row)
 
     def _save_progress(self) -> None:
@@ -604,10 +652,26 @@ class ParticipantSession:
 
     def _log_event(self, kind: str, **details: Any) -> None:
         event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}
-        durable_append(self.folder / "events.jsonl", json.dumps(event) + "\n")
+        append_json_record(self.folder / "events.jsonl", event)
 
     def _restore(self) -> None:
-        self.trial_index, self.phase = read_progress(self.folder)
+        for name in LOGS:  # a crash inside an append leaves a partial last line: cut it before appending again
+            tail = trim_torn_tail(self.folder / name)
+            if tail:
+                self._log_event(
+                    "torn_tail_trimmed", file=name, bytes=len(tail), text=tail[:200].decode("utf-8", "replace")
+                )
+        try:
+            self.trial_index, self.phase = read_progress(self.folder)
+        except ValueError as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
+        if not (0 <= self.trial_index <= len(self.participant.trials) and self.phase in PHASES) or (
+            (self.trial_index == len(self.participant.trials)) != (self.phase == "done")
+        ):
+            raise DamagedRecords(
+                f"{self.folder / 'progress.json'}: trial {self.trial_index} at {self.phase!r} is not a place in "
+                f"participant {self.participant.id}'s {len(self.participant.trials)} trials"
+            )
         if self.phase == "label":
             self._open_trial(resume=True)
 
@@ -634,9 +698,20 @@ def _json_number(value: Any, name: str, bound: str = "") -> float:
     Raises:
         BadInput: Naming ``name`` (and ``bound``, the range the caller checks next) and the value.
     """
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise BadInput(f"{name} must be a finite number{' ' + bound if bound else ''}, got {value!r}")
-    return float(value)
+    wanted = f"{name} must be a finite number{' ' + bound if bound else ''}"
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise BadInput(f"{wanted}, got {value!r}"[:300])
+    try:
+        number = float(value)  # an int too large for a float raises OverflowError
+    except OverflowError:
+        raise BadInput(f"{wanted}, got an integer of {len(str(abs(value)))} digits") from None
+    if not math.isfinite(number):
+        raise BadInput(f"{wanted}, got {value!r}")
+    return number
+
+
+_CHECKPOINT_MAGIC = b"antmaze_hirl trial checkpoint v2\n"
+"""First bytes of a checkpoint with a hash; a SHA-256 hex line follows, then the pickle."""
 
 
 def _save_checkpoint(state: TrialState, path: Path) -> None:
@@ -647,15 +722,25 @@ def _save_checkpoint(state: TrialState, path: Path) -> None:
         data = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
     finally:
         trainer.env, trainer.expert = env, expert
-    atomic_write_bytes(path, data)
+    atomic_write_bytes(path, _CHECKPOINT_MAGIC + hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
 
 
 def _load_checkpoint(path: Path, env: Any) -> TrialState:
+    """The trial state saved at ``path``; checkpoints from before the hash (a bare pickle) load unchecked.
+
+    Raises:
+        DamagedRecords: If the file fails its hash, cannot be unpickled, or holds something else (names it).
+    """
+    data = path.read_bytes()
+    if data.startswith(_CHECKPOINT_MAGIC):
+        digest, _, data = data[len(_CHECKPOINT_MAGIC) :].partition(b"\n")
+        if hashlib.sha256(data).hexdigest().encode() != digest:
+            raise DamagedRecords(f"{path} is damaged: its content does not match its SHA-256 (restore a backup)")
     try:
-        state = pickle.loads(path.read_bytes())
-    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError) as error:
-        raise ValueError(f"{path} is not a readable trial checkpoint: {error}") from error
+        state = pickle.loads(data)
+    except Exception as error:  # a damaged pickle raises nearly anything (TypeError, KeyError, MemoryError...)
+        raise DamagedRecords(f"{path} is not a readable trial checkpoint: {type(error).__name__}: {error}") from None
     if not isinstance(state, TrialState):
-        raise ValueError(f"{path} holds {type(state).__name__}, not a trial checkpoint")
+        raise DamagedRecords(f"{path} holds {type(state).__name__}, not a trial checkpoint")
     state.trainer.env, state.trainer.expert = env, PageExpert()
     return state

@@ -1,7 +1,10 @@
-"""A study folder opened for serving: its plan, settings and the participants' sessions."""
+"""A study folder opened for serving: its plan, settings and the participants' sessions, and its server lock."""
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
+import os
 import threading
 from pathlib import Path
 
@@ -15,6 +18,55 @@ class UnknownParticipant(KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0])
+
+
+class StudyInUse(OSError):
+    """Another server already serves this study folder (the message names its PID)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+class StudyLock:
+    """An exclusive OS lock (``flock``) on ``DIR/server.lock``: one server per study folder.
+
+    Two servers on one folder would both append every click and event. The lock is the kernel's, so
+    it goes with the process that holds it, even after ``kill -9``; the file keeps the holder's PID for
+    the message a second server gives.
+
+    Args:
+        study_dir: The study folder.
+
+    Raises:
+        StudyInUse: If another process (or another server in this one) holds the lock.
+    """
+
+    FILE_NAME = "server.lock"
+
+    def __init__(self, study_dir: str | Path) -> None:
+        self.path = Path(study_dir) / self.FILE_NAME
+        if not Path(study_dir).is_dir():
+            raise FileNotFoundError(f"{study_dir} is not a study folder (run 'antmaze-hirl study init' first)")
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip() or "unknown"
+            os.close(fd)
+            raise StudyInUse(
+                f"{study_dir} is already served by PID {holder} (it holds {self.path}); stop that server first"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self._fd: int | None = fd
+
+    def release(self) -> None:
+        """Releases the lock (the file stays; its PID line is stale until the next server writes its own)."""
+        if self._fd is not None:
+            with contextlib.suppress(OSError):
+                fcntl.flock(self._fd, fcntl.LOCK_UN)
+            os.close(self._fd)
+            self._fd = None
 
 
 class Study:
@@ -38,7 +90,8 @@ class Study:
             )
         self._participants = {participant.id: participant for participant in self.plan.participants}
         self._sessions: dict[str, ParticipantSession] = {}
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # guards the dicts, never held while a session is restored
+        self._restoring = {participant_id: threading.Lock() for participant_id in self._participants}
 
     @property
     def participant_ids(self) -> list[str]:
@@ -48,22 +101,29 @@ class Study:
     def session(self, participant_id: str) -> ParticipantSession:
         """The session of ``participant_id`` (restored from disk the first time).
 
+        Restoring one participant (simulators, checkpoint: seconds) holds only that participant's lock,
+        so the others are served meanwhile. A failed restore is not kept: the next request tries again.
+
         Raises:
             UnknownParticipant: If the plan has no such participant.
+            DamagedRecords: If the participant's files are damaged or missing (names the file).
         """
         self._check_known(participant_id)
-        with self._lock:
-            if participant_id not in self._sessions:
-                self._sessions[participant_id] = ParticipantSession(
-                    self.folder, self.plan, self._participants[participant_id], self.settings
-                )
-            return self._sessions[participant_id]
+        with self._restoring[participant_id]:
+            with self._lock:
+                session = self._sessions.get(participant_id)
+            if session is None:
+                session = ParticipantSession(self.folder, self.plan, self._participants[participant_id], self.settings)
+                with self._lock:
+                    self._sessions[participant_id] = session
+            return session
 
     def progress(self, participant_id: str) -> tuple[int, str]:
         """``(trial_index, phase)`` of ``participant_id``, without restoring a session (no simulators built).
 
         Raises:
             UnknownParticipant: If the plan has no such participant.
+            ValueError: If its ``progress.json`` is malformed (names the file).
         """
         self._check_known(participant_id)
         with self._lock:
