@@ -1,0 +1,198 @@
+"""Durable study logs: torn tails trimmed and logged, damaged lines named, damaged checkpoints stop one participant."""
+
+import csv
+import json
+import pickle
+import threading
+import time
+
+import httpx
+import pytest
+from study_helpers import click_once, make_tiny_study, open_session
+
+from antmaze_hirl.study.data import EPISODE_COLUMNS, load_episodes
+from antmaze_hirl.study.logs import DamagedLog, append_csv_row, read_csv_rows, read_json_records
+from antmaze_hirl.study.plan import load_plan
+from antmaze_hirl.study.server import StudyServer
+from antmaze_hirl.study.session import DamagedRecords
+from antmaze_hirl.study.store import Study
+
+TOKEN = "durability-token-0123456789"
+
+
+def events_of(participant):
+    return [record for _, record in read_json_records(participant / "events.jsonl")]
+
+
+def play_one_episode(session):
+    """Start (if at the intro), click to the end of one episode and close it."""
+    if session.phase == "intro":
+        session.start_trial()
+    while session.phase == "label":
+        click_once(session)
+    session.next_episode()
+
+
+@pytest.fixture
+def one_episode_in(tmp_path):
+    """A participant one episode into a three-episode trial (no practice), session closed as after a kill."""
+    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=3, practice=0)
+    session = open_session(folder)
+    play_one_episode(session)
+    session.close()
+    return folder, folder / "participants" / "P01"
+
+
+def test_a_torn_last_line_is_trimmed_on_restart_and_the_trim_logged(one_episode_in):
+    folder, participant = one_episode_in
+    intact = {name: (participant / name).read_bytes() for name in ("clicks.jsonl", "episodes.csv")}
+    torn = {"clicks.jsonl": '{"participant": "P01", "trial": 1, "epis', "episodes.csv": "P01,1,dagger,"}
+    for name, tail in torn.items():  # a power cut mid-append
+        with (participant / name).open("a") as handle:
+            handle.write(tail)
+    session = open_session(folder)  # the restart
+    for name, content in intact.items():
+        assert (participant / name).read_bytes() == content, name  # the tail is gone, nothing else
+    trims = [event for event in events_of(participant) if event["event"] == "torn_tail_trimmed"]
+    assert {(event["file"], event["text"]) for event in trims} == set(torn.items())
+    play_one_episode(session)  # the next records start on their own line
+    session.close()
+    episodes = load_episodes(folder, load_plan(folder))
+    assert list(episodes["episode"]) == [0, 1]
+    assert len(read_json_records(participant / "clicks.jsonl")) == int(episodes["expert_cost"].sum())
+
+
+def test_readers_skip_a_torn_last_line_with_a_warning_naming_file_and_line(one_episode_in):
+    _, participant = one_episode_in
+    path = participant / "clicks.jsonl"
+    lines = path.read_text().count("\n")
+    with path.open("a") as handle:
+        handle.write('{"participant": "P0')
+    with pytest.warns(UserWarning, match=rf"clicks.jsonl:{lines + 1}: skipped a partial last line"):
+        records = read_json_records(path)
+    assert len(records) == lines
+
+
+def test_readers_reject_a_changed_line_naming_file_and_line(one_episode_in):
+    folder, participant = one_episode_in
+    clicks = participant / "clicks.jsonl"
+    lines = clicks.read_text().splitlines(keepends=True)
+    lines[0] = lines[0].replace('"x": ', '"x": 1', 1)  # a changed digit: still JSON, no longer what was written
+    clicks.write_text("".join(lines))
+    with pytest.raises(DamagedLog, match=r"clicks.jsonl:1: checksum mismatch"):
+        read_json_records(clicks)
+    episodes = participant / "episodes.csv"
+    rows = episodes.read_text().splitlines(keepends=True)
+    rows[1] = rows[1].replace("dagger", "daggex", 1)
+    episodes.write_text("".join(rows))
+    with pytest.raises(ValueError, match=r"episodes.csv:2: checksum mismatch"):
+        load_episodes(folder, load_plan(folder))
+    lost = "".join([rows[0], rows[1].rsplit(",", 1)[0] + "\n"])  # a row whose checksum cell is gone
+    episodes.write_text(lost)
+    with pytest.raises(DamagedLog, match=r"episodes.csv:2: checksum mismatch"):
+        read_csv_rows(episodes, EPISODE_COLUMNS)
+
+
+def test_old_format_logs_without_checksums_still_load_and_keep_their_format(tmp_path):
+    legacy = tmp_path / "episodes.csv"
+    row = {column: str(index) for index, column in enumerate(EPISODE_COLUMNS)}
+    with legacy.open("w", newline="") as handle:  # as the kit wrote it before checksums: csv.DictWriter
+        writer = csv.DictWriter(handle, fieldnames=EPISODE_COLUMNS)
+        writer.writeheader()
+        writer.writerow(row)
+    append_csv_row(legacy, EPISODE_COLUMNS, row)  # appending to a legacy file keeps it legacy
+    assert read_csv_rows(legacy, EPISODE_COLUMNS) == [row, row]
+    assert "crc32" not in legacy.read_text()
+    answers = tmp_path / "events.jsonl"
+    answers.write_text(json.dumps({"event": "trial_start"}) + "\n")  # a legacy line, then a checksummed one
+    from antmaze_hirl.study.logs import append_json_record
+
+    append_json_record(answers, {"event": "pause"})
+    assert [record["event"] for _, record in read_json_records(answers)] == ["trial_start", "pause"]
+    answers.write_text(answers.read_text() + json.dumps({"event": "resume"}) + "\n")  # unsealed after sealed
+    with pytest.raises(DamagedLog, match=r"events.jsonl:3: the line has no checksum"):
+        read_json_records(answers)
+
+
+def test_a_checkpoint_with_flipped_bytes_stops_the_participant_naming_the_file(one_episode_in):
+    folder, participant = one_episode_in
+    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    data = bytearray(checkpoint.read_bytes())
+    for offset in range(200, 220):  # 20 flipped bytes inside the pickle
+        data[offset] ^= 0xFF
+    checkpoint.write_bytes(bytes(data))
+    before = (participant / "episodes.csv").read_bytes()
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl is damaged"):
+        open_session(folder)
+    assert (participant / "episodes.csv").read_bytes() == before
+
+
+def test_an_old_format_checkpoint_without_a_hash_still_loads(one_episode_in):
+    folder, participant = one_episode_in
+    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    data = checkpoint.read_bytes()
+    checkpoint.write_bytes(data.split(b"\n", 2)[2])  # the bare pickle the kit wrote before the hash
+    session = open_session(folder)
+    assert session.state()["episode"]["number"] == 2
+    session.close()
+    pickle.loads(checkpoint.read_bytes())  # untouched: still the bare pickle
+
+
+def test_a_missing_checkpoint_stops_the_participant_instead_of_restarting_the_trial(one_episode_in):
+    folder, participant = one_episode_in
+    (participant / "trial1" / "checkpoint.pkl").unlink()
+    before = (participant / "episodes.csv").read_bytes()
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl is missing.*1 episode"):
+        open_session(folder)
+    assert (participant / "episodes.csv").read_bytes() == before  # no episode 0 written again
+
+
+def test_a_repeated_row_in_episodes_csv_stops_the_participant(one_episode_in):
+    folder, participant = one_episode_in
+    episodes = participant / "episodes.csv"
+    lines = episodes.read_text().splitlines(keepends=True)
+    episodes.write_text("".join([*lines, lines[-1]]))
+    with pytest.raises(DamagedRecords, match="do not match"):
+        open_session(folder)
+
+
+def test_one_participants_damage_never_breaks_the_others(tmp_path):
+    folder = make_tiny_study(tmp_path / "study", participants=2)
+    (folder / "participants" / "P01").mkdir(parents=True)
+    (folder / "participants" / "P01" / "progress.json").write_text('{"trial_index": 0, "pha')
+    with StudyServer(folder, token=TOKEN).running() as server:
+        with httpx.Client(base_url=server.base_url, headers={"X-Study-Token": TOKEN}, timeout=120) as client:
+            overview = client.get("/api/study")
+            assert overview.status_code == 200
+            first, second = overview.json()["participants"]
+            assert first["phase"] == "damaged" and "progress.json" in first["error"]
+            assert second["phase"] == "intro"
+            damaged = client.get("/api/participants/P01/state")
+            assert damaged.status_code == 409 and "progress.json" in damaged.json()["error"]
+            assert client.post("/api/participants/P02/start", json={}).status_code == 200
+
+
+def test_restoring_a_session_runs_off_the_event_loop(tmp_path, monkeypatch):
+    folder = make_tiny_study(tmp_path / "study", participants=2)
+    restoring = threading.Event()
+    slow = Study.session
+
+    def slow_session(self, participant_id):  # a restore that takes seconds (simulators, a big checkpoint)
+        if participant_id == "P01":
+            restoring.set()
+            time.sleep(3)
+        return slow(self, participant_id)
+
+    monkeypatch.setattr(Study, "session", slow_session)
+    with StudyServer(folder, token=TOKEN).running() as server:
+        headers = {"X-Study-Token": TOKEN}
+        worker = threading.Thread(
+            target=httpx.get, args=(f"{server.base_url}/api/participants/P01/state",), kwargs={"headers": headers}
+        )
+        worker.start()
+        assert restoring.wait(30)
+        started = time.monotonic()
+        assert httpx.get(f"{server.base_url}/api/study", headers=headers, timeout=30).status_code == 200
+        waited = time.monotonic() - started
+        worker.join()
+    assert waited < 2.5  # served while P01's restore slept its 3 s
