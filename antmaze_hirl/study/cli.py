@@ -121,7 +121,12 @@ def _add_serve(commands: argparse._SubParsersAction, formatter_class: type) -> N
     parser.add_argument("dir", type=Path, help="study folder made by 'study init'")
     parser.add_argument("--host", default="127.0.0.1", help="interface to listen on; others than loopback warn")
     parser.add_argument("--port", type=int, default=8765, help="TCP port")
-    parser.add_argument("--token", default=None, help="access token (default: a random one, printed in the URL)")
+    parser.add_argument(
+        "--token",
+        default=None,
+        help="access token, at least 16 characters (default: $ANTMAZE_HIRL_STUDY_TOKEN, else a random one, "
+        "printed in the URL); prefer the environment variable: a --token value is visible in ps",
+    )
     parser.add_argument(
         "--allow-host", action="append", default=[], help="extra Host header name to accept (repeatable)"
     )

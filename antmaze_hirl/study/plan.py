@@ -9,6 +9,7 @@ Participants only ever see neutral labels ("Method A", ...), fixed for the whole
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Collection, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -147,9 +148,22 @@ def _known_methods() -> list[str]:
     return list(METHODS)
 
 
-def _check_count(name: str, value: object, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ValueError(f"{name} must be an int >= {minimum}, got {value!r}")
+MAX_PARTICIPANTS = 10_000
+"""Most participants a plan holds (a study of more is a typo)."""
+
+MAX_EPISODES = 100_000
+"""Most episodes a trial holds."""
+
+MAX_SEED = 2**32 - 1
+"""Largest study or trial seed (numpy's seeds are 32-bit words; trial seeds stay below this)."""
+
+SAFE_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+"""A participant id: it names a folder, so letters, digits, ``_`` and ``-`` only, at most 64."""
+
+
+def _check_count(name: str, value: object, minimum: int, maximum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not minimum <= value <= maximum:
+        raise ValueError(f"{name} must be an int in [{minimum}, {maximum}], got {value!r}"[:200])
     return value
 
 
@@ -209,17 +223,17 @@ def make_plan(
     if body not in BODY_SPECS:
         raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_SPECS)}")
     methods = _check_methods(methods, _known_methods() if known_methods is None else known_methods)
-    _check_count("participants", participants, 1)
-    _check_count("episodes", episodes, 1)
-    _check_count("practice", practice, 0)
-    _check_count("seed", seed, 0)
+    _check_count("participants", participants, 1, MAX_PARTICIPANTS)
+    _check_count("episodes", episodes, 1, MAX_EPISODES)
+    _check_count("practice", practice, 0, MAX_EPISODES)
+    _check_count("seed", seed, 0, MAX_SEED)
     rng = np.random.default_rng(seed)
     rows = williams_design(len(methods))
     rows = [rows[i] for i in rng.permutation(len(rows))]
     letters = [chr(ord("A") + i) for i in range(len(methods))]
     shuffled = [letters[i] for i in rng.permutation(len(methods))]
     labels = {method: f"Method {letter}" for method, letter in zip(methods, shuffled, strict=True)}
-    base = int(rng.integers(0, 2**31))
+    base = int(rng.integers(0, 2**31))  # + at most MAX_PARTICIPANTS * (MAX_METHODS + 1) slots: below MAX_SEED
     slots = len(methods) + 1  # trial 0 is the practice slot, used or not
     plans = []
     for i in range(participants):
@@ -331,7 +345,13 @@ def _participant_from_dict(entry: object) -> ParticipantPlan:
                 _typed(t["seed"], int, "a trial seed"),
             )
         )
-    return ParticipantPlan(_typed(fields["id"], str, "a participant id"), tuple(trials))
+    participant_id = _typed(fields["id"], str, "a participant id")
+    if not SAFE_ID.match(participant_id):
+        # The id names the participant's folder: "../x" or "a/b" would write outside the study.
+        raise ValueError(f"participant id {participant_id[:80]!r} is not a safe name ({SAFE_ID.pattern})")
+    for trial in trials:
+        _check_count(f"participant {participant_id}'s trial seed", trial.seed, 0, MAX_SEED)
+    return ParticipantPlan(participant_id, tuple(trials))
 
 
 def _check_consistent(plan: StudyPlan) -> None:
