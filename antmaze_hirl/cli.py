@@ -12,6 +12,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.cli_validation import apply_bounds
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -408,7 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for add in SUBCOMMANDS:
         add(subparsers)
-    return parser
+    return apply_bounds(parser)  # every numeric option bounded, usage errors on one line
 
 
 def main(argv: Sequence[str] | None = None) -> int:

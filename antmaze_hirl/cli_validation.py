@@ -1,0 +1,175 @@
+"""Bounds for every numeric option of the ``antmaze-hirl`` command line, checked while parsing.
+
+:func:`apply_bounds` walks a built parser (every subcommand, ``study`` ones included) and gives each
+``int`` or ``float`` option a type that refuses values outside its bounds, NaN and infinity, with a
+one-line error and exit status 2, before a handler imports torch or writes a file. An option missing
+from :data:`INT_BOUNDS` / :data:`FLOAT_BOUNDS` is a programming error raised when the parser is built,
+so a new option cannot skip validation.
+
+Bounds are sanity limits, not tuning advice: seeds fit a 31-bit word so that the ``seed + i`` that
+evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; counts stop well before a
+typo exhausts memory or time; distances and rates are finite and positive.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+MAX_SEED = 2**31 - 1
+"""Largest ``--seed``: ``seed + i`` for the derived seeds stays below 2**32."""
+
+MAX_STUDY_SEED = 2**32 - 1
+"""Largest ``study init --seed`` (:data:`antmaze_hirl.study.plan.MAX_SEED`, not imported: it pulls numpy)."""
+
+
+@dataclass(frozen=True)
+class IntBounds:
+    """An integer option's closed range ``[low, high]``."""
+
+    low: int
+    high: int
+    meaning: str = ""
+
+    def describe(self) -> str:
+        """``an int in [low, high]``, plus what a special value means."""
+        return f"an int in [{self.low}, {self.high}]" + (f" ({self.meaning})" if self.meaning else "")
+
+
+@dataclass(frozen=True)
+class FloatBounds:
+    """A float option's range: finite, ``low < value`` (or ``<=`` when ``low_inclusive``), ``value <= high``."""
+
+    low: float
+    high: float
+    low_inclusive: bool = False
+
+    def describe(self) -> str:
+        """``a finite number > low and <= high``."""
+        return f"a finite number {'>=' if self.low_inclusive else '>'} {self.low:g} and <= {self.high:g}"
+
+
+_COUNT = IntBounds(1, 1_000_000)
+_EVAL_MAZES = IntBounds(1, 100_000)
+_STEPS = IntBounds(1, 10**10)
+_CORES = IntBounds(1, 1024)
+_METRES = FloatBounds(0.0, 1000.0)
+
+INT_BOUNDS: dict[str, IntBounds] = {
+    "seed": IntBounds(0, MAX_SEED),
+    "study init:seed": IntBounds(0, MAX_STUDY_SEED),
+    "seeds": IntBounds(1, 10_000),
+    "episodes": _COUNT,
+    "study init:episodes": IntBounds(1, 100_000),
+    "practice": IntBounds(0, 100_000, "0: no practice trial"),
+    "participants": IntBounds(1, 10_000),
+    "eval_every": _COUNT,
+    "eval_episodes": _EVAL_MAZES,
+    "final_eval_episodes": _EVAL_MAZES,
+    "maze_size": IntBounds(2, 64),
+    "gradient_steps": IntBounds(0, 10**7),
+    "timesteps": _STEPS,
+    "checkpoint_freq": _STEPS,
+    "eval_freq": _STEPS,
+    "threads": _CORES,
+    "jobs": _CORES,
+    "cpus_per_trial": _CORES,
+    "port": IntBounds(0, 65535, "0: any free port"),
+}
+"""Bounds of the integer options, by ``dest``; ``"COMMAND:dest"`` overrides for one (sub)command."""
+
+FLOAT_BOUNDS: dict[str, FloatBounds] = {
+    "max_subgoal_distance": _METRES,
+    "max_distance": _METRES,
+    "expert_max_distance": _METRES,
+    "decay": FloatBounds(1.0, 1e6, low_inclusive=True),
+    "noise": FloatBounds(0.0, 100.0, low_inclusive=True),
+    "delay": FloatBounds(0.0, 3600.0, low_inclusive=True),
+}
+"""Bounds of the float options, by ``dest``; ``"COMMAND:dest"`` overrides for one (sub)command."""
+
+
+def bounded_int(bounds: IntBounds) -> Callable[[str], int]:
+    """An argparse ``type`` parsing a decimal integer within ``bounds``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text.strip(), 10) if len(text) <= 40 else None  # no 4,300-digit conversions
+        except ValueError:
+            value = None
+        if value is None or not bounds.low <= value <= bounds.high:
+            raise argparse.ArgumentTypeError(f"must be {bounds.describe()}, got {_shown(text)}")
+        return value
+
+    parse.__name__ = "int"
+    return parse
+
+
+def bounded_float(bounds: FloatBounds) -> Callable[[str], float]:
+    """An argparse ``type`` parsing a finite float within ``bounds`` (never NaN or infinity)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text) if len(text) <= 40 else math.nan
+        except ValueError:
+            value = math.nan
+        above_low = value >= bounds.low if bounds.low_inclusive else value > bounds.low
+        if not (math.isfinite(value) and above_low and value <= bounds.high):
+            raise argparse.ArgumentTypeError(f"must be {bounds.describe()}, got {_shown(text)}")
+        return value
+
+    parse.__name__ = "float"
+    return parse
+
+
+def _shown(text: str) -> str:
+    return repr(text) if len(text) <= 40 else f"{text[:20]!r}... ({len(text)} characters)"
+
+
+def _one_line_error(parser: argparse.ArgumentParser) -> Callable[[str], None]:
+    def error(message: str) -> None:
+        parser.exit(2, f"{parser.prog}: error: {message} (see {parser.prog} --help)\n")
+
+    return error
+
+
+def numeric_options(parser: argparse.ArgumentParser, command: str = "") -> list[tuple[str, argparse.Action]]:
+    """``(command, action)`` of every option of ``parser`` and its subcommands whose type is numeric."""
+    found = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found.extend(numeric_options(sub, f"{command} {name}".strip()))
+        elif action.type in (int, float) or getattr(action, "bounds", None) is not None:
+            found.append((command, action))
+        elif getattr(action.type, "__name__", "") in ("_positive_int",):  # the backends' own int type
+            found.append((command, action))
+    return found
+
+
+def apply_bounds(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Bounds every numeric option of ``parser`` (and its subcommands), and makes usage errors one line.
+
+    Raises:
+        KeyError: If a numeric option has no bounds in :data:`INT_BOUNDS` / :data:`FLOAT_BOUNDS`.
+    """
+    for command, action in numeric_options(parser):
+        is_float = action.type is float or isinstance(getattr(action, "bounds", None), FloatBounds)
+        table = FLOAT_BOUNDS if is_float else INT_BOUNDS
+        bounds = table.get(f"{command}:{action.dest}") or table.get(action.dest)
+        if bounds is None:
+            raise KeyError(f"antmaze-hirl {command} {action.option_strings or action.dest}: no bounds declared")
+        action.bounds = bounds  # type: ignore[attr-defined]  # for the tests and for help texts
+        action.type = bounded_float(bounds) if is_float else bounded_int(bounds)
+    _set_errors(parser)
+    return parser
+
+
+def _set_errors(parser: argparse.ArgumentParser) -> None:
+    parser.error = _one_line_error(parser)  # type: ignore[method-assign]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                _set_errors(sub)
