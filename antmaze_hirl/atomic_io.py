@@ -67,9 +67,23 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode())
 
 
-def atomic_write_json(path: str | Path, data: Any) -> Path:
-    """Writes ``data`` as indented JSON, atomically (see :func:`atomic_write_with`)."""
-    return atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+def atomic_write_json(path: str | Path, data: Any, *, allow_nan: bool = True) -> Path:
+    """Writes ``data`` as indented JSON, atomically (see :func:`atomic_write_with`).
+
+    Args:
+        path: The file to (re)place.
+        data: JSON-ready data.
+        allow_nan: ``False`` refuses NaN and infinity, which are not JSON (Python writes ``NaN``,
+            which strict readers reject); the file is then left as it was.
+
+    Raises:
+        ValueError: With ``allow_nan=False``, for a non-finite float (names the file).
+    """
+    try:
+        text = json.dumps(data, indent=2, allow_nan=allow_nan)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error} (NaN and Infinity are not JSON)") from None
+    return atomic_write_text(path, text + "\n")
 
 
 def durable_append(path: str | Path, text: str) -> Path:

@@ -60,3 +60,11 @@ def test_plan_ids_are_validated_as_safe_names_on_load(tmp_path):
         (folder / "plan.json").write_text(json.dumps(plan))
         with pytest.raises(ValueError, match="not a safe name"):
             load_plan(folder)
+
+
+def test_study_settings_never_hold_nan_or_infinity():
+    from antmaze_hirl.study.settings import StudySettings
+
+    for value in (float("inf"), float("nan")):
+        with pytest.raises(ValueError, match="expert_max_distance must be"):
+            StudySettings.for_body("point", expert_max_distance=value)

@@ -269,7 +269,7 @@ def save_plan(plan: StudyPlan, directory: str | Path) -> Path:
             same = False
         if not same:
             raise ValueError(f"{path} already holds a different plan; a study's plan never changes (use a new folder)")
-    return atomic_write_json(path, content)
+    return atomic_write_json(path, content, allow_nan=False)
 
 
 def load_plan(directory: str | Path, known_methods: Collection[str] | None = None) -> StudyPlan:

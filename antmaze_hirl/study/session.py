@@ -648,7 +648,9 @@ class ParticipantSession:
     def _save_progress(self) -> None:
         # An episode that ended but is not closed is not saved yet: after a restart it is replayed.
         phase = "label" if self.phase == "episode_over" else self.phase
-        atomic_write_json(self.folder / "progress.json", {"trial_index": self.trial_index, "phase": phase})
+        atomic_write_json(
+            self.folder / "progress.json", {"trial_index": self.trial_index, "phase": phase}, allow_nan=False
+        )
 
     def _log_event(self, kind: str, **details: Any) -> None:
         event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}

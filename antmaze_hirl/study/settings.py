@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,10 @@ class StudySettings:
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
+        for name in ("expert_max_distance", "decay"):  # never NaN or Infinity in settings.json (not JSON)
+            value = getattr(self, name)
+            if value is not None and not math.isfinite(value):
+                raise ValueError(f"{name} must be a finite number, got {value!r}")
         if not isinstance(self.show_learner_subgoal, bool):
             raise ValueError(f"show_learner_subgoal must be true or false, got {self.show_learner_subgoal!r}")
 
@@ -83,7 +88,7 @@ class StudySettings:
 
 def save_settings(settings: StudySettings, study_dir: str | Path) -> Path:
     """Writes ``DIR/settings.json`` atomically."""
-    return atomic_write_json(Path(study_dir) / SETTINGS_FILE, asdict(settings))
+    return atomic_write_json(Path(study_dir) / SETTINGS_FILE, asdict(settings), allow_nan=False)
 
 
 def load_settings(study_dir: str | Path) -> StudySettings:
