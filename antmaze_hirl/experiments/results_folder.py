@@ -1,11 +1,23 @@
-"""A results folder on disk: trial CSVs, the checks before resuming one, and the reports built from it."""
+"""A results folder on disk: trial CSVs, the checks before resuming one, and the reports built from it.
+
+Each finished trial is ``trials/<method>_seed<k>.csv`` plus its record ``trials/<method>_seed<k>.json``:
+``{"seconds", "rows", "sha256"}``, the row count and the SHA-256 of the CSV's bytes, written just before
+the CSV (:func:`trial_record`). :func:`check_trial` tells a damaged trial (a cut line, a duplicated or
+dropped row, an empty file, garbage, or a CSV that does not match its record) and names the file; on
+resume :func:`trial_is_done` moves such a file aside to ``<name>.csv.damaged`` (its bytes are kept) and
+the trial is run again. Trials written before the record held a hash get the structural checks only.
+:func:`write_reports` never replaces ``episodes.csv`` and ``summary.json`` with ones that lack a trial
+the old ``episodes.csv`` had (while a damaged trial is re-run, the old reports stay).
+"""
 
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -39,6 +51,121 @@ learner (NaN where not evaluated; ``eval_mazes`` is how many mazes), and the tra
 (:func:`~antmaze_hirl.envs.layouts.canonical_layout`)."""
 
 TEXT_COLUMNS = ("method", "layout")
+
+REQUIRED_COLUMNS = tuple(column for column in COLUMNS if column not in ("eval_mazes", "layout"))
+"""Columns every trial CSV has (trials from before ``eval_mazes`` and ``layout`` were recorded lack those)."""
+
+
+class DamagedTrial(ValueError):
+    """A trial CSV that is not what its run wrote (the message names the file and what is wrong)."""
+
+
+def trial_record(csv_text: str, seconds: float) -> dict[str, Any]:
+    """The record saved beside a trial CSV: wall time, row count and SHA-256 of the CSV's UTF-8 bytes."""
+    rows = max(csv_text.count("\n") - 1, 0)  # one line per row after the header; no cell holds a newline
+    return {"seconds": seconds, "rows": rows, "sha256": hashlib.sha256(csv_text.encode()).hexdigest()}
+
+
+def check_trial(path: Path, episodes: int) -> list[dict[str, Any]]:
+    """A finished trial's rows, after checking them against its record and the experiment's episode count.
+
+    Args:
+        path: ``trials/<method>_seed<k>.csv``.
+        episodes: Episodes per trial in this experiment (the rows must be episodes ``0..episodes-1``).
+
+    Raises:
+        DamagedTrial: Naming ``path`` and what is wrong.
+    """
+    try:
+        data = path.read_bytes()
+        text = data.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise DamagedTrial(f"{path}: unreadable ({error})") from None
+    record_path = path.with_suffix(".json")
+    try:
+        record = json.loads(record_path.read_text()) if record_path.exists() else {}
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise DamagedTrial(f"{record_path}: the trial's record is unreadable ({error})") from None
+    if not isinstance(record, dict):
+        raise DamagedTrial(f"{record_path}: the trial's record is not a JSON object")
+    if "sha256" in record and hashlib.sha256(data).hexdigest() != record["sha256"]:
+        lines = max(text.count("\n") - 1, 0)
+        raise DamagedTrial(
+            f"{path}: its bytes do not match the SHA-256 in {record_path.name} ({lines} rows, {record.get('rows')} "
+            "written): cut, edited or damaged"
+        )
+    if not text.strip():
+        raise DamagedTrial(f"{path}: empty")
+    if not text.endswith("\n"):  # the writer ends every row with one: this file was cut
+        raise DamagedTrial(f"{path}:{text.count(chr(10)) + 1}: the last line has no newline: the file was cut")
+    reader = csv.DictReader(io.StringIO(text))
+    header = reader.fieldnames or []
+    missing = [column for column in REQUIRED_COLUMNS if column not in header]
+    if missing or not set(header) <= set(COLUMNS):
+        raise DamagedTrial(f"{path}: header {header[:20]} is not a trial's (missing {missing})"[:300])
+    rows = []
+    for number, row in enumerate(reader, start=2):
+        if None in row or None in row.values():
+            raise DamagedTrial(f"{path}:{number}: {len(header)} cells expected: a cut or glued line")
+        try:
+            rows.append({key: _parse(key, value) for key, value in row.items()})
+        except ValueError as error:
+            raise DamagedTrial(f"{path}:{number}: not a trial row ({error})") from None
+        layout = row.get("layout", "")
+        if layout and not _is_layout(layout):
+            raise DamagedTrial(f"{path}:{number}: layout {layout[:60]!r} is not a maze (cut or edited)")
+    found = [row["episode"] for row in rows]
+    if found != list(range(episodes)):
+        repeated = sorted({e for e in found if found.count(e) > 1}, key=str)
+        absent = sorted(set(range(episodes)) - set(found))
+        raise DamagedTrial(
+            f"{path}: episodes {_span(found)} where 0..{episodes - 1} were expected"
+            + (f"; repeated {repeated[:5]}" if repeated else "")
+            + (f"; missing {absent[:5]}" if absent else "")
+        )
+    return rows
+
+
+def _is_layout(text: str) -> bool:
+    # canonical_layout's form: equal rows of 0/1 with one S (unless it is the goal) and one G.
+    rows = text.split("/")
+    return (
+        len(rows) >= 3
+        and len({len(row) for row in rows}) == 1
+        and set(text) <= set("01SG/")
+        and text.count("G") == 1
+        and text.count("S") <= 1
+    )
+
+
+def _span(values: list[Any]) -> str:
+    return f"[{', '.join(map(str, values[:6]))}{', ...' if len(values) > 6 else ''}] ({len(values)} rows)"
+
+
+def trial_is_done(out_dir: Path, method: str, seed: int, episodes: int) -> bool:
+    """Whether the trial's CSV is on disk and sound; a damaged one is moved aside (warning naming it), to re-run.
+
+    The damaged bytes are kept as ``<name>.csv.damaged`` (``.damaged1``, ... if that exists), never deleted.
+    """
+    path = trial_path(out_dir, method, seed)
+    if not path.exists():
+        return False
+    try:
+        check_trial(path, episodes)
+    except DamagedTrial as damaged:
+        aside = _free_name(path.with_name(path.name + ".damaged"))
+        path.rename(aside)
+        warnings.warn(f"{damaged}; moved to {aside.name}, and the trial runs again", stacklevel=2)
+        return False
+    return True
+
+
+def _free_name(path: Path) -> Path:
+    candidate, number = path, 0
+    while candidate.exists():
+        number += 1
+        candidate = path.with_name(f"{path.name}{number}")
+    return candidate
 
 
 def rows_to_csv(rows: Sequence[dict[str, Any]], columns: Sequence[str] = COLUMNS) -> str:
@@ -110,11 +237,31 @@ def check_resumable(
 
 
 def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: ExperimentConfig) -> dict[str, Any]:
-    """Writes ``episodes.csv``, ``summary.json`` and ``panels.png`` from the finished trials on disk."""
-    done = [(m, s) for m in methods for s in range(seeds) if trial_path(out_dir, m, s).exists()]
-    rows = [row for m, s in done for row in with_eval_mazes(read_rows(trial_path(out_dir, m, s)), config)]
+    """Writes ``episodes.csv``, ``summary.json`` and ``panels.png`` from the sound finished trials on disk.
+
+    A damaged trial is left out with a warning naming it. When the old ``episodes.csv`` holds a trial of
+    this grid that the new one would lack (damaged, or moved aside to run again), nothing is replaced:
+    the old reports stay, and the summary they hold is returned.
+    """
+    done = []
+    for m, s in ((m, s) for m in methods for s in range(seeds)):
+        if trial_path(out_dir, m, s).exists():
+            try:
+                done.append((m, s, check_trial(trial_path(out_dir, m, s), config.episodes)))
+            except DamagedTrial as damaged:
+                warnings.warn(f"left out of the reports: {damaged}", stacklevel=2)
+    lost = _trials_in(out_dir / "episodes.csv") & {(m, s) for m in methods for s in range(seeds)}
+    lost -= {(m, s) for m, s, _ in done}
+    if lost and (out_dir / "summary.json").exists():
+        warnings.warn(
+            f"kept {out_dir / 'episodes.csv'} and summary.json: they hold trial(s) {sorted(lost)[:5]} that are not "
+            "on disk sound now (re-run pending)",
+            stacklevel=2,
+        )
+        return json.loads((out_dir / "summary.json").read_text())
+    rows = [row for _, _, trial in done for row in with_eval_mazes(trial, config)]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
-    timed = sorted(trial_path(out_dir, m, s).with_suffix(".json") for m, s in done)
+    timed = sorted(trial_path(out_dir, m, s).with_suffix(".json") for m, s, _ in done)
     # Finished trials only (save_trial writes the .json just before the .csv); older folders lack some.
     seconds = {path.stem: json.loads(path.read_text())["seconds"] for path in timed if path.exists()}
     recorded = json.loads((out_dir / "config.json").read_text())  # the settings and the low level's identity
@@ -128,6 +275,15 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
     atomic_write_json(out_dir / "summary.json", summary)
     plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
     return summary
+
+
+def _trials_in(episodes_csv: Path) -> set[tuple[str, int]]:
+    # The (method, seed) trials an episodes.csv holds; none when it is missing or unreadable.
+    try:
+        with episodes_csv.open() as handle:
+            return {(row["method"], int(row["seed"])) for row in csv.DictReader(handle)}
+    except (OSError, UnicodeDecodeError, KeyError, TypeError, ValueError, csv.Error):
+        return set()
 
 
 def with_eval_mazes(trial: list[dict[str, Any]], config: ExperimentConfig) -> list[dict[str, Any]]:

@@ -32,7 +32,9 @@ from antmaze_hirl.experiments.results_folder import (
     check_resumable,
     read_rows,
     rows_to_csv,
+    trial_is_done,
     trial_path,
+    trial_record,
     write_reports,
 )
 from antmaze_hirl.experiments.tensorboard import DAggerTensorBoard, trial_log_dir
@@ -292,9 +294,9 @@ def check_worker(body: str, low_level: Any, expected: dict[str, str]) -> None:
 
 def save_trial(out_dir: Path, method: str, seed: int, rows: list[dict[str, Any]], seconds: float) -> Path:
     """Saves a finished trial atomically: its rows in ``trials/<method>_seed<k>.csv``, its wall time beside it."""
-    path = trial_path(out_dir, method, seed)
-    atomic_write_json(path.with_suffix(".json"), {"seconds": seconds})
-    atomic_write_text(path, rows_to_csv(rows))  # last: its existence marks the trial done
+    path, text = trial_path(out_dir, method, seed), rows_to_csv(rows)
+    atomic_write_json(path.with_suffix(".json"), trial_record(text, seconds))  # rows and hash: damage is found
+    atomic_write_text(path, text)  # last: its existence marks the trial done
     return path
 
 
@@ -382,7 +384,7 @@ def run_experiment(
         (m, s): (m, s, config, low_level, trial_log_dir(out_dir, m, s) if tensorboard else None)
         for s in range(seeds)
         for m in methods
-        if not trial_path(out_dir, m, s).exists()
+        if not trial_is_done(out_dir, m, s, config.episodes)  # a damaged trial is moved aside and runs again
     }
     serial = runner.kind == "serial"
     # Serial: the bar counts episodes (a trial takes minutes); elsewhere trials, as they come back.

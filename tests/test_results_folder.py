@@ -1,0 +1,111 @@
+"""Results folders that check themselves: each damaged trial is detected, named by file, and re-run on resume."""
+
+import json
+import warnings
+
+import pytest
+
+from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path
+from antmaze_hirl.experiments.runner import run_experiment
+
+TINY = ExperimentConfig(
+    body="point", episodes=3, eval_every=2, eval_episodes=2, final_eval_episodes=3, maze_size=3, gradient_steps=5
+)
+
+
+def cut_line(text):
+    return text[: len(text) - 25]  # mid-way through the last row
+
+
+def duplicated_row(text):
+    lines = text.splitlines(keepends=True)
+    return "".join([*lines, lines[-1]])
+
+
+def dropped_row(text):
+    lines = text.splitlines(keepends=True)
+    return "".join(lines[:2] + lines[3:])
+
+
+DAMAGE = {
+    "cut line": cut_line,
+    "duplicated row": duplicated_row,
+    "dropped row": dropped_row,
+    "empty file": lambda text: "",
+    "garbage": lambda text: "\x00\x01 not a csv at all \x7f\n" * 5,
+}
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A finished tiny experiment: its folder and its files' bytes."""
+    folder = tmp_path_factory.mktemp("results")
+    run_experiment(["dagger"], 2, TINY, folder, progress_bar=False, tensorboard=False)
+    files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
+    return folder, files
+
+
+def test_each_trial_records_its_row_count_and_hash(finished):
+    folder, _ = finished
+    record = json.loads(trial_path(folder, "dagger", 0).with_suffix(".json").read_text())
+    assert record["rows"] == TINY.episodes and len(record["sha256"]) == 64 and record["seconds"] > 0
+    assert len(check_trial(trial_path(folder, "dagger", 0), TINY.episodes)) == TINY.episodes
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def test_a_damaged_trial_is_named_by_file_with_and_without_its_hash(finished, tmp_path, kind):
+    folder, _ = finished
+    path = tmp_path / "trials" / "dagger_seed0.csv"
+    path.parent.mkdir()
+    original = trial_path(folder, "dagger", 0)
+    path.write_text(DAMAGE[kind](original.read_text()))
+    path.with_suffix(".json").write_text(original.with_suffix(".json").read_text())
+    with pytest.raises(DamagedTrial, match=r"dagger_seed0\.csv"):
+        check_trial(path, TINY.episodes)
+    path.with_suffix(".json").write_text('{"seconds": 1.0}')  # a trial from before the hash: structure only
+    with pytest.raises(DamagedTrial, match=r"dagger_seed0\.csv"):
+        check_trial(path, TINY.episodes)
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def test_a_damaged_trial_is_rerun_on_resume_and_nothing_is_overwritten_with_less(finished, tmp_path, kind):
+    source, files = finished
+    folder = tmp_path / "results"
+    (folder / "trials").mkdir(parents=True)
+    for path in source.rglob("*"):
+        if path.is_file() and "tb" not in path.relative_to(source).parts:
+            target = folder / path.relative_to(source)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(path.read_bytes())
+    damaged = trial_path(folder, "dagger", 1)
+    damaged.write_text(DAMAGE[kind](damaged.read_text()))
+    damaged_bytes = damaged.read_bytes()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run_experiment(["dagger"], 2, TINY, folder, progress_bar=False, tensorboard=False)
+    named = [str(w.message) for w in caught if "dagger_seed1.csv" in str(w.message)]
+    assert named and "runs again" in named[0], [str(w.message) for w in caught]
+    assert (folder / "trials" / "dagger_seed1.csv.damaged").read_bytes() == damaged_bytes  # kept, not deleted
+    # The re-run is seeded: the trial, the tables and the summary's figures come back as they were.
+    assert damaged.read_bytes() == files["dagger_seed1.csv"]
+    assert (folder / "episodes.csv").read_bytes() == files["episodes.csv"]
+    summary, before = (json.loads(s) for s in ((folder / "summary.json").read_text(), files["summary.json"]))
+    assert summary["methods"] == before["methods"]
+
+
+def test_reports_are_not_replaced_with_fewer_trials_while_one_is_damaged(finished, tmp_path):
+    from antmaze_hirl.experiments.results_folder import write_reports
+
+    source, files = finished
+    folder = tmp_path / "results"
+    for path in source.rglob("*"):
+        if path.is_file() and "tb" not in path.relative_to(source).parts:
+            target = folder / path.relative_to(source)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(path.read_bytes())
+    trial_path(folder, "dagger", 1).write_text("")
+    with pytest.warns(UserWarning, match=r"dagger_seed1\.csv: its bytes do not match the SHA-256"):
+        write_reports(folder, ["dagger"], 2, TINY)
+    assert (folder / "episodes.csv").read_bytes() == files["episodes.csv"]
+    assert (folder / "summary.json").read_bytes() == files["summary.json"]
