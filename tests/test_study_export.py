@@ -169,3 +169,22 @@ def test_missing_minari_gives_the_install_hint(study, monkeypatch):
     with pytest.raises(MinariMissingError, match=r"Minari export needs the extra: pip install -e \.\[minari\]"):
         export_minari(study_dir, "antmaze-hirl/study-v0")
     assert issubclass(MinariMissingError, ImportError)
+
+
+def test_the_dataset_records_the_env_spec_so_recover_environment_works(study, tmp_path):
+    from study_helpers import TINY_SETTINGS
+
+    from antmaze_hirl.study.settings import StudySettings, save_settings
+
+    study_dir, _ = study
+    save_settings(StudySettings.for_body("point", **TINY_SETTINGS), study_dir)
+    export_minari(study_dir, "antmaze_hirl/spec-test-v0")
+    dataset = minari.load_dataset("antmaze_hirl/spec-test-v0")
+    assert dataset.spec.env_spec is not None and dataset.spec.env_spec.id == "antmaze_hirl/PointMaze-v0"
+    env = dataset.recover_environment()
+    try:
+        assert env.unwrapped.maze_size == (TINY_SETTINGS["maze_size"],) * 2  # the study's maze family
+        observation, _ = env.reset(seed=0)
+        assert set(observation) == {"image", "state"}
+    finally:
+        env.close()

@@ -156,6 +156,25 @@ def _datasets_path(data_path: str | Path | None) -> Iterator[None]:
             os.environ["MINARI_DATASETS_PATH"] = previous
 
 
+def study_env_spec(study_dir: str | Path, body: str) -> Any:
+    """The registered high-level env of the study's body, with the study's maze size, as a Gymnasium ``EnvSpec``.
+
+    What ``MinariDataset.recover_environment()`` rebuilds: the body's maze family (with the study's
+    ``maze_size`` when ``settings.json`` is there) and its shipped low level. A study with held-out
+    layouts drew its mazes from one part of that family; the spec gives the whole family.
+    """
+    import dataclasses
+
+    import gymnasium as gym
+
+    from antmaze_hirl.study.settings import SETTINGS_FILE, load_settings
+
+    spec = gym.spec(f"antmaze_hirl/{body.capitalize()}Maze-v0")
+    if (Path(study_dir) / SETTINGS_FILE).exists():
+        spec = dataclasses.replace(spec, kwargs={**spec.kwargs, "maze_size": load_settings(study_dir).maze_size})
+    return spec
+
+
 def export_minari(
     study_dir: str | Path, dataset_id: str, *, include_practice: bool = False, data_path: str | Path | None = None
 ) -> Path:
@@ -214,6 +233,7 @@ def export_minari(
             "state": spaces.Box(-np.inf, np.inf, state_shape, np.float32),
         }
     )
+    env_spec = study_env_spec(study_dir, plan.body)
     with _datasets_path(data_path):
         target = get_dataset_path(dataset_id)
         if target.exists():
@@ -224,6 +244,7 @@ def export_minari(
                 [EpisodeBuffer(id=i, **buffer) for i, buffer in enumerate(buffers)],
                 observation_space=observation_space,
                 action_space=spaces.Box(-np.inf, np.inf, (2,), np.float32),
+                env=env_spec,  # so that dataset.recover_environment() builds the study's high-level env
                 algorithm_name="antmaze_hirl user study (human high-level labels)",
                 description=f"High-level demonstrations of the {plan.body} maze user study; infos hold the labels.",
                 jpeg_encoding=False,  # the learner trains on exact pixels: store them losslessly
