@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -33,9 +34,13 @@ class IntBounds:
     high: int
     meaning: str = ""
 
-    def describe(self) -> str:
-        """``an int in [low, high]``, plus what a special value means."""
-        return f"an int in [{self.low}, {self.high}]" + (f" ({self.meaning})" if self.meaning else "")
+    def refusal(self, text: str, value: int | None) -> str:
+        """Why ``text`` (parsed as ``value``, ``None`` if not an int) is refused: ``must be >= 1 (...), got 0``."""
+        meaning = f" ({self.meaning})" if self.meaning else ""
+        if value is None:
+            return f"must be an int in [{self.low}, {self.high}]{meaning}, got {_shown(text)}"
+        bound = f">= {self.low}" if value < self.low else f"<= {self.high}"
+        return f"must be {bound}{meaning}, got {_shown(text, quote=False)}"
 
 
 @dataclass(frozen=True)
@@ -60,7 +65,7 @@ _METRES = FloatBounds(0.0, 1000.0)
 INT_BOUNDS: dict[str, IntBounds] = {
     "seed": IntBounds(0, MAX_SEED),
     "study init:seed": IntBounds(0, MAX_STUDY_SEED),
-    "seeds": IntBounds(1, 10_000),
+    "seeds": IntBounds(1, 10_000, "trials per method"),
     "episodes": _COUNT,
     "study init:episodes": IntBounds(1, 100_000),
     "practice": IntBounds(0, 100_000, "0: no practice trial"),
@@ -100,7 +105,7 @@ def bounded_int(bounds: IntBounds) -> Callable[[str], int]:
         except ValueError:
             value = None
         if value is None or not bounds.low <= value <= bounds.high:
-            raise argparse.ArgumentTypeError(f"must be {bounds.describe()}, got {_shown(text)}")
+            raise argparse.ArgumentTypeError(bounds.refusal(text, value))
         return value
 
     parse.__name__ = "int"
@@ -124,13 +129,17 @@ def bounded_float(bounds: FloatBounds) -> Callable[[str], float]:
     return parse
 
 
-def _shown(text: str) -> str:
-    return repr(text) if len(text) <= 40 else f"{text[:20]!r}... ({len(text)} characters)"
+def _shown(text: str, *, quote: bool = True) -> str:
+    if len(text) > 40:
+        return f"{text[:20]!r}... ({len(text)} characters)"
+    return repr(text) if quote else text
 
 
 def _one_line_error(parser: argparse.ArgumentParser) -> Callable[[str], None]:
     def error(message: str) -> None:
-        parser.exit(2, f"{parser.prog}: error: {message} (see {parser.prog} --help)\n")
+        # "argument --seeds: must be >= 1 ..." -> "--seeds must be >= 1 ...", as the handlers word their checks
+        message = re.sub(r"^argument (--[\w-]+)(?:/--[\w-]+)*: must be ", r"\1 must be ", message)
+        parser.exit(2, f"{parser.prog}: error: {' '.join(message.split())} (see {parser.prog} --help)\n")
 
     return error
 

@@ -57,7 +57,7 @@ def test_hostile_values_exit_0_or_2_with_one_line_and_no_traceback(command, opti
         except SystemExit as exit_info:
             assert exit_info.code == 2, (argv, exit_info.code)
             err = capsys.readouterr().err
-            assert err.count("\n") == 1 and "error: argument " + option in err, (argv, err)
+            assert err.count("\n") == 1 and f"error: {option} must be " in err, (argv, err)
             assert "Traceback" not in err and value[:20] in err  # names the value
             continue
         # Accepted: a finite value within the declared bounds (0 for a practice count, a port, a seed...).

@@ -130,3 +130,115 @@ def test_a_gated_trial_replays_the_learners_own_steps_in_chromium(tmp_path, monk
     with (folder / "participants" / "P01" / "episodes.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert len(rows) == 3 and sum(int(r["expert_cost"]) for r in rows[1:]) < sum(int(r["attempts"]) for r in rows[1:])
+
+
+BUSY_LOG = """
+window.busySeen = [];
+new MutationObserver(() => {
+  const box = document.getElementById('busy');
+  const text = box && !box.hidden ? document.getElementById('busy-text').textContent : null;
+  if (text && window.busySeen[window.busySeen.length - 1] !== text) { window.busySeen.push(text); }
+}).observe(document, { subtree: true, attributes: true, childList: true, characterData: true });
+"""
+"""Records each sentence the busy indicator shows, however briefly (a DOM observer, set up before the page runs)."""
+
+
+def press_tab_until(page, name, limit=30):
+    """Tabs through the page until the focused element is the button ``name``: reachable by keyboard."""
+    for _ in range(limit):
+        page.keyboard.press("Tab")
+        if page.evaluate("() => document.activeElement && document.activeElement.textContent.trim()") == name:
+            return
+    raise AssertionError(f"no Tab stop reaches the button {name!r}")
+
+
+def refused_points(state):
+    """A point too far for the circle, and one on an inner wall (if the maze has one), both inside the bounds."""
+    maze = state["maze"]
+    low, high = maze["bounds"]
+    agent, scale = state["agent"], maze["scale"]
+    too_far = wall = None
+    for row, cells in enumerate(maze["walls"]):
+        for col, is_wall in enumerate(cells):
+            xy = [maze["low"][0] + (col + 0.5) * scale, maze["high"][1] - (row + 0.5) * scale]
+            if not (low[0] <= xy[0] <= high[0] and low[1] <= xy[1] <= high[1]):
+                continue
+            far = ((xy[0] - agent[0]) ** 2 + (xy[1] - agent[1]) ** 2) ** 0.5 > 1.2 * state["max_distance"]
+            if is_wall and wall is None:
+                wall = xy
+            elif far and not is_wall and too_far is None:
+                too_far = xy
+    return too_far, wall
+
+
+@pytest.mark.parametrize(("width", "height"), [(1280, 800), (1024, 640)])
+def test_the_page_refuses_bad_clicks_shows_busy_and_summary_and_fits_the_window(tmp_path, width, height):
+    from antmaze_hirl.study.server import StudyServer
+
+    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger",), episodes=1, practice=2)
+    images = SCREENSHOT.parent
+    with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": width, "height": height})
+        errors, labels = [], []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        page.on("request", lambda request: labels.append(request.url) if request.url.endswith("/label") else None)
+        page.add_init_script(BUSY_LOG)
+        page.goto(server.url)
+        page.get_by_role("button", name="P01").wait_for()
+        press_tab_until(page, "P01")  # keyboard only, up to the first maze
+        page.keyboard.press("Enter")
+        page.get_by_role("button", name="Start").wait_for()
+        assert page.locator("#intro-learner").is_visible()  # the orange suggestion is explained
+        press_tab_until(page, "Start")
+        page.keyboard.press("Enter")
+        page.keyboard.press("Enter")  # a double start sends one request and shows no protocol error
+        page.wait_for_function("() => state && state.phase === 'label' && !busy", timeout=120_000)
+        assert "maze is loading" in " ".join(page.evaluate("() => window.busySeen"))
+        assert page.locator("#error").inner_text() == ""
+        # The scaled canvas fits the window whole, and clicks still land where the page means them.
+        box = page.locator("#maze").bounding_box()
+        rect = [box["x"] + box["width"], box["y"] + box["height"], box["width"]]
+        assert rect[0] <= width and rect[1] <= height, rect
+        if height <= 640:
+            assert rect[2] < 640  # scaled down
+        walls_refused = 0
+        while True:
+            state = page.evaluate("() => state")
+            if state["phase"] != "label":
+                break
+            too_far, wall = refused_points(state)
+            for xy, words in ((too_far, "Too far"), (wall, "wall")):
+                if xy is None:
+                    continue
+                sent = len(labels)
+                page.mouse.click(*canvas_point(page, state, xy))
+                assert words in page.locator("#status").inner_text()
+                assert len(labels) == sent  # refused on the page: nothing was sent
+                walls_refused += words == "wall"
+            if state["query"]["step"] == 1 and not (images / f"study_page_{width}x{height}.png").exists():
+                page.screenshot(path=str(images / f"study_page_{width}x{height}.png"))
+            state = click_until_next_query(page, state)
+            if state["phase"] == "intro":
+                break
+        assert state["phase"] == "intro" and page.locator("#summary").is_visible()
+        summary = page.locator("#summary").inner_text()
+        assert summary.startswith("Practice finished: the robot reached the goal in ") and " of 2 mazes" in summary
+        assert any("learning from your points" in text for text in page.evaluate("() => window.busySeen"))
+        page.screenshot(path=str(images / f"study_summary_{width}x{height}.png"))
+        text = page.locator("body").inner_text()
+        assert "'label'" not in text and "'intro'" not in text and "episode_over" not in text
+        browser.close()
+    assert errors == []
+    assert walls_refused >= 1  # the seeded mazes have inner walls: the wall refusal was tried
+
+
+def click_until_next_query(page, state):
+    """One oracle click; waits until the page shows the next query or leaves the maze phase."""
+    x, y = canvas_point(page, state, oracle_click(state))
+    query = state["query"]["id"]
+    page.mouse.click(x, y)
+    page.wait_for_function(
+        "([q]) => !busy && state && (state.phase !== 'label' || state.query.id !== q)", arg=[query], timeout=120_000
+    )
+    return page.evaluate("() => state")

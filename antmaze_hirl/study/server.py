@@ -267,6 +267,10 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
     async def page() -> Any:
         return HTMLResponse((static / "index.html").read_text(encoding="utf-8"))
 
+    @app.get("/favicon.ico")
+    async def favicon() -> Any:
+        return Response(status_code=204)  # browsers ask for one; no warning in the log for it
+
     @app.get("/api/study")
     async def study_overview() -> Any:
         # From the saved progress: the participant picker must not build every participant's simulators.

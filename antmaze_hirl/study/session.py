@@ -197,6 +197,7 @@ class ParticipantSession:
         self._trail: list[list[float]] = []
         self._walk: list[dict[str, Any]] = []  # the learner's unasked steps the page has not shown yet
         self._camera: AntCamera | None = None
+        self._last_trial: dict[str, Any] | None = None  # how the trial just closed went (the page's summary)
         try:
             self._restore()
         except BaseException:
@@ -226,7 +227,10 @@ class ParticipantSession:
                 "trials": len(self.participant.trials),
                 "trial": None,
                 "camera": self.settings.body == "ant" and bool(os.environ.get("MUJOCO_GL")),
+                "learner_shown": self.settings.show_learner_subgoal,
             }
+            if self._last_trial is not None and self.phase in ("intro", "questionnaire", "done"):
+                state["last_trial"] = self._last_trial
             if trial is None:
                 return state
             state["trial"] = {
@@ -602,6 +606,13 @@ class ParticipantSession:
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
         state.trainer.policy.save(self._trial_folder / "learner.zip")
+        self._last_trial = {
+            "label": trial.label,
+            "practice": trial.practice,
+            "episodes": len(state.rows),
+            "successes": state.successes,
+            "labels": int(state.trainer.total_expert_cost),
+        }
         self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
         self._run = None
         if trial.practice:

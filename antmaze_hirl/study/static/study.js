@@ -17,6 +17,65 @@ let queryVisibleAt = 0;   // when the open query became clickable (after the ani
 let hover = null;         // mouse position in world metres
 let questionnaireItems = null;
 
+// What the busy indicator says while the page waits for the server (plain sentences, no internal names).
+const BUSY = {
+  start: "Please wait: the maze is loading...",
+  next: "Please wait: the computer is learning from your points, and the next maze is loading...",
+  label: "The robot is walking...",
+};
+
+// Protocol refusals (HTTP 409) become instructions; what the server said stays in the console for the experimenter.
+const WAIT = {
+  start: "Please wait, the maze is loading.",
+  next: "Please wait, the next maze is loading.",
+  label: "Please wait for the robot to stop, then click again.",
+  questionnaire: "Please wait, the page is catching up.",
+  pause: "Please wait, the page is catching up.",
+};
+
+class StudyError extends Error {
+  constructor(status, detail) {
+    super(detail);
+    this.status = status;
+    this.detail = detail;
+  }
+}
+
+function plainMessage(error, action) {
+  console.warn(`study ${action}:`, error);
+  if (!(error instanceof StudyError)) {
+    return "The connection to the study was lost. Check the network and try again, or call the experimenter.";
+  }
+  if (error.status === 403) { return "This link does not work: please ask the experimenter for the study link."; }
+  if (error.status === 404) { return "This participant is not part of the study: please ask the experimenter."; }
+  if (error.status === 409 && /paused/.test(error.detail)) { return "The study is paused: press P to continue."; }
+  if (error.status === 409 && action === "load") {
+    return "Your session cannot go on from here: please call the experimenter.";
+  }
+  if (error.status === 409) { return WAIT[action] || "Please wait, the page is catching up."; }
+  return "That did not work. Please try again; if it happens again, call the experimenter.";
+}
+
+function setBusy(text) {
+  $("busy").hidden = !text;
+  $("busy-text").textContent = text || "";
+}
+
+// The server said no: tell the participant what to do, then show what the server has now.
+async function refused(error, action) {
+  const message = plainMessage(error, action);
+  setError(message);
+  if (error instanceof StudyError && error.status === 409 && action !== "load") {
+    try {
+      state = await api(participantPath("state"));
+      await render();
+      if (!/paused/.test(error.detail)) { setError(""); }  // the page is in step again
+    } catch (again) {
+      setError(plainMessage(again, "load"));
+    }
+  }
+}
+
 async function api(path, body) {
   const options = { headers: { "X-Study-Token": token } };
   if (body !== undefined) {
@@ -27,7 +86,7 @@ async function api(path, body) {
   const response = await fetch(path, options);
   const data = await response.json().catch(() => ({ error: `HTTP ${response.status}` }));
   if (!response.ok) {
-    throw new Error(data.error || `HTTP ${response.status}`);
+    throw new StudyError(response.status, data.error || `HTTP ${response.status}`);
   }
   return data;
 }
@@ -66,6 +125,20 @@ function toWorld(maze, px, py) {
 function insideBounds(maze, xy) {
   const [low, high] = maze.bounds;
   return xy[0] >= low[0] && xy[0] <= high[0] && xy[1] >= low[1] && xy[1] <= high[1];
+}
+
+// Why a click cannot be a subgoal (shown, and nothing is sent), or null when it can.
+function refusalOf(xy) {
+  const maze = state.maze;
+  if (!insideBounds(maze, xy)) { return "That point is outside the maze: click inside it."; }
+  const col = Math.floor((xy[0] - maze.low[0]) / maze.scale);
+  const row = Math.floor((maze.high[1] - xy[1]) / maze.scale);
+  if (maze.walls[row] && maze.walls[row][col]) { return "That is a wall: click on the white floor."; }
+  const distance = Math.hypot(xy[0] - state.agent[0], xy[1] - state.agent[1]);
+  // A click on the dashed line counts as inside: 3 screen pixels of slack (the line is drawn 2 px wide).
+  const slack = (3 * canvas.width) / (canvas.getBoundingClientRect().width * scaleOf(maze));
+  if (distance > state.max_distance + slack) { return "Too far: click inside the dashed circle."; }
+  return null;
 }
 
 // ----------------------------------------------------------------------------------- drawing
@@ -202,7 +275,12 @@ async function render() {
         await replayWalk();
         $("status").textContent = endMessage(state.episode_end);
       }
-      state = await api(participantPath("next"), {});
+      setBusy(BUSY.next);
+      try {
+        state = await api(participantPath("next"), {});
+      } finally {
+        setBusy(null);
+      }
     }
     if (state.phase === "label" && state.walk && state.walk.length) {
       show("task");
@@ -219,7 +297,10 @@ async function render() {
     $("intro-title").textContent = state.trial.practice
       ? "Practice: get to know the task"
       : `${state.trial.label} (part ${state.trial.number} of ${state.trials})`;
+    $("intro-learner").hidden = !state.learner_shown;
+    renderSummary();
     show("intro");
+    $("start").disabled = false;
   } else if (state.phase === "label") {
     show("task");
     $("legend-learner").hidden = !state.learner_subgoal;
@@ -235,6 +316,18 @@ async function render() {
   } else if (state.phase === "done") {
     show("done");
   }
+}
+
+// After the practice: how it went, in one sentence, before the first real part.
+function renderSummary() {
+  const last = state.last_trial;
+  const box = $("summary");
+  box.hidden = !(last && last.practice);
+  if (box.hidden) { return; }
+  const mazes = last.episodes === 1 ? "maze" : "mazes";
+  const points = last.labels === 1 ? "point" : "points";
+  box.textContent = `Practice finished: the robot reached the goal in ${last.successes} of ${last.episodes} ${mazes}, `
+    + `and you gave ${last.labels} ${points}. Now the real parts begin; they work the same way.`;
 }
 
 function refreshCamera() {
@@ -309,8 +402,9 @@ canvas.addEventListener("click", async (event) => {
   const px = (event.clientX - rect.left) * (canvas.width / rect.width);
   const py = (event.clientY - rect.top) * (canvas.height / rect.height);
   const xy = toWorld(state.maze, px, py);
-  if (!insideBounds(state.maze, xy)) {
-    $("status").textContent = "That point is outside the maze: click inside it.";
+  const refusal = refusalOf(xy);
+  if (refusal) {
+    $("status").textContent = refusal;  // refused here: nothing is sent, the point is not counted
     return;
   }
   busy = true;
@@ -330,23 +424,45 @@ canvas.addEventListener("click", async (event) => {
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
-    state = next ? await next : result.state;
+    if (next) {
+      setBusy(BUSY.next);  // the learner's update and the next maze, if not done while the walk played
+      try {
+        state = await next;
+      } catch (error) {
+        busy = false;
+        await refused(error, "next");
+        return;
+      } finally {
+        setBusy(null);
+      }
+    } else {
+      state = result.state;
+    }
     await render();
   } catch (error) {
-    setError(error.message);
+    busy = false;
+    await refused(error, "label");
   } finally {
     busy = false;
   }
 });
 
 $("start").addEventListener("click", async () => {
+  if ($("start").disabled) { return; }
+  $("start").disabled = true;  // a double click sends one start
   setError("");
+  setBusy(BUSY.start);
   try {
     state = await api(participantPath("start"), {});
     $("status").textContent = "Click a point inside the dashed circle.";
+    setBusy(null);
     await render();
   } catch (error) {
-    setError(error.message);
+    setBusy(null);
+    await refused(error, "start");
+  } finally {
+    setBusy(null);
+    $("start").disabled = false;
   }
 });
 
@@ -368,7 +484,7 @@ $("tlx").addEventListener("submit", async (event) => {
     });
     await render();
   } catch (error) {
-    $("form-error").textContent = error.message;
+    $("form-error").textContent = plainMessage(error, "questionnaire");
   }
 });
 
@@ -382,7 +498,7 @@ document.addEventListener("keydown", async (event) => {
       $("paused").hidden = !state.paused;
       if (wasPaused && state.phase === "label") { queryVisibleAt = performance.now(); }
     } catch (error) {
-      setError(error.message);
+      setError(plainMessage(error, "pause"));
     }
   }
 });
@@ -413,7 +529,7 @@ async function load() {
     state = await api(participantPath("state"));
     await render();
   } catch (error) {
-    setError(error.message);
+    setError(plainMessage(error, "load"));
   }
 }
 
