@@ -15,7 +15,7 @@ PACKAGE = ROOT / "antmaze_hirl"
 # Bottom up. A module may import its own unit (package or root module) and any unit of a lower layer, never
 # one of its own layer or above, not even inside a function. The root package's __init__ is the top.
 LAYERS = (
-    ("_lazy", "atomic_io"),
+    ("_lazy", "atomic_io", "cli_validation"),
     ("envs",),
     ("experts", "sb3_ext", "rollout"),
     ("plotting", "registration"),

@@ -228,6 +228,21 @@ def test_the_page_refuses_bad_clicks_shows_busy_and_summary_and_fits_the_window(
         page.screenshot(path=str(images / f"study_summary_{width}x{height}.png"))
         text = page.locator("body").inner_text()
         assert "'label'" not in text and "'intro'" not in text and "episode_over" not in text
+        # What the server's refusals (HTTP 409) become on the page: instructions, never its state names.
+        shown = page.evaluate(
+            """() => [
+                plainMessage(new StudyError(409, "no trial to start: participant P01 is at 'label'"), "start"),
+                plainMessage(new StudyError(409, "no episode has just ended (participant P01 is at 'intro')"), "next"),
+                plainMessage(new StudyError(409, "the study is paused: resume before clicking"), "label"),
+                plainMessage(new StudyError(409, "participant P01: progress.json is not a participant's"), "load"),
+            ]"""
+        )
+        assert shown == [
+            "Please wait, the maze is loading.",
+            "Please wait, the next maze is loading.",
+            "The study is paused: press P to continue.",
+            "Your session cannot go on from here: please call the experimenter.",
+        ]
         browser.close()
     assert errors == []
     assert walls_refused >= 1  # the seeded mazes have inner walls: the wall refusal was tried
