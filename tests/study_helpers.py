@@ -5,7 +5,7 @@ from pathlib import Path
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.settings import StudySettings, save_settings
 
-TINY_SETTINGS = {"maze_size": 3, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
+TINY_SETTINGS = {"maze_size": 4, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
 
 
 def make_tiny_study(
