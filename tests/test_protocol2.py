@@ -168,3 +168,26 @@ def test_committed_protocol_1_folders_still_summarise_as_committed(body):
         assert summary[method]["final_success"] == figures["final_success"], method
         assert summary[method]["normalised_auc"] == figures["normalised_auc"], method
         assert "untrained_success" not in summary[method]
+
+
+def test_protocol_2_trains_the_generic_learner_and_protocol_1_the_body_default():
+    from antmaze_hirl.experiments.config import LEARNERS, PROTOCOL_LEARNER, STRONG_PRIOR, learner_settings
+    from antmaze_hirl.experiments.runner import make_env, make_trainer
+    from antmaze_hirl.experts import PathOracle
+
+    def policy_config(config):
+        env = make_env(config, split="train")
+        trainer = make_trainer("dagger", 0, config, env, PathOracle.for_env(env))
+        env.close()
+        return trainer.policy.policy.config()
+
+    generic = policy_config(TINY2)
+    assert PROTOCOL_LEARNER == "next_cell_cnn" and generic["head"] == "next_cell"
+    assert generic["planning_iterations"] == 0 and not generic["block_walls"]
+    old = policy_config(ExperimentConfig(body="point", maze_size=4, held_out_layouts=True))
+    assert old["planning_iterations"] == 14 and old["block_walls"]  # the point's body default: the strong prior
+    prior = policy_config(ExperimentConfig(**{**TINY2.__dict__, "learner": STRONG_PRIOR}))
+    assert prior["planning_iterations"] == 14 and prior["block_walls"]
+    assert learner_settings(STRONG_PRIOR, 5)["planning_iterations"] == 16 and STRONG_PRIOR in LEARNERS
+    with pytest.raises(ValueError, match="unknown learner 'mlp'; choose from"):
+        ExperimentConfig(learner="mlp")

@@ -25,7 +25,13 @@ from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.experiments.backends import Backend, import_ray, run_tasks
-from antmaze_hirl.experiments.config import ExperimentConfig, evaluation_schedule, evaluation_sets
+from antmaze_hirl.experiments.config import (
+    ExperimentConfig,
+    evaluation_schedule,
+    evaluation_sets,
+    learner_settings,
+    trial_learner,
+)
 from antmaze_hirl.experiments.outcomes import EVALUATION_COLUMNS, play_mazes, summarise_mazes
 from antmaze_hirl.experiments.provenance import code_provenance, source_sha256
 from antmaze_hirl.experiments.results_folder import (
@@ -160,12 +166,16 @@ def make_trainer(
     """The trainer of one trial: a fresh learner seeded by ``seed``, ``method``'s strategy, ``config``'s settings.
 
     The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
-    ``policy_settings`` are :class:`HighLevelPolicy` constructor settings (an ablation's variant).
+    The learner is ``config``'s (:func:`~antmaze_hirl.experiments.config.trial_learner`); ``policy_settings``
+    are :class:`HighLevelPolicy` constructor settings over it (an ablation's variant).
     """
     rng = np.random.default_rng(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
     # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
     reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
+    learner = trial_learner(config)
+    if learner is not None:
+        policy_settings = {**learner_settings(learner, config.maze_size), **(policy_settings or {})}
     strategy = make_strategy(method)
     if strategy.updates_every_step:
         strategy.step_gradient_steps = config.step_gradient_steps
