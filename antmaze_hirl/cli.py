@@ -371,9 +371,11 @@ def _run_experiment(args: argparse.Namespace) -> int:
     for method, figures in summary["methods"].items():
         final = figures["final_success"]
         pooled = final["pooled"]
+        # Protocol 2 pools with a cluster bootstrap over seeds and mazes; protocol 1 with a Wilson interval.
+        low, high = pooled.get("cluster_bootstrap_95") or pooled["wilson_95"]
         print(
             f"{method}: final success median {final['median']} (min {final['min']}, max {final['max']}; "
-            f"pooled {pooled['rate']:.3f}, 95% CI {pooled['wilson_95'][0]:.3f}-{pooled['wilson_95'][1]:.3f}), "
+            f"pooled {pooled['rate']:.3f}, 95% CI {low:.3f}-{high:.3f}), "
             f"normalised AUC median {figures['normalised_auc']['median']}, "
             f"expert cost/episode {figures['mean_expert_cost_per_episode']:.1f}, "
             f"attempts/episode {figures['mean_attempts_per_episode']:.1f}, "

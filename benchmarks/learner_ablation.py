@@ -47,10 +47,19 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
-from antmaze_hirl.dagger.high_level_policy import planning_rounds
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
-from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, body_settings, evaluation_sets
+from antmaze_hirl.experiments.config import (
+    LEARNERS,
+    SELECTION_SEED,
+    ExperimentConfig,
+    body_settings,
+    evaluation_sets,
+    learner_settings,
+)
+from antmaze_hirl.experiments.config import (
+    PLANS as PLANS,  # re-exported: the variants' stand-in for rows + cols + 2 rounds
+)
 from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
@@ -59,17 +68,10 @@ from antmaze_hirl.experts.oracle import plan_subgoal
 
 RESULTS = Path(__file__).parent / "results"
 
-PLANS = -1
-"""Stands for ``rows + cols + 2`` value-iteration rounds on the trial's map (:func:`variant_settings`)."""
-
-VARIANTS: dict[str, dict[str, Any]] = {
-    "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
-    "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
-    "next_cell_vin": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False},
-    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
-}
-"""HighLevelPolicy settings of each variant: every setting a body's default sets (``body_policy_defaults``),
-given explicitly, so a change of default changes no variant. ``next_cell_vin_walls`` is the point's default."""
+VARIANTS: dict[str, dict[str, Any]] = LEARNERS
+"""HighLevelPolicy settings of each variant: the named learners of ``ExperimentConfig.learner``
+(:data:`~antmaze_hirl.experiments.config.LEARNERS`). ``next_cell_vin_walls`` is the point's protocol-1
+default, the "strong prior" ablation of protocol 2."""
 
 BODY_FILE_PREFIX = {"point": "", "ant": "ant_"}
 """Trial files of the ant start ``ant_``; the point's keep the names they had before the ant joined."""
@@ -77,11 +79,7 @@ BODY_FILE_PREFIX = {"point": "", "ant": "ant_"}
 
 def variant_settings(variant: str, config: ExperimentConfig) -> dict[str, Any]:
     """The variant's settings on the trial's map: :data:`PLANS` becomes ``rows + cols + 2`` rounds."""
-    settings = dict(VARIANTS[variant])
-    if settings["planning_iterations"] == PLANS:
-        side = config.maze_size + 2  # the border adds a row and a column on each side
-        settings["planning_iterations"] = planning_rounds(side, side)
-    return settings
+    return learner_settings(variant, config.maze_size)
 
 
 SELECTION_MAZES = 50

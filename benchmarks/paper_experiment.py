@@ -13,9 +13,13 @@ CSV per finished trial, so an interrupted run resumes), then prints the figures 
 It also reports the oracle's success, with its 95% Wilson interval: the oracle driving the same low level
 on the same held-out mazes (no ceiling: a learner may beat it on a sample of 100 mazes).
 
-``--held-out-layouts`` runs the protocol of issue 12 (training, periodic and final evaluation mazes from
-disjoint wall grids, ``ExperimentConfig.held_out_layouts``); pass ``--eval-episodes 50`` with it for the
-fixed 50-maze periodic set. The default is the protocol of the committed results folders.
+``--protocol 2`` (the default; issue 32, ``ExperimentConfig.protocol``) holds the mazes out by wall grid
+up to the square's symmetries and reads every curve on one fixed set of ``--final-eval-episodes``
+(default 100) held-out mazes, scored before the first episode (the untrained learner), every
+``eval_every`` episodes and after the last, with per-maze outcomes in ``evaluations.csv`` and pooled
+rates with a cluster bootstrap over seeds and mazes. ``--protocol 1`` is that of the committed results
+folders (``benchmarks/results/paper_experiment_{point,ant}``): with ``--held-out-layouts`` the protocol
+of issue 12 (periodic and final evaluation on different sets), without it mazes held out by seed only.
 
 Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) oracle subgoals; the ant
 runs 3x3 mazes with 2 m oracle subgoals, and 4x4 mazes with ``--held-out-layouts`` (HELD_OUT_MAZE_SIZE: the 3x3
@@ -25,7 +29,7 @@ family has only 48 wall grids). At half torque the shipped ant walks ~0.7-1 m/s,
 Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
            [--address RAY_ADDRESS] [--cpus-per-trial 1] [--seeds 5] [--episodes 100] [--maze-size N]
            [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
-           [--held-out-layouts --eval-episodes 50] [--allow-code-change]
+           [--protocol 1|2] [--held-out-layouts --eval-episodes 50] [--allow-code-change]
        python benchmarks/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
 """
 
@@ -42,7 +46,13 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
-from antmaze_hirl.experiments.config import DEFAULT_METHODS, body_settings, evaluation_sets
+from antmaze_hirl.experiments.config import (
+    CURRENT_PROTOCOL,
+    DEFAULT_METHODS,
+    PROTOCOLS,
+    body_settings,
+    evaluation_sets,
+)
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.experts import PathOracle
@@ -123,6 +133,13 @@ def main() -> None:
     parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
     parser.add_argument("--eval-episodes", type=int, default=None, help="mazes per periodic evaluation (default 20)")
     parser.add_argument("--held-out-layouts", action="store_true", help="ExperimentConfig.held_out_layouts")
+    parser.add_argument(
+        "--protocol",
+        type=int,
+        choices=PROTOCOLS,
+        default=CURRENT_PROTOCOL,
+        help="ExperimentConfig.protocol; 2 (default) implies --held-out-layouts",
+    )
     parser.add_argument("--allow-code-change", action="store_true", help="resume a folder written by other code")
     parser.add_argument(
         "--oracle-only",
@@ -138,6 +155,8 @@ def main() -> None:
         help="with --ceiling-only: a candidate low-level policy .zip instead of the shipped one",
     )
     args = parser.parse_args()
+    if args.protocol >= 2:
+        args.held_out_layouts = True
     torch.set_num_threads(args.cpus_per_trial)
     settings = dict(
         body_settings(
@@ -150,7 +169,11 @@ def main() -> None:
     if args.eval_episodes is not None:
         settings["eval_episodes"] = args.eval_episodes
     config = ExperimentConfig(
-        body=args.body, episodes=args.episodes, held_out_layouts=args.held_out_layouts, **settings
+        body=args.body,
+        episodes=args.episodes,
+        held_out_layouts=args.held_out_layouts,
+        protocol=args.protocol,
+        **settings,
     )
     if args.low_level is not None and not args.oracle_only:
         parser.error("--low-level only goes with --oracle-only: trials always use the shipped policy")

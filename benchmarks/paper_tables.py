@@ -55,22 +55,42 @@ def _minutes(seconds: dict[str, float], method: str) -> str:
     return f"{min(times):.1f}-{max(times):.1f} min" if times else "n/a"
 
 
+def pooled_interval(pooled: dict[str, Any]) -> tuple[float, float]:
+    """A pooled rate's 95% interval: its cluster bootstrap (protocol 2), else its Wilson interval (protocol 1)."""
+    low, high = pooled.get("cluster_bootstrap_95") or pooled["wilson_95"]
+    return low, high
+
+
+def _interval_name(summary: dict[str, Any]) -> str:
+    pooled = [m["final_success"]["pooled"] for _, m in _methods_run(summary) if m["final_success"].get("pooled")]
+    return "cluster bootstrap" if pooled and "cluster_bootstrap_95" in pooled[0] else "Wilson"
+
+
+def _rate_cell(pooled: dict[str, Any] | None) -> str:
+    if not pooled:
+        return "n/a"
+    low, high = pooled_interval(pooled)
+    return f"{100 * pooled['rate']:.1f}% [{100 * low:.1f}, {100 * high:.1f}]"
+
+
 def cost_table(summary: dict[str, Any]) -> str:
-    """Final learner-only success and what it cost, one row per method, and the oracle's success."""
+    """Final learner-only success and what it cost, one row per method, and the oracle's success.
+
+    In protocol 2 a column gives the untrained learner's success on the same mazes (where the curve starts).
+    """
+    untrained = any("untrained_success" in method for _, method in _methods_run(summary))
     lines = [
-        "| method | final success, median (min-max) | pooled [95% Wilson] | labels / episode | attempts / episode "
-        "| labels per trial, median (min-max) | trial time |",
-        "|---|---|---|---|---|---|---|",
+        "| method |"
+        + (" untrained success, pooled [95% cluster bootstrap] |" if untrained else "")
+        + f" final success, median (min-max) | pooled [95% {_interval_name(summary)}] | labels / episode "
+        "| attempts / episode | labels per trial, median (min-max) | trial time |",
+        "|---|" + ("---|" if untrained else "") + "---|---|---|---|---|---|",
     ]
     for name, method in _methods_run(summary):
-        pooled = method["final_success"]["pooled"]
-        interval = (
-            f"{100 * pooled['rate']:.1f}% [{100 * pooled['wilson_95'][0]:.1f}, {100 * pooled['wilson_95'][1]:.1f}]"
-            if pooled
-            else "n/a"
-        )
+        interval = _rate_cell(method["final_success"]["pooled"])
+        start = f" {_rate_cell(method.get('untrained_success', {}).get('pooled'))} |" if untrained else ""
         lines.append(
-            f"| {name} | {_spread(method['final_success'])}{_p_value(method, 'final_success')} | {interval} "
+            f"| {name} |{start} {_spread(method['final_success'])}{_p_value(method, 'final_success')} | {interval} "
             f"| {method['mean_expert_cost_per_episode']:.1f} | {method['mean_attempts_per_episode']:.1f} "
             f"| {_spread(method.get('total_labels', {}), lambda v: f'{v:.0f}')} "
             f"| {_minutes(summary.get('trial_seconds', {}), name)} |"
@@ -79,8 +99,9 @@ def cost_table(summary: dict[str, Any]) -> str:
     if oracle:
         low, high = oracle["wilson_95"]
         successes = round(oracle["success_rate"] * oracle["episodes"])
+        blank = " |" if untrained else ""
         lines.append(
-            f"| oracle success | | {successes} of {oracle['episodes']}: {100 * oracle['success_rate']:.0f}% "
+            f"| oracle success |{blank} | {successes} of {oracle['episodes']}: {100 * oracle['success_rate']:.0f}% "
             f"[{100 * low:.1f}, {100 * high:.1f}] | | {oracle['mean_attempts']:.1f} | | |"
         )
     return "\n".join(lines)
@@ -111,12 +132,12 @@ def effort_table(summary: dict[str, Any]) -> str:
     """Each method's labels over a trial against plain DAgger's, and whether its final success is DAgger's.
 
     The [ask-less] goal reads off it: ``gated`` at <= 0.3x DAgger's labels, its median final success
-    inside DAgger's pooled 95% Wilson interval (or above it).
+    inside DAgger's pooled 95% interval (or above it): Wilson in protocol 1, cluster bootstrap in protocol 2.
     """
     dagger = summary["methods"].get("dagger", {})
     if not dagger.get("seeds") or not dagger["final_success"].get("pooled"):
         return "(no plain DAgger trials with counted evaluations to compare with)"
-    low, _ = dagger["final_success"]["pooled"]["wilson_95"]
+    low, _ = pooled_interval(dagger["final_success"]["pooled"])
     dagger_labels = dagger["total_labels"]["median"]
     lines = [
         "| method | labels per trial, median | ratio to DAgger | final success, median "

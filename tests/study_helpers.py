@@ -5,15 +5,25 @@ from pathlib import Path
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.settings import StudySettings, save_settings
 
-TINY_SETTINGS = {"maze_size": 3, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
+TINY_SETTINGS = {"maze_size": 4, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
 
 
 def make_tiny_study(
-    folder: Path, *, participants: int = 1, methods=("dagger", "reward"), episodes: int = 2, practice: int = 1
+    folder: Path,
+    *,
+    participants: int = 1,
+    methods=("dagger", "reward"),
+    episodes: int = 2,
+    practice: int = 1,
+    **settings,
 ) -> Path:
-    """A study folder: point body, 3x3 mazes, ``episodes`` per trial, tiny evaluations."""
+    """A study folder: point body, 4x4 held-out mazes, ``episodes`` per trial, tiny evaluations.
+
+    ``settings`` override :data:`TINY_SETTINGS` (4x4: the 3x3 family has no selection part once the
+    layouts are split up to symmetry).
+    """
     save_plan(make_plan("point", list(methods), participants, episodes=episodes, practice=practice, seed=0), folder)
-    save_settings(StudySettings.for_body("point", **TINY_SETTINGS), folder)
+    save_settings(StudySettings.for_body("point", **{**TINY_SETTINGS, **settings}), folder)
     return folder
 
 

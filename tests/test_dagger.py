@@ -80,9 +80,10 @@ def start_query(policy):
 
 def test_noise_based_picks_the_candidate_where_the_policy_varies():
     query = start_query(CraftedPolicy())
-    scores = NoiseQuery(n_noises=8).scores(query, np.random.default_rng(0))
+    scores = NoiseQuery(n_noises=8, signal="offsets").scores(query, np.random.default_rng(0))
     assert scores[0] > 0 and np.all(scores[1:] == 0)
-    np.testing.assert_array_equal(NoiseQuery().choose_start(query, np.random.default_rng(1)), query.candidates[0])
+    chosen = NoiseQuery(signal="offsets").choose_start(query, np.random.default_rng(1))
+    np.testing.assert_array_equal(chosen, query.candidates[0])
 
 
 class ConstantMember:
@@ -99,7 +100,7 @@ class ConstantMember:
 
 def test_multi_policy_picks_where_members_disagree():
     query = start_query(CraftedPolicy())
-    strategy = MultiPolicyQuery(n_policies=3)
+    strategy = MultiPolicyQuery(n_policies=3, signal="offsets")
     assert strategy.choose_start(query, np.random.default_rng(0)) is None  # no members before the first update
     strategy.members = [ConstantMember(value) for value in (-0.5, 0.0, 0.5)]
     np.testing.assert_array_equal(strategy.choose_start(query, np.random.default_rng(0)), query.candidates[2])

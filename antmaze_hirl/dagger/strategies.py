@@ -132,8 +132,69 @@ class DAggerQuery(QueryStrategy):
 
 
 def spread(outputs: np.ndarray) -> float:
-    """Trace of the covariance of ``(n, 2)`` outputs: how much they vary."""
+    """Trace of the covariance of ``(n, d)`` outputs (offsets, or class distributions): how much they vary."""
     return float(np.var(outputs, axis=0).sum())
+
+
+SIGNALS = ("probabilities", "offsets")
+"""What a variance-based start score measures the spread of (:class:`NoiseQuery`, :class:`MultiPolicyQuery`).
+
+``"probabilities"`` (the default): the learner's softmax distribution over its classes (the 9 next cells,
+or the heading bins): continuous in the network's inputs and weights, so its spread is never identically
+zero. ``"offsets"``: the subgoal offsets, the score of protocol 1 (the committed results). With a next-cell
+head the offset is a function of the argmax class, piecewise constant, so its spread under body noise is
+zero up to rounding (~1e-32) almost everywhere, and the argmax then picks by rounding residue (a cell
+next to the goal) or index 0."""
+
+
+def check_signal(signal: str) -> str:
+    """Returns ``signal`` if it is one of :data:`SIGNALS`.
+
+    Raises:
+        ValueError: Naming the value and the choices.
+    """
+    if signal not in SIGNALS:
+        raise ValueError(f"signal must be one of {list(SIGNALS)}, got {signal!r}")
+    return signal
+
+
+def class_probabilities(learner: Any, batch: EncodedBatch) -> np.ndarray:
+    """The learner's softmax distribution over its classes for an encoded batch, ``(B, classes)`` float64.
+
+    Read from the learner's own ``class_probabilities(batch)`` if it has one, else from the torch network
+    of its :class:`~antmaze_hirl.dagger.policy.SubgoalPolicy` (``learner.policy.network``): the next-cell
+    logits, or the heading logits of a heading head (its distance output is left out).
+
+    Raises:
+        ValueError: For a learner with neither (name its type; ``signal="offsets"`` needs only ``offsets``).
+    """
+    own = getattr(learner, "class_probabilities", None)
+    if callable(own):
+        return np.asarray(own(batch), dtype=np.float64)
+    network = getattr(getattr(learner, "policy", learner), "network", None)
+    import torch  # here: this module is imported where torch is not needed (the method names)
+
+    if not isinstance(network, torch.nn.Module):
+        raise ValueError(
+            f"{type(learner).__name__} has no class distribution (no class_probabilities, no policy.network): "
+            "use signal='offsets'"
+        )
+    network.eval()
+    with torch.no_grad():
+        outputs = network(torch.from_numpy(batch.grids), torch.from_numpy(batch.vectors))
+    logits = outputs[0] if isinstance(outputs, tuple) else outputs
+    return torch.softmax(logits.double(), dim=1).numpy()
+
+
+def argmax_ties_random(scores: np.ndarray, rng: np.random.Generator) -> int:
+    """Index of the largest score, ties (to 1e-12 of the largest) broken by ``rng``, not by position.
+
+    Before the first update, or with a signal that is flat, every candidate ties: index 0 would then
+    always start the episode in the same cell.
+    """
+    scores = np.asarray(scores, dtype=np.float64)
+    best = np.flatnonzero(scores >= scores.max() - 1e-12 * max(1.0, abs(scores.max())))
+    return int(best[rng.integers(len(best))]) if len(best) > 1 else int(best[0])
 
 
 class NoiseQuery(QueryStrategy):
@@ -149,19 +210,27 @@ class NoiseQuery(QueryStrategy):
     behaviour before issue 12, with which the committed ``noise`` results up to then were made (the
     new default changes the method's numbers).
 
+    The output whose spread is measured is ``signal`` (:data:`SIGNALS`): by default the learner's softmax
+    distribution over its classes, which varies continuously with the body observation; the subgoal
+    offsets (``"offsets"``, protocol 1) of a next-cell head do not vary at all. Ties (a flat score, e.g.
+    before the learner depends on the body) are broken at random (:func:`argmax_ties_random`).
+
     Args:
         n_noises: Perturbations per candidate.
         noise_scale: Half-width of the uniform noise, in body-observation units.
         shared_noise: One noise buffer for all candidates (the paper's Alg. 2), else fresh noise per candidate.
+        signal: ``"probabilities"`` or ``"offsets"`` (:data:`SIGNALS`).
 
     Raises:
-        ValueError: If ``n_noises`` is below 2 or ``noise_scale`` is negative.
+        ValueError: If ``n_noises`` is below 2, ``noise_scale`` is negative or ``signal`` is unknown.
     """
 
     name = "noise"
     reads_policy_outputs = True
 
-    def __init__(self, n_noises: int = 10, noise_scale: float = 1.0, *, shared_noise: bool = True) -> None:
+    def __init__(
+        self, n_noises: int = 10, noise_scale: float = 1.0, *, shared_noise: bool = True, signal: str = "probabilities"
+    ) -> None:
         if n_noises < 2:
             raise ValueError(f"n_noises must be >= 2 to measure a spread, got {n_noises}")
         if not noise_scale >= 0:
@@ -169,9 +238,10 @@ class NoiseQuery(QueryStrategy):
         self.n_noises = n_noises
         self.noise_scale = noise_scale
         self.shared_noise = shared_noise
+        self.signal = check_signal(signal)
 
     def scores(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray:
-        """Spread of the policy's outputs at each candidate."""
+        """Spread of the policy's outputs (``signal``) at each candidate."""
         body = query.body_observation
         if self.shared_noise:
             buffer = rng.uniform(-self.noise_scale, self.noise_scale, size=(self.n_noises, *body.shape))
@@ -181,12 +251,16 @@ class NoiseQuery(QueryStrategy):
                 -self.noise_scale, self.noise_scale, size=(len(query.candidates), self.n_noises, *body.shape)
             )
         agents = np.repeat(query.candidates, self.n_noises, axis=0)
-        outputs = query.policy.offsets(query.encode(agents, noisy.reshape(-1, *body.shape)))
-        return np.array([spread(block) for block in outputs.reshape(len(query.candidates), self.n_noises, 2)])
+        batch = query.encode(agents, noisy.reshape(-1, *body.shape))
+        outputs = (
+            class_probabilities(query.policy, batch) if self.signal == "probabilities" else query.policy.offsets(batch)
+        )
+        blocks = outputs.reshape(len(query.candidates), self.n_noises, outputs.shape[-1])
+        return np.array([spread(block) for block in blocks])
 
     def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
-        """The candidate with the largest output spread."""
-        return query.candidates[int(np.argmax(self.scores(query, rng)))]
+        """The candidate with the largest output spread (ties broken at random)."""
+        return query.candidates[argmax_ties_random(self.scores(query, rng), rng)]
 
 
 class BaggedEnsemble:
@@ -246,6 +320,10 @@ class BaggedEnsemble:
         """Every member's normalised offsets for an encoded batch, ``(B, members, 2)``."""
         return np.stack([member.offsets(batch) for member in self.members], axis=1)
 
+    def member_probabilities(self, batch: EncodedBatch) -> np.ndarray:
+        """Every member's class distribution (:func:`class_probabilities`), ``(B, members, classes)``."""
+        return np.stack([class_probabilities(member, batch) for member in self.members], axis=1)
+
 
 class MultiPolicyQuery(BaggedEnsemble, QueryStrategy):
     """Multi-policy start selection (Alg. 3, eq. 2).
@@ -259,28 +337,49 @@ class MultiPolicyQuery(BaggedEnsemble, QueryStrategy):
     ``ceil(N / 5)`` gradient steps (40 at the experiments' N = 200), a fifth of the learner's, on a
     bootstrap resample of D the size of D. The paper trains its policies fully; see ``member_steps``.
 
+    Disagreement is the spread across members of ``signal`` (:data:`SIGNALS`): by default their class
+    distributions, which differ wherever their weights do; the members' argmax offsets (``"offsets"``,
+    protocol 1) tie on most candidates. Ties are broken at random.
+
     Args:
         n_policies: Ensemble size.
         make_policy: Factory ``rng -> learner`` for the ensemble members (``None``: the learner's ``spawn``).
         member_steps: Gradient steps per member per update (``None``: ``ceil(N / n_policies)``).
+        signal: ``"probabilities"`` or ``"offsets"``.
+
+    Raises:
+        ValueError: As :class:`BaggedEnsemble`, or for an unknown ``signal``.
     """
 
     name = "multi_policy"
     reads_policy_outputs = True
 
+    def __init__(
+        self,
+        n_policies: int = 5,
+        make_policy: Callable[[np.random.Generator], OffsetLearner] | None = None,
+        member_steps: int | None = None,
+        *,
+        signal: str = "probabilities",
+    ) -> None:
+        super().__init__(n_policies, make_policy, member_steps)
+        self.signal = check_signal(signal)
+
     def scores(self, query: StartQuery) -> np.ndarray:
-        """Disagreement (spread across members) at each candidate."""
+        """Disagreement (spread across members of ``signal``) at each candidate."""
         if not self.members:
             return np.zeros(len(query.candidates))
         bodies = np.repeat(query.body_observation[None], len(query.candidates), axis=0)
-        outputs = self.member_offsets(query.encode(query.candidates, bodies))  # (candidates, members, 2)
+        batch = query.encode(query.candidates, bodies)
+        # (candidates, members, classes or 2)
+        outputs = self.member_probabilities(batch) if self.signal == "probabilities" else self.member_offsets(batch)
         return np.array([spread(block) for block in outputs])
 
     def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
         """The candidate with the largest ensemble disagreement (corner start before the first update)."""
         if not self.members:
             return None
-        return query.candidates[int(np.argmax(self.scores(query)))]
+        return query.candidates[argmax_ties_random(self.scores(query), rng)]
 
 
 class RewardBasedQuery(QueryStrategy):

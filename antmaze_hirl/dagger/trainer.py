@@ -13,6 +13,7 @@ from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.schedules import BetaSchedule, InverseDecayBetaSchedule
 from antmaze_hirl.dagger.strategies import DAggerQuery, QueryStrategy, StartQuery
+from antmaze_hirl.envs.layouts import bfs_distances
 from antmaze_hirl.envs.reach import as_finite_vector
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experts.base import Expert
@@ -422,6 +423,12 @@ class DAggerTrainer:
     def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
         geometry = self.env.unwrapped.geometry
         goal_cell = geometry.xy_to_cell(goal_xy)
-        cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]
+        # A chosen start obeys the env's min_goal_cells as its corner start does (else a start one step
+        # from the goal makes a cheap episode); the corner meets it, so some cell always does.
+        steps = bfs_distances(walls, goal_cell)
+        least = max(1, int(getattr(self.env.unwrapped, "min_goal_cells", 1)))
+        cells = [tuple(cell) for cell in np.argwhere(steps >= least)]
+        if not cells:
+            cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]
         candidates = np.stack([geometry.cell_to_xy(cell) for cell in cells])
         return StartQuery(walls, goal_xy, candidates, self._rest_body, self.policy)

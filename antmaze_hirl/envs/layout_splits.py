@@ -1,12 +1,20 @@
-"""A fixed partition of maze layouts into training, evaluation and selection parts, by wall grid.
+"""A fixed partition of maze layouts into training, evaluation and selection parts, by wall grid up to symmetry.
 
-A layout's part is decided by its wall grid alone (:func:`~antmaze_hirl.envs.layouts.wall_grid_string`,
-start and goal ignored): ``int(sha256(wall_grid_string).hexdigest(), 16) % 10`` is 0 or 1 for
-``"eval"`` (20%), 2 for ``"selection"`` (10%), 3 to 9 for ``"train"`` (70%). Hashing the walls rather
+A layout's part is decided by its wall grid alone, start and goal ignored, and by that grid *up to the
+eight symmetries of the square*: ``int(sha256(canonical_wall_grid(walls)).hexdigest(), 16) % 10`` is 0 or
+1 for ``"eval"`` (20%), 2 for ``"selection"`` (10%), 3 to 9 for ``"train"`` (70%), where
+:func:`~antmaze_hirl.envs.layouts.canonical_wall_grid` is the smallest string of the grid's eight
+rotations and mirrors. The learner trains on all eight images of every sample (its augmentation,
+``antmaze_hirl.dagger.features``), so a rotated or mirrored copy of a training grid is a training grid
+to it: hashing the canonical form puts a grid and all its images in one part, and no evaluation or
+selection task (walls, start, goal) is a symmetric image of a training task. Hashing the walls rather
 than the whole layout means an evaluation maze never shares its walls with a training maze, not merely
-its start and goal: a small family repeats wall grids often (the ant's 3x3 mazes have about 48), so a
-partition by seed or by the full layout still evaluates on walls seen in training. The partition is a
-pure function of the grid, the same on every machine and in every run.
+its start and goal. The partition is a pure function of the grid, the same on every machine and run.
+
+The first partition (protocol 1, :func:`wall_grid_split_v1`) hashed the raw grid: a 4x4 evaluation grid
+then almost always had a rotated copy in the training part. Every results folder made with
+``held_out_layouts`` before this change (``benchmarks/results/paper_experiment_{point,ant}``,
+``low_level_selection_held_out*.json``, ``oracle_success_ant_4.json``, ``maze_families.json``) used it.
 """
 
 from __future__ import annotations
@@ -17,7 +25,7 @@ from typing import Literal, get_args
 
 import numpy as np
 
-from antmaze_hirl.envs.layouts import MazeLayout, wall_grid_string
+from antmaze_hirl.envs.layouts import MazeLayout, canonical_wall_grid, wall_grid_string
 
 LayoutSplit = Literal["train", "eval", "selection"]
 SPLITS: tuple[LayoutSplit, ...] = get_args(LayoutSplit)
@@ -40,9 +48,24 @@ def check_split(split: str) -> LayoutSplit:
 
 
 def wall_grid_split(walls: np.ndarray) -> LayoutSplit:
-    """The part a wall grid belongs to (see the module docstring)."""
-    digest = hashlib.sha256(wall_grid_string(walls).encode()).hexdigest()
-    return _BUCKETS[int(digest, 16) % 10]
+    """The part a wall grid belongs to: that of its canonical form up to symmetry (see the module docstring).
+
+    Every rotation and mirror of ``walls`` gets the same part.
+    """
+    return _bucket(canonical_wall_grid(walls))
+
+
+def wall_grid_split_v1(walls: np.ndarray) -> LayoutSplit:
+    """The part of protocol 1, the raw grid's hash, kept to audit the results folders made with it.
+
+    Not closed under symmetry: a grid and its rotation often fall in different parts. Nothing draws
+    mazes with it any more.
+    """
+    return _bucket(wall_grid_string(walls))
+
+
+def _bucket(grid_string: str) -> LayoutSplit:
+    return _BUCKETS[int(hashlib.sha256(grid_string.encode()).hexdigest(), 16) % 10]
 
 
 def layout_split(layout: MazeLayout) -> LayoutSplit:
@@ -80,8 +103,8 @@ def sample_layout_in_split(
         layout = sample(rng)
         if layout_split(layout) == split:
             return layout
-        seen.add(wall_grid_string(layout.walls))
+        seen.add(canonical_wall_grid(layout.walls))
     raise ValueError(
-        f"no layout in split {split!r} in {max_tries} draws ({len(seen)} distinct wall grids seen, all in "
-        "other parts): this maze family has too few wall grids to hold out; use a larger maze_size"
+        f"no layout in split {split!r} in {max_tries} draws ({len(seen)} distinct wall grids up to symmetry "
+        "seen, all in other parts): this maze family has too few wall grids to hold out; use a larger maze_size"
     )

@@ -82,6 +82,56 @@ def canonical_layout(layout: MazeLayout) -> str:
     return "/".join("".join(row) for row in rows)
 
 
+SQUARE_SYMMETRIES: tuple[tuple[int, bool], ...] = tuple((k, flip) for flip in (False, True) for k in range(4))
+"""The eight symmetries of the square as ``(k, flip)``: mirror the columns first if ``flip``, then rotate by
+``k`` quarter turns counter-clockwise (``np.rot90``), on grids drawn with row 0 at the top. The learner's
+augmentation (``antmaze_hirl.dagger.features``) draws from the same group; ``tests/test_layout_splits.py``
+checks that against its code."""
+
+
+def transform_wall_grid(grid: np.ndarray, k: int, flip: bool) -> np.ndarray:
+    """The image of a ``(..., rows, cols)`` grid under the symmetry ``(k, flip)`` of :data:`SQUARE_SYMMETRIES`."""
+    out = np.flip(grid, axis=-1) if flip else np.asarray(grid)
+    return np.ascontiguousarray(np.rot90(out, k=k, axes=(-2, -1)))
+
+
+def transform_cell(cell: Cell, shape: tuple[int, int], k: int, flip: bool) -> Cell:
+    """Where ``cell`` of a ``shape`` grid lands under the symmetry ``(k, flip)`` (as :func:`transform_wall_grid`)."""
+    marker = np.zeros(shape, dtype=bool)
+    marker[cell] = True
+    row, col = np.argwhere(transform_wall_grid(marker, k, flip))[0]
+    return int(row), int(col)
+
+
+def transform_layout(layout: MazeLayout, k: int, flip: bool) -> MazeLayout:
+    """The layout's image under the symmetry ``(k, flip)``: walls, start and goal moved together."""
+    shape = layout.walls.shape
+    return MazeLayout(
+        transform_wall_grid(layout.walls, k, flip),
+        transform_cell(layout.start_cell, shape, k, flip),
+        transform_cell(layout.goal_cell, shape, k, flip),
+    )
+
+
+def canonical_wall_grid(walls: np.ndarray) -> str:
+    """The wall grid's form up to symmetry: the smallest :func:`wall_grid_string` of its eight images.
+
+    A grid and its rotations and mirrors have the same canonical form, and two grids with the same form
+    are images of each other. The layout partition (``layout_splits``) hashes this.
+    """
+    return min(wall_grid_string(transform_wall_grid(walls, k, flip)) for k, flip in SQUARE_SYMMETRIES)
+
+
+def canonical_task(layout: MazeLayout) -> str:
+    """The task (walls, start and goal) up to symmetry: the smallest :func:`canonical_layout` of its eight images.
+
+    Unlike :func:`canonical_layout` (the layout as drawn, which ``episodes.csv`` records), two tasks that
+    are rotations or mirrors of each other share this form: what the learner, trained on all eight
+    images, cannot tell apart.
+    """
+    return min(canonical_layout(transform_layout(layout, k, flip)) for k, flip in SQUARE_SYMMETRIES)
+
+
 def walls_to_maze_map(walls: np.ndarray) -> list[list[int]]:
     """Converts a boolean wall grid to a gymnasium-robotics ``maze_map`` list of lists."""
     return [[int(cell) for cell in row] for row in np.asarray(walls, dtype=bool)]

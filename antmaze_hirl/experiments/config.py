@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TypedDict
+from typing import Any, TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
 from antmaze_hirl.envs.layout_splits import LayoutSplit
@@ -95,6 +95,16 @@ class ExperimentConfig:
             either. ``False`` (the default, kept so that the committed results folders, which lack this
             setting, still read as what they are): every maze is drawn from the whole family, held out
             by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+        protocol: How the curves are read. ``1`` (the default, so that the committed results folders,
+            which lack this setting, read as what they are): a periodic set and a different final set,
+            the untrained learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (issue 32; needs
+            ``held_out_layouts``): one fixed set, the ``final_eval_episodes`` mazes of the ``"eval"`` part
+            (symmetry-disjoint from training and selection), scored before the first episode (the
+            untrained learner), every ``eval_every`` episodes and after the last; ``eval_episodes`` is not
+            used. Every evaluation also writes its per-maze outcomes (``evaluations.csv``).
+        learner: The high-level learner, one of :data:`LEARNERS`; ``None``: protocol 2's
+            :data:`PROTOCOL_LEARNER`, or in protocol 1 the body's default (the planning learner
+            :data:`STRONG_PRIOR` for the point, ``next_cell_cnn`` for the ant).
         step_gradient_steps: Gradient steps after every labelled step for the strategies that update
             after every step (``reward_per_step``, Alg. 4). 20 gives about the gradient budget of the
             per-episode methods (N = 200 per episode of about 10 labels), so the comparison is of when the
@@ -115,6 +125,8 @@ class ExperimentConfig:
     expert_max_distance: float | None = None
     held_out_layouts: bool = False
     step_gradient_steps: int | None = 20
+    protocol: int = 1
+    learner: str | None = None
 
     def __post_init__(self) -> None:
         body_spec(self.body)
@@ -136,15 +148,96 @@ class ExperimentConfig:
             raise ValueError(f"step_gradient_steps must be >= 1 or None, got {self.step_gradient_steps}")
         if not isinstance(self.held_out_layouts, bool):
             raise ValueError(f"held_out_layouts must be True or False, got {self.held_out_layouts!r}")
+        if self.learner is not None and self.learner not in LEARNERS:
+            raise ValueError(f"unknown learner {self.learner!r}; choose from {sorted(LEARNERS)}")
+        if self.protocol not in PROTOCOLS:
+            raise ValueError(f"protocol must be one of {list(PROTOCOLS)}, got {self.protocol!r}")
+        if self.protocol >= 2 and not self.held_out_layouts:
+            raise ValueError("protocol 2 needs held_out_layouts=True (its evaluation set is the held-out 'eval' part)")
+
+    @property
+    def evaluates_untrained(self) -> bool:
+        """Whether the untrained learner is evaluated before the first episode (protocol 2)."""
+        return self.protocol >= 2
+
+
+PLANS = -1
+"""Stands for ``rows + cols + 2`` value-iteration rounds on the trial's map (:func:`learner_settings`)."""
+
+LEARNERS: dict[str, dict[str, Any]] = {
+    "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
+    "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
+    "next_cell_vin": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False},
+    "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
+}
+"""The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
+body's default sets given explicitly (the variants of ``benchmarks/learner_ablation.py``). CNN learners see
+only the bird's-eye encoding; ``next_cell_vin`` reads the next cell out of value iteration; ``_walls`` also
+rules out the moves the walls block, which solves most mazes before any label."""
+
+STRONG_PRIOR = "next_cell_vin_walls"
+"""The learner that solves the held-out point mazes untrained (the point's default before protocol 2): a
+named ablation, reported beside its untrained success, not the main protocol's learner."""
+
+PROTOCOL_LEARNER = "next_cell_cnn"
+"""Protocol 2's learner for both bodies when ``ExperimentConfig.learner`` is not set: the generic CNN
+next-cell head, chosen on the selection mazes under the <= 20% untrained-success rule
+(``benchmarks/results/untrained_learners_{point,ant}.json``)."""
+
+
+def learner_settings(name: str, maze_size: int) -> dict[str, Any]:
+    """The settings of learner ``name`` on ``maze_size`` mazes: :data:`PLANS` becomes ``rows + cols + 2`` rounds.
+
+    Raises:
+        ValueError: Naming an unknown learner and the known ones.
+    """
+    if name not in LEARNERS:
+        raise ValueError(f"unknown learner {name!r}; choose from {sorted(LEARNERS)}")
+    settings = dict(LEARNERS[name])
+    if settings["planning_iterations"] == PLANS:
+        from antmaze_hirl.dagger.high_level_policy import planning_rounds  # here: this module stays torch-free
+
+        side = maze_size + 2  # the border adds a row and a column on each side
+        settings["planning_iterations"] = planning_rounds(side, side)
+    return settings
+
+
+def trial_learner(config: ExperimentConfig) -> str | None:
+    """The learner a trial trains: ``config.learner``, else protocol 2's :data:`PROTOCOL_LEARNER`.
+
+    ``None`` in protocol 1 without a learner: the body's default (``HighLevelPolicy.for_env``).
+    """
+    if config.learner is not None:
+        return config.learner
+    return PROTOCOL_LEARNER if config.protocol >= 2 else None
+
+
+PROTOCOLS = (1, 2)
+"""The protocols of :attr:`ExperimentConfig.protocol`."""
+
+CURRENT_PROTOCOL = 2
+"""The protocol ``benchmarks/paper_experiment.py`` runs unless told otherwise."""
+
+
+def evaluation_schedule(config: ExperimentConfig) -> list[int]:
+    """The training episodes after which the learner is evaluated; ``0`` is before the first (protocol 2).
+
+    Every ``eval_every``-th episode and the last, as both protocols have it.
+    """
+    after = [e for e in range(1, config.episodes + 1) if e % config.eval_every == 0 or e == config.episodes]
+    return [0, *after] if config.evaluates_untrained else after
 
 
 def evaluation_sets(config: ExperimentConfig) -> dict[str, tuple[LayoutSplit, int, int]]:
-    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}``.
+    """The two evaluation sets: ``{"periodic" | "final": (split, first seed, mazes)}`` (one and the same in protocol 2).
 
     The split restricts the mazes only with ``held_out_layouts`` (:func:`~antmaze_hirl.experiments.runner.make_env`).
     """
     from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED  # here: the CLI imports this module without torch
 
+    if config.protocol >= 2:  # one set: every evaluation, the untrained one and the last included
+        curve = ("eval", HELD_OUT_SEED, config.final_eval_episodes)
+        return {"periodic": curve, "final": curve}
     if config.held_out_layouts:
         return {
             "periodic": ("selection", SELECTION_SEED, config.eval_episodes),

@@ -25,6 +25,7 @@ from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.outcomes import EVALUATION_COLUMNS, EVALUATION_TEXT_COLUMNS
 from antmaze_hirl.experiments.provenance import check_same_code
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.plotting import plot_panels
@@ -186,6 +187,20 @@ def read_rows(path: Path) -> list[dict[str, Any]]:
         return [{key: _parse(key, value) for key, value in row.items()} for row in csv.DictReader(handle)]
 
 
+def read_evaluations(path: Path) -> list[dict[str, Any]]:
+    """Rows of an ``evaluations.csv`` (or a trial's part of it) with numbers and successes parsed back."""
+    with path.open() as handle:
+        return [
+            {key: value if key in EVALUATION_TEXT_COLUMNS else _parse(key, value) for key, value in row.items()}
+            for row in csv.DictReader(handle)
+        ]
+
+
+def evaluations_path(trial: Path) -> Path:
+    """Where a trial's per-maze outcomes live, beside its rows: ``trials/<method>_seed<k>.evaluations.csv``."""
+    return trial.with_suffix(".evaluations.csv")
+
+
 def _parse(column: str, value: str) -> Any:
     if column in TEXT_COLUMNS:
         return value
@@ -261,6 +276,10 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
         return json.loads((out_dir / "summary.json").read_text())
     rows = [row for _, _, trial in done for row in with_eval_mazes(trial, config)]
     atomic_write_text(out_dir / "episodes.csv", rows_to_csv(rows))
+    parts = [evaluations_path(trial_path(out_dir, m, s)) for m, s, _ in done]
+    evaluations = [row for part in parts if part.exists() for row in read_evaluations(part)]
+    if evaluations:
+        atomic_write_text(out_dir / "evaluations.csv", rows_to_csv(evaluations, EVALUATION_COLUMNS))
     timed = sorted(trial_path(out_dir, m, s).with_suffix(".json") for m, s, _ in done)
     # Finished trials only (save_trial writes the .json just before the .csv); older folders lack some.
     seconds = {path.stem: json.loads(path.read_text())["seconds"] for path in timed if path.exists()}
@@ -269,7 +288,7 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
     summary = {
         "config": recorded,
         "provenance": provenance,
-        "methods": summarise(rows, methods),
+        "methods": summarise(rows, methods, evaluations=evaluations or None),
         "trial_seconds": seconds,
     }
     atomic_write_json(out_dir / "summary.json", summary)

@@ -25,11 +25,19 @@ from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.experiments.backends import Backend, import_ray, run_tasks
-from antmaze_hirl.experiments.config import ExperimentConfig, evaluation_sets
+from antmaze_hirl.experiments.config import (
+    ExperimentConfig,
+    evaluation_schedule,
+    evaluation_sets,
+    learner_settings,
+    trial_learner,
+)
+from antmaze_hirl.experiments.outcomes import EVALUATION_COLUMNS, play_mazes, summarise_mazes
 from antmaze_hirl.experiments.provenance import code_provenance, source_sha256
 from antmaze_hirl.experiments.results_folder import (
     COLUMNS,
     check_resumable,
+    evaluations_path,
     read_rows,
     rows_to_csv,
     trial_is_done,
@@ -56,6 +64,7 @@ __all__ = [
     "run_and_save_trial",
     "run_experiment",
     "run_trial",
+    "run_trial_with_evaluations",
     "save_trial",
     "timed_trial",
     "worker_identity",
@@ -116,6 +125,12 @@ class TrialEnvs:
         result = evaluate_high_level(policy, self.evaluation[name], episodes=mazes, seed=first_seed)
         return {"eval_success": result["success_rate"], "eval_attempts": result["mean_attempts"], "eval_mazes": mazes}
 
+    def evaluate_mazes(self, policy: Any, *, final: bool) -> list[dict[str, Any]]:
+        """The learner alone on the final (or periodic) set, one outcome per maze (:func:`play_mazes`)."""
+        name = "final" if final else "periodic"
+        _, first_seed, mazes = self.sets[name]
+        return play_mazes(policy, self.evaluation[name], episodes=mazes, seed=first_seed)
+
     def close(self) -> None:
         """Closes every env."""
         for env in {id(env): env for env in (self.train, *self.evaluation.values())}.values():
@@ -129,7 +144,10 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
     the same seed (an episode's layout is drawn at reset, before the policy acts).
     """
     rows = []
-    for name, (split, first_seed, mazes) in evaluation_sets(config).items():
+    sets = evaluation_sets(config)
+    if sets["periodic"] == sets["final"]:  # protocol 2: one set
+        sets = {"curve": sets["final"]}
+    for name, (split, first_seed, mazes) in sets.items():
         env = make_env(config, low_level, split=split)
         for seed in range(first_seed, first_seed + mazes):
             env.reset(seed=seed)
@@ -150,12 +168,16 @@ def make_trainer(
     """The trainer of one trial: a fresh learner seeded by ``seed``, ``method``'s strategy, ``config``'s settings.
 
     The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
-    ``policy_settings`` are :class:`HighLevelPolicy` constructor settings (an ablation's variant).
+    The learner is ``config``'s (:func:`~antmaze_hirl.experiments.config.trial_learner`); ``policy_settings``
+    are :class:`HighLevelPolicy` constructor settings over it (an ablation's variant).
     """
     rng = np.random.default_rng(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
     # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
     reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
+    learner = trial_learner(config)
+    if learner is not None:
+        policy_settings = {**learner_settings(learner, config.maze_size), **(policy_settings or {})}
     strategy = make_strategy(method)
     if strategy.updates_every_step:
         strategy.step_gradient_steps = config.step_gradient_steps
@@ -183,16 +205,49 @@ def run_trial(
 ) -> list[dict[str, Any]]:
     """Trains one learner with ``method`` from seed ``seed``; returns one row per training episode.
 
-    Rows at every ``eval_every``-th episode (and the last) carry the learner-only evaluation. With
-    ``tensorboard_dir``, each row and each update's loss is logged there too (:class:`DAggerTensorBoard`);
-    the rows are the same either way.
+    Rows at the episodes of :func:`~antmaze_hirl.experiments.config.evaluation_schedule` carry the
+    learner-only evaluation. With ``tensorboard_dir``, each row and each update's loss is logged there too
+    (:class:`DAggerTensorBoard`); the rows are the same either way. :func:`run_trial_with_evaluations`
+    also returns protocol 2's per-maze outcomes.
+    """
+    return run_trial_with_evaluations(
+        method, seed, config, low_level=low_level, progress=progress, tensorboard_dir=tensorboard_dir
+    )[0]
+
+
+def run_trial_with_evaluations(
+    method: str,
+    seed: int,
+    config: ExperimentConfig,
+    *,
+    low_level: Any = None,
+    progress: tqdm | None = None,
+    tensorboard_dir: Path | None = None,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """:func:`run_trial`'s rows and, in protocol 2, every evaluation's per-maze outcomes (else ``[]``).
+
+    Protocol 2 evaluates the untrained learner first (``episode`` 0, 0 labels), then after each scheduled
+    episode, always on the same mazes (:data:`~antmaze_hirl.experiments.outcomes.EVALUATION_COLUMNS`).
     """
     envs = TrialEnvs(config, low_level)
     env = envs.train
     trainer = make_trainer(method, seed, config, env, PathOracle.for_env(env, max_distance=config.expert_max_distance))
     rows: list[dict[str, Any]] = []
+    evaluations: list[dict[str, Any]] = []
+    schedule = set(evaluation_schedule(config))
+
+    def evaluate(episodes_done: int, final: bool) -> dict[str, Any]:
+        if not config.evaluates_untrained:  # protocol 1, as it always ran
+            return envs.evaluate(trainer.policy, final=final)
+        outcomes = envs.evaluate_mazes(trainer.policy, final=final)
+        trial = {"method": method, "seed": seed, "episode": episodes_done, "labels": trainer.total_expert_cost}
+        evaluations.extend({**trial, **outcome} for outcome in outcomes)
+        return summarise_mazes(outcomes)
+
     with contextlib.ExitStack() as stack:
         board = stack.enter_context(DAggerTensorBoard(tensorboard_dir)) if tensorboard_dir is not None else None
+        if 0 in schedule:
+            evaluate(0, final=False)
         for episode in range(config.episodes):
             record = trainer.run_episode()
             row = {
@@ -204,15 +259,15 @@ def run_trial(
                 "layout": canonical_layout(env.unwrapped.layout),
             }
             final = episode == config.episodes - 1
-            if final or (episode + 1) % config.eval_every == 0:
-                row.update(envs.evaluate(trainer.policy, final=final))
+            if episode + 1 in schedule:
+                row.update(evaluate(episode + 1, final))
             rows.append({column: row.get(column, math.nan) for column in COLUMNS})
             if board is not None:
                 board.write_episode(rows[-1], trainer)
             if progress is not None:
                 progress.update(1)
     envs.close()
-    return rows
+    return rows, evaluations
 
 
 def run_and_save_trial(
@@ -241,13 +296,15 @@ def timed_trial(
     tensorboard_dir: Path | None = None,
     *,
     progress: tqdm | None = None,
-) -> tuple[list[dict[str, Any]], float]:
-    """:func:`run_trial`'s rows and its wall time in seconds (rounded to 0.1 s)."""
+) -> tuple[list[dict[str, Any]], float, list[dict[str, Any]]]:
+    """:func:`run_trial`'s rows, its wall time in seconds (rounded to 0.1 s) and its per-maze outcomes."""
     if progress is not None:
         progress.set_postfix_str(f"{method} seed {seed}")
     start = time.perf_counter()
-    rows = run_trial(method, seed, config, low_level=low_level, progress=progress, tensorboard_dir=tensorboard_dir)
-    return rows, round(time.perf_counter() - start, 1)
+    rows, evaluations = run_trial_with_evaluations(
+        method, seed, config, low_level=low_level, progress=progress, tensorboard_dir=tensorboard_dir
+    )
+    return rows, round(time.perf_counter() - start, 1), evaluations
 
 
 def checked_trial(
@@ -258,7 +315,7 @@ def checked_trial(
     tensorboard_dir: Path | None = None,
     *,
     expected: dict[str, str],
-) -> tuple[list[dict[str, Any]], float]:
+) -> tuple[list[dict[str, Any]], float, list[dict[str, Any]]]:
     """:func:`timed_trial` on a worker, once :func:`check_worker` found the driver's low level and code there."""
     check_worker(config.body, low_level, expected)
     return timed_trial(method, seed, config, low_level, tensorboard_dir)
@@ -292,9 +349,21 @@ def check_worker(body: str, low_level: Any, expected: dict[str, str]) -> None:
             )
 
 
-def save_trial(out_dir: Path, method: str, seed: int, rows: list[dict[str, Any]], seconds: float) -> Path:
-    """Saves a finished trial atomically: its rows in ``trials/<method>_seed<k>.csv``, its wall time beside it."""
+def save_trial(
+    out_dir: Path,
+    method: str,
+    seed: int,
+    rows: list[dict[str, Any]],
+    seconds: float,
+    evaluations: list[dict[str, Any]] | None = None,
+) -> Path:
+    """Saves a finished trial atomically: its rows in ``trials/<method>_seed<k>.csv``, its wall time beside it.
+
+    Protocol 2's per-maze outcomes go to ``trials/<method>_seed<k>.evaluations.csv``, before the rows.
+    """
     path, text = trial_path(out_dir, method, seed), rows_to_csv(rows)
+    if evaluations:
+        atomic_write_text(evaluations_path(path), rows_to_csv(evaluations, EVALUATION_COLUMNS))
     atomic_write_json(path.with_suffix(".json"), trial_record(text, seconds))  # rows and hash: damage is found
     atomic_write_text(path, text)  # last: its existence marks the trial done
     return path
@@ -337,7 +406,8 @@ def run_experiment(
     With ``tensorboard`` (the default) each trial also logs its episodes to ``out_dir/tb/<method>_seed<k>/``
     (``tensorboard --logdir out_dir/tb``); the logs are not part of the results and change no number.
 
-    Writes ``out_dir/episodes.csv``, ``out_dir/eval_layouts.csv`` (every evaluation maze:
+    Writes ``out_dir/episodes.csv``, in protocol 2 ``out_dir/evaluations.csv`` (every evaluation's
+    per-maze outcomes), ``out_dir/eval_layouts.csv`` (every evaluation maze:
     :func:`evaluation_layouts`), ``out_dir/summary.json`` and ``out_dir/panels.png``.
 
     ``out_dir/config.json`` records the settings and the low level's identity

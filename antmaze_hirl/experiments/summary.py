@@ -20,6 +20,14 @@ For each method, over its seeds (median, min and max):
   DAgger's own: the expert-cost figure of "equal success with fewer labels". A seed that never reaches it
   counts as infinitely many labels in the median (``None`` if that is the median);
 * secondary: mean expert cost and attempts per episode, and labels to first reach 60% success.
+
+With protocol 2's per-maze outcomes (``evaluations``, ``evaluations.csv``) every curve starts at the
+trial's measured untrained success (``untrained_success``, per seed and pooled), the final evaluation is
+the same set as every other, and each pooled rate (``final_success.pooled``, ``untrained_success.pooled``)
+carries a two-way cluster bootstrap interval over seeds and mazes
+(:func:`~antmaze_hirl.experiments.uncertainty.cluster_bootstrap`) instead of a Wilson interval that
+counts the shared mazes as independent; per-seed rates keep their Wilson intervals. Without them
+(protocol 1, the committed results folders) the figures are as they always were.
 """
 
 from __future__ import annotations
@@ -37,7 +45,7 @@ from antmaze_hirl.experiments.curves import (
     normalised_auc,
     success_at_labels,
 )
-from antmaze_hirl.experiments.uncertainty import paired_comparison, pooled_rate, rate_with_interval
+from antmaze_hirl.experiments.uncertainty import cluster_bootstrap, paired_comparison, pooled_rate, rate_with_interval
 
 TARGET_SUCCESS = 0.6
 BASELINE = "dagger"
@@ -70,7 +78,31 @@ def trials_by_method(rows: Sequence[dict[str, Any]], methods: Sequence[str]) -> 
     return grouped
 
 
-def final_success(trials: dict[int, Trial]) -> dict[str, Any]:
+def maze_table(evaluations: Sequence[dict[str, Any]], seeds: Sequence[int], episode: int | None) -> np.ndarray:
+    """``(seeds, mazes)`` successes of a method's evaluations after ``episode`` episodes (``None``: each trial's last).
+
+    Raises:
+        ValueError: If the seeds did not play the same mazes (then they are no shared clusters).
+    """
+    by_seed: dict[int, dict[int, bool]] = {}
+    for seed in seeds:
+        rows = [row for row in evaluations if int(row["seed"]) == seed]
+        at = max(int(row["episode"]) for row in rows) if episode is None else episode
+        by_seed[seed] = {int(row["maze_seed"]): bool(row["success"]) for row in rows if int(row["episode"]) == at}
+    mazes = [sorted(outcomes) for outcomes in by_seed.values()]
+    if any(m != mazes[0] for m in mazes):
+        raise ValueError(f"seeds {list(seeds)} played different evaluation mazes; a pooled rate needs shared ones")
+    return np.array([[by_seed[seed][maze] for maze in mazes[0]] for seed in seeds], dtype=np.float64)
+
+
+def untrained_success(evaluations: Sequence[dict[str, Any]], seeds: Sequence[int]) -> dict[str, Any]:
+    """The untrained learner's success (evaluation at episode 0): per seed and pooled with its cluster bootstrap."""
+    table = maze_table(evaluations, seeds, 0)
+    per_seed = [float(rate) for rate in table.mean(axis=1)]
+    return {**median_range(per_seed), "per_seed": per_seed, "pooled": cluster_bootstrap(table)}
+
+
+def final_success(trials: dict[int, Trial], evaluations: Sequence[dict[str, Any]] | None = None) -> dict[str, Any]:
     """Final learner-only success: spread over seeds, each seed's rate and the pooled rate with Wilson intervals.
 
     The number of mazes comes from each final row's ``eval_mazes``; where that is missing (results
@@ -91,22 +123,28 @@ def final_success(trials: dict[int, Trial]) -> dict[str, Any]:
         for seed, row in finals.items()
     ]
     pooled = None
-    if counted:
+    if evaluations:  # protocol 2: the seeds share the mazes, so the interval resamples both
+        pooled = cluster_bootstrap(maze_table(evaluations, sorted(trials), None))
+    elif counted:
         pooled = pooled_rate(sum(seed["successes"] for seed in per_seed), sum(int(n) for n in mazes.values()))
     return {**median_range([seed["rate"] for seed in per_seed]), "per_seed": per_seed, "pooled": pooled}
 
 
-def _per_seed_figures(trial: Trial, horizon: float) -> dict[str, float | None]:
-    figures = {f"success_at_{budget}_labels": success_at_labels(trial, budget) for budget in LABEL_BUDGETS}
+def _per_seed_figures(trial: Trial, horizon: float, start: float) -> dict[str, float | None]:
+    figures = {f"success_at_{budget}_labels": success_at_labels(trial, budget, start) for budget in LABEL_BUDGETS}
     return {
         "final_success": float(trial[-1]["eval_success"]),
         **figures,
-        "normalised_auc": normalised_auc(trial, horizon),
+        "normalised_auc": normalised_auc(trial, horizon, start),
     }
 
 
 def summarise(
-    rows: Sequence[dict[str, Any]], methods: Sequence[str], *, baseline: str = BASELINE
+    rows: Sequence[dict[str, Any]],
+    methods: Sequence[str],
+    *,
+    baseline: str = BASELINE,
+    evaluations: Sequence[dict[str, Any]] | None = None,
 ) -> dict[str, dict[str, Any]]:
     """Summary per method over seeds (see the module docstring for each figure).
 
@@ -114,12 +152,19 @@ def summarise(
         rows: Every episode row of one experiment (the columns of ``episodes.csv``).
         methods: Methods to summarise, in order; one without rows gets ``{"seeds": 0}``.
         baseline: The method the others are compared with, when it has rows.
+        evaluations: Protocol 2's per-maze outcomes (the rows of ``evaluations.csv``); ``None`` for protocol 1.
     """
     grouped = trials_by_method(rows, methods)
+    by_method = {m: [row for row in evaluations or () if row["method"] == m] for m in grouped}
+    starts = {
+        method: {seed: _untrained(by_method[method], seed) for seed in trials} for method, trials in grouped.items()
+    }
     every_trial = [trial for trials in grouped.values() for trial in trials.values()]
     horizon = min((final_labels(trial) for trial in every_trial), default=0.0)
     figures = {
-        method: {seed: _per_seed_figures(trial, horizon) for seed, trial in trials.items()} if horizon > 0 else {}
+        method: {seed: _per_seed_figures(trial, horizon, starts[method][seed]) for seed, trial in trials.items()}
+        if horizon > 0
+        else {}
         for method, trials in grouped.items()
     }
     summary: dict[str, dict[str, Any]] = {}
@@ -132,7 +177,7 @@ def summarise(
         method_rows = [row for trial in trials.values() for row in trial]
         summary[method] = {
             "seeds": len(trials),
-            "final_success": final_success(trials),
+            "final_success": final_success(trials, by_method[method]),
             "success_at_labels": {str(budget): _budget_figure(per_seed, budget) for budget in LABEL_BUDGETS},
             "normalised_auc": {
                 **median_range([seed["normalised_auc"] for seed in per_seed.values()]),
@@ -144,23 +189,41 @@ def summarise(
             "cost_to_60_percent": {"median": float(np.median(costs)) if costs else None, "seeds_reached": len(costs)},
             "total_labels": median_range([float(trial[-1]["cumulative_expert_cost"]) for trial in trials.values()]),
         }
+        if by_method[method]:
+            summary[method]["untrained_success"] = untrained_success(by_method[method], sorted(trials))
         if method != baseline and figures.get(baseline):
             summary[method][f"vs_{baseline}"] = _compare(per_seed, figures[baseline])
     target = summary.get(baseline, {}).get("final_success", {}).get("median")
     if target:  # None without baseline trials; 0 success is no target to match
-        matches = {method: _labels_to_match(trials, target) for method, trials in grouped.items() if trials}
+        matches = {
+            method: _labels_to_match(trials, target, starts[method]) for method, trials in grouped.items() if trials
+        }
         for method, match in matches.items():
             ratio = (
                 match["median"] / matches[baseline]["median"]
                 if match["median"] and matches[baseline]["median"]
                 else None
             )
-            summary[method][f"labels_to_match_{baseline}"] = {**match, f"ratio_vs_{baseline}": ratio}
+            summary[method][f"labels_to_match_{baseline}"] = {
+                **match,
+                f"ratio_vs_{baseline}": ratio,
+                # How often DAgger itself reaches its own median: below half its seeds, the ratio means little.
+                f"{baseline}_seeds_reached": matches[baseline]["seeds_reached"] if baseline in matches else None,
+                # Protocol 2: the target and every curve are read on one set; protocol 1: the target is the
+                # final set's and the curves' earlier points the periodic set's.
+                "same_set": bool(evaluations),
+            }
     return summary
 
 
-def _labels_to_match(trials: dict[int, Trial], target: float) -> dict[str, Any]:
-    per_seed = [labels_to_reach(trial, target) for trial in trials.values()]
+def _untrained(evaluations: Sequence[dict[str, Any]], seed: int) -> float:
+    """The trial's untrained success (its evaluation at episode 0), 0 where none was made (protocol 1)."""
+    at_start = [bool(row["success"]) for row in evaluations if int(row["seed"]) == seed and int(row["episode"]) == 0]
+    return float(np.mean(at_start)) if at_start else 0.0
+
+
+def _labels_to_match(trials: dict[int, Trial], target: float, starts: dict[int, float]) -> dict[str, Any]:
+    per_seed = [labels_to_reach(trial, target, starts[seed]) for seed, trial in trials.items()]
     # A seed that never reaches the target has spent more labels than any that did: it sorts last.
     ranked = np.array([math.inf if labels is None else labels for labels in per_seed])
     median = float(np.median(ranked))

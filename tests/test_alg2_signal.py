@@ -1,0 +1,105 @@
+"""Issue 32: the start scores of Alg. 2 and 3 carry a continuous signal, and starts keep min_goal_cells."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from antmaze_hirl import PathOracle
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
+from antmaze_hirl.dagger.strategies import (
+    MultiPolicyQuery,
+    NoiseQuery,
+    StartQuery,
+    argmax_ties_random,
+    class_probabilities,
+)
+from antmaze_hirl.envs import PointGoToController
+from antmaze_hirl.envs.layouts import bfs_distances, generate_layout
+
+GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
+
+
+def point_env(**kwargs):
+    return gym.make("antmaze_hirl/PointMaze-v0", maze_size=4, low_level=PointGoToController(), **kwargs)
+
+
+def start_query(policy, seed):
+    rng = np.random.default_rng(seed)
+    layout = generate_layout(rng, n_rows=4, n_cols=4)
+    geometry = policy.geometry
+    cells = [tuple(cell) for cell in np.argwhere(~layout.walls) if tuple(cell) != layout.goal_cell]
+    candidates = np.stack([geometry.cell_to_xy(cell) for cell in cells])
+    return StartQuery(layout.walls, geometry.cell_to_xy(layout.goal_cell), candidates, np.zeros(2), policy)
+
+
+HEADING = {"head": "heading", "planning_iterations": 0, "block_walls": False}
+
+
+@pytest.mark.parametrize("settings", [GENERIC, HEADING], ids=["next_cell", "heading"])
+def test_the_noise_score_of_the_class_distribution_is_nonzero_where_the_offsets_is_zero(settings):
+    env = point_env()
+    zero_offsets = 0
+    for seed in range(3):
+        policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **settings)
+        query = start_query(policy, seed)
+        probabilities = NoiseQuery().scores(query, np.random.default_rng(seed))
+        offsets = NoiseQuery(signal="offsets").scores(query, np.random.default_rng(seed))
+        assert probabilities.min() > 1e-14, probabilities  # the body noise moves every distribution
+        assert len(np.unique(probabilities)) == len(probabilities)  # no ties for the argmax to break by position
+        zero_offsets += int((offsets < 1e-20).sum())
+        distribution = class_probabilities(policy, query.encode(query.candidates, np.zeros((len(query.candidates), 2))))
+        np.testing.assert_allclose(distribution.sum(axis=1), 1.0)
+    if settings["head"] == "next_cell":
+        assert zero_offsets > 0  # the protocol-1 score: an argmax class does not move under small noise
+    env.close()
+
+
+def test_ties_are_broken_at_random_not_by_position():
+    picks = {argmax_ties_random(np.zeros(6), np.random.default_rng(seed)) for seed in range(40)}
+    assert picks == set(range(6))
+    assert argmax_ties_random(np.array([0.0, 3.0, 1.0, 3.0 - 1e-15]), np.random.default_rng(0)) in (1, 3)
+    assert argmax_ties_random(np.array([0.0, 3.0, 1.0, 2.0]), np.random.default_rng(0)) == 1
+
+
+def test_unknown_signal_and_a_learner_without_a_distribution_are_clear_errors():
+    with pytest.raises(ValueError, match="signal must be one of \\['probabilities', 'offsets'\\], got 'argmax'"):
+        NoiseQuery(signal="argmax")
+    with pytest.raises(ValueError, match="signal must be one of"):
+        MultiPolicyQuery(signal="x")
+    with pytest.raises(ValueError, match="object has no class distribution"):
+        class_probabilities(object(), None)
+
+
+class Recording:
+    """Wraps a strategy's choose_start and keeps every query's candidates and the start chosen."""
+
+    def __init__(self, strategy):
+        self.strategy, self.seen = strategy, []
+        original = strategy.choose_start
+
+        def choose_start(query, rng):
+            start = original(query, rng)
+            self.seen.append((query, start))
+            return start
+
+        strategy.choose_start = choose_start
+
+
+@pytest.mark.parametrize("make", [NoiseQuery, lambda: MultiPolicyQuery(n_policies=2)], ids=["noise", "multi_policy"])
+def test_chosen_starts_respect_min_goal_cells(make):
+    env = point_env(min_goal_cells=3)
+    rng = np.random.default_rng(0)
+    strategy = make()
+    recording = Recording(strategy)
+    policy = HighLevelPolicy.for_env(env, rng=rng, **GENERIC)
+    trainer = DAggerTrainer(
+        env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, gradient_steps=2
+    )
+    trainer.train(4)
+    geometry = env.unwrapped.geometry
+    assert recording.seen
+    for query, start in recording.seen:
+        steps = bfs_distances(query.walls, geometry.xy_to_cell(query.goal_xy))
+        assert all(steps[geometry.xy_to_cell(xy)] >= 3 for xy in query.candidates)
+        assert start is None or steps[geometry.xy_to_cell(start)] >= 3
+    env.close()

@@ -1,0 +1,193 @@
+"""Issue 32, protocol 2: curves read on one set, the untrained learner measured, pooled rates bootstrapped."""
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from antmaze_hirl.envs.layouts import canonical_wall_grid
+from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.config import evaluation_schedule, evaluation_sets
+from antmaze_hirl.experiments.curves import labels_to_reach, normalised_auc, success_curve
+from antmaze_hirl.experiments.results_folder import read_rows
+from antmaze_hirl.experiments.summary import summarise
+from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+
+RESULTS = Path(__file__).parents[1] / "benchmarks" / "results"
+TINY2 = ExperimentConfig(
+    body="point",
+    episodes=3,
+    eval_every=2,
+    eval_episodes=2,
+    final_eval_episodes=4,
+    maze_size=4,
+    gradient_steps=5,
+    held_out_layouts=True,
+    protocol=2,
+)
+
+
+def crafted_trial(method, seed, evaluations_by_episode, labels_per_episode=10, mazes=4):
+    """Rows and per-maze outcomes of one trial: ``{episode: successes out of mazes}``, 0 the untrained one."""
+    rows, outcomes = [], []
+    last = max(evaluations_by_episode)
+    for episode in range(1, last + 1):
+        labels = episode * labels_per_episode
+        successes = evaluations_by_episode.get(episode)
+        rows.append(
+            {
+                "method": method,
+                "seed": seed,
+                "episode": episode - 1,
+                "expert_cost": labels_per_episode,
+                "cumulative_expert_cost": labels,
+                "attempts": labels_per_episode,
+                "eval_success": math.nan if successes is None else successes / mazes,
+                "eval_mazes": math.nan if successes is None else mazes,
+            }
+        )
+    for episode, successes in evaluations_by_episode.items():
+        for maze in range(mazes):
+            outcomes.append(
+                {
+                    "method": method,
+                    "seed": seed,
+                    "episode": episode,
+                    "labels": episode * labels_per_episode,
+                    "maze_seed": 1000 + maze,
+                    "success": maze < successes,
+                }
+            )
+    return rows, outcomes
+
+
+def test_curve_metrics_on_one_set_start_at_the_untrained_success():
+    rows, evaluations = [], []
+    # DAgger: untrained 2/4, 3/4 after 2 episodes, 4/4 after 4: its median final success is 1.0 on the same set.
+    for seed, curve in enumerate([{0: 2, 2: 3, 4: 4}, {0: 2, 2: 2, 4: 4}]):
+        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
+        rows += trial_rows
+        evaluations += outcomes
+    # noise: 3/4 and 4/4 untrained (a learner that needs few or no labels), then damaged by training.
+    for seed, curve in enumerate([{0: 3, 2: 1, 4: 2}, {0: 4, 2: 3, 4: 4}]):
+        trial_rows, outcomes = crafted_trial("noise", seed, curve)
+        rows += trial_rows
+        evaluations += outcomes
+    summary = summarise(rows, ["dagger", "noise"], evaluations=evaluations)
+    dagger, noise = summary["dagger"], summary["noise"]
+    assert dagger["untrained_success"]["per_seed"] == [0.5, 0.5]
+    assert noise["untrained_success"]["median"] == 0.875
+    assert dagger["final_success"]["median"] == 1.0  # the curve's last point
+    assert (
+        dagger["final_success"]["pooled"]["rate"] == 1.0 and "cluster_bootstrap_95" in dagger["final_success"]["pooled"]
+    )
+    # Label horizon 40: dagger seed 0's curve (0, .5) (20, .75) (40, 1) has area (0.625 * 20 + 0.875 * 20) / 40.
+    assert dagger["normalised_auc"]["per_seed"][0] == pytest.approx(0.75)
+    assert dagger["normalised_auc"]["label_horizon"] == 40
+    match = dagger["labels_to_match_dagger"]
+    assert match["per_seed"] == [40.0, 40.0] and match["dagger_seeds_reached"] == 2 and match["same_set"]
+    # noise seed 1 starts at the target: 0 labels; seed 0 never reaches it.
+    assert noise["labels_to_match_dagger"]["per_seed"] == [None, 0.0]
+    assert noise["labels_to_match_dagger"]["dagger_seeds_reached"] == 2
+    # The same trial read without its untrained point (protocol 1) starts at (0, 0).
+    noise_rows = [row for row in rows if row["method"] == "noise" and row["seed"] == 1]
+    assert success_curve(noise_rows)[1][0] == 0.0 and success_curve(noise_rows, 1.0)[1][0] == 1.0
+    assert labels_to_reach(noise_rows, 1.0) == 40.0 and labels_to_reach(noise_rows, 1.0, 1.0) == 0.0
+    assert normalised_auc(noise_rows, 40, 1.0) == pytest.approx((0.875 * 20 + 0.875 * 20) / 40)
+
+
+def test_cluster_bootstrap_matches_the_known_standard_errors():
+    # Only the mazes vary (every seed identical): half the 100 mazes fail for everyone. The mean over a
+    # maze resample has standard error sqrt(0.25 / 100) = 0.05; a pooled Wilson interval of the 1,000
+    # outcomes would claim about 0.016.
+    mazes = np.tile(np.arange(100) < 50, (10, 1))
+    result = cluster_bootstrap(mazes, resamples=4000)
+    assert result["rate"] == 0.5 and result["bootstrap_se"] == pytest.approx(0.05, rel=0.1)
+    low, high = result["cluster_bootstrap_95"]
+    assert low == pytest.approx(0.5 - 1.96 * 0.05, abs=0.015) and high == pytest.approx(0.5 + 1.96 * 0.05, abs=0.015)
+    # Only the seeds vary: 5 of 10 seeds solve every maze. Standard error sqrt(0.25 / 10) = 0.158.
+    seeds = np.repeat((np.arange(10) < 5)[:, None], 100, axis=1)
+    assert cluster_bootstrap(seeds, resamples=4000)["bootstrap_se"] == pytest.approx(0.5 / np.sqrt(10), rel=0.1)
+    # No variation at all: a degenerate interval.
+    assert cluster_bootstrap(np.ones((3, 20)))["cluster_bootstrap_95"] == [1.0, 1.0]
+    with pytest.raises(ValueError, match=r"non-empty \(seeds, mazes\) table, got shape \(5,\)"):
+        cluster_bootstrap(np.ones(5))
+    with pytest.raises(ValueError, match="resamples must be >= 100, got 10"):
+        cluster_bootstrap(np.ones((2, 2)), resamples=10)
+
+
+def test_protocol_settings_are_checked_and_the_schedule_includes_the_untrained_learner():
+    assert evaluation_schedule(TINY2) == [0, 2, 3]
+    assert evaluation_schedule(ExperimentConfig(episodes=25, eval_every=10)) == [10, 20, 25]
+    sets = evaluation_sets(TINY2)
+    assert sets["periodic"] == sets["final"] and sets["final"][0] == "eval" and sets["final"][2] == 4
+    with pytest.raises(ValueError, match="protocol 2 needs held_out_layouts=True"):
+        ExperimentConfig(protocol=2)
+    with pytest.raises(ValueError, match=r"protocol must be one of \[1, 2\], got 3"):
+        ExperimentConfig(protocol=3, held_out_layouts=True)
+
+
+def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(tmp_path):
+    run_experiment(["dagger"], 2, TINY2, tmp_path, progress_bar=False, tensorboard=False)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    untrained = summary["methods"]["dagger"]["untrained_success"]
+    assert len(untrained["per_seed"]) == 2 and "cluster_bootstrap_95" in untrained["pooled"]
+    with (tmp_path / "evaluations.csv").open() as handle:
+        evaluations = list(csv.DictReader(handle))
+    rows = read_rows(tmp_path / "episodes.csv")
+    for seed in (0, 1):
+        mine = [row for row in evaluations if int(row["seed"]) == seed]
+        by_episode = {}
+        for row in mine:
+            by_episode.setdefault(int(row["episode"]), []).append(row)
+        assert sorted(by_episode) == [0, 2, 3]
+        mazes = [[row["maze_seed"] for row in outcomes] for outcomes in by_episode.values()]
+        assert all(m == mazes[0] for m in mazes) and len(mazes[0]) == 4  # one set, every time
+        last = [row for row in rows if row["seed"] == seed][-1]
+        assert last["eval_success"] == np.mean([row["success"] == "True" for row in by_episode[3]])
+        assert int(by_episode[3][0]["labels"]) == last["cumulative_expert_cost"]
+
+    # Held out up to symmetry: no evaluation wall grid is a rotation or mirror of a training one.
+    def grid_class(layout):
+        grid = layout.replace("S", "0").replace("G", "0")
+        return canonical_wall_grid(np.array([[c == "1" for c in row] for row in grid.split("/")]))
+
+    training = {grid_class(row["layout"]) for row in rows}
+    assert training.isdisjoint({grid_class(row["layout"]) for row in evaluations})
+
+
+@pytest.mark.parametrize("body", ["point", "ant"])
+def test_committed_protocol_1_folders_still_summarise_as_committed(body):
+    folder = RESULTS / f"paper_experiment_{body}"
+    committed = json.loads((folder / "summary.json").read_text())["methods"]
+    summary = summarise(read_rows(folder / "episodes.csv"), list(committed))
+    for method, figures in committed.items():
+        assert summary[method]["final_success"] == figures["final_success"], method
+        assert summary[method]["normalised_auc"] == figures["normalised_auc"], method
+        assert "untrained_success" not in summary[method]
+
+
+def test_protocol_2_trains_the_generic_learner_and_protocol_1_the_body_default():
+    from antmaze_hirl.experiments.config import LEARNERS, PROTOCOL_LEARNER, STRONG_PRIOR, learner_settings
+    from antmaze_hirl.experiments.runner import make_env, make_trainer
+    from antmaze_hirl.experts import PathOracle
+
+    def policy_config(config):
+        env = make_env(config, split="train")
+        trainer = make_trainer("dagger", 0, config, env, PathOracle.for_env(env))
+        env.close()
+        return trainer.policy.policy.config()
+
+    generic = policy_config(TINY2)
+    assert PROTOCOL_LEARNER == "next_cell_cnn" and generic["head"] == "next_cell"
+    assert generic["planning_iterations"] == 0 and not generic["block_walls"]
+    old = policy_config(ExperimentConfig(body="point", maze_size=4, held_out_layouts=True))
+    assert old["planning_iterations"] == 14 and old["block_walls"]  # the point's body default: the strong prior
+    prior = policy_config(ExperimentConfig(**{**TINY2.__dict__, "learner": STRONG_PRIOR}))
+    assert prior["planning_iterations"] == 14 and prior["block_walls"]
+    assert learner_settings(STRONG_PRIOR, 5)["planning_iterations"] == 16 and STRONG_PRIOR in LEARNERS
+    with pytest.raises(ValueError, match="unknown learner 'mlp'; choose from"):
+        ExperimentConfig(learner="mlp")
