@@ -249,7 +249,10 @@ def test_the_final_checkpoint_has_every_update_of_the_run(tmp_path):
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=150, **TINY)
     folder, _ = latest_checkpoint(tmp_path / "checkpoints")
     saved = load_low_level("point", folder / "model.zip")
-    assert saved._n_updates == model._n_updates == 200  # one update per step after learning_starts=100
+    # Every weight is the final one (a checkpoint from step 150 would differ: it saw 150 fewer updates).
+    assert saved.num_timesteps == model.num_timesteps == 300
+    final = model.policy.state_dict()
+    assert all(th.equal(value, final[name]) for name, value in saved.policy.state_dict().items())
     obs, _ = ReachEnv("point").reset(seed=1)
     np.testing.assert_array_equal(saved.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
 
@@ -332,7 +335,16 @@ def test_user_brings_sac_with_her_and_no_glue():
     env = gym.make("antmaze_hirl/AntReach-v0")
     model = tiny_sac_her(env, learning_starts=120)
     model.learn(150)
-    assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
+    # The package takes the user's model as it is: to evaluate it, and as the maze env's low level.
+    reach = env.unwrapped
+    result = evaluate_reach(model, reach, episodes=2, seed=0)
+    assert result["episodes"] == 2 and 0.0 <= result["success_rate"] <= 1.0
+    assert 1 <= result["mean_steps"] <= reach.horizon
+    maze = gym.make("antmaze_hirl/AntMaze-v0", low_level=model)
+    maze.reset(seed=0)
+    *_, info = maze.step(maze.unwrapped.agent_xy + np.array([1.0, 0.0]))
+    assert 1 <= info["low_level_steps"] <= maze.unwrapped.reach.horizon == reach.horizon
+    assert len(info["agent_path"]) == info["low_level_steps"] + 1
 
 
 def test_learning_curve_snapshots_and_tensorboard_are_written(tmp_path):
