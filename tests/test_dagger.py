@@ -249,7 +249,10 @@ def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
     assert trained["success_rate"] >= max(untrained["success_rate"] + gain, least), (untrained, trained)
 
 
-@pytest.mark.parametrize(("head", "planning_iterations"), [("heading", 0), ("heading", 4), ("next_cell", 0)])
+@pytest.mark.parametrize(
+    ("head", "planning_iterations"),
+    [("heading", 0), pytest.param("heading", 4, marks=pytest.mark.integration), ("next_cell", 0)],  # planning: 5 s
+)
 def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iterations):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)

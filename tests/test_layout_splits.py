@@ -45,6 +45,7 @@ def test_split_is_the_documented_hash_of_the_wall_grid():
         assert layout_split(moved) == expected
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize(("body", "maze_size"), [("ant", 3), ("point", 5)])
 def test_training_and_evaluation_mazes_share_no_wall_grid(body, maze_size):
     sample = family_sampler(body, maze_size)

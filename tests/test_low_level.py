@@ -75,6 +75,7 @@ def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
     assert np.mean(gains) >= 0.3, gains
 
 
+@pytest.mark.integration
 def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the_same(tmp_path):
     # Values unlike SB3's and the shipped point defaults, so a setting dropped on the way shows.
     config = tiny_config(gamma=0.9, tau=0.02, batch_size=64, net_arch=[32, 16], action_noise_std=0.3, n_sampled_goal=2)
@@ -97,6 +98,7 @@ def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the
         )
 
 
+@pytest.mark.integration
 def test_save_load_round_trip_gives_identical_actions(tmp_path):
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
     loaded = load_low_level("point", tmp_path / "policy.zip")
@@ -108,6 +110,7 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
         )
 
 
+@pytest.mark.integration
 def test_init_from_warm_starts_weights_with_an_empty_buffer(tmp_path):
     config = tiny_config()
     source = train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=10**9, **TINY)
@@ -121,6 +124,7 @@ def test_init_from_warm_starts_weights_with_an_empty_buffer(tmp_path):
     assert not np.array_equal(source.predict(obs, deterministic=True)[0], cold.predict(obs, deterministic=True)[0])
 
 
+@pytest.mark.integration
 def test_resume_continues_step_count_and_buffer(tmp_path):
     config = tiny_config()
     tiny = {**TINY, "eval_freq": 100, "eval_episodes": 2}
@@ -171,6 +175,7 @@ class StartOfTraining(BaseCallback):
         return True
 
 
+@pytest.mark.integration
 def test_a_run_killed_mid_way_resumes_losing_at_most_checkpoint_freq_steps(tmp_path):
     config = tiny_config()
     crash = CrashAt(520)
@@ -195,6 +200,7 @@ def test_a_run_killed_mid_way_resumes_losing_at_most_checkpoint_freq_steps(tmp_p
     assert np.abs(resumed.replay_buffer.observations["observation"][450:600]).sum() > 0
 
 
+@pytest.mark.integration
 def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 200, tmp_path / "a", config=config, checkpoint_freq=10**9, **TINY)
@@ -208,6 +214,7 @@ def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
         train_low_level("point", "td3", 500, run, config=config, resume=True, init_from=tmp_path / "other.zip", **TINY)
 
 
+@pytest.mark.integration
 def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=300, **TINY)
@@ -229,6 +236,7 @@ def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_pat
         train_low_level("point", "td3", 300, run, config=config, resume=True, init_buffer=tmp_path / "other", **TINY)
 
 
+@pytest.mark.integration
 def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path):
     config = tiny_config()
     with pytest.raises(FileNotFoundError, match=r"--init-buffer .*nothing\.pkl is not a file"):
@@ -240,6 +248,7 @@ def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path
         train_low_level("point", "td3", 0, tmp_path / "b", config=config, init_buffer=ant_buffer, **TINY)
 
 
+@pytest.mark.integration
 def test_bad_budgets_fail_before_any_training(tmp_path):
     with pytest.raises(ValueError, match="total_timesteps must be >= 0, got -5"):
         train_low_level("point", "td3", -5, tmp_path / "a", config=tiny_config(), **TINY)
@@ -250,6 +259,7 @@ def test_bad_budgets_fail_before_any_training(tmp_path):
     assert not any((tmp_path / name / "checkpoints").exists() for name in "abc")
 
 
+@pytest.mark.integration
 def test_evaluation_runs_on_the_training_envs_settings(tmp_path):
     config = tiny_config(env_kwargs={"horizon": 7})
     train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=10**9, **{**TINY, "eval_freq": 200})
@@ -257,6 +267,7 @@ def test_evaluation_runs_on_the_training_envs_settings(tmp_path):
     assert float(row["mean_steps"]) <= 7  # the default point horizon is 50
 
 
+@pytest.mark.integration
 def test_the_final_checkpoint_has_every_update_of_the_run(tmp_path):
     # 300 steps, a checkpoint every 150: the last periodic save and the end of training fall on one step.
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=150, **TINY)
@@ -287,12 +298,14 @@ def test_crashed_saves_leave_nothing_behind(tmp_path):
     assert sorted(p.name for p in directory.iterdir()) == sorted([final.name, "ckpt-good-one", "latest.json"])
 
 
+@pytest.mark.integration
 def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):
     train_low_level("point", "td3", 200, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
     with pytest.raises(FileExistsError, match="pass resume=True"):
         train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
 
 
+@pytest.mark.integration
 def test_corrupt_or_mismatched_checkpoint_raises_clear_error(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=100, **TINY)
@@ -314,6 +327,7 @@ def test_corrupt_or_mismatched_checkpoint_raises_clear_error(tmp_path):
         train_low_level("point", "td3", 400, tmp_path, config=config, resume=True, **TINY)
 
 
+@pytest.mark.integration
 def test_resume_without_checkpoint_is_an_error(tmp_path):
     with pytest.raises(CheckpointError, match="no checkpoint to resume"):
         train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), resume=True, **TINY)
@@ -344,6 +358,7 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
         load_low_level("point", tmp_path / "missing.zip")
 
 
+@pytest.mark.integration
 def test_user_brings_sac_with_her_and_no_glue():
     env = gym.make("antmaze_hirl/AntReach-v0")
     model = tiny_sac_her(env, learning_starts=120)
@@ -360,6 +375,7 @@ def test_user_brings_sac_with_her_and_no_glue():
     assert len(info["agent_path"]) == info["low_level_steps"] + 1
 
 
+@pytest.mark.integration
 def test_learning_curve_snapshots_and_tensorboard_are_written(tmp_path):
     train_low_level(
         "point",

@@ -64,6 +64,7 @@ def test_maze_resets_are_seeded_and_mix_with_the_base_map():
     assert seen_open and seen_maze
 
 
+@pytest.mark.integration
 def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
     def splits(**kwargs):
         env = ReachEnv("point", maze_probability=1.0, maze_sizes=[4], **kwargs)

@@ -210,6 +210,7 @@ def test_aggrevate_takes_the_learners_bins_and_labels_once_per_state():
 # --- through the experiment runner and the CLI ---
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("method", ["reward_per_step", "aggrevate"])
 def test_new_methods_run_a_point_trial(method):
     rows = run_trial(method, 0, TINY)
@@ -233,6 +234,7 @@ def test_the_experiment_sets_the_per_step_gradient_budget_of_alg_4():
         dataclasses.replace(TINY, step_gradient_steps=0)
 
 
+@pytest.mark.integration
 def test_cli_accepts_the_new_methods(tmp_path):
     args = ["experiment", "--methods", "reward_per_step,aggrevate", "--seeds", "1", "--episodes", "1"]
     args += ["--eval-every", "1", "--eval-episodes", "1", "--final-eval-episodes", "1", "--maze-size", "3"]
