@@ -9,7 +9,7 @@ neither torch nor Stable-Baselines3.
 from antmaze_hirl._lazy import lazy_exports
 from antmaze_hirl.registration import ENV_IDS, register_envs
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 register_envs()
 

@@ -7,6 +7,7 @@ neither torch nor Stable-Baselines3.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -32,6 +33,8 @@ example:
   antmaze-hirl demo --body ant"""
 
 _Subparsers = argparse._SubParsersAction
+STUDY_EXTRA_MODULES = ("fastapi", "starlette", "uvicorn", "statsmodels", "pandas")
+"""What ``pip install 'antmaze_hirl[study]'`` adds: the study page's ASGI stack and its report's statistics."""
 _BODIES = sorted(BODY_SPECS)
 
 
@@ -418,6 +421,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``antmaze-hirl`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command == "study":
+        # The core install has no web or statistics stack: name the extra rather than fail deep in an import.
+        missing = [name for name in STUDY_EXTRA_MODULES if importlib.util.find_spec(name) is None]
+        if missing:
+            parser.exit(
+                2, f"antmaze-hirl study: error: needs {', '.join(missing)}: pip install 'antmaze_hirl[study]'\n"
+            )
     # After parsing, so that --help and a usage error never load SB3 (which the checkpoint module imports).
     from antmaze_hirl.sb3_ext.checkpoint import CheckpointError
 

@@ -1,9 +1,13 @@
+import gymnasium as gym
 import numpy as np
 import pytest
 import torch
 from stable_baselines3 import SAC, HerReplayBuffer
 
 import antmaze_hirl  # noqa: F401  (registers the env ids)
+from antmaze_hirl import PathOracle
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
+from antmaze_hirl.envs import PointGoToController
 
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
@@ -32,3 +36,37 @@ def tiny_sac_her(env, learning_starts=100):
         policy_kwargs={"net_arch": [32, 32]},
         seed=0,
     )
+
+
+def point_maze(**kwargs):
+    """The tests' small maze: a 3x3 point maze, goal at least 2 cells from the start, the scripted go-to below."""
+    settings = {"maze_size": 3, "min_goal_cells": 2, **kwargs}
+    return gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController(), **settings)
+
+
+def make_point_trainer(strategy=None, seed=0, *, env=None, policy=None, policy_settings=None, **kwargs):
+    """A DAgger trainer on :func:`point_maze` (or ``env``) with the oracle as expert, seeded by ``seed``.
+
+    ``policy(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
+    the other keyword arguments go to ``DAggerTrainer`` (default ``gradient_steps=5``).
+    """
+    env = env if env is not None else point_maze()
+    rng = np.random.default_rng(seed)
+    learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if policy is None else policy(env, rng)
+    kwargs = {"gradient_steps": 5, **kwargs}
+    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=strategy, **kwargs)
+
+
+# The goals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A
+# feature that is off (probability 0) must draw nothing from the env's stream, or committed figures change.
+POINT_GOALS_SEED_3 = [
+    [0.51083038, -0.41789375],
+    [1.34843411, 0.76218861],
+    [-1.16531856, 1.07518948],
+    [2.29882936, 0.86257555],
+]
+
+
+def reset_goals(env, seed=3, resets=3):
+    """``desired_goal`` of ``env.reset(seed=seed)`` and of the ``resets`` plain resets after it."""
+    return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]

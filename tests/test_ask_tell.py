@@ -2,23 +2,12 @@
 
 import pickle
 
-import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import make_point_trainer
 
-from antmaze_hirl import PathOracle
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, MultiPolicyQuery, RewardBasedQuery
-from antmaze_hirl.envs import PointGoToController
+from antmaze_hirl.dagger import MultiPolicyQuery, RewardBasedQuery
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
-
-
-def make_trainer(seed=0, strategy=None):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
-    rng = np.random.default_rng(seed)
-    policy = HighLevelPolicy.for_env(env, rng=rng)
-    return DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, gradient_steps=5
-    )
 
 
 def drive_by_hand(trainer, episodes):
@@ -38,8 +27,8 @@ def drive_by_hand(trainer, episodes):
 
 @pytest.mark.parametrize("make_strategy", [lambda: None, RewardBasedQuery, lambda: MultiPolicyQuery(n_policies=2)])
 def test_ask_tell_gives_the_same_episodes_as_run_episode(make_strategy):
-    synchronous = make_trainer(strategy=make_strategy())
-    by_hand = make_trainer(strategy=make_strategy())
+    synchronous = make_point_trainer(strategy=make_strategy())
+    by_hand = make_point_trainer(strategy=make_strategy())
     expected = [r.to_dict() for r in synchronous.train(2)]
     records, requests = drive_by_hand(by_hand, 2)
     assert [r.to_dict() for r in records] == expected
@@ -50,7 +39,7 @@ def test_ask_tell_gives_the_same_episodes_as_run_episode(make_strategy):
 
 
 def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
-    trainer = make_trainer()
+    trainer = make_point_trainer()
     run = trainer.start_episode()
     request = run.request
     np.testing.assert_array_equal(request.learner_subgoal, trainer.policy.predict(request.observation))
@@ -68,7 +57,7 @@ def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
 
 
 def test_a_bad_label_is_refused_and_leaves_the_episode_as_it_was():
-    trainer = make_trainer()
+    trainer = make_point_trainer()
     run = trainer.start_episode()
     request = run.request
     for bad in ([np.nan, 0.0], [1.0], "left", [np.inf, 1.0]):
@@ -80,7 +69,7 @@ def test_a_bad_label_is_refused_and_leaves_the_episode_as_it_was():
 
 
 def test_answering_an_ended_episode_raises():
-    trainer = make_trainer()
+    trainer = make_point_trainer()
     run = trainer.start_episode()
     while not run.done:
         run.answer(trainer.expert.label(run.request.observation))
@@ -89,18 +78,18 @@ def test_answering_an_ended_episode_raises():
 
 
 def test_a_trainer_pickles_between_episodes_and_goes_on_identically():
-    trainer = make_trainer(strategy=MultiPolicyQuery(n_policies=2))
+    trainer = make_point_trainer(strategy=MultiPolicyQuery(n_policies=2))
     trainer.train(2)
     env, expert = trainer.env, trainer.expert
     trainer.env = trainer.expert = None
     copy = pickle.loads(pickle.dumps(trainer))
     trainer.env, trainer.expert = env, expert
-    copy.env, copy.expert = make_trainer().env, expert
+    copy.env, copy.expert = make_point_trainer().env, expert
     assert copy.train(1)[0].to_dict() == trainer.train(1)[0].to_dict()
 
 
 def test_the_update_waits_for_finish_or_the_next_episode():
-    trainer = make_trainer()
+    trainer = make_point_trainer()
     run = trainer.start_episode()
     with pytest.raises(RuntimeError, match="still running"):
         run.finish()

@@ -49,6 +49,7 @@ def test_a_worker_refuses_another_low_level_or_code():
         check_worker("point", None, {**expected, "source_sha256": "1" * 64})
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("kind", ["serial", "processes"])
 def test_a_failing_task_is_raised_as_itself_after_the_others_finish(kind):
     results = {}

@@ -79,6 +79,7 @@ def test_demo_writes_picture_and_reports(tmp_path, capsys):
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.integration
 def test_console_script_is_installed():
     script = Path(sys.executable).parent / "antmaze-hirl"
     result = subprocess.run([str(script), "--help"], capture_output=True, text=True, check=True)
@@ -127,6 +128,7 @@ def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
         main(["--traceback", "train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
 
 
+@pytest.mark.integration
 def test_eval_low_loads_a_sac_with_her_zip(tmp_path, capsys):
     model = tiny_sac_her(ReachEnv("point"))
     model.learn(300)

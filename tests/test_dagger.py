@@ -1,6 +1,7 @@
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import make_point_trainer, point_maze
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import (
@@ -108,7 +109,7 @@ def test_multi_policy_picks_where_members_disagree():
 
 @pytest.mark.parametrize(("member_steps", "expected"), [(None, 4), (7, 7)])
 def test_multi_policy_members_share_the_learners_gradient_budget(member_steps, expected):
-    trainer, _ = make_trainer(strategy=MultiPolicyQuery(n_policies=3, member_steps=member_steps), gradient_steps=10)
+    trainer = make_point_trainer(strategy=MultiPolicyQuery(n_policies=3, member_steps=member_steps), gradient_steps=10)
     trainer.train(2)
     updates = 2
     assert [member.gradient_steps for member in trainer.strategy.members] == [expected * updates] * 3
@@ -144,15 +145,9 @@ def test_augmentation_keeps_grid_vector_and_label_consistent():
     assert len({tuple(v[:2]) for v in augmented.vectors}) == 4  # the four diagonal directions all appear
 
 
-def make_trainer(seed=0, policy_settings=None, **kwargs):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
-    rng = np.random.default_rng(seed)
-    policy = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {}))
-    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, **kwargs), env
-
-
 def test_blend_executes_the_beta_mix_and_counts_labels():
-    trainer, env = make_trainer(beta_schedule=InverseDecayBetaSchedule(decay=1.0, beta0=0.25), gradient_steps=1)
+    trainer = make_point_trainer(beta_schedule=InverseDecayBetaSchedule(decay=1.0, beta0=0.25), gradient_steps=1)
+    env = trainer.env
     executed = []
     step = env.step
 
@@ -208,25 +203,32 @@ def test_a_mix_the_agent_already_reaches_is_replaced_by_the_experts_subgoal():
 
 
 def test_switch_mixing_and_per_step_updates_run():
-    trainer, _ = make_trainer(mixing="switch", per_step_gradient_steps=2, gradient_steps=5)
+    trainer = make_point_trainer(mixing="switch", per_step_gradient_steps=2, gradient_steps=5)
     record = trainer.run_episode()
     assert trainer.policy.gradient_steps == 2 * record.expert_cost + 5
     assert trainer.updates == 1 and trainer.beta == 0.5
 
 
+@pytest.mark.integration
 def test_dagger_moves_the_learner_towards_the_experts_labels():
-    # The fast check of learning: on mazes it never trained on, the learner's subgoals get nearer the oracle's.
-    trainer, _ = make_trainer(seed=0, gradient_steps=100)
-    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
+    # On mazes it never trained on, the learner's subgoals get nearer the oracle's: the distance after 8
+    # episodes over the untrained one. Over seeds 0-9 (AMD EPYC, shared machine) that ratio spread from 0.20 to
+    # 0.81 (mean 0.41, sd 0.18); after 4 episodes it spread from 0.20 to 1.19, so one seed is no test. The mean
+    # of seeds 0-4 was 0.30; its seed-to-seed sd is ~0.08, so the bound 0.7 sits 3 sd above the 10-seed mean.
+    eval_env = point_maze()
     oracle = PathOracle.for_env(eval_env)
     observations = [eval_env.reset(seed=1000 + seed)[0] for seed in range(30)]
+    ratios = []
+    for seed in range(5):
+        trainer = make_point_trainer(seed=seed, gradient_steps=100)
 
-    def distance_to_the_experts_labels():
-        return np.mean([np.linalg.norm(trainer.policy.predict(obs) - oracle.label(obs)) for obs in observations])
+        def distance_to_the_experts_labels(policy=trainer.policy):
+            return np.mean([np.linalg.norm(policy.predict(obs) - oracle.label(obs)) for obs in observations])
 
-    untrained = distance_to_the_experts_labels()
-    trainer.train(4)
-    assert distance_to_the_experts_labels() < 0.6 * untrained, untrained
+        untrained = distance_to_the_experts_labels()
+        trainer.train(8)
+        ratios.append(distance_to_the_experts_labels() / untrained)
+    assert np.mean(ratios) < 0.7, ratios
 
 
 @pytest.mark.slow
@@ -240,7 +242,7 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
     ],
 )
 def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
-    trainer, _ = make_trainer(seed=0, policy_settings=settings, gradient_steps=300)
+    trainer = make_point_trainer(seed=0, policy_settings=settings, gradient_steps=300)
     eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     untrained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
     trainer.train(20)
@@ -248,7 +250,10 @@ def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
     assert trained["success_rate"] >= max(untrained["success_rate"] + gain, least), (untrained, trained)
 
 
-@pytest.mark.parametrize(("head", "planning_iterations"), [("heading", 0), ("heading", 4), ("next_cell", 0)])
+@pytest.mark.parametrize(
+    ("head", "planning_iterations"),
+    [("heading", 0), pytest.param("heading", 4, marks=pytest.mark.integration), ("next_cell", 0)],  # planning: 5 s
+)
 def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iterations):
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     rng = np.random.default_rng(0)
@@ -273,14 +278,15 @@ def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iter
 
 
 def test_trainer_is_seeded():
-    first = [r.to_dict() for r in make_trainer(seed=4, gradient_steps=5)[0].train(2)]
-    second = [r.to_dict() for r in make_trainer(seed=4, gradient_steps=5)[0].train(2)]
+    first = [r.to_dict() for r in make_point_trainer(seed=4, gradient_steps=5).train(2)]
+    second = [r.to_dict() for r in make_point_trainer(seed=4, gradient_steps=5).train(2)]
     assert first == second
 
 
 @pytest.mark.parametrize("strategy", [NoiseQuery(), MultiPolicyQuery(n_policies=2)])
 def test_start_selecting_strategies_start_episodes_where_they_choose(strategy):
-    trainer, env = make_trainer(strategy=strategy, gradient_steps=5)
+    trainer = make_point_trainer(strategy=strategy, gradient_steps=5)
+    env = trainer.env
     trainer.train(1)  # the first episode starts in a corner; afterwards the strategy picks
     chosen, starts = [], []
     choose, reset = strategy.choose_start, env.reset

@@ -8,6 +8,9 @@ from pathlib import Path
 
 import pytest
 
+# End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
+pytestmark = pytest.mark.integration
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -46,6 +46,7 @@ def test_summary_over_seeds():
     assert summarise(rows, ["c"]) == {"c": {"seeds": 0}}
 
 
+@pytest.mark.integration
 def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     summary = run_experiment(["dagger", "reward"], 2, TINY, tmp_path, progress_bar=False)
     assert set(summary["methods"]) == {"dagger", "reward"}
@@ -67,6 +68,7 @@ def test_experiment_writes_tables_and_resumes_per_trial(tmp_path):
     assert (tmp_path / "trials" / "reward_seed1.csv").exists()
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize(
     ("methods", "config"),
     [
@@ -84,6 +86,7 @@ def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path, methods, con
         run_experiment(["dagger"], 1, TINY, tmp_path / "other", progress_bar=False, jobs=0)
 
 
+@pytest.mark.integration
 def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="holds results made with"):
@@ -94,6 +97,7 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
         ExperimentConfig(expert_max_distance=-1.0)
 
 
+@pytest.mark.integration
 def test_experiment_refuses_results_made_with_another_low_level(tmp_path):
     from antmaze_hirl.envs.controllers import PointGoToController
     from antmaze_hirl.sb3_ext.loading import load_low_level
@@ -112,6 +116,7 @@ def test_experiment_refuses_results_made_with_another_low_level(tmp_path):
             run_experiment(["dagger"], 1, TINY, tmp_path, low_level=other, progress_bar=False)
 
 
+@pytest.mark.integration
 def test_results_written_before_a_setting_existed_still_resume(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     config_file = tmp_path / "config.json"
@@ -133,6 +138,7 @@ def test_trials_written_before_eval_mazes_existed_get_whole_counts_filled():
     assert last_line.split(",")[-2] == str(TINY.final_eval_episodes)  # "3", not "3.0"
 
 
+@pytest.mark.integration
 def test_expert_max_distance_reaches_the_oracle(monkeypatch):
     from antmaze_hirl.experiments import runner
 
@@ -150,6 +156,7 @@ def test_expert_max_distance_reaches_the_oracle(monkeypatch):
     assert seen == [0.5, 1.0]  # the point's cell is 1 m
 
 
+@pytest.mark.integration
 def test_experiment_cli(tmp_path, capsys):
     args = ["experiment", "--methods", "noise", "--seeds", "1", "--episodes", "2", "--eval-every", "1"]
     args += ["--eval-episodes", "1", "--final-eval-episodes", "2", "--maze-size", "3", "--gradient-steps", "3"]
@@ -173,6 +180,7 @@ def grid_of(layout):
     return canonical_wall_grid(np.array([[cell == "1" for cell in row] for row in grid.split("/")]))
 
 
+@pytest.mark.integration
 def test_held_out_runs_rerun_byte_for_byte_and_share_no_wall_grid(tmp_path):
     from antmaze_hirl.experiments.runner import read_rows
 
@@ -354,6 +362,7 @@ def test_wilson_intervals_and_paired_test_against_known_values():
         paired_comparison([0.5, 0.6], [0.5])
 
 
+@pytest.mark.integration
 def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
     one = dataclasses.replace(TINY, episodes=1)
     summary = run_experiment(["dagger"], 1, one, tmp_path, progress_bar=False)

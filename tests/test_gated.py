@@ -1,12 +1,11 @@
 """Uncertainty-gated queries (method ``gated``): the gate, its threshold, the trainer's unasked steps, composition."""
 
-import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import make_point_trainer, point_maze
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import (
-    DAggerTrainer,
     GatedQuery,
     HighLevelPolicy,
     MultiPolicyQuery,
@@ -19,25 +18,9 @@ from antmaze_hirl.dagger import (
 from antmaze_hirl.dagger.features import EncodedBatch
 from antmaze_hirl.dagger.gating import QuantileThreshold, RiskModel, disagreement
 from antmaze_hirl.dagger.strategies import METHODS
-from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experiments.runner import check_methods
-
-
-def make_env(**kwargs):
-    settings = {"maze_size": 3, "min_goal_cells": 2, **kwargs}
-    return gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController(), **settings)
-
-
-def make_trainer(strategy, seed=0, env=None, policy=None, **kwargs):
-    env = env if env is not None else make_env()
-    rng = np.random.default_rng(seed)
-    learner = HighLevelPolicy.for_env(env, rng=rng) if policy is None else policy(env, rng)
-    settings = {"gradient_steps": 5, **kwargs}
-    return DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=strategy, **settings
-    )
 
 
 def drive_by_hand(trainer, episodes):
@@ -93,7 +76,7 @@ def test_the_gate_opens_exactly_where_crafted_members_disagree():
 
 
 def test_wants_label_reads_the_ensemble_on_real_observations():
-    env = make_env()
+    env = point_maze()
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
     strategy = crafted_gate(policy)
     opened = []
@@ -182,7 +165,7 @@ class EveryOtherStep(QueryStrategy):
 
 
 def test_unasked_steps_add_nothing_and_cost_nothing():
-    trainer = make_trainer(EveryOtherStep())
+    trainer = make_point_trainer(EveryOtherStep())
     trainer.train(1)  # D empty: every step of the first episode is asked
     size = len(trainer.dataset)
     records, walked = drive_by_hand(trainer, 3)
@@ -224,7 +207,7 @@ class NeverAsk(QueryStrategy):
 
 
 def test_an_episode_can_end_without_a_request_and_a_request_can_come_after_unasked_steps():
-    trainer = make_trainer(NeverAsk(), policy=Perfect)
+    trainer = make_point_trainer(NeverAsk(), policy=Perfect)
     first = trainer.start_episode()
     assert first.request is not None and first.executed == []  # D is empty: the gate is open
     while not first.done:
@@ -234,7 +217,7 @@ def test_an_episode_can_end_without_a_request_and_a_request_can_come_after_unask
     assert run.done and run.request is None and run.record.expert_cost == 0
     assert len(run.executed) == run.record.attempts > 0 and not any(step.asked for step in run.executed)
     run.finish()
-    late = make_trainer(EveryOtherStep(first_asked=2), policy=Perfect, env=make_env(min_goal_cells=3))
+    late = make_point_trainer(EveryOtherStep(first_asked=2), policy=Perfect, env=point_maze(min_goal_cells=3))
     late.train(1)
     run = late.start_episode()
     if run.done:  # reached within two steps: nothing to check on this maze
@@ -257,7 +240,7 @@ class CornerSeeker:
 
 
 def test_a_no_op_proposal_opens_the_gate():
-    trainer = make_trainer(NeverAsk(), policy=CornerSeeker, env=make_env(max_steps=200))
+    trainer = make_point_trainer(NeverAsk(), policy=CornerSeeker, env=point_maze(max_steps=200))
     records, walked = drive_by_hand(trainer, 4)
     # Unasked, the agent would park in the corner and repeat the no-op until the step budget ran out.
     assert max(r.attempts for r in records) < 60 and sum(r.expert_cost for r in records[1:]) > 0
@@ -278,8 +261,8 @@ def test_a_no_op_proposal_opens_the_gate():
 )
 def test_ask_tell_gives_the_same_records_as_run_episode(make):
     env_settings = {"max_steps": 60}
-    synchronous = make_trainer(make(), env=make_env(**env_settings))
-    by_hand = make_trainer(make(), env=make_env(**env_settings))
+    synchronous = make_point_trainer(make(), env=point_maze(**env_settings))
+    by_hand = make_point_trainer(make(), env=point_maze(**env_settings))
     expected = [r.to_dict() for r in synchronous.train(4)]
     records, _ = drive_by_hand(by_hand, 4)
     assert [r.to_dict() for r in records] == expected
@@ -287,7 +270,7 @@ def test_ask_tell_gives_the_same_records_as_run_episode(make):
 
 
 def test_labels_after_a_failure_execute_nothing_and_count():
-    trainer = make_trainer(GatedQuery(n_policies=2, label_failures=True), env=make_env(max_steps=40))
+    trainer = make_point_trainer(GatedQuery(n_policies=2, label_failures=True), env=point_maze(max_steps=40))
     trainer.train(2)
     seen = 0
     for _ in range(6):
@@ -313,7 +296,7 @@ def test_labels_after_a_failure_execute_nothing_and_count():
 
 
 def test_gated_composes_with_reward_pruning_of_asked_labels():
-    trainer = make_trainer(make_strategy("gated+reward"), env=make_env(max_steps=40))
+    trainer = make_point_trainer(make_strategy("gated+reward"), env=point_maze(max_steps=40))
     records, walked = drive_by_hand(trainer, 8)
     failed = [r for r in records if not r.success]
     labelled = [r for r in failed if r.expert_cost]
@@ -350,16 +333,23 @@ def test_risk_model_learns_which_subgoals_fail():
 # --- end to end ---
 
 
+@pytest.mark.integration
 def test_a_short_point_run_spends_fewer_labels_than_attempts_and_learns():
-    # The heading head: the point's default planner already walks these small mazes untrained.
+    # The heading head: the point's default planner already walks these small mazes untrained. Over seeds
+    # 0-7 (AMD EPYC, shared machine) 8 episodes took 7-27 labels for 43-84 attempts, and success on the 15
+    # mazes rose by 0.20-0.67 (mean 0.375, sd 0.17); the mean of 3 seeds has sd ~0.1, so the bound 0.1 sits
+    # ~2.7 sd under the 8-seed mean, and no seed gained under 0.2.
     def heading(env, rng):
         return HighLevelPolicy.for_env(env, rng=rng, head="heading", planning_iterations=0, block_walls=False)
 
-    trainer = make_trainer(GatedQuery(), gradient_steps=100, policy=heading)
-    eval_env = make_env()
-    untrained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
-    records = trainer.train(8)
-    trained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
-    labels, attempts = sum(r.expert_cost for r in records), sum(r.attempts for r in records)
-    assert labels < attempts, (labels, attempts)
-    assert trained["success_rate"] > untrained["success_rate"], (untrained, trained)
+    eval_env = point_maze()
+    gains = []
+    for seed in range(3):
+        trainer = make_point_trainer(GatedQuery(), seed, gradient_steps=100, policy=heading)
+        untrained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
+        records = trainer.train(8)
+        trained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
+        labels, attempts = sum(r.expert_cost for r in records), sum(r.attempts for r in records)
+        assert labels < attempts, (seed, labels, attempts)
+        gains.append(trained["success_rate"] - untrained["success_rate"])
+    assert np.mean(gains) > 0.1, gains

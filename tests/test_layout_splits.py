@@ -133,6 +133,7 @@ def learner_images(layout):
         yield walls, MazeLayout(walls, *cells)
 
 
+@pytest.mark.integration  # 2,000 draws per part and family
 def test_parts_are_disjoint_under_every_symmetry(drawn_parts):
     grids = {split: {wall_grid_string(layout.walls) for layout in layouts} for split, layouts in drawn_parts.items()}
     tasks = {split: {canonical_layout(layout) for layout in layouts} for split, layouts in drawn_parts.items()}

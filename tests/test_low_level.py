@@ -40,28 +40,42 @@ def goal_value_gap(model, env):
     return float(np.mean(gaps))
 
 
+@pytest.mark.integration
 def test_point_td3_her_learns_that_near_goals_are_worth_more(tmp_path):
     # The fast check of learning (the success-rate one below is slow): HER's relabelled sparse rewards teach
     # the critic, within 1000 steps, that a goal next to the body is worth more than one far away (without
-    # relabelling, n_sampled_goal=0, the gap stays under 0.2).
+    # relabelling, n_sampled_goal=0, the gap stays under 0.2). Over seeds 0-7 (AMD EPYC, shared machine) the
+    # gain was 1.58-2.61 (mean 2.17, sd 0.33): the bound 0.5 on the mean of 3 seeds is far outside the spread.
     config = tiny_config()
     env = ReachEnv("point")
-    untrained = goal_value_gap(make_model("point", "td3", config, seed=0), env)
-    model = train_low_level("point", "td3", 1000, tmp_path, seed=0, config=config, checkpoint_freq=10**9, **TINY)
-    assert goal_value_gap(model, env) > untrained + 0.5, untrained
+    gains = []
+    for seed in range(3):
+        untrained = goal_value_gap(make_model("point", "td3", config, seed=seed), env)
+        model = train_low_level(
+            "point", "td3", 1000, tmp_path / str(seed), seed=seed, config=config, checkpoint_freq=10**9, **TINY
+        )
+        gains.append(goal_value_gap(model, env) - untrained)
+    assert np.mean(gains) > 0.5, gains
 
 
 @pytest.mark.slow
 def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
+    # 8k steps: 4k sat at the edge of the margin (0.3 vs 0.375 needed on one machine, enough on another), so
+    # the check is the mean gain of 3 seeds. Seed 0 gained 0.90 (0.075 -> 0.975) on an AMD EPYC; fewer than 8
+    # seeds were measured at 8k steps (each takes minutes), so the margin's spread is not yet known.
     config = tiny_config()
     env = ReachEnv("point")
-    untrained = evaluate_reach(make_model("point", "td3", config, seed=0), env, episodes=40, seed=500)
-    # 8k steps: 4k sat at the edge of the margin (0.3 vs 0.375 needed on one machine, enough on another).
-    model = train_low_level("point", "td3", 8000, tmp_path, seed=0, config=config, checkpoint_freq=10**9, **TINY)
-    trained = evaluate_reach(model, env, episodes=40, seed=500)
-    assert trained["success_rate"] >= untrained["success_rate"] + 0.3, (untrained, trained)
+    gains = []
+    for seed in range(3):
+        untrained = evaluate_reach(make_model("point", "td3", config, seed=seed), env, episodes=40, seed=500)
+        model = train_low_level(
+            "point", "td3", 8000, tmp_path / str(seed), seed=seed, config=config, checkpoint_freq=10**9, **TINY
+        )
+        gains.append(evaluate_reach(model, env, episodes=40, seed=500)["success_rate"] - untrained["success_rate"])
+    assert np.mean(gains) >= 0.3, gains
 
 
+@pytest.mark.integration
 def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the_same(tmp_path):
     # Values unlike SB3's and the shipped point defaults, so a setting dropped on the way shows.
     config = tiny_config(gamma=0.9, tau=0.02, batch_size=64, net_arch=[32, 16], action_noise_std=0.3, n_sampled_goal=2)
@@ -84,6 +98,7 @@ def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the
         )
 
 
+@pytest.mark.integration
 def test_save_load_round_trip_gives_identical_actions(tmp_path):
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
     loaded = load_low_level("point", tmp_path / "policy.zip")
@@ -95,6 +110,7 @@ def test_save_load_round_trip_gives_identical_actions(tmp_path):
         )
 
 
+@pytest.mark.integration
 def test_init_from_warm_starts_weights_with_an_empty_buffer(tmp_path):
     config = tiny_config()
     source = train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=10**9, **TINY)
@@ -108,6 +124,7 @@ def test_init_from_warm_starts_weights_with_an_empty_buffer(tmp_path):
     assert not np.array_equal(source.predict(obs, deterministic=True)[0], cold.predict(obs, deterministic=True)[0])
 
 
+@pytest.mark.integration
 def test_resume_continues_step_count_and_buffer(tmp_path):
     config = tiny_config()
     tiny = {**TINY, "eval_freq": 100, "eval_episodes": 2}
@@ -158,6 +175,7 @@ class StartOfTraining(BaseCallback):
         return True
 
 
+@pytest.mark.integration
 def test_a_run_killed_mid_way_resumes_losing_at_most_checkpoint_freq_steps(tmp_path):
     config = tiny_config()
     crash = CrashAt(520)
@@ -182,6 +200,7 @@ def test_a_run_killed_mid_way_resumes_losing_at_most_checkpoint_freq_steps(tmp_p
     assert np.abs(resumed.replay_buffer.observations["observation"][450:600]).sum() > 0
 
 
+@pytest.mark.integration
 def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 200, tmp_path / "a", config=config, checkpoint_freq=10**9, **TINY)
@@ -195,6 +214,7 @@ def test_a_warm_started_run_resumes_with_or_without_its_init_from(tmp_path):
         train_low_level("point", "td3", 500, run, config=config, resume=True, init_from=tmp_path / "other.zip", **TINY)
 
 
+@pytest.mark.integration
 def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 300, tmp_path / "a", config=config, checkpoint_freq=300, **TINY)
@@ -216,6 +236,7 @@ def test_init_buffer_carries_another_runs_transitions_and_its_provenance(tmp_pat
         train_low_level("point", "td3", 300, run, config=config, resume=True, init_buffer=tmp_path / "other", **TINY)
 
 
+@pytest.mark.integration
 def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path):
     config = tiny_config()
     with pytest.raises(FileNotFoundError, match=r"--init-buffer .*nothing\.pkl is not a file"):
@@ -227,6 +248,7 @@ def test_init_buffer_rejects_a_missing_file_or_a_buffer_of_other_shapes(tmp_path
         train_low_level("point", "td3", 0, tmp_path / "b", config=config, init_buffer=ant_buffer, **TINY)
 
 
+@pytest.mark.integration
 def test_bad_budgets_fail_before_any_training(tmp_path):
     with pytest.raises(ValueError, match="total_timesteps must be >= 0, got -5"):
         train_low_level("point", "td3", -5, tmp_path / "a", config=tiny_config(), **TINY)
@@ -237,6 +259,7 @@ def test_bad_budgets_fail_before_any_training(tmp_path):
     assert not any((tmp_path / name / "checkpoints").exists() for name in "abc")
 
 
+@pytest.mark.integration
 def test_evaluation_runs_on_the_training_envs_settings(tmp_path):
     config = tiny_config(env_kwargs={"horizon": 7})
     train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=10**9, **{**TINY, "eval_freq": 200})
@@ -244,12 +267,16 @@ def test_evaluation_runs_on_the_training_envs_settings(tmp_path):
     assert float(row["mean_steps"]) <= 7  # the default point horizon is 50
 
 
+@pytest.mark.integration
 def test_the_final_checkpoint_has_every_update_of_the_run(tmp_path):
     # 300 steps, a checkpoint every 150: the last periodic save and the end of training fall on one step.
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=150, **TINY)
     folder, _ = latest_checkpoint(tmp_path / "checkpoints")
     saved = load_low_level("point", folder / "model.zip")
-    assert saved._n_updates == model._n_updates == 200  # one update per step after learning_starts=100
+    # Every weight is the final one (a checkpoint from step 150 would differ: it saw 150 fewer updates).
+    assert saved.num_timesteps == model.num_timesteps == 300
+    final = model.policy.state_dict()
+    assert all(th.equal(value, final[name]) for name, value in saved.policy.state_dict().items())
     obs, _ = ReachEnv("point").reset(seed=1)
     np.testing.assert_array_equal(saved.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0])
 
@@ -271,12 +298,14 @@ def test_crashed_saves_leave_nothing_behind(tmp_path):
     assert sorted(p.name for p in directory.iterdir()) == sorted([final.name, "ckpt-good-one", "latest.json"])
 
 
+@pytest.mark.integration
 def test_fresh_run_refuses_to_overwrite_a_checkpoint(tmp_path):
     train_low_level("point", "td3", 200, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
     with pytest.raises(FileExistsError, match="pass resume=True"):
         train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), checkpoint_freq=100, **TINY)
 
 
+@pytest.mark.integration
 def test_corrupt_or_mismatched_checkpoint_raises_clear_error(tmp_path):
     config = tiny_config()
     train_low_level("point", "td3", 200, tmp_path, config=config, checkpoint_freq=100, **TINY)
@@ -298,6 +327,7 @@ def test_corrupt_or_mismatched_checkpoint_raises_clear_error(tmp_path):
         train_low_level("point", "td3", 400, tmp_path, config=config, resume=True, **TINY)
 
 
+@pytest.mark.integration
 def test_resume_without_checkpoint_is_an_error(tmp_path):
     with pytest.raises(CheckpointError, match="no checkpoint to resume"):
         train_low_level("point", "td3", 400, tmp_path, config=tiny_config(), resume=True, **TINY)
@@ -328,13 +358,24 @@ def test_wrong_checkpoint_is_rejected(tmp_path):
         load_low_level("point", tmp_path / "missing.zip")
 
 
+@pytest.mark.integration
 def test_user_brings_sac_with_her_and_no_glue():
     env = gym.make("antmaze_hirl/AntReach-v0")
     model = tiny_sac_her(env, learning_starts=120)
     model.learn(150)
-    assert model.num_timesteps == 150 and model.replay_buffer.size() == 150
+    # The package takes the user's model as it is: to evaluate it, and as the maze env's low level.
+    reach = env.unwrapped
+    result = evaluate_reach(model, reach, episodes=2, seed=0)
+    assert result["episodes"] == 2 and 0.0 <= result["success_rate"] <= 1.0
+    assert 1 <= result["mean_steps"] <= reach.horizon
+    maze = gym.make("antmaze_hirl/AntMaze-v0", low_level=model)
+    maze.reset(seed=0)
+    *_, info = maze.step(maze.unwrapped.agent_xy + np.array([1.0, 0.0]))
+    assert 1 <= info["low_level_steps"] <= maze.unwrapped.reach.horizon == reach.horizon
+    assert len(info["agent_path"]) == info["low_level_steps"] + 1
 
 
+@pytest.mark.integration
 def test_learning_curve_snapshots_and_tensorboard_are_written(tmp_path):
     train_low_level(
         "point",

@@ -10,6 +10,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
 import low_level
 
+# End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
+pytestmark = pytest.mark.integration
+
 SCRIPT = Path(__file__).parents[1] / "benchmarks" / "low_level.py"
 
 

@@ -16,6 +16,9 @@ from antmaze_hirl.sb3_ext.checkpoint import latest_checkpoint
 from antmaze_hirl.sb3_ext.loading import load_low_level, policy_fingerprint
 from antmaze_hirl.sb3_ext.training import algo_class
 
+# End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
+pytestmark = pytest.mark.integration
+
 TINY = {"eval_freq": 10**9, "eval_episodes": 3, "progress_bar": False}
 
 

@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import POINT_GOALS_SEED_3, reset_goals
 
 from antmaze_hirl.envs import ReachEnv
 from antmaze_hirl.envs.layout_splits import wall_grid_split
@@ -63,6 +64,7 @@ def test_maze_resets_are_seeded_and_mix_with_the_base_map():
     assert seen_open and seen_maze
 
 
+@pytest.mark.integration
 def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
     def splits(**kwargs):
         env = ReachEnv("point", maze_probability=1.0, maze_sizes=[4], **kwargs)
@@ -74,11 +76,9 @@ def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
 
 
 def test_mazes_off_keep_the_random_stream():
-    plain, off = ReachEnv("point"), ReachEnv("point", maze_probability=0.0)
-    for seed in range(3):
-        goals = [env.reset(seed=seed)[0]["desired_goal"] for env in (plain, off)]
-        np.testing.assert_array_equal(*goals)
-        np.testing.assert_array_equal(plain.reset()[0]["desired_goal"], off.reset()[0]["desired_goal"])
+    np.testing.assert_allclose(reset_goals(ReachEnv("point", maze_probability=0.0)), POINT_GOALS_SEED_3, rtol=1e-6)
+    # The check can fail: mazes on at a chance that never gives one still take a draw per reset.
+    assert not np.allclose(reset_goals(ReachEnv("point", maze_probability=1e-12)), POINT_GOALS_SEED_3)
 
 
 def test_chained_and_placed_resets_keep_the_current_walls():

@@ -18,6 +18,7 @@ def solve(env, oracle, seed):
     return info
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("low_level", [PointGoToController(), None], ids=["scripted", "shipped-td3"])
 def test_oracle_with_point_solves_random_mazes(low_level):
     env = gym.make("antmaze_hirl/PointMaze-v0", low_level=low_level)

@@ -84,6 +84,7 @@ def study(tmp_path):
     return tmp_path, plan, answers
 
 
+@pytest.mark.integration
 def test_analyze_writes_the_report(study):
     study_dir, plan, answers = study
     out = analyze(study_dir)

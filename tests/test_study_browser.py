@@ -10,6 +10,9 @@ from study_helpers import make_tiny_study
 
 from antmaze_hirl.study.simulate import oracle_click
 
+# End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
+pytestmark = pytest.mark.integration
+
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 SCREENSHOT = Path(__file__).resolve().parent.parent / "docs" / "images" / "study_page.png"
 

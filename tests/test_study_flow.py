@@ -21,6 +21,9 @@ from antmaze_hirl.study.server import TOKEN_ENV, StudyServer, bind_socket
 from antmaze_hirl.study.settings import load_settings
 from antmaze_hirl.study.simulate import SimulatedParticipant, StudyClient, oracle_click, simulate_study
 
+# End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
+pytestmark = pytest.mark.integration
+
 COMPARED = ("episode", "success", "expert_cost", "cumulative_expert_cost", "attempts", "low_level_steps", "beta")
 
 

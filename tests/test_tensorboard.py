@@ -47,6 +47,7 @@ def losses(monkeypatch):
     return returned
 
 
+@pytest.mark.integration
 def test_a_trial_logs_each_episode_and_changes_no_result(tmp_path, losses):
     run_experiment(["reward"], 1, TINY, tmp_path / "off", progress_bar=False, tensorboard=False)
     del losses[:]

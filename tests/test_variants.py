@@ -6,16 +6,13 @@ import json
 import math
 from types import SimpleNamespace
 
-import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import make_point_trainer
 
-from antmaze_hirl import PathOracle
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger import (
     AggreVaTeQuery,
-    DAggerTrainer,
-    HighLevelPolicy,
     InverseDecayBetaSchedule,
     MultiPolicyQuery,
     NoiseQuery,
@@ -30,7 +27,6 @@ from antmaze_hirl.dagger.strategies import (
     make_strategy,
     spread,
 )
-from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig
@@ -54,13 +50,6 @@ TINY = ExperimentConfig(
 )
 
 
-def make_trainer(strategy, **kwargs):
-    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
-    rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng)
-    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, **kwargs)
-
-
 def test_new_methods_are_strategies():
     assert STRATEGIES["reward_per_step"] is RewardPerStepQuery and STRATEGIES["aggrevate"] is AggreVaTeQuery
     assert make_strategy("reward_per_step").updates_every_step and not make_strategy("reward").updates_every_step
@@ -71,7 +60,7 @@ def test_new_methods_are_strategies():
 
 @pytest.mark.parametrize(("step_gradient_steps", "per_update"), [(None, 3), (2, 2)])
 def test_reward_per_step_updates_and_decays_beta_after_every_step(step_gradient_steps, per_update):
-    trainer = make_trainer(
+    trainer = make_point_trainer(
         RewardPerStepQuery(step_gradient_steps), gradient_steps=3, beta_schedule=InverseDecayBetaSchedule(2.0)
     )
     env = trainer.env
@@ -109,7 +98,7 @@ def test_reward_per_step_updates_and_decays_beta_after_every_step(step_gradient_
 
 
 def test_per_episode_methods_keep_one_update_per_episode():
-    trainer = make_trainer(make_strategy("reward"), gradient_steps=3)
+    trainer = make_point_trainer(make_strategy("reward"), gradient_steps=3)
     record = trainer.run_episode()
     assert trainer.updates == 1 and trainer.policy.gradient_steps == 3 and record.expert_cost > 1
 
@@ -209,7 +198,7 @@ def test_aggrevate_trains_towards_the_lowest_cost_heading():
 
 
 def test_aggrevate_takes_the_learners_bins_and_labels_once_per_state():
-    trainer = make_trainer(make_strategy("aggrevate"), gradient_steps=1)
+    trainer = make_point_trainer(make_strategy("aggrevate"), gradient_steps=1)
     assert trainer.strategy.n_directions == trainer.policy.policy.n_directions
     record = trainer.run_episode()
     assert len(trainer.dataset) == record.expert_cost == trainer.total_expert_cost
@@ -221,6 +210,7 @@ def test_aggrevate_takes_the_learners_bins_and_labels_once_per_state():
 # --- through the experiment runner and the CLI ---
 
 
+@pytest.mark.integration
 @pytest.mark.parametrize("method", ["reward_per_step", "aggrevate"])
 def test_new_methods_run_a_point_trial(method):
     rows = run_trial(method, 0, TINY)
@@ -244,6 +234,7 @@ def test_the_experiment_sets_the_per_step_gradient_budget_of_alg_4():
         dataclasses.replace(TINY, step_gradient_steps=0)
 
 
+@pytest.mark.integration
 def test_cli_accepts_the_new_methods(tmp_path):
     args = ["experiment", "--methods", "reward_per_step,aggrevate", "--seeds", "1", "--episodes", "1"]
     args += ["--eval-every", "1", "--eval-episodes", "1", "--final-eval-episodes", "1", "--maze-size", "3"]

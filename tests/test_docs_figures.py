@@ -1,0 +1,57 @@
+"""The headline figures of the README and the results page are those of the committed results files."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from antmaze_hirl.experiments.uncertainty import wilson_interval
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "benchmarks" / "results"
+PAGES = [ROOT / "README.md", ROOT / "docs" / "results" / "index.md"]
+
+
+def load(name):
+    return json.loads((RESULTS / name).read_text())
+
+
+def percent(value):
+    return f"{100 * value:.1f}"
+
+
+def interval(successes, trials):
+    low, high = wilson_interval(successes, trials)
+    return f"[{percent(low)}, {percent(high)}]".replace("100.0]", "100]")
+
+
+def headline_figures():
+    low_level = load("low_level.json")["eval_low"]
+    figures = []
+    for body in ("point", "ant"):
+        pooled = low_level[body]
+        successes = round(pooled["pooled_success_rate"] * pooled["pooled_episodes"])
+        rate = f"{100 * pooled['pooled_success_rate']:g}"
+        figures.append(
+            f"{successes} of {pooled['pooled_episodes']}: {rate}% {interval(successes, pooled['pooled_episodes'])}"
+        )
+    families = load("in_maze.json")["results"]["shipped"]["families"]
+    for family in ("ant4", "large"):
+        row = families[family]
+        figures.append(f"{100 * row['success_rate']:g}% {interval(row['successes'], row['episodes'])}")
+    methods = load("paper_experiment_ant/summary.json")["methods"]
+    for method in ("dagger", "gated"):
+        final = methods[method]["final_success"]
+        figures.append(f"{final['median']:.0%} ({final['min']:.0%}-{final['max']:.0%})")
+        figures.append(f"{methods[method]['total_labels']['median']:.0f} labels")
+    ratio = methods["gated"]["total_labels"]["median"] / methods["dagger"]["total_labels"]["median"]
+    figures.append(f"({ratio:.2f}x DAgger's)")
+    figures.append(f"{load('study_latency.json')['bodies']['ant']['all']['server']['p95_ms']} ms")
+    return figures
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda page: page.name)
+def test_the_headline_table_quotes_the_results_files(page):
+    text = page.read_text()
+    missing = [figure for figure in headline_figures() if figure not in text]
+    assert not missing, f"{page.relative_to(ROOT)} lacks {missing}"
