@@ -20,6 +20,8 @@ from antmaze_hirl.experiments.config import (
     BODY_DEFAULTS,
     DEFAULT_METHODS,
     HELD_OUT_MAZE_SIZE,
+    LEARNERS,
+    PROTOCOLS,
     ExperimentConfig,
     body_settings,
 )
@@ -318,6 +320,20 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         help="draw the training mazes and both evaluation sets from disjoint sets of wall grids (see "
         "antmaze_hirl.envs.layout_splits); without it mazes are held out by seed only, as in the committed results",
     )
+    parser.add_argument(
+        "--protocol",
+        choices=[str(protocol) for protocol in PROTOCOLS],
+        default=str(defaults.protocol),
+        help="how mazes are held out and curves read: 1, as the committed results folders; 2, the corrected "
+        "protocol of docs/guides/protocol.md (implies --held-out-layouts: symmetry-closed held-out mazes, one "
+        "fixed evaluation set scored from episode 0, a learner without a planning prior)",
+    )
+    parser.add_argument(
+        "--learner",
+        choices=sorted(LEARNERS),
+        default=None,
+        help="the high-level learner (default: protocol 2's generic learner, or in protocol 1 the body's default)",
+    )
     add_backend_arguments(parser)
     parser.add_argument(
         "--allow-code-change",
@@ -345,6 +361,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
     if args.seeds < 1:
         raise ValueError(f"--seeds must be >= 1 (trials per method), got {args.seeds}")
     torch.set_num_threads(args.cpus_per_trial)
+    held_out = args.held_out_layouts or int(args.protocol) >= 2  # protocol 2 evaluates on the held-out part
     config = ExperimentConfig(
         body=args.body,
         episodes=args.episodes,
@@ -353,10 +370,12 @@ def _run_experiment(args: argparse.Namespace) -> int:
         final_eval_episodes=args.final_eval_episodes,
         gradient_steps=args.gradient_steps,
         decay=args.decay,
-        held_out_layouts=args.held_out_layouts,
+        held_out_layouts=held_out,
+        protocol=int(args.protocol),
+        learner=args.learner,
         **body_settings(
             args.body,
-            held_out_layouts=args.held_out_layouts,
+            held_out_layouts=held_out,
             maze_size=args.maze_size,
             expert_max_distance=args.expert_max_distance,
         ),
