@@ -137,12 +137,12 @@ def assert_no_live_workers() -> None:
     assert [child for child in multiprocessing.active_children() if child.is_alive()] == []
 
 
-VECTOR_MODES = [
-    ("sync", {}),
-    ("async", {}),  # the default context: fork on Linux
-    ("async", {"context": "spawn"}),
-    ("vector_entry_point", {}),
-]
+VECTOR_MODES = {
+    "sync": ("sync", {}),
+    "async-fork": ("async", {}),  # the default context on Linux
+    "async-spawn": ("async", {"context": "spawn"}),
+    "native": ("vector_entry_point", {}),
+}
 
 
 def vector_cases() -> list:
