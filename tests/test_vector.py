@@ -150,9 +150,7 @@ def vector_cases() -> list:
     # cores): those two cases are marked slow; every other id and mode runs by default.
     cases = []
     for env_id in sorted(ENV_IDS):
-        for (mode, vector_kwargs), name in zip(
-            VECTOR_MODES, ["sync", "async-fork", "async-spawn", "native"], strict=True
-        ):
+        for name, (mode, vector_kwargs) in VECTOR_MODES.items():
             slow = name == "async-spawn" and env_id in MAZE_IDS
             marks = [pytest.mark.slow] if slow else []
             cases.append(pytest.param(env_id, mode, vector_kwargs, id=f"{name}-{env_id}", marks=marks))
