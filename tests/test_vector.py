@@ -11,6 +11,8 @@ import pytest
 import torch as th
 
 import antmaze_hirl  # noqa: F401  (registers the ids)
+from antmaze_hirl.dagger import HighLevelPolicy
+from antmaze_hirl.dagger.evaluation import evaluate_high_level, evaluation_episodes
 from antmaze_hirl.envs.controllers import (
     PointGoToController,
     PredictController,
@@ -257,3 +259,43 @@ def test_sub_envs_with_their_own_controllers_warn_and_still_step():
     obs, _ = vector.reset(seed=0)
     vector.step(oracle_actions(PathOracle.for_env(envs[0]), obs, 2))
     vector.close()
+
+
+def test_lockstep_evaluation_plays_the_serial_episodes():
+    # PointGoToController acts elementwise and the oracle row by row: lockstep must replay serial exactly.
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
+    oracle = PathOracle.for_env(env)
+    serial = evaluation_episodes(oracle, env, episodes=7, seed=100)
+    lockstep = evaluation_episodes(oracle, env, episodes=7, seed=100, num_envs=3)  # 3 does not divide 7
+    fields = ("is_success", "attempts", "total_low_level_steps", "flipped")
+    assert [[info[key] for key in fields] for info in lockstep] == [[info[key] for key in fields] for info in serial]
+    assert evaluate_high_level(oracle, env, episodes=7, seed=100, num_envs=3) == evaluate_high_level(
+        oracle, env, episodes=7, seed=100
+    )
+    env.close()
+
+
+def test_lockstep_evaluation_batches_a_learner():
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
+    calls = []
+    original = policy.predict_batch
+
+    def counted(observations):
+        calls.append(len(observations))
+        return original(observations)
+
+    policy.predict_batch = counted
+    lockstep = evaluate_high_level(policy, env, episodes=6, seed=200, num_envs=6)
+    assert calls and calls[0] == 6  # one batch for all six mazes at their first subgoal
+    del policy.predict_batch
+    assert lockstep == evaluate_high_level(policy, env, episodes=6, seed=200)
+    env.close()
+
+
+@pytest.mark.parametrize("num_envs", [0, 2.0])
+def test_evaluation_num_envs_is_checked(num_envs):
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
+    with pytest.raises(ValueError, match="num_envs must be an integer >= 1"):
+        evaluate_high_level(PathOracle.for_env(env), env, episodes=2, num_envs=num_envs)
+    env.close()

@@ -48,6 +48,44 @@ def _autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
         raise ValueError(f"autoreset_mode must be one of {names}, got {mode!r}") from None
 
 
+def walk_in_lockstep(
+    envs: Sequence[HighLevelMazeEnv], walks: dict[int, SubgoalWalk], low_level: BatchController
+) -> None:
+    """Advances every walk until it is done: one ``low_level`` call per low-level step for the walks not done.
+
+    Args:
+        envs: The sub-envs; ``walks[i]`` was started by ``envs[i].start_walk`` (or ``begin_subgoal``).
+        walks: The sub-envs' walks, by sub-env index.
+        low_level: The batch controller; it gets the goal observations of the walking sub-envs, in index order.
+    """
+    active = sorted(index for index, walk in walks.items() if not walk.done)
+    while active:
+        first = walks[active[0]].low_obs
+        observations = {key: np.stack([walks[index].low_obs[key] for index in active]) for key in first}
+        low_actions = low_level(observations, np.asarray(active))
+        for row, index in enumerate(active):
+            envs[index].advance_subgoal(walks[index], low_actions[row])
+        active = [index for index in active if not walks[index].done]
+
+
+def copies_of(env: Any, count: int) -> list[HighLevelMazeEnv]:
+    """``count`` new high-level envs made with ``env``'s own arguments, sharing its low-level controller.
+
+    ``env`` (wrapped or not) must be a :class:`HighLevelMazeEnv` or a subclass that records its arguments
+    with ``EzPickle`` (as :class:`~antmaze_hirl.envs.split_env.SplitMazeEnv` does); a copy reset with a seed
+    plays the episode ``env`` would play with that seed.
+
+    Raises:
+        ValueError: If ``env`` is no such env, or ``count`` < 1.
+    """
+    inner = getattr(env, "unwrapped", env)
+    if not isinstance(inner, HighLevelMazeEnv):
+        raise ValueError(f"lockstep copies need a HighLevelMazeEnv, got {type(inner).__name__}")
+    count = check_num_envs(count)
+    kwargs = {**inner._ezpickle_kwargs, "low_level": inner.controller}  # one controller for all: it batches
+    return [type(inner)(*inner._ezpickle_args, **kwargs) for _ in range(count)]
+
+
 class HighLevelVectorEnv(VectorEnv):
     """``N`` high-level mazes stepped together, their low levels in lockstep (one controller call per low-level step).
 
@@ -156,7 +194,7 @@ class HighLevelVectorEnv(VectorEnv):
                 self._observations[index], info = self._reset_one(index, None, None)
                 infos = self._add_info(infos, info, index)
         walks = {index: self.envs[index].start_walk(*checked[index]) for index in walking}
-        self._walk_in_lockstep(walks)
+        walk_in_lockstep(self.envs, walks, self.low_level)
         for index, walk in walks.items():
             obs, rewards[index], terminations[index], truncations[index], info = self.envs[index].end_subgoal(walk)
             if self.autoreset_mode == AutoresetMode.SAME_STEP and (terminations[index] or truncations[index]):
@@ -167,17 +205,6 @@ class HighLevelVectorEnv(VectorEnv):
         if self.autoreset_mode == AutoresetMode.NEXT_STEP:
             self._autoreset = terminations | truncations
         return self._stacked(), rewards, terminations, truncations, infos
-
-    def _walk_in_lockstep(self, walks: dict[int, SubgoalWalk]) -> None:
-        # One controller call per low-level step for every sub-env still walking; the others wait.
-        active = [index for index, walk in walks.items() if not walk.done]
-        while active:
-            first = walks[active[0]].low_obs
-            observations = {key: np.stack([walks[index].low_obs[key] for index in active]) for key in first}
-            low_actions = self.low_level(observations, np.asarray(active))
-            for row, index in enumerate(active):
-                self.envs[index].advance_subgoal(walks[index], low_actions[row])
-            active = [index for index in active if not walks[index].done]
 
     def _reset_one(
         self, index: int, seed: int | None, options: dict[str, Any] | None
