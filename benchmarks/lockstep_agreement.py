@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -68,6 +69,7 @@ def compare(policy: Any, env: gym.Env, *, mazes: int, num_envs: int) -> dict[str
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
+    argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mazes", type=int, default=100, help="held-out mazes per comparison")
     parser.add_argument("--num-envs", type=int, default=25, help="mazes at once in lockstep")
@@ -92,7 +94,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         env.close()
     report = {
         "benchmark": "lockstep_agreement",
-        "command": "python benchmarks/lockstep_agreement.py " + " ".join(argv or []),
+        "command": "python benchmarks/lockstep_agreement.py " + " ".join(argv),
         "num_envs": args.num_envs,
         "machine": f"{platform.processor() or platform.machine()}, shared with other work while measured",
         "rows": rows,
