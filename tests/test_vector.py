@@ -299,3 +299,26 @@ def test_evaluation_num_envs_is_checked(num_envs):
     with pytest.raises(ValueError, match="num_envs must be an integer >= 1"):
         evaluate_high_level(PathOracle.for_env(env), env, episodes=2, num_envs=num_envs)
     env.close()
+
+
+def test_sb3_trains_on_the_lockstep_env_through_the_adapter():
+    from stable_baselines3 import PPO
+
+    from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv, make_sb3_vec_env
+
+    venv = make_sb3_vec_env(
+        "antmaze_hirl/PointMaze-v0", 2, maze_size=3, max_steps=60, clip_subgoals=True, low_level=PointGoToController()
+    )
+    obs = venv.reset()
+    assert obs["state"].shape[0] == 2
+    dones_seen = []
+    for _ in range(12):
+        obs, _, dones, infos = venv.step(np.stack([venv.action_space.sample() for _ in range(2)]))
+        for index in np.flatnonzero(dones):
+            dones_seen.append(index)
+            assert "terminal_observation" in infos[index] and "is_success" in infos[index]
+    assert dones_seen  # 60 low-level steps end an episode within a few subgoals
+    PPO("MultiInputPolicy", venv, n_steps=8, batch_size=8, n_epochs=1, seed=0).learn(16)
+    venv.close()
+    with pytest.raises(ValueError, match="autoreset_mode 'SameStep'"):
+        GymnasiumVecEnv(gym.make_vec("antmaze_hirl/PointMaze-v0", 2, low_level=PointGoToController()))
