@@ -21,7 +21,7 @@ step of every sub-env); seeded, so every row plays the same mazes.
 from __future__ import annotations
 
 import argparse
-import json
+import os
 import platform
 import sys
 import time
@@ -34,7 +34,7 @@ import numpy as np
 import torch as th
 
 import antmaze_hirl  # noqa: F401  (registers the ids)
-from antmaze_hirl.atomic_io import atomic_write_text
+from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs import controllers
 from antmaze_hirl.experts.oracle import PathOracle
 
@@ -155,12 +155,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "seconds_per_row": args.seconds,
         "seed": args.seed,
         "maze_sizes": {body: MAZE_SIZES[body] for body in args.bodies},
-        "machine": f"{platform.processor() or platform.machine()}, shared with other work while measured",
+        "machine": f"{platform.machine()} ({os.cpu_count()} CPUs), shared with other work while measured",
         "raw_baselines": baselines,
         "rows": rows,
     }
-    atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    print(f"wrote {atomic_write_json(args.out, report)}")
     return report
 
 

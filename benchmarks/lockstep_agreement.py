@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -26,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import antmaze_hirl  # noqa: F401  (registers the ids)
-from antmaze_hirl.atomic_io import atomic_write_text
+from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluation_episodes
 from antmaze_hirl.experiments.config import body_settings
@@ -96,11 +97,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "benchmark": "lockstep_agreement",
         "command": "python benchmarks/lockstep_agreement.py " + " ".join(argv),
         "num_envs": args.num_envs,
-        "machine": f"{platform.processor() or platform.machine()}, shared with other work while measured",
+        "machine": f"{platform.machine()} ({os.cpu_count()} CPUs), shared with other work while measured",
         "rows": rows,
     }
-    atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    print(f"wrote {atomic_write_json(args.out, report)}")
     return report
 
 
