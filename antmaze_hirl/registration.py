@@ -10,6 +10,14 @@ from __future__ import annotations
 
 import gymnasium as gym
 
+VECTOR_ENTRY_POINTS: dict[str, str] = {
+    "antmaze_hirl/AntReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
+    "antmaze_hirl/PointReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
+    "antmaze_hirl/AntMaze-v0": "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env",
+    "antmaze_hirl/PointMaze-v0": "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env",
+}
+"""Each id's native vector env (``gym.make_vec(id, N)``, ``vectorization_mode="vector_entry_point"``)."""
+
 ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
     "antmaze_hirl/AntReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "ant"}),
     "antmaze_hirl/PointReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "point"}),
@@ -23,4 +31,6 @@ def register_envs() -> None:
     """Registers every id in :data:`ENV_IDS` that is not registered yet (safe to call twice)."""
     for env_id, (entry_point, kwargs) in ENV_IDS.items():
         if env_id not in gym.registry:
-            gym.register(id=env_id, entry_point=entry_point, kwargs=kwargs)
+            gym.register(
+                id=env_id, entry_point=entry_point, vector_entry_point=VECTOR_ENTRY_POINTS[env_id], kwargs=kwargs
+            )

@@ -13,6 +13,11 @@ from antmaze_hirl.envs import _notices  # noqa: F401
 _EXPORTS = {
     "STANDARD_MAPS": "antmaze_hirl.envs.layouts",
     "ActionSmoother": "antmaze_hirl.envs.controllers",
+    "AgentPath": "antmaze_hirl.envs.high_level",
+    "BatchController": "antmaze_hirl.envs.controllers",
+    "HighLevelVectorEnv": "antmaze_hirl.envs.vector",
+    "as_batch_controller": "antmaze_hirl.envs.controllers",
+    "inference_threads": "antmaze_hirl.envs.controllers",
     "BirdseyeRenderer": "antmaze_hirl.envs.birdseye",
     "HighLevelMazeEnv": "antmaze_hirl.envs.high_level",
     "LowLevelController": "antmaze_hirl.envs.controllers",

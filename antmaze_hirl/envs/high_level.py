@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -40,6 +42,80 @@ def _renamed_min_goal_cells(min_goal_cells: int, min_goal_distance: int | None) 
             f"{min_goal_cells} and min_goal_distance={min_goal_distance}"
         )
     return min_goal_distance
+
+
+class AgentPath:
+    """The body's xy after every low-level step of one high-level step, ``(steps + 1, 2)`` metres.
+
+    An array in all but type: ``np.asarray(path)``, ``path.shape``, ``len(path)``, indexing and iteration
+    work as on the array it holds (:attr:`xy`). It is no ``np.ndarray`` so that Gymnasium's vector envs,
+    which stack an ndarray info into one array of the first sub-env's shape, keep these paths of different
+    lengths in an object array instead (``infos["agent_path"][i]``).
+
+    Args:
+        xy: The positions, ``(steps + 1, 2)``.
+    """
+
+    __slots__ = ("xy",)
+
+    def __init__(self, xy: np.ndarray) -> None:
+        self.xy = xy
+
+    def __array__(self, dtype: Any = None, copy: bool | None = None) -> np.ndarray:
+        """The positions as an array (a copy when ``copy`` or another ``dtype`` asks for one)."""
+        if dtype is not None and np.dtype(dtype) != self.xy.dtype:
+            return self.xy.astype(dtype)
+        return self.xy.copy() if copy else self.xy
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Shape of :attr:`xy`."""
+        return self.xy.shape
+
+    def __len__(self) -> int:
+        return len(self.xy)
+
+    def __getitem__(self, index: Any) -> Any:
+        return self.xy[index]
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return iter(self.xy)
+
+    def __eq__(self, other: object) -> bool:
+        """Whether ``other`` is an :class:`AgentPath` with the same positions, exactly."""
+        return isinstance(other, AgentPath) and bool(np.array_equal(self.xy, other.xy))
+
+    __hash__ = None  # type: ignore[assignment]  # equal by value, and mutable like an array
+
+    def __repr__(self) -> str:
+        return f"AgentPath({self.xy!r})"
+
+
+@dataclass
+class SubgoalWalk:
+    """One high-level step in progress: the low level walking to one subgoal (see :meth:`HighLevelMazeEnv.step`).
+
+    Attributes:
+        subgoal: The subgoal as executed (clipped, pushed out), metres.
+        clipped: Whether the subgoal was clipped to the maze.
+        extended: Whether it was pushed out to ``min_subgoal_distance``.
+        low_obs: The low level's current goal observation.
+        path: Body xy at the start and after every low-level step so far.
+        success: Whether the final goal is reached.
+        subgoal_reached: Whether the subgoal is reached.
+        fell: Whether the ant flipped (a terminal flip).
+        done: Whether the walk is over (then :meth:`HighLevelMazeEnv.end_subgoal`).
+    """
+
+    subgoal: np.ndarray
+    clipped: bool
+    extended: bool
+    low_obs: dict[str, np.ndarray]
+    path: list[np.ndarray]
+    success: bool = False
+    subgoal_reached: bool = False
+    fell: bool = False
+    done: bool = False
 
 
 class HighLevelMazeEnv(gym.Env, EzPickle):
@@ -249,6 +325,30 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             ValueError: If the subgoal is NaN/inf or, unless ``clip_subgoals``, outside the maze.
 
         """
+        walk = self.begin_subgoal(action)
+        while not walk.done:
+            self.advance_subgoal(walk, self.controller(walk.low_obs))
+        return self.end_subgoal(walk)
+
+    def begin_subgoal(self, action: np.ndarray) -> SubgoalWalk:
+        """The first part of :meth:`step`: checks and sets subgoal ``action``, and starts its walk.
+
+        :meth:`step` is ``begin_subgoal`` (:meth:`check_subgoal`, then :meth:`start_walk`), then
+        :meth:`advance_subgoal` with the controller's action until the walk is done, then
+        :meth:`end_subgoal`; a vector env runs the same parts for many mazes, with one batched controller
+        call per low-level step.
+
+        Raises:
+            ValueError: If the subgoal is NaN/inf or, unless ``clip_subgoals``, outside the maze.
+        """
+        return self.start_walk(*self.check_subgoal(action))
+
+    def check_subgoal(self, action: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Subgoal ``action`` clipped to the maze, and whether it was clipped; changes nothing.
+
+        Raises:
+            ValueError: If the subgoal is NaN/inf or, unless ``clip_subgoals``, outside the maze.
+        """
         subgoal = as_finite_vector(action, 2, "subgoal")
         low, high = self.action_space.low, self.action_space.high
         clipped = bool(np.any(subgoal < low) or np.any(subgoal > high))
@@ -257,34 +357,48 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 f"subgoal {subgoal.tolist()} is outside the maze bounds x in [{low[0]}, {high[0]}], "
                 f"y in [{low[1]}, {high[1]}]; pass clip_subgoals=True to clip instead"
             )
-        subgoal, extended = self._push_out(np.clip(subgoal, low, high))
+        return np.clip(subgoal, low, high), clipped
+
+    def start_walk(self, subgoal: np.ndarray, clipped: bool) -> SubgoalWalk:
+        """Sets a subgoal that :meth:`check_subgoal` returned (pushed out if too near) and starts its walk."""
+        subgoal, extended = self._push_out(subgoal)
         low_obs = self.reach.set_goal(subgoal)
         self.attempts += 1
-        path = [self.reach.agent_xy]
-        subgoal_reached = success = fell = False
-        while self.total_low_level_steps < self.max_steps:
-            low_obs, _, fell, horizon_over, low_info = self.reach.step(self.controller(low_obs))
-            self.total_low_level_steps += 1
-            path.append(low_obs["achieved_goal"])
-            success = self._goal_reached()
-            subgoal_reached = low_info["is_success"]
-            if success or subgoal_reached or fell or horizon_over:
-                break
+        walk = SubgoalWalk(subgoal, clipped, extended, low_obs, [self.reach.agent_xy])
+        walk.done = self.total_low_level_steps >= self.max_steps
+        return walk
+
+    def advance_subgoal(self, walk: SubgoalWalk, low_action: np.ndarray) -> None:
+        """One low-level step of ``walk`` with ``low_action``; sets ``walk.done`` when the walk is over."""
+        low_obs, _, fell, horizon_over, low_info = self.reach.step(low_action)
+        self.total_low_level_steps += 1
+        walk.path.append(low_obs["achieved_goal"])
+        walk.low_obs = low_obs
+        walk.success = self._goal_reached()
+        walk.subgoal_reached = low_info["is_success"]
+        walk.fell = fell
+        walk.done = bool(
+            walk.success or walk.subgoal_reached or fell or horizon_over or self.total_low_level_steps >= self.max_steps
+        )
+
+    def end_subgoal(self, walk: SubgoalWalk) -> tuple[dict, float, bool, bool, dict]:
+        """The last part of :meth:`step`: its ``(observation, reward, terminated, truncated, info)``."""
+        success = walk.success
         info = {
-            "low_level_steps": len(path) - 1,
+            "low_level_steps": len(walk.path) - 1,
             "total_low_level_steps": self.total_low_level_steps,
-            "subgoal_reached": bool(subgoal_reached),
-            "flipped": bool(fell),
+            "subgoal_reached": bool(walk.subgoal_reached),
+            "flipped": bool(walk.fell),
             "attempts": self.attempts,
             "is_success": success,
-            "subgoal": subgoal,
-            "subgoal_clipped": clipped,
-            "subgoal_extended": extended,
-            "subgoal_in_wall": not self.geometry.is_free(self.layout.walls, subgoal),
-            "agent_path": np.asarray(path),
+            "subgoal": walk.subgoal,
+            "subgoal_clipped": walk.clipped,
+            "subgoal_extended": walk.extended,
+            "subgoal_in_wall": not self.geometry.is_free(self.layout.walls, walk.subgoal),
+            "agent_path": AgentPath(np.asarray(walk.path)),
         }
         truncated = not success and self.total_low_level_steps >= self.max_steps
-        return self._get_obs(), float(success), success or fell, truncated, info
+        return self._get_obs(), float(success), success or walk.fell, truncated, info
 
     def is_no_op_subgoal(self, subgoal: np.ndarray) -> bool:
         """Whether ``subgoal`` lies within :attr:`min_subgoal_distance` of the body's exact position.

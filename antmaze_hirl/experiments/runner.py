@@ -118,11 +118,16 @@ class TrialEnvs:
         }
         self.evaluation = {name: by_split[split] for name, (split, _, _) in self.sets.items()}
 
+    evaluation_envs: int = 1
+    """Mazes evaluated at once (:func:`~antmaze_hirl.dagger.evaluate_high_level`'s ``num_envs``); 1 is serial,
+    as committed results were made."""
+
     def evaluate(self, policy: Any, *, final: bool) -> dict[str, float]:
         """The learner alone on the final (or periodic) set: ``eval_success``, ``eval_attempts``, ``eval_mazes``."""
         name = "final" if final else "periodic"
         _, first_seed, mazes = self.sets[name]
-        result = evaluate_high_level(policy, self.evaluation[name], episodes=mazes, seed=first_seed)
+        env = self.evaluation[name]
+        result = evaluate_high_level(policy, env, episodes=mazes, seed=first_seed, num_envs=self.evaluation_envs)
         return {"eval_success": result["success_rate"], "eval_attempts": result["mean_attempts"], "eval_mazes": mazes}
 
     def evaluate_mazes(self, policy: Any, *, final: bool) -> list[dict[str, Any]]:

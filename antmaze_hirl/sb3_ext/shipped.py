@@ -16,6 +16,7 @@ from antmaze_hirl.envs.controllers import PredictController
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
 from antmaze_hirl.envs.layouts import MazeMap
 from antmaze_hirl.envs.simulator import Body, body_spec
+from antmaze_hirl.envs.vector import HighLevelVectorEnv, check_num_envs
 
 if TYPE_CHECKING:
     from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
@@ -81,3 +82,40 @@ def make_maze_env(
             )
         low_level = ShippedPolicyController(body)
     return HighLevelMazeEnv(body, maze_map, low_level=low_level, **kwargs)
+
+
+def make_maze_vector_env(
+    num_envs: int,
+    body: Body = "point",
+    maze_map: str | MazeMap | None = None,
+    *,
+    low_level: Any = None,
+    autoreset_mode: str = "NextStep",
+    **kwargs: Any,
+) -> HighLevelVectorEnv:
+    """``vector_entry_point`` of the maze ids: ``num_envs`` mazes, their low levels in lockstep.
+
+    ``gym.make_vec("antmaze_hirl/AntMaze-v0", num_envs=N, **kwargs)`` calls it. Every sub-env shares one
+    controller (the shipped policy by default), batched over the sub-envs still walking
+    (:class:`~antmaze_hirl.envs.vector.HighLevelVectorEnv`).
+
+    Args:
+        num_envs: Number of mazes, >= 1.
+        body: ``"point"`` or ``"ant"``.
+        maze_map: As :func:`make_maze_env`.
+        low_level: As :func:`make_maze_env`; one object shared by every sub-env.
+        autoreset_mode: Gymnasium autoreset mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``.
+        **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
+
+    Raises:
+        ValueError: If ``num_envs`` is not an integer >= 1 (before anything loads), or as :func:`make_maze_env`.
+    """
+    num_envs = check_num_envs(num_envs)
+    first = make_maze_env(body, maze_map, low_level=low_level, **kwargs)
+    shared = first.controller  # one controller for all, so that it is batched once
+
+    def another() -> HighLevelMazeEnv:
+        return HighLevelMazeEnv(body, maze_map, low_level=shared, **kwargs)
+
+    envs = [first, *(another() for _ in range(num_envs - 1))]
+    return HighLevelVectorEnv(envs, autoreset_mode=autoreset_mode)

@@ -1,0 +1,167 @@
+"""Hierarchy throughput: low-level steps/s of oracle + shipped low level, against the raw simulator, in one run.
+
+Per body, side by side:
+
+* the baseline: raw gymnasium-robotics ``AntMaze_UMaze-v5`` (point: ``PointMaze_UMaze-v3``) with random
+  actions, the simulator's bound (measured before and after the hierarchy rows; their mean is the reference);
+* the oracle choosing subgoals for the shipped low-level policy in
+  ``gym.make_vec(id, N)`` (:class:`~antmaze_hirl.envs.vector.HighLevelVectorEnv`, the low level in lockstep)
+  for each ``--num-envs`` N and each global torch thread count of ``--threads``, as low-level steps/s summed
+  over the sub-envs;
+* ``serial, unscoped``: one ``gym.make`` env at torch's 2 threads with the single-thread inference scope
+  turned off (``SMALL_BATCH_ROWS = -1``), i.e. the low level as it ran before the scope.
+
+Ratios are to the raw baseline of the same body. Each row runs for ``--seconds`` (at least one high-level
+step of every sub-env); seeded, so every row plays the same mazes.
+
+    python benchmarks/hierarchy_throughput.py                       # both bodies, N = 1 4 16 64, 1 and 2 threads
+    python benchmarks/hierarchy_throughput.py --bodies point --num-envs 1 8 --seconds 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import gymnasium_robotics
+import numpy as np
+import torch as th
+
+import antmaze_hirl  # noqa: F401  (registers the ids)
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.envs import controllers
+from antmaze_hirl.experts.oracle import PathOracle
+
+RESULTS = Path(__file__).parent / "results" / "hierarchy_throughput.json"
+RAW_IDS = {"ant": "AntMaze_UMaze-v5", "point": "PointMaze_UMaze-v3"}
+MAZE_SIZES = {"ant": 4, "point": 5}  # the ant's 4x4 mazes, as issue 31 measured; the point's default
+
+
+def raw_steps_per_s(body: str, seconds: float, seed: int) -> float:
+    """Random-action steps/s of the raw gymnasium-robotics maze (continuing task: it never ends)."""
+    gym.register_envs(gymnasium_robotics)
+    env = gym.make(RAW_IDS[body])
+    env.reset(seed=seed)
+    env.action_space.seed(seed)
+    steps, start = 0, time.perf_counter()
+    while time.perf_counter() - start < seconds:
+        for _ in range(100):
+            env.step(env.action_space.sample())
+        steps += 100
+    rate = steps / (time.perf_counter() - start)
+    env.close()
+    return rate
+
+
+def hierarchy_steps_per_s(env: Any, oracle: PathOracle, seconds: float, seed: int) -> tuple[float, int]:
+    """Low-level steps/s over all sub-envs of a vector env driven by ``oracle``, and the steps counted."""
+    obs, _ = env.reset(seed=seed)
+    steps, start = 0, time.perf_counter()
+    while steps == 0 or time.perf_counter() - start < seconds:
+        subgoals = np.stack([oracle({key: value[i] for key, value in obs.items()}) for i in range(env.num_envs)])
+        obs, _, _, _, infos = env.step(subgoals.astype(np.float32))
+        if "low_level_steps" in infos:  # absent when every sub-env was reset in this step
+            steps += int(np.sum(infos["low_level_steps"] * infos["_low_level_steps"]))
+    return steps / (time.perf_counter() - start), steps
+
+
+def serial_steps_per_s(body: str, oracle_distance: float | None, seconds: float, seed: int) -> tuple[float, int]:
+    """Low-level steps/s of one ``gym.make`` env, as :func:`hierarchy_steps_per_s` counts them."""
+    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=MAZE_SIZES[body])
+    oracle = PathOracle.for_env(env, max_distance=oracle_distance)
+    obs, _ = env.reset(seed=seed)
+    steps, start = 0, time.perf_counter()
+    while steps == 0 or time.perf_counter() - start < seconds:
+        obs, _, terminated, truncated, info = env.step(oracle(obs))
+        steps += info["low_level_steps"]
+        if terminated or truncated:
+            obs, _ = env.reset()
+    rate = steps / (time.perf_counter() - start)
+    env.close()
+    return rate, steps
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    argv = sys.argv[1:] if argv is None else argv
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--bodies", nargs="+", default=["ant", "point"], choices=["ant", "point"])
+    parser.add_argument("--num-envs", nargs="+", type=int, default=[1, 4, 16, 64])
+    parser.add_argument("--threads", nargs="+", type=int, default=[1, 2], help="global torch thread counts")
+    parser.add_argument("--seconds", type=float, default=4.0, help="wall time per row")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=RESULTS)
+    args = parser.parse_args(argv)
+    if min(args.num_envs) < 1 or min(args.threads) < 1 or args.seconds <= 0:
+        parser.error(f"--num-envs and --threads must be >= 1 and --seconds > 0, got {args}")
+    caller_threads = th.get_num_threads()
+    rows: list[dict[str, Any]] = []
+    baselines = {}
+    for body in args.bodies:
+        expert_distance = 2.0 if body == "ant" else None  # the ant experiment's oracle reach
+        before = raw_steps_per_s(body, args.seconds, args.seed)
+        body_rows = []
+        th.set_num_threads(2)
+        small, controllers.SMALL_BATCH_ROWS = controllers.SMALL_BATCH_ROWS, -1  # the low level as before the scope
+        try:
+            rate, steps = serial_steps_per_s(body, expert_distance, args.seconds, args.seed)
+        finally:
+            controllers.SMALL_BATCH_ROWS = small
+        body_rows.append({"mode": "serial, unscoped", "num_envs": 1, "torch_threads": 2, "steps_per_s": rate})
+        for threads in args.threads:
+            th.set_num_threads(threads)
+            rate, steps = serial_steps_per_s(body, expert_distance, args.seconds, args.seed)
+            body_rows.append({"mode": "serial", "num_envs": 1, "torch_threads": threads, "steps_per_s": rate})
+        for num_envs in args.num_envs:
+            env = gym.make_vec(f"antmaze_hirl/{body.capitalize()}Maze-v0", num_envs, maze_size=MAZE_SIZES[body])
+            oracle = PathOracle.for_env(env.envs[0], max_distance=expert_distance)
+            for threads in args.threads:
+                th.set_num_threads(threads)
+                rate, steps = hierarchy_steps_per_s(env, oracle, args.seconds, args.seed)
+                body_rows.append(
+                    {"mode": "lockstep", "num_envs": num_envs, "torch_threads": threads, "steps_per_s": rate}
+                )
+                print(f"{body} N={num_envs} threads={threads}: {rate:,.0f} low-level steps/s ({steps})", flush=True)
+            env.close()
+        th.set_num_threads(caller_threads)
+        after = raw_steps_per_s(body, args.seconds, args.seed)
+        raw = (before + after) / 2
+        baselines[body] = {"id": RAW_IDS[body], "before": round(before), "after": round(after), "mean": round(raw)}
+        best = max(row["steps_per_s"] for row in body_rows)
+        for row in body_rows:
+            row.update(
+                body=body,
+                steps_per_s=round(row["steps_per_s"], 1),
+                ratio_to_raw=round(row["steps_per_s"] / raw, 3),
+                ratio_to_best=round(row["steps_per_s"] / best, 3),
+            )
+        rows.extend(body_rows)
+        print(f"{body} raw {RAW_IDS[body]}: {before:,.0f} before, {after:,.0f} after", flush=True)
+    th.set_num_threads(caller_threads)
+    print(f"{'body':6} {'mode':17} {'N':>3} {'thr':>3} {'steps/s':>9} {'x raw':>6} {'x best':>6}")
+    for row in rows:
+        print(
+            f"{row['body']:6} {row['mode']:17} {row['num_envs']:>3} {row['torch_threads']:>3} "
+            f"{row['steps_per_s']:>9,.0f} {row['ratio_to_raw']:>6.2f} {row['ratio_to_best']:>6.2f}"
+        )
+    report = {
+        "benchmark": "hierarchy_throughput",
+        "command": "python benchmarks/hierarchy_throughput.py " + " ".join(argv),
+        "seconds_per_row": args.seconds,
+        "seed": args.seed,
+        "maze_sizes": {body: MAZE_SIZES[body] for body in args.bodies},
+        "machine": f"{platform.machine()} ({os.cpu_count()} CPUs), shared with other work while measured",
+        "raw_baselines": baselines,
+        "rows": rows,
+    }
+    print(f"wrote {atomic_write_json(args.out, report)}")
+    return report
+
+
+if __name__ == "__main__":
+    main()
