@@ -334,6 +334,13 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         default=None,
         help="the high-level learner (default: protocol 2's generic learner, or in protocol 1 the body's default)",
     )
+    parser.add_argument(
+        "--evaluation-envs",
+        type=int,
+        default=defaults.evaluation_envs,
+        help="mazes each evaluation plays at once, in lockstep (several times faster; 1: one after another, as "
+        "the committed results were made; ant outcomes differ between the two, see docs/guides/vector-envs.md)",
+    )
     add_backend_arguments(parser)
     parser.add_argument(
         "--allow-code-change",
@@ -373,6 +380,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         held_out_layouts=held_out,
         protocol=int(args.protocol),
         learner=args.learner,
+        evaluation_envs=args.evaluation_envs,
         **body_settings(
             args.body,
             held_out_layouts=held_out,

@@ -81,6 +81,7 @@ INT_BOUNDS: dict[str, IntBounds] = {
     "threads": _CORES,
     "jobs": _CORES,
     "cpus_per_trial": _CORES,
+    "evaluation_envs": IntBounds(1, 1024, "mazes evaluated at once"),
     "port": IntBounds(0, 65535, "0: any free port"),
 }
 """Bounds of the integer options, by ``dest``; ``"COMMAND:dest"`` overrides for one (sub)command."""

@@ -3,6 +3,7 @@
 import csv
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -157,6 +158,24 @@ def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(tmp_path)
 
     training = {grid_class(row["layout"]) for row in rows}
     assert training.isdisjoint({grid_class(row["layout"]) for row in evaluations})
+
+
+def test_lockstep_evaluation_gives_the_serial_per_maze_outcomes_on_the_point(tmp_path):
+    # The point's low level and learner are exact in lockstep (benchmarks/lockstep_agreement.py: 100/100):
+    # evaluation_envs changes how the mazes are played, not which mazes or what happens in them.
+    runs = {}
+    for envs in (1, 3):
+        out = tmp_path / f"envs{envs}"
+        run_experiment(["dagger"], 1, replace(TINY2, evaluation_envs=envs), out, progress_bar=False, tensorboard=False)
+        with (out / "evaluations.csv").open() as handle:
+            runs[envs] = [{k: v for k, v in row.items()} for row in csv.DictReader(handle)]
+    assert len(runs[1]) == 3 * TINY2.final_eval_episodes
+    assert runs[1] == runs[3]
+
+
+def test_evaluation_envs_is_checked():
+    with pytest.raises(ValueError, match="evaluation_envs must be >= 1, got 0"):
+        replace(TINY2, evaluation_envs=0)
 
 
 @pytest.mark.parametrize("body", ["point", "ant"])

@@ -17,6 +17,7 @@ import numpy as np
 
 from antmaze_hirl.envs.controllers import as_batch_controller, inference_threads
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv, SubgoalWalk
+from antmaze_hirl.envs.layouts import MazeLayout
 from antmaze_hirl.envs.vector import check_num_envs, copies_of, walk_in_lockstep
 from antmaze_hirl.rollout import play_episode
 
@@ -72,22 +73,39 @@ def evaluation_episodes(
     Raises:
         ValueError: If ``episodes`` or ``num_envs`` is below 1.
     """
+    return [info for _, info in evaluation_outcomes(policy, env, episodes=episodes, seed=seed, num_envs=num_envs)]
+
+
+def evaluation_outcomes(
+    policy: Any, env: Any, *, episodes: int, seed: int = HELD_OUT_SEED, num_envs: int = 1
+) -> list[tuple[MazeLayout, dict[str, Any]]]:
+    """Each evaluation episode's maze (as its reset drew it) and last ``info``, in seed order.
+
+    Raises:
+        ValueError: If ``episodes`` or ``num_envs`` is below 1.
+    """
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     num_envs = check_num_envs(num_envs)
     if num_envs == 1:
-        return [play_episode(env, policy, seed=seed + episode).info for episode in range(episodes)]
+        played = []
+        for episode in range(episodes):
+            info = play_episode(env, policy, seed=seed + episode).info
+            played.append((env.unwrapped.layout, info))  # drawn at this episode's reset
+        return played
     return _lockstep_episodes(policy, env, episodes=episodes, seed=seed, num_envs=min(num_envs, episodes))
 
 
-def _lockstep_episodes(policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int) -> list[dict[str, Any]]:
+def _lockstep_episodes(
+    policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int
+) -> list[tuple[MazeLayout, dict[str, Any]]]:
     copies = _COPIES.setdefault(env, {})
     if num_envs not in copies:
         copies[num_envs] = copies_of(env, num_envs)
     envs = copies[num_envs]
     low_level = as_batch_controller(envs[0].controller, num_envs)
     space = envs[0].action_space
-    results: list[dict[str, Any] | None] = [None] * episodes
+    results: list[tuple[MazeLayout, dict[str, Any]] | None] = [None] * episodes
     playing: dict[int, int] = {}  # sub-env -> episode it plays
     observations: dict[int, dict[str, np.ndarray]] = {}
     queued = iter(range(episodes))
@@ -113,9 +131,9 @@ def _lockstep_episodes(policy: Any, env: Any, *, episodes: int, seed: int, num_e
         for index in indices:
             observations[index], _, terminated, truncated, info = envs[index].end_subgoal(walks[index])
             if terminated or truncated:
-                results[playing.pop(index)] = info
+                results[playing.pop(index)] = (envs[index].layout, info)
                 start_next(index)
-    return [info for info in results if info is not None]
+    return [played for played in results if played is not None]
 
 
 def _predict_batch(policy: Any, observations: list[dict[str, np.ndarray]]) -> list[np.ndarray]:

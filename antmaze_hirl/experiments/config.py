@@ -105,6 +105,12 @@ class ExperimentConfig:
         learner: The high-level learner, one of :data:`LEARNERS`; ``None``: protocol 2's
             :data:`PROTOCOL_LEARNER`, or in protocol 1 the body's default (the planning learner
             :data:`STRONG_PRIOR` for the point, ``next_cell_cnn`` for the ant).
+        evaluation_envs: Mazes an evaluation plays at once, in lockstep
+            (:func:`~antmaze_hirl.dagger.evaluation.evaluation_episodes`'s ``num_envs``). ``1`` (the default)
+            plays them one after another, as every committed results folder was made. More is several times
+            faster, and the mazes and seeds are the same, but batched products round differently, so ant
+            outcomes are not replays of serial ones (``docs/guides/vector-envs.md``): a results folder is made
+            with one setting, which ``config.json`` records.
         step_gradient_steps: Gradient steps after every labelled step for the strategies that update
             after every step (``reward_per_step``, Alg. 4). 20 gives about the gradient budget of the
             per-episode methods (N = 200 per episode of about 10 labels), so the comparison is of when the
@@ -127,6 +133,7 @@ class ExperimentConfig:
     step_gradient_steps: int | None = 20
     protocol: int = 1
     learner: str | None = None
+    evaluation_envs: int = 1
 
     def __post_init__(self) -> None:
         body_spec(self.body)
@@ -137,6 +144,7 @@ class ExperimentConfig:
             "final_eval_episodes",
             "maze_size",
             "episodes_per_update",
+            "evaluation_envs",
         ):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")

@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from antmaze_hirl.dagger.evaluation import evaluation_outcomes
 from antmaze_hirl.envs.layouts import canonical_layout, canonical_task
-from antmaze_hirl.rollout import play_episode
 
 EVALUATION_COLUMNS = (
     "method",
@@ -34,11 +34,12 @@ untrained learner), ``labels`` the expert labels spent by then."""
 EVALUATION_TEXT_COLUMNS = ("method", "layout", "task_class")
 
 
-def play_mazes(policy: Any, env: Any, *, episodes: int, seed: int) -> list[dict[str, Any]]:
+def play_mazes(policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int = 1) -> list[dict[str, Any]]:
     """The learner alone on mazes ``seed .. seed + episodes - 1``: one outcome per maze.
 
     Each maze is the one an episode reset with its seed plays (as
-    :func:`~antmaze_hirl.dagger.evaluation.evaluate_high_level` plays them).
+    :func:`~antmaze_hirl.dagger.evaluation.evaluate_high_level` plays them), ``num_envs`` at once in
+    lockstep (:attr:`~antmaze_hirl.experiments.config.ExperimentConfig.evaluation_envs`).
 
     Returns:
         ``{"maze_seed", "layout", "task_class", "success", "attempts", "low_level_steps"}`` per maze.
@@ -46,12 +47,9 @@ def play_mazes(policy: Any, env: Any, *, episodes: int, seed: int) -> list[dict[
     Raises:
         ValueError: If ``episodes < 1``.
     """
-    if episodes < 1:
-        raise ValueError(f"episodes must be >= 1, got {episodes}")
+    played = evaluation_outcomes(policy, env, episodes=episodes, seed=seed, num_envs=num_envs)
     outcomes = []
-    for maze_seed in range(seed, seed + episodes):
-        info = play_episode(env, policy, seed=maze_seed).info
-        layout = env.unwrapped.layout  # drawn at this episode's reset
+    for maze_seed, (layout, info) in enumerate(played, start=seed):
         outcomes.append(
             {
                 "maze_seed": maze_seed,

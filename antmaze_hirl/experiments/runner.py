@@ -117,10 +117,7 @@ class TrialEnvs:
             for split in dict.fromkeys(s for s, _, _ in self.sets.values())
         }
         self.evaluation = {name: by_split[split] for name, (split, _, _) in self.sets.items()}
-
-    evaluation_envs: int = 1
-    """Mazes evaluated at once (:func:`~antmaze_hirl.dagger.evaluate_high_level`'s ``num_envs``); 1 is serial,
-    as committed results were made."""
+        self.evaluation_envs = config.evaluation_envs  # 1: serial, as committed results were made
 
     def evaluate(self, policy: Any, *, final: bool) -> dict[str, float]:
         """The learner alone on the final (or periodic) set: ``eval_success``, ``eval_attempts``, ``eval_mazes``."""
@@ -134,7 +131,7 @@ class TrialEnvs:
         """The learner alone on the final (or periodic) set, one outcome per maze (:func:`play_mazes`)."""
         name = "final" if final else "periodic"
         _, first_seed, mazes = self.sets[name]
-        return play_mazes(policy, self.evaluation[name], episodes=mazes, seed=first_seed)
+        return play_mazes(policy, self.evaluation[name], episodes=mazes, seed=first_seed, num_envs=self.evaluation_envs)
 
     def close(self) -> None:
         """Closes every env."""
