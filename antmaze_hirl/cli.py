@@ -388,6 +388,12 @@ def _add_study(subparsers: _Subparsers) -> None:
     add_study_parser(subparsers, _HelpFormatter)
 
 
+def _add_benchmark(subparsers: _Subparsers) -> None:
+    from antmaze_hirl.experiments.benchmark import add_benchmark_parser  # light: the handler imports the envs
+
+    add_benchmark_parser(subparsers, _HelpFormatter)
+
+
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
@@ -395,6 +401,7 @@ SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_ensemble_low,
     _add_experiment,
     _add_study,
+    _add_benchmark,
 )
 """The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
 

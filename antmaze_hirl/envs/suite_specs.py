@@ -35,6 +35,9 @@ class SuiteSpec:
         n_tasks: Tasks in the list.
         max_low_level_steps: The largest per-task low-level step limit.
         checksum: SHA-256 of the task list (:func:`antmaze_hirl.envs.suites.tasks_checksum`).
+        episodes_per_task: The protocol's episodes per task, K: 1 on a random family (100 mazes), 20 on a
+            fixed map (100 episodes over 5 tasks; OGBench plays 50 per task), each with its own start and goal
+            noise.
     """
 
     name: str
@@ -45,6 +48,7 @@ class SuiteSpec:
     n_tasks: int
     max_low_level_steps: int
     checksum: str
+    episodes_per_task: int = 1
 
     @property
     def max_episode_steps(self) -> int:
@@ -84,6 +88,7 @@ SUITE_SPECS: dict[str, SuiteSpec] = {
             5,
             960,
             "1e3a297858444af78ceaacad7613c898399ce9d5bdd7a1524824ca1677b821e0",
+            20,
         ),
         SuiteSpec(
             "medium",
@@ -94,6 +99,7 @@ SUITE_SPECS: dict[str, SuiteSpec] = {
             5,
             1600,
             "dd00145768a21ebf331971b89310741654197a2587e047b5b6241fc0a3bed770",
+            20,
         ),
         SuiteSpec(
             "large",
@@ -104,6 +110,18 @@ SUITE_SPECS: dict[str, SuiteSpec] = {
             5,
             3040,
             "0a2b43afd252ef12ccabd52a8fa08a0a9eebcdf61aefed594e7ec7144c04496b",
+            20,
+        ),
+        SuiteSpec(
+            "giant",
+            "antmaze_hirl/AntMaze-giant-v0",
+            "ant",
+            "giant",
+            None,
+            5,
+            4800,
+            "4df9aa760368eaff67cf1eacaa310ec710d44730d909dc69eca8833e32166395",
+            20,
         ),
     )
 }

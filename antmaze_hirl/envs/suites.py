@@ -2,9 +2,10 @@
 
 Every suite (:data:`~antmaze_hirl.envs.suite_specs.SUITE_SPECS`) is a list of tasks stored in
 ``benchmark_suites.json`` beside this module. A task is a wall grid, a start cell, a goal cell and a
-low-level step limit; the body starts at the start cell's centre and the goal is the goal cell's centre,
-so a task is the same on every machine and run (only the body's initial joint noise, from the reset
-seed, varies between episodes).
+low-level step limit. An episode of a task starts the body in the start cell and puts the goal in the
+goal cell, each at the cell's centre plus uniform noise of +-0.25 cell (the experiments' episodes; for the
+ant +-1 m, OGBench's noise), drawn from the reset seed: the task is fixed, its episodes vary with the seed
+(without the noise every episode of a task would be the same, the env being deterministic).
 
 How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``benchmarks/make_suites.py``):
 
@@ -14,8 +15,8 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``benchmarks/make_s
   symmetries: no suite maze is, up to rotation or mirror, a wall grid of any family's ``train`` or
   ``selection`` part. Tasks that are symmetric images of an earlier task are skipped, so the 100 tasks
   are 100 distinct tasks to a learner trained on all 8 images. Low-level step limit 500.
-* fixed maps (``u``, ``medium``, ``large``): 5 tasks per map, as OGBench. ``medium`` and ``large`` are
-  OGBench's own ``navigate`` tasks (its ``task1``..``task5`` are our ``task_id`` 0..4; gymnasium-robotics'
+* fixed maps (``u``, ``medium``, ``large``, ``giant``): 5 tasks per map, as OGBench. ``medium``, ``large``
+  and ``giant`` (:data:`GIANT_MAP`) are OGBench's own ``navigate`` tasks (its ``task1``..``task5`` are our ``task_id`` 0..4; gymnasium-robotics'
   maps are the same grids). ``u`` has no OGBench tasks; its 5 are listed in :data:`FIXED_MAP_TASKS`.
   Held out there means: the map's wall grid, up to symmetry, is in no random family's ``train`` part
   (no family has its grid shape: 3x3 interiors are ``u``'s shape, but U has 2 walls where the 3x3 family
@@ -48,6 +49,8 @@ from antmaze_hirl.envs.layouts import (
     canonical_task,
     generate_layout,
     shortest_path,
+    MazeMap,
+    resolve_maze_map,
     validate_maze_map,
     wall_grid_string,
 )
@@ -72,6 +75,29 @@ FIXED_MAP_TASKS: dict[str, list[tuple[tuple[int, int], tuple[int, int]]]] = {
     "large": [((1, 1), (7, 10)), ((5, 4), (7, 1)), ((7, 4), (1, 10)), ((3, 8), (5, 4)), ((1, 1), (5, 4))],
 }
 """The fixed maps' (start cell, goal cell) pairs, in ``task_id`` order."""
+FIXED_MAP_TASKS["giant"] = [
+    ((1, 1), (10, 14)),
+    ((1, 14), (10, 1)),
+    ((8, 14), (1, 1)),
+    ((8, 3), (5, 12)),
+    ((5, 9), (3, 8)),
+]
+
+GIANT_MAP: list[list[int]] = [
+    [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1],
+    [1, 0, 1, 0, 0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1],
+    [1, 0, 1, 0, 1, 1, 0, 1, 0, 1, 0, 0, 1, 1, 0, 1],
+    [1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1],
+    [1, 0, 1, 1, 1, 0, 1, 1, 1, 1, 1, 1, 0, 1, 0, 1],
+    [1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 1],
+    [1, 1, 1, 0, 1, 0, 1, 0, 0, 1, 0, 1, 0, 1, 1, 1],
+    [1, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1],
+    [1, 0, 1, 0, 1, 0, 1, 1, 1, 1, 1, 1, 0, 1, 0, 1],
+    [1, 0, 1, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1],
+    [1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 1],
+    [1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1],
+]
+"""OGBench's ``giant`` maze (``antmaze-giant-navigate``), 10x14 free cells; its tasks are OGBench's 5."""
 
 
 @dataclass(frozen=True)
@@ -109,9 +135,9 @@ def scaled_step_limit(layout: MazeLayout, scale: float) -> int:
     return max(MIN_STEPS, math.ceil(STEPS_PER_METRE * metres))
 
 
-def fixed_map(spec: SuiteSpec) -> Any:
-    """The maze map of a fixed-map suite (a gymnasium-robotics map name or a list of rows)."""
-    return spec.source
+def fixed_map(spec: SuiteSpec) -> MazeMap:
+    """The maze map of a fixed-map suite: :data:`GIANT_MAP` or a gymnasium-robotics map."""
+    return GIANT_MAP if spec.source == "giant" else resolve_maze_map(spec.source)
 
 
 def draw_suite_tasks(name: str) -> list[SuiteTask]:
@@ -215,7 +241,8 @@ class SuiteMazeEnv(HighLevelMazeEnv):
 
     ``reset(options={"task_id": k})`` plays task ``k`` (0-based; OGBench's ``taskN`` is ``k = N - 1``). A
     plain ``reset`` draws a task uniformly with ``self.np_random``, so a seeded reset picks the same task
-    on every machine. ``info["task_id"]`` names the task played. The observation space is the same for
+    on every machine. ``info["task_id"]`` names the task played. Start and goal lie in the task's cells,
+    placed with :meth:`noisy_cell_centre` from ``np_random``. The observation space is the same for
     every task of a suite (one maze shape per suite). The low-level budget ``max_steps`` is the task's.
 
     Args:
@@ -236,6 +263,7 @@ class SuiteMazeEnv(HighLevelMazeEnv):
         shape = self.tasks[0].layout.walls.shape
         super().__init__(
             self.suite.body,
+            None if self.suite.source == "random" else fixed_map(self.suite),
             maze_size=(shape[0] - 2, shape[1] - 2),
             low_level=low_level,
             max_steps=self.suite.max_low_level_steps,
@@ -268,14 +296,8 @@ class SuiteMazeEnv(HighLevelMazeEnv):
         task = self.tasks[task_id]
         self.task_id = task_id
         self.max_steps = task.max_low_level_steps
-        geometry = self.geometry
-        obs, info = super().reset(
-            options={
-                "layout": task.layout,
-                "start_xy": geometry.cell_to_xy(task.layout.start_cell),
-                "goal_xy": geometry.cell_to_xy(task.layout.goal_cell),
-            }
-        )
+        # The parent draws the start and goal positions in the task's cells from np_random (noisy_cell_centre).
+        obs, info = super().reset(options={"layout": task.layout})
         return obs, {**info, "task_id": task_id}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
