@@ -139,7 +139,7 @@ def play(env, policy, seed, task_id):
     obs, info = env.reset(seed=seed, options={"task_id": task_id})
     trace, done = [obs["state"].copy()], False
     while not done:
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        obs, _reward, terminated, truncated, info = env.step(policy(obs))
         trace.append(obs["state"].copy())
         done = terminated or truncated
     return np.array(trace), info
@@ -149,7 +149,7 @@ def test_task_id_selects_the_task_and_a_plain_reset_draws_one_with_np_random():
     env = gym.make("antmaze_hirl/PointMaze-5x5-v0")
     inner = env.unwrapped
     for task_id in (0, 57, 99):
-        obs, info = env.reset(seed=0, options={"task_id": task_id})
+        _obs, info = env.reset(seed=0, options={"task_id": task_id})
         task = suites.suite_tasks("point5")[task_id]
         assert info["task_id"] == task_id and inner.layout == task.layout
         assert inner.geometry.xy_to_cell(inner.agent_xy) == task.layout.start_cell

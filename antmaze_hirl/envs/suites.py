@@ -15,13 +15,15 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``benchmarks/make_s
   symmetries: no suite maze is, up to rotation or mirror, a wall grid of any family's ``train`` or
   ``selection`` part. Tasks that are symmetric images of an earlier task are skipped, so the 100 tasks
   are 100 distinct tasks to a learner trained on all 8 images. Low-level step limit 500.
-* fixed maps (``u``, ``medium``, ``large``, ``giant``): 5 tasks per map, as OGBench. ``medium``, ``large``
-  and ``giant`` (:data:`GIANT_MAP`) are OGBench's own ``navigate`` tasks (its ``task1``..``task5`` are our ``task_id`` 0..4; gymnasium-robotics'
-  maps are the same grids). ``u`` has no OGBench tasks; its 5 are listed in :data:`FIXED_MAP_TASKS`.
-  Held out there means: the map's wall grid, up to symmetry, is in no random family's ``train`` part
-  (no family has its grid shape: 3x3 interiors are ``u``'s shape, but U has 2 walls where the 3x3 family
-  places 3, checked in the tests), and the start/goal pairs are fixed. A learner trained on the map itself
-  is on OGBench's protocol (same maze, held-out start/goal pairs), not on held-out mazes: a row says which.
+* fixed maps (``u``, ``medium``, ``large``, ``giant``): 5 tasks per map, as OGBench. ``medium``,
+  ``large`` and ``giant`` (:data:`GIANT_MAP`) carry OGBench's own ``navigate`` tasks (its ``task1`` to
+  ``task5`` are ``task_id`` 0 to 4; gymnasium-robotics' medium and large maps are OGBench's grids). ``u``
+  has no OGBench tasks; its 5 are in :data:`FIXED_MAP_TASKS`. Held out there means: no random family the
+  package trains on (3x3, 4x4, 5x5 free cells, 30% walls) ever draws the map's wall grid up to symmetry
+  (the other maps' shapes differ from every family's; ``u`` has the 3x3 family's shape but 2 interior
+  walls where that family places 3; both checked in the tests), whatever part the partition's hash gives
+  the grid, and the start/goal pairs are fixed. A learner trained on the map itself is on OGBench's
+  protocol (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
   Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))`` (``benchmarks/in_maze.py``'s
   rule, a 0.5 m/s average).
 """
@@ -46,11 +48,11 @@ from antmaze_hirl.envs.high_level import DEFAULT_MIN_GOAL_CELLS, HighLevelMazeEn
 from antmaze_hirl.envs.layout_splits import sample_layout_in_split
 from antmaze_hirl.envs.layouts import (
     MazeLayout,
+    MazeMap,
     canonical_task,
     generate_layout,
-    shortest_path,
-    MazeMap,
     resolve_maze_map,
+    shortest_path,
     validate_maze_map,
     wall_grid_string,
 )

@@ -283,7 +283,7 @@ def score_policy(
     suite: str,
     policy: Any,
     *,
-    episodes_per_task: int = 1,
+    episodes_per_task: int | None = None,
     seed: int = 0,
     task_ids: Sequence[int] | None = None,
     low_level: Any = None,
@@ -295,7 +295,7 @@ def score_policy(
         suite: A suite name (:data:`~antmaze_hirl.envs.suite_specs.SUITE_SPECS`).
         policy: ``"oracle"``, ``"random"``, a path (see :func:`resolve_policy`), or a callable
             ``observation -> subgoal`` / an object with ``predict`` (SB3 models included).
-        episodes_per_task: Episodes per task, K.
+        episodes_per_task: Episodes per task, K; default the suite's protocol (:attr:`SuiteSpec.episodes_per_task`).
         seed: Episode ``j`` of task ``k`` resets with ``seed + k * K + j``; the random policy draws from it.
         task_ids: A subset of tasks (default all), e.g. for a quick check; the report says which ran.
         low_level: The low-level controller (default: the body's shipped policy).
@@ -309,6 +309,7 @@ def score_policy(
         FileNotFoundError: If a policy path names no file.
     """
     spec = check_suite_name(suite)
+    episodes_per_task = spec.episodes_per_task if episodes_per_task is None else episodes_per_task
     if isinstance(episodes_per_task, bool) or not isinstance(episodes_per_task, int) or episodes_per_task < 1:
         raise ValueError(f"episodes_per_task must be an integer >= 1, got {episodes_per_task!r}")
     from antmaze_hirl.envs.suites import check_task_id
@@ -395,7 +396,12 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         required=True,
         help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner",
     )
-    parser.add_argument("--episodes-per-task", type=int, default=1, help="episodes per task, K")
+    parser.add_argument(
+        "--episodes-per-task",
+        type=int,
+        default=None,
+        help="episodes per task, K (default: the suite's protocol, 1 on point5/ant4, 20 on the fixed maps)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="episode j of task k resets with seed + k*K + j")
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
     parser.add_argument("--json", type=Path, default=None, help="write the report here (atomically)")
@@ -416,7 +422,7 @@ def _parse_task_ids(text: str | None) -> list[int] | None:
 def run_benchmark_command(args: argparse.Namespace) -> int:
     """Handler of ``antmaze-hirl benchmark``: scores, prints the table, writes ``--json``."""
     spec = check_suite_name(args.suite)
-    if args.episodes_per_task < 1:
+    if args.episodes_per_task is not None and args.episodes_per_task < 1:
         raise ValueError(f"--episodes-per-task must be >= 1, got {args.episodes_per_task}")
     import torch
 
@@ -430,7 +436,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
     )
     command = ["antmaze-hirl", "benchmark", spec.name, "--policy", str(args.policy)]
-    command += ["--episodes-per-task", str(args.episodes_per_task), "--seed", str(args.seed)]
+    command += ["--episodes-per-task", str(report["episodes_per_task"]), "--seed", str(args.seed)]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
     print(report_table(report, per_task=args.per_task or spec.n_tasks <= 10))
     if args.json is not None:
