@@ -438,7 +438,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     command = ["antmaze-hirl", "benchmark", spec.name, "--policy", str(args.policy)]
     command += ["--episodes-per-task", str(report["episodes_per_task"]), "--seed", str(args.seed)]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
-    print(report_table(report, per_task=args.per_task or spec.n_tasks <= 10))
+    print(report_table(report, per_task=args.per_task or len(report["tasks"]) <= 10))
     if args.json is not None:
         from antmaze_hirl.atomic_io import atomic_write_json
 
