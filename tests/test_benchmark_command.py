@@ -164,3 +164,20 @@ def test_a_report_of_another_format_is_refused(tmp_path):
     path.write_text(json.dumps({"format": "x"}))
     with pytest.raises(ValueError, match=r"has format 'x', expected 'antmaze_hirl.benchmark_result/1'"):
         load_report(path)
+
+
+def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+    import leaderboard
+
+    page = leaderboard.PAGE.read_text()
+    assert leaderboard.page_text(page) == page, "run python benchmarks/leaderboard.py"
+    reports = sorted(leaderboard.RESULTS.glob("*.json"))
+    assert reports
+    for path in reports:
+        report = load_report(path)
+        assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
+        assert f"]({'../benchmarks/results/benchmark/' + path.name})" in page
