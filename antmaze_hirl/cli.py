@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study.
+"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.

@@ -137,8 +137,9 @@ class RandomSubgoalPolicy:
 def _suite_env_factory(spec: SuiteSpec, low_level: Any) -> Callable[[], Any]:
     import gymnasium as gym
 
-    import antmaze_hirl  # noqa: F401  (registers the ids)
+    from antmaze_hirl.registration import register_envs
 
+    register_envs()  # done by `import antmaze_hirl`, which this layer may not import
     return lambda: gym.make(spec.env_id, low_level=low_level)
 
 
@@ -390,11 +391,11 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         epilog="example:\n  antmaze-hirl benchmark point5 --policy oracle --json runs/point5_oracle.json",
         formatter_class=formatter_class,
     )
-    parser.add_argument("suite", help=f"suite name: one of {', '.join(SUITE_SPECS)}")
+    parser.add_argument("suite", help=f"suite name: one of {', '.join(SUITE_SPECS)} (required)")
     parser.add_argument(
         "--policy",
         required=True,
-        help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner",
+        help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner (required)",
     )
     parser.add_argument(
         "--episodes-per-task",
@@ -404,7 +405,7 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     )
     parser.add_argument("--seed", type=int, default=0, help="episode j of task k resets with seed + k*K + j")
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
-    parser.add_argument("--json", type=Path, default=None, help="write the report here (atomically)")
+    parser.add_argument("--json", type=Path, default=None, help="write the report here, atomically (default: print only)")
     parser.add_argument("--per-task", action="store_true", help="print one line per task")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run_benchmark_command)
