@@ -405,7 +405,9 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     )
     parser.add_argument("--seed", type=int, default=0, help="episode j of task k resets with seed + k*K + j")
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
-    parser.add_argument("--json", type=Path, default=None, help="write the report here, atomically (default: print only)")
+    parser.add_argument(
+        "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
+    )
     parser.add_argument("--per-task", action="store_true", help="print one line per task")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run_benchmark_command)
