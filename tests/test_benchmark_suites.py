@@ -208,3 +208,32 @@ def test_the_oracle_solves_every_point_task():
     oracle = PathOracle.for_env(env)
     failed = [k for k in range(100) if not play(env, oracle, seed=k, task_id=k)[1]["is_success"]]
     assert failed == []
+
+
+def short_trace(env, seed, task_id, steps=3):
+    obs, _ = env.reset(seed=seed, options={"task_id": task_id})
+    env.action_space.seed(seed)
+    trace = [obs["state"].copy(), obs["image"].copy()]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        trace += [obs["state"].copy(), obs["image"].copy(), reward]
+        if terminated or truncated:
+            break
+    return trace
+
+
+def assert_same_trace(first, second):
+    assert len(first) == len(second)
+    for a, b in zip(first, second, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("name", list(SUITE_SPECS))
+def test_every_suite_id_is_deterministic_and_pickles(name, still_controller):
+    low_level = still_controller if SUITE_SPECS[name].body == "ant" else None
+    env = gym.make(SUITE_SPECS[name].env_id, low_level=low_level)
+    task_id = SUITE_SPECS[name].n_tasks - 1
+    first = short_trace(env, 7, task_id)
+    assert_same_trace(first, short_trace(gym.make(SUITE_SPECS[name].env_id, low_level=low_level), 7, task_id))
+    assert_same_trace(first, short_trace(pickle.loads(pickle.dumps(env)), 7, task_id))
+    env.close()
