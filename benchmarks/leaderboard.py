@@ -32,12 +32,6 @@ GOAL = 0.95
 NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
-        "DAgger (plain), generic learner, seed 0, 1,000 labels",
-        "`python benchmarks/benchmark_dagger.py --labels 100,300,1000 --seed 0` (its 1,000-label point did not "
-        "finish in this session's background run)",
-    ),
-    (
-        "point5",
         "DAgger (plain), generic learner, more seeds",
         "`python benchmarks/benchmark_dagger.py --seed 1` (and 2, ...): one seed is not a spread",
     ),
@@ -48,9 +42,14 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "SB3 PPO / SAC on the high level (shipped low level)",
-        "train `PPO('MultiInputPolicy', SplitMazeEnv('point', split='train', low_level=...))`, save, then "
-        "`antmaze-hirl benchmark point5 --policy ppo.zip`",
+        "SB3 PPO at 200k high-level steps; SB3 SAC on the high level",
+        "`python benchmarks/benchmark_sb3_high.py --algo ppo --steps 200000` / `--algo sac --steps N` "
+        "(only PPO at 2,048 steps ran in this session)",
+    ),
+    (
+        "ant suites",
+        "DAgger, active methods, PPO/SAC on the ant",
+        "as the point rows, with the ant's training env; not run: the ant's background budget went to the oracle rows",
     ),
     (
         "point5",
