@@ -96,7 +96,15 @@ def results_table() -> str:
     reports = [(path, load_report(path)) for path in sorted(RESULTS.glob("*.json"))]
     order = list(SUITE_SPECS)
     named = ("oracle", "random")
-    reports.sort(key=lambda item: (order.index(item[1]["suite"]), item[1]["policy"] not in named, item[1]["policy"]))
+    reports.sort(
+        key=lambda item: (
+            order.index(item[1]["suite"]),
+            item[1]["policy"] not in named,
+            item[1]["policy"].split(",")[0],
+            item[1].get("training", {}).get("labels", 0),
+            -item[1]["episodes"],
+        )
+    )
     lines = [
         "| suite | policy | budget | success [95% Wilson] | oracle goal (>= 95%) | mean subgoals | "
         "mean low-level steps | flips | wall time | file |",
