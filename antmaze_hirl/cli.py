@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study.
+"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.
@@ -421,6 +421,12 @@ def _add_study(subparsers: _Subparsers) -> None:
     add_study_parser(subparsers, _HelpFormatter)
 
 
+def _add_benchmark(subparsers: _Subparsers) -> None:
+    from antmaze_hirl.experiments.benchmark import add_benchmark_parser  # light: the handler imports the envs
+
+    add_benchmark_parser(subparsers, _HelpFormatter)
+
+
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
@@ -428,6 +434,7 @@ SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_ensemble_low,
     _add_experiment,
     _add_study,
+    _add_benchmark,
 )
 """The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
 

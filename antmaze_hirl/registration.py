@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import gymnasium as gym
 
+from antmaze_hirl.envs.suite_specs import SUITE_ENTRY_POINT, SUITE_SPECS
+
 VECTOR_ENTRY_POINTS: dict[str, str] = {
     "antmaze_hirl/AntReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
     "antmaze_hirl/PointReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
@@ -34,3 +36,8 @@ def register_envs() -> None:
             gym.register(
                 id=env_id, entry_point=entry_point, vector_entry_point=VECTOR_ENTRY_POINTS[env_id], kwargs=kwargs
             )
+    # The benchmark suites (antmaze_hirl.envs.suite_specs): one id per suite, its step limit in subgoals.
+    for spec in SUITE_SPECS.values():
+        if spec.env_id not in gym.registry:
+            kwargs = {"suite": spec.name}
+            gym.register(spec.env_id, SUITE_ENTRY_POINT, max_episode_steps=spec.max_episode_steps, kwargs=kwargs)

@@ -1,0 +1,183 @@
+"""``antmaze-hirl benchmark`` and :func:`score_policy`: oracle, random, SB3 zips, DAgger learners, bad input."""
+
+import json
+import zipfile
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3 import PPO
+
+from antmaze_hirl.cli import main
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.experiments import benchmark
+from antmaze_hirl.experiments.benchmark import load_report, score_policy
+
+TASKS = [0, 1, 2, 3]
+
+
+@pytest.fixture(scope="module")
+def point_env():
+    env = gym.make("antmaze_hirl/PointMaze-5x5-v0")
+    yield env
+    env.close()
+
+
+@pytest.fixture(scope="module")
+def ppo_zip(tmp_path_factory, point_env):
+    # A user's tiny high-level PPO, untrained: only its file format and spaces matter here.
+    model = PPO("MultiInputPolicy", point_env, n_steps=8, batch_size=8, policy_kwargs={"net_arch": [8]}, seed=0)
+    path = tmp_path_factory.mktemp("sb3") / "ppo_high.zip"
+    model.save(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def learner_zip(tmp_path_factory, point_env):
+    path = tmp_path_factory.mktemp("dagger") / "learner.zip"
+    HighLevelPolicy.for_env(point_env, rng=np.random.default_rng(0)).save(path)
+    return path
+
+
+def test_the_oracle_scores_above_a_random_policy_with_intervals_attempts_and_steps():
+    oracle = score_policy("point5", "oracle", task_ids=TASKS)
+    random = score_policy("point5", "random", task_ids=TASKS)
+    assert oracle["success_rate"] > random["success_rate"]  # the score discriminates
+    assert oracle["successes"] == len(TASKS)  # the oracle solves all 100 point tasks (benchmarks/results)
+    for report in (oracle, random):
+        low, high = report["wilson_95"]
+        assert low <= report["success_rate"] <= high
+        assert [row["task_id"] for row in report["tasks"]] == TASKS
+        assert report["episodes"] == len(TASKS) and report["episodes_per_task"] == 1
+        assert report["low_level_steps_total"] == sum(o["low_level_steps"] for o in report["episode_outcomes"])
+        assert report["mean_attempts"] >= 1 and report["suite_checksum"] == benchmark.SUITE_SPECS["point5"].checksum
+    assert random["mean_low_level_steps"] > oracle["mean_low_level_steps"]
+
+
+def test_scores_are_reproducible_and_several_episodes_per_task_get_a_bootstrap_over_tasks():
+    first = score_policy("point5", "random", task_ids=[5, 6], episodes_per_task=2, seed=3)
+    again = score_policy("point5", "random", task_ids=[5, 6], episodes_per_task=2, seed=3)
+    assert first["episode_outcomes"] == again["episode_outcomes"]
+    assert [o["seed"] for o in first["episode_outcomes"]] == [13, 14, 15, 16]  # seed + k * K + j
+    assert "task_bootstrap_95" in first
+    assert "task_bootstrap_95" not in score_policy("point5", "oracle", task_ids=[5])
+
+
+def test_a_callable_is_scored_like_the_named_policies(point_env):
+    from antmaze_hirl.experts import PathOracle
+
+    oracle = PathOracle.for_env(point_env)
+    by_callable = score_policy("point5", oracle, task_ids=[7])
+    by_name = score_policy("point5", "oracle", task_ids=[7])
+    assert by_callable["episode_outcomes"] == by_name["episode_outcomes"]
+
+
+def test_a_tiny_sb3_zip_and_a_saved_dagger_learner_are_scored(ppo_zip, learner_zip):
+    for path, kind in ((ppo_zip, "sb3"), (learner_zip, "dagger learner")):
+        report = score_policy("point5", str(path), task_ids=[0, 1])
+        assert report["policy"] == f"{kind} {path}"
+        assert report["episodes"] == 2 and 0 <= report["successes"] <= 2
+
+
+def test_the_batched_runner_is_a_one_line_swap(monkeypatch):
+    seen = []
+
+    def recording_runner(make_env, policy, episodes, *, progress=False):
+        seen.append(list(episodes))
+        return benchmark.play_serial(make_env, policy, episodes, progress=progress)
+
+    monkeypatch.setattr(benchmark, "EPISODE_RUNNER", recording_runner)
+    score_policy("point5", "oracle", task_ids=[2])
+    assert seen == [[(2, 2)]]
+
+
+def run_cli(capsys, *argv):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["benchmark", *argv])
+    return exit_info.value.code, capsys.readouterr()
+
+
+def test_the_command_prints_the_table_and_writes_the_report(tmp_path, capsys):
+    out = tmp_path / "report.json"
+    assert (
+        main(["benchmark", "point5", "--policy", "oracle", "--tasks", "0,1", "--json", str(out), "--no-progress"]) == 0
+    )
+    printed = capsys.readouterr().out
+    assert "2/2" in printed and "task 1" in printed and f"wrote {out}" in printed
+    report = load_report(out)
+    assert (
+        report["command"] == "antmaze-hirl benchmark point5 --policy oracle --episodes-per-task 1 --seed 0 --tasks 0,1"
+    )
+    assert report["success_rate"] == 1.0
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["pointy", "--policy", "oracle"], r"unknown benchmark suite 'pointy'; choose one of \['point5'"),
+        (["point5", "--policy", "missing.zip"], r"no policy file at missing.zip; --policy takes oracle, random"),
+        (["point5", "--policy", "random", "--tasks", "0,100"], r"task_id 100 is out of range for suite 'point5'"),
+        (["point5", "--policy", "random", "--tasks", "a"], r"--tasks must be comma-separated integers, got 'a'"),
+        (["point5", "--policy", "random", "--episodes-per-task", "0"], r"--episodes-per-task must be >= 1, got 0"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):
+    code, captured = run_cli(capsys, *argv)
+    assert code == 2
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("antmaze-hirl benchmark: error: ")
+    assert pytest.importorskip("re").search(message, lines[0]), lines[0]
+
+
+def test_a_policy_of_the_wrong_body_is_one_line_and_exit_2(capsys, ppo_zip, learner_zip):
+    # Scored on the ant's U maze, the point's policies are refused before any episode is played.
+    code, captured = run_cli(capsys, "u", "--policy", str(ppo_zip))
+    assert code == 2 and "a policy of another body or maze size" in captured.err
+    assert len(captured.err.strip().splitlines()) == 1
+    code, captured = run_cli(capsys, "u", "--policy", str(learner_zip))
+    assert code == 2 and "is a learner for the point body (1 m cells); suite 'u' is ant" in captured.err
+
+
+def test_a_file_that_is_no_policy_is_refused_naming_it(tmp_path):
+    text = tmp_path / "notes.zip"
+    text.write_text("not a zip")
+    with pytest.raises(ValueError, match=r"notes.zip is not a zip"):
+        score_policy("point5", str(text), task_ids=[0])
+    other = tmp_path / "other.zip"
+    with zipfile.ZipFile(other, "w") as archive:
+        archive.writestr("readme.txt", "hello")
+    with pytest.raises(ValueError, match=r"other.zip is neither an SB3 model zip"):
+        score_policy("point5", str(other), task_ids=[0])
+
+
+def test_a_learner_for_another_maze_shape_is_refused(tmp_path):
+    env = gym.make("antmaze_hirl/AntMaze-4x4-v0", low_level=lambda obs: np.zeros(8))
+    path = tmp_path / "ant4_learner.zip"
+    HighLevelPolicy.for_env(env, rng=np.random.default_rng(0)).save(path)
+    env.close()
+    with pytest.raises(ValueError, match=r"is a learner for 6x6 maps; suite 'large' has 9x12 maps"):
+        score_policy("large", str(path), task_ids=[0], low_level=lambda obs: np.zeros(8))
+
+
+def test_a_report_of_another_format_is_refused(tmp_path):
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps({"format": "x"}))
+    with pytest.raises(ValueError, match=r"has format 'x', expected 'antmaze_hirl.benchmark_result/1'"):
+        load_report(path)
+
+
+def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+    import leaderboard
+
+    page = leaderboard.PAGE.read_text()
+    assert leaderboard.page_text(page) == page, "run python benchmarks/leaderboard.py"
+    reports = sorted(leaderboard.RESULTS.glob("*.json"))
+    assert reports
+    for path in reports:
+        report = load_report(path)
+        assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
+        assert f"]({'../benchmarks/results/benchmark/' + path.name})" in page
