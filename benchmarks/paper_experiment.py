@@ -27,7 +27,8 @@ family has only 48 wall grids). At half torque the shipped ant walks ~0.7-1 m/s,
 (25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
 
 Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
-           [--address RAY_ADDRESS] [--cpus-per-trial 1] [--evaluation-envs 25] [--seeds 5] [--episodes 100] [--maze-size N]
+           [--address RAY_ADDRESS] [--cpus-per-trial 1] [--evaluation-envs 25] [--seeds 5] [--episodes 100]
+           [--maze-size N]
            [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
            [--protocol 1|2] [--held-out-layouts --eval-episodes 50] [--allow-code-change]
        python benchmarks/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
