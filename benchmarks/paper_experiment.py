@@ -17,9 +17,11 @@ on the same held-out mazes (no ceiling: a learner may beat it on a sample of 100
 up to the square's symmetries and reads every curve on one fixed set of ``--final-eval-episodes``
 (default 100) held-out mazes, scored before the first episode (the untrained learner), every
 ``eval_every`` episodes and after the last, with per-maze outcomes in ``evaluations.csv`` and pooled
-rates with a cluster bootstrap over seeds and mazes. ``--protocol 1`` is that of the committed results
-folders (``benchmarks/results/paper_experiment_{point,ant}``): with ``--held-out-layouts`` the protocol
-of issue 12 (periodic and final evaluation on different sets), without it mazes held out by seed only.
+rates with a cluster bootstrap over seeds and mazes. ``--protocol 1`` reads as the committed results folders do
+(``benchmarks/results/paper_experiment_{point,ant}``): with ``--held-out-layouts`` the protocol of issue 12
+(periodic and final evaluation on different sets), without it mazes held out by seed only. Re-running
+those folders exactly needs the commit their provenance.json names: the strategies' scores, the start rule
+and the layout split have changed since.
 
 Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) oracle subgoals; the ant
 runs 3x3 mazes with 2 m oracle subgoals, and 4x4 mazes with ``--held-out-layouts`` (HELD_OUT_MAZE_SIZE: the 3x3

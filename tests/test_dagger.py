@@ -211,7 +211,8 @@ def test_switch_mixing_and_per_step_updates_run():
 
 @pytest.mark.integration
 def test_dagger_moves_the_learner_towards_the_experts_labels():
-    # On mazes it never trained on, the learner's subgoals get nearer the oracle's: the distance after 8
+    # On mazes held out by seed (not by layout: the 3x3 family has few grids), the learner's subgoals get nearer
+    # the oracle's: the distance after 8
     # episodes over the untrained one. Over seeds 0-9 (AMD EPYC, shared machine) that ratio spread from 0.20 to
     # 0.81 (mean 0.41, sd 0.18); after 4 episodes it spread from 0.20 to 1.19, so one seed is no test. The mean
     # of seeds 0-4 was 0.30; its seed-to-seed sd is ~0.08, so the bound 0.7 sits 3 sd above the 10-seed mean.
