@@ -23,6 +23,7 @@ REQUIRED = {
     "study init": ["runs/x", "--body", "point", "--participants", "2"],
     "study serve": ["runs/x"],
     "study simulate": ["runs/x"],
+    "benchmark": ["point5", "--policy", "random"],
 }
 """What each subcommand needs besides the option under test, so that an accepted value parses whole."""
 
