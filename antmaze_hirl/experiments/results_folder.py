@@ -334,8 +334,23 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
         "trial_seconds": seconds,
     }
     atomic_write_json(out_dir / "summary.json", summary)
-    plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
+    plot_panels(
+        rows,
+        methods,
+        out_dir / "panels.png",
+        title=f"{config.body}: DAgger + active learning",
+        untrained=untrained_by_seed(evaluations) or None,  # protocol 2: the curves start at the untrained success
+    )
     return summary
+
+
+def untrained_by_seed(evaluations: Sequence[dict[str, Any]]) -> dict[str, dict[int, float]]:
+    """``{method: {seed: success at episode 0}}`` of protocol 2's per-maze outcomes (``{}`` for none)."""
+    outcomes: dict[str, dict[int, list[bool]]] = {}
+    for row in evaluations:
+        if int(row["episode"]) == 0:
+            outcomes.setdefault(row["method"], {}).setdefault(int(row["seed"]), []).append(bool(row["success"]))
+    return {m: {s: sum(o) / len(o) for s, o in seeds.items()} for m, seeds in outcomes.items()}
 
 
 def _trials_in(episodes_csv: Path) -> set[tuple[str, int]]:
