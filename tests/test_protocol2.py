@@ -251,3 +251,20 @@ def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(tmp_path,
     assert episodes[0] == 0 and labels[0] == 0
     assert by_episode[:, 0].tolist() == start and by_labels[:, 0].tolist() == start
     assert episodes.tolist() == [0.0, 2.0, 3.0]
+
+
+def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
+    from antmaze_hirl.experiments.summary import cost_to_reach
+
+    rows, evaluations = [], []
+    # Seed 0 is at 3/4 untrained, then 2/4 and 3/4: 0 labels. Seed 1 starts at 1/4 and reaches 3/4 after 4 episodes.
+    for seed, curve in enumerate([{0: 3, 2: 2, 4: 3}, {0: 1, 2: 2, 4: 3}]):
+        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
+        rows += trial_rows
+        evaluations += outcomes
+    figure = summarise(rows, ["dagger"], evaluations=evaluations)["dagger"]["cost_to_60_percent"]
+    assert figure == {"median": 20.0, "seeds_reached": 2}  # median of 0 and 40 labels
+    seed0 = [row for row in rows if row["seed"] == 0]
+    assert cost_to_reach(seed0, start=0.75) == 0.0 and cost_to_reach(seed0) == 40.0
+    # Protocol 1 (no per-maze outcomes) reads the rows only: seed 0 costs 40 labels there.
+    assert summarise(rows, ["dagger"])["dagger"]["cost_to_60_percent"] == {"median": 40.0, "seeds_reached": 2}

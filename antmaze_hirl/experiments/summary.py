@@ -19,7 +19,8 @@ For each method, over its seeds (median, min and max):
   success (:func:`~antmaze_hirl.experiments.curves.labels_to_reach`), and the ratio of its median to
   DAgger's own: the expert-cost figure of "equal success with fewer labels". A seed that never reaches it
   counts as infinitely many labels in the median (``None`` if that is the median);
-* secondary: mean expert cost and attempts per episode, and labels to first reach 60% success.
+* secondary: mean expert cost and attempts per episode, and labels to first reach 60% success
+  (``cost_to_60_percent``; in protocol 2 the untrained evaluation counts, at 0 labels).
 
 With protocol 2's per-maze outcomes (``evaluations``, ``evaluations.csv``) every curve starts at the
 trial's measured untrained success (``untrained_success``, per seed and pooled), the final evaluation is
@@ -61,8 +62,16 @@ def median_range(values: Sequence[float | None]) -> dict[str, float | None]:
     return {"median": float(np.median(present)), "min": float(np.min(present)), "max": float(np.max(present))}
 
 
-def cost_to_reach(rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS) -> float | None:
-    """Cumulative expert cost at the first learner-only evaluation with success >= ``target`` (one trial)."""
+def cost_to_reach(
+    rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS, start: float | None = None
+) -> float | None:
+    """Cumulative expert cost at the first learner-only evaluation with success >= ``target`` (one trial).
+
+    ``start`` is the untrained learner's success (protocol 2's evaluation at episode 0): at or above
+    ``target`` the trial costs 0 labels. ``None`` (protocol 1, no untrained evaluation) skips it.
+    """
+    if start is not None and start >= target:
+        return 0.0
     for row in rows:
         if not math.isnan(row["eval_success"]) and row["eval_success"] >= target:
             return float(row["cumulative_expert_cost"])
@@ -173,7 +182,12 @@ def summarise(
             summary[method] = {"seeds": 0}
             continue
         per_seed = figures[method]
-        costs = [cost for trial in trials.values() if (cost := cost_to_reach(trial)) is not None]
+        # Protocol 2: the untrained evaluation counts (a learner at 60% untrained costs 0 labels).
+        costs = [
+            cost
+            for seed, trial in trials.items()
+            if (cost := cost_to_reach(trial, start=starts[method][seed] if evaluations else None)) is not None
+        ]
         method_rows = [row for trial in trials.values() for row in trial]
         summary[method] = {
             "seeds": len(trials),
