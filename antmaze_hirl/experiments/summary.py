@@ -18,7 +18,9 @@ For each method, over its seeds (median, min and max):
 * ``labels_to_match_<baseline>``: labels at which the curve first reaches plain DAgger's median final
   success (:func:`~antmaze_hirl.experiments.curves.labels_to_reach`), and the ratio of its median to
   DAgger's own: the expert-cost figure of "equal success with fewer labels". A seed that never reaches it
-  counts as infinitely many labels in the median (``None`` if that is the median);
+  counts as infinitely many labels in the median (``None`` if that is the median); 0 labels (a learner at
+  the target untrained, protocol 2) is a count like any: ratio 0.0 against DAgger's 40, 1.0 when both are 0,
+  ``None`` when DAgger needs 0 and the method more;
 * secondary: mean expert cost and attempts per episode, and labels to first reach 60% success
   (``cost_to_60_percent``; in protocol 2 the untrained evaluation counts, at 0 labels).
 
@@ -213,11 +215,7 @@ def summarise(
             method: _labels_to_match(trials, target, starts[method]) for method, trials in grouped.items() if trials
         }
         for method, match in matches.items():
-            ratio = (
-                match["median"] / matches[baseline]["median"]
-                if match["median"] and matches[baseline]["median"]
-                else None
-            )
+            ratio = _ratio(match["median"], matches[baseline]["median"])
             summary[method][f"labels_to_match_{baseline}"] = {
                 **match,
                 f"ratio_vs_{baseline}": ratio,
@@ -228,6 +226,19 @@ def summarise(
                 "same_set": bool(evaluations),
             }
     return summary
+
+
+def _ratio(labels: float | None, baseline: float | None) -> float | None:
+    """``labels / baseline``: 0 labels is a count like any (0 vs DAgger's 40 is 0.0, 0 vs 0 is 1.0).
+
+    ``None`` where either never reaches the target (``None``), or the baseline needs 0 labels and this method more
+    (no finite ratio).
+    """
+    if labels is None or baseline is None:
+        return None
+    if baseline == 0:
+        return 1.0 if labels == 0 else None
+    return labels / baseline
 
 
 def _untrained(evaluations: Sequence[dict[str, Any]], seed: int) -> float:
