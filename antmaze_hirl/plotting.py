@@ -30,6 +30,7 @@ __all__ = [
     "plot_panels",
     "plot_played_episode",
     "save_figure",
+    "success_points",
 ]
 
 
@@ -151,12 +152,42 @@ def draw_band(ax: Axes, x: np.ndarray, values: np.ndarray, label: str) -> Line2D
     return line
 
 
+def success_points(
+    rows: Sequence[Mapping[str, Any]], method: str, untrained: Mapping[int, float] | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The success curves' points of one method: ``(episodes, labels, success)``.
+
+    ``episodes`` and ``labels`` are the medians over seeds at each evaluation, ``success`` is
+    ``(seeds, points)``. With protocol 2's per-seed untrained success (``untrained``: ``{seed: rate}``,
+    the evaluation at episode 0) every curve starts at ``(0 episodes / 0 labels, untrained success)``;
+    without it (protocol 1) the curves start at the first evaluation after training.
+    """
+    success = _per_seed(rows, method, "eval_success", evaluated_only=True)
+    if success.size == 0:
+        return np.zeros(0), np.zeros(0), success
+    episodes = np.median(_per_seed(rows, method, "episode", evaluated_only=True), axis=0) + 1
+    labels = np.median(_per_seed(rows, method, "cumulative_expert_cost", evaluated_only=True), axis=0)
+    if untrained:
+        seeds = list(dict.fromkeys(row["seed"] for row in rows if row["method"] == method))  # _per_seed's order
+        start = np.array([[float(untrained[int(seed)])] for seed in seeds])
+        success = np.hstack([start, success])
+        episodes, labels = np.concatenate([[0.0], episodes]), np.concatenate([[0.0], labels])
+    return episodes, labels, success
+
+
 def plot_panels(
-    rows: Sequence[Mapping[str, Any]], methods: Sequence[str], out_file: str | Path, *, title: str = ""
+    rows: Sequence[Mapping[str, Any]],
+    methods: Sequence[str],
+    out_file: str | Path,
+    *,
+    title: str = "",
+    untrained: Mapping[str, Mapping[int, float]] | None = None,
 ) -> Path:
     """Saves the paper's three panels as one PNG: success vs episode, success vs expert cost, attempts vs episode.
 
-    Each panel draws the median over seeds with a min-max band (:func:`draw_band`).
+    Each panel draws the median over seeds with a min-max band (:func:`draw_band`). With protocol 2's
+    untrained success (``untrained``: ``{method: {seed: rate}}``) the success curves start there, at 0
+    episodes and 0 labels (:func:`success_points`).
 
     Returns:
         The path of the written file.
@@ -164,11 +195,9 @@ def plot_panels(
     fig = new_figure(figsize=(15, 4))
     axes = fig.subplots(1, 3)
     for method in methods:
-        success = _per_seed(rows, method, "eval_success", evaluated_only=True)
+        episodes, cost, success = success_points(rows, method, (untrained or {}).get(method))
         if success.size == 0:
             continue
-        episodes = np.median(_per_seed(rows, method, "episode", evaluated_only=True), axis=0) + 1
-        cost = np.median(_per_seed(rows, method, "cumulative_expert_cost", evaluated_only=True), axis=0)
         draw_band(axes[0], episodes, success, method)
         draw_band(axes[1], cost, success, method)
         attempts = _per_seed(rows, method, "attempts", evaluated_only=False)

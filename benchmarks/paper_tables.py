@@ -110,8 +110,11 @@ def cost_table(summary: dict[str, Any]) -> str:
 def per_label_table(summary: dict[str, Any]) -> str:
     """Learning per label: success at each budget, normalised AUC and labels to match DAgger's success."""
     budgets = " | ".join(f"success at {budget} labels" for budget in LABEL_BUDGETS)
+    run = [method for _, method in _methods_run(summary)]
+    horizon = next((m["normalised_auc"].get("label_horizon") for m in run if "normalised_auc" in m), None)
+    auc = "normalised AUC" if horizon is None else f"normalised AUC over 0-{horizon:.0f} labels"
     lines = [
-        f"| method | {budgets} | normalised AUC | labels to match DAgger, median (seeds reaching) | ratio to DAgger |",
+        f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |",
         "|---|" + "---|" * (len(LABEL_BUDGETS) + 3),
     ]
     for name, method in _methods_run(summary):
@@ -125,6 +128,22 @@ def per_label_table(summary: dict[str, Any]) -> str:
         reached = f" ({match['seeds_reached']} of {method['seeds']})" if match else ""
         ratio = "n/a" if match.get("ratio_vs_dagger") is None else f"{match['ratio_vs_dagger']:.2f}x"
         lines.append(f"| {name} | {' | '.join(cells)} | {auc} | {labels}{reached} | {ratio} |")
+    # Summaries from before same_set was recorded print no note.
+    same = {m["labels_to_match_dagger"].get("same_set") for m in run if "labels_to_match_dagger" in m} - {None}
+    if same:
+        lines.append("")
+        if same == {True}:
+            lines.append(
+                "Labels to match DAgger: same_set true: DAgger's target and every curve are read on one "
+                "evaluation set (protocol 2)."
+            )
+        elif same == {False}:
+            lines.append(
+                "Labels to match DAgger: same_set false: DAgger's target is read on the final set and the "
+                "curves' earlier points on the periodic set (protocol 1)."
+            )
+        else:
+            lines.append("Labels to match DAgger: same_set differs between methods.")
     return "\n".join(lines)
 
 

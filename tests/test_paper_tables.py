@@ -24,7 +24,16 @@ def test_tables_print_the_summary_figures():
     per_label = paper_tables.per_label_table(summary).splitlines()
     # DAgger's median final success, 75%: seed 0 reaches it at 262.5 labels, seed 1 never (its median is none).
     assert per_label[2] == "| dagger | 45% (40%-50%) | 65% (63%-67%) | n/a | 0.40 (0.38-0.41) | n/a (1 of 2) | n/a |"
-    assert all(line.count("|") == per_label[0].count("|") for line in per_label)
+    table = [line for line in per_label if line.startswith("|")]
+    assert all(line.count("|") == per_label[0].count("|") for line in table)
+    # The AUC's label horizon (summary.json's label_horizon) and the target's set are printed.
+    horizon = summary["methods"]["dagger"]["normalised_auc"]["label_horizon"]
+    assert f"| normalised AUC over 0-{horizon:.0f} labels |" in per_label[0]
+    assert per_label[len(table) :] == [
+        "",
+        "Labels to match DAgger: same_set false: DAgger's target is read on the final set and the curves' "
+        "earlier points on the periodic set (protocol 1).",
+    ]
     effort = paper_tables.effort_table(summary).splitlines()
     # Noise: 300 labels (seeds 200, 400) against DAgger's 275; its 75% median is above DAgger's pooled 53.1%.
     assert effort[3] == "| noise | 300 | 1.09x | 75% | yes (bound 53.1%) |"
@@ -109,3 +118,27 @@ def test_bad_beside_arguments_get_one_line_errors(tmp_path, monkeypatch, capsys,
     with pytest.raises(SystemExit) as stop:
         paper_tables.main()
     assert stop.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_labels_to_match_dagger_at_0_labels_has_a_ratio_and_protocol_2_notes_the_same_set():
+    from test_protocol2 import crafted_trial
+
+    rows, evaluations = [], []
+    # DAgger reaches its median final success (4/4) after 4 episodes (40 labels); noise starts there untrained.
+    for method, curves in (("dagger", [{0: 1, 2: 3, 4: 4}] * 2), ("noise", [{0: 4, 2: 4, 4: 4}] * 2)):
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve)
+            rows += trial_rows
+            evaluations += outcomes
+    summary = {"methods": summarise(rows, ["dagger", "noise"], evaluations=evaluations)}
+    noise = summary["methods"]["noise"]["labels_to_match_dagger"]
+    assert noise["median"] == 0.0 and noise["ratio_vs_dagger"] == 0.0  # not None: 0 labels is a count
+    per_label = paper_tables.per_label_table(summary).splitlines()
+    assert "| normalised AUC over 0-40 labels |" in per_label[0]
+    assert per_label[3].endswith("| 0 (2 of 2) | 0.00x |")
+    assert per_label[-1].startswith("Labels to match DAgger: same_set true: DAgger's target and every curve")
+    # DAgger itself at 0 labels: 0 against 0 is a ratio of 1; a method needing more has no finite ratio.
+    both = {"methods": summarise(rows, ["noise"], baseline="noise", evaluations=evaluations)}
+    assert both["methods"]["noise"]["labels_to_match_noise"]["ratio_vs_noise"] == 1.0
+    dagger_vs_noise = summarise(rows, ["dagger", "noise"], baseline="noise", evaluations=evaluations)
+    assert dagger_vs_noise["dagger"]["labels_to_match_noise"]["ratio_vs_noise"] is None

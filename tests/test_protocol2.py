@@ -210,3 +210,61 @@ def test_protocol_2_trains_the_generic_learner_and_protocol_1_the_body_default()
     assert learner_settings(STRONG_PRIOR, 5)["planning_iterations"] == 16 and STRONG_PRIOR in LEARNERS
     with pytest.raises(ValueError, match="unknown learner 'mlp'; choose from"):
         ExperimentConfig(learner="mlp")
+
+
+def test_the_success_curves_start_at_the_untrained_success():
+    from antmaze_hirl.experiments.results_folder import untrained_by_seed
+    from antmaze_hirl.plotting import success_points
+
+    rows, evaluations = [], []
+    for seed, curve in enumerate([{0: 1, 2: 3, 4: 4}, {0: 3, 2: 2, 4: 4}]):
+        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
+        rows += trial_rows
+        evaluations += outcomes
+    untrained = untrained_by_seed(evaluations)
+    assert untrained == {"dagger": {0: 0.25, 1: 0.75}}
+    episodes, labels, success = success_points(rows, "dagger", untrained["dagger"])
+    assert episodes.tolist() == [0.0, 2.0, 4.0] and labels.tolist() == [0.0, 20.0, 40.0]
+    assert success.tolist() == [[0.25, 0.75, 1.0], [0.75, 0.5, 1.0]]
+    # Protocol 1: no untrained point, the curve starts at the first evaluation after training.
+    episodes, labels, success = success_points(rows, "dagger")
+    assert episodes.tolist() == [2.0, 4.0] and labels.tolist() == [20.0, 40.0] and success.shape == (2, 2)
+
+
+def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(tmp_path, monkeypatch):
+    import antmaze_hirl.plotting as plotting
+    from antmaze_hirl.experiments.results_folder import read_evaluations, write_reports
+
+    run_experiment(["dagger"], 2, TINY2, tmp_path, progress_bar=False, tensorboard=False)
+    drawn = []
+    real = plotting.draw_band
+    monkeypatch.setattr(
+        plotting, "draw_band", lambda ax, x, values, label: drawn.append((x, values)) or real(ax, x, values, label)
+    )
+    write_reports(tmp_path, ["dagger"], 2, TINY2)
+    untrained = {}
+    for row in read_evaluations(tmp_path / "evaluations.csv"):
+        if row["episode"] == 0:
+            untrained.setdefault(row["seed"], []).append(row["success"])
+    start = [np.mean(untrained[seed]) for seed in (0, 1)]
+    (episodes, by_episode), (labels, by_labels) = drawn[0], drawn[1]  # success vs episode, success vs labels
+    assert episodes[0] == 0 and labels[0] == 0
+    assert by_episode[:, 0].tolist() == start and by_labels[:, 0].tolist() == start
+    assert episodes.tolist() == [0.0, 2.0, 3.0]
+
+
+def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
+    from antmaze_hirl.experiments.summary import cost_to_reach
+
+    rows, evaluations = [], []
+    # Seed 0 is at 3/4 untrained, then 2/4 and 3/4: 0 labels. Seed 1 starts at 1/4 and reaches 3/4 after 4 episodes.
+    for seed, curve in enumerate([{0: 3, 2: 2, 4: 3}, {0: 1, 2: 2, 4: 3}]):
+        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
+        rows += trial_rows
+        evaluations += outcomes
+    figure = summarise(rows, ["dagger"], evaluations=evaluations)["dagger"]["cost_to_60_percent"]
+    assert figure == {"median": 20.0, "seeds_reached": 2}  # median of 0 and 40 labels
+    seed0 = [row for row in rows if row["seed"] == 0]
+    assert cost_to_reach(seed0, start=0.75) == 0.0 and cost_to_reach(seed0) == 40.0
+    # Protocol 1 (no per-maze outcomes) reads the rows only: seed 0 costs 40 labels there.
+    assert summarise(rows, ["dagger"])["dagger"]["cost_to_60_percent"] == {"median": 40.0, "seeds_reached": 2}

@@ -6,7 +6,7 @@ import warnings
 import pytest
 
 from antmaze_hirl.experiments.config import ExperimentConfig
-from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path
+from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path, trial_record, write_reports
 from antmaze_hirl.experiments.runner import run_experiment
 
 TINY = ExperimentConfig(
@@ -109,3 +109,101 @@ def test_reports_are_not_replaced_with_fewer_trials_while_one_is_damaged(finishe
         write_reports(folder, ["dagger"], 2, TINY)
     assert (folder / "episodes.csv").read_bytes() == files["episodes.csv"]
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
+
+
+TINY2 = ExperimentConfig(
+    body="point",
+    episodes=3,
+    eval_every=2,
+    eval_episodes=2,
+    final_eval_episodes=3,
+    maze_size=4,
+    gradient_steps=5,
+    held_out_layouts=True,
+    protocol=2,
+)
+
+
+def changed_value(text):
+    return text.replace(",True", ",False", 1) if ",True" in text else text.replace(",False", ",True", 1)
+
+
+PART_DAMAGE = {
+    "missing part": None,
+    "cut line": cut_line,
+    "changed value": changed_value,
+}
+
+
+@pytest.fixture(scope="module")
+def finished2(tmp_path_factory):
+    """A finished tiny protocol-2 experiment: its folder and its files' bytes."""
+    folder = tmp_path_factory.mktemp("results2")
+    run_experiment(["dagger"], 2, TINY2, folder, progress_bar=False, tensorboard=False)
+    files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
+    return folder, files
+
+
+def copy_folder(source, folder):
+    for path in source.rglob("*"):
+        if path.is_file() and "tb" not in path.relative_to(source).parts:
+            target = folder / path.relative_to(source)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(path.read_bytes())
+
+
+def damage_part(part, kind):
+    if PART_DAMAGE[kind] is None:
+        part.unlink()
+    else:
+        damaged = PART_DAMAGE[kind](part.read_text())
+        assert damaged != part.read_text()
+        part.write_text(damaged)
+
+
+def test_a_protocol_2_record_holds_its_evaluations_part_and_older_records_still_load(finished2, tmp_path):
+    folder, files = finished2
+    path = trial_path(folder, "dagger", 0)
+    record = json.loads(path.with_suffix(".json").read_text())
+    part = files["dagger_seed0.evaluations.csv"].decode()
+    assert record["evaluations"]["rows"] == part.count("\n") - 1 == 3 * TINY2.final_eval_episodes
+    assert len(record["evaluations"]["sha256"]) == 64
+    assert len(check_trial(path, TINY2.episodes)) == TINY2.episodes
+    # A record from before the part was recorded loads, part or no part (structure of the rows only).
+    copy_folder(folder, tmp_path)
+    old = trial_path(tmp_path, "dagger", 0)
+    old.with_suffix(".json").write_text(json.dumps({k: v for k, v in record.items() if k != "evaluations"}))
+    old.with_suffix(".evaluations.csv").unlink()
+    assert len(check_trial(old, TINY2.episodes)) == TINY2.episodes
+    # Protocol 1 records have no "evaluations" entry.
+    assert "evaluations" not in trial_record("a\n1\n", 1.0)
+
+
+@pytest.mark.parametrize("kind", sorted(PART_DAMAGE))
+def test_a_damaged_evaluations_part_is_named_and_its_trial_rerun_on_resume(finished2, tmp_path, kind):
+    source, files = finished2
+    folder = tmp_path / "results"
+    copy_folder(source, folder)
+    rows_csv = trial_path(folder, "dagger", 1)
+    part = rows_csv.with_suffix(".evaluations.csv")
+    damage_part(part, kind)
+    damaged_bytes = part.read_bytes() if part.exists() else None
+    with pytest.raises(DamagedTrial, match=r"dagger_seed1\.evaluations\.csv"):
+        check_trial(rows_csv, TINY2.episodes)
+    with pytest.warns(UserWarning, match=r"left out of the reports: .*dagger_seed1\.evaluations\.csv"):
+        write_reports(folder, ["dagger"], 2, TINY2)  # no bare ValueError from summarise; old reports kept
+    assert (folder / "summary.json").read_bytes() == files["summary.json"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        run_experiment(["dagger"], 2, TINY2, folder, progress_bar=False, tensorboard=False)
+    named = [str(w.message) for w in caught if "dagger_seed1.evaluations.csv" in str(w.message)]
+    assert named and "runs again" in named[0], [str(w.message) for w in caught]
+    assert (folder / "trials" / "dagger_seed1.csv.damaged").exists()
+    if damaged_bytes is not None:  # the damaged part's bytes are kept, not deleted
+        assert (folder / "trials" / "dagger_seed1.evaluations.csv.damaged").read_bytes() == damaged_bytes
+    # The seeded re-run writes the part, the trial and the reports back as they were.
+    assert part.read_bytes() == files["dagger_seed1.evaluations.csv"]
+    assert rows_csv.read_bytes() == files["dagger_seed1.csv"]
+    assert (folder / "evaluations.csv").read_bytes() == files["evaluations.csv"]
+    summary, before = (json.loads(s) for s in ((folder / "summary.json").read_text(), files["summary.json"]))
+    assert summary["methods"] == before["methods"]

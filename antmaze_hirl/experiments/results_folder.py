@@ -2,7 +2,9 @@
 
 Each finished trial is ``trials/<method>_seed<k>.csv`` plus its record ``trials/<method>_seed<k>.json``:
 ``{"seconds", "rows", "sha256"}``, the row count and the SHA-256 of the CSV's bytes, written just before
-the CSV (:func:`trial_record`). :func:`check_trial` tells a damaged trial (a cut line, a duplicated or
+the CSV (:func:`trial_record`); in protocol 2 also ``"evaluations": {"rows", "sha256"}`` of the trial's
+per-maze part ``trials/<method>_seed<k>.evaluations.csv``, which is checked with the CSV.
+:func:`check_trial` tells a damaged trial (a cut line, a duplicated or
 dropped row, an empty file, garbage, or a CSV that does not match its record) and names the file; on
 resume :func:`trial_is_done` moves such a file aside to ``<name>.csv.damaged`` (its bytes are kept) and
 the trial is run again. Trials written before the record held a hash get the structural checks only.
@@ -61,10 +63,43 @@ class DamagedTrial(ValueError):
     """A trial CSV that is not what its run wrote (the message names the file and what is wrong)."""
 
 
-def trial_record(csv_text: str, seconds: float) -> dict[str, Any]:
-    """The record saved beside a trial CSV: wall time, row count and SHA-256 of the CSV's UTF-8 bytes."""
+def _count_and_hash(csv_text: str) -> dict[str, Any]:
     rows = max(csv_text.count("\n") - 1, 0)  # one line per row after the header; no cell holds a newline
-    return {"seconds": seconds, "rows": rows, "sha256": hashlib.sha256(csv_text.encode()).hexdigest()}
+    return {"rows": rows, "sha256": hashlib.sha256(csv_text.encode()).hexdigest()}
+
+
+def trial_record(csv_text: str, seconds: float, evaluations_text: str | None = None) -> dict[str, Any]:
+    """The record saved beside a trial CSV: wall time, row count and SHA-256 of the CSV's UTF-8 bytes.
+
+    With protocol 2's per-maze part (``evaluations_text``, :func:`evaluations_path`) its row count and
+    SHA-256 go under ``"evaluations"``, so a missing or damaged part marks the trial damaged too.
+    """
+    record = {"seconds": seconds, **_count_and_hash(csv_text)}
+    if evaluations_text is not None:
+        record["evaluations"] = _count_and_hash(evaluations_text)
+    return record
+
+
+def _check_evaluations_part(path: Path, record: dict[str, Any], record_path: Path) -> None:
+    # The trial's per-maze part against its record (protocol 2; records without "evaluations" are not checked).
+    expected = record.get("evaluations")
+    if expected is None:
+        return
+    part = evaluations_path(path)
+    if not isinstance(expected, dict) or "sha256" not in expected:
+        raise DamagedTrial(f'{record_path}: its "evaluations" entry is not a row count and SHA-256')
+    try:
+        data = part.read_bytes()
+    except FileNotFoundError:
+        raise DamagedTrial(f"{part}: missing (its trial's record {record_path.name} lists it)") from None
+    except OSError as error:
+        raise DamagedTrial(f"{part}: unreadable ({error})") from None
+    if hashlib.sha256(data).hexdigest() != expected["sha256"]:
+        lines = max(data.count(b"\n") - 1, 0)
+        raise DamagedTrial(
+            f"{part}: its bytes do not match the SHA-256 in {record_path.name} ({lines} rows, "
+            f"{expected.get('rows')} written): cut, edited or damaged"
+        )
 
 
 def check_trial(path: Path, episodes: int) -> list[dict[str, Any]]:
@@ -124,6 +159,7 @@ def check_trial(path: Path, episodes: int) -> list[dict[str, Any]]:
             + (f"; repeated {repeated[:5]}" if repeated else "")
             + (f"; missing {absent[:5]}" if absent else "")
         )
+    _check_evaluations_part(path, record, record_path)
     return rows
 
 
@@ -156,7 +192,13 @@ def trial_is_done(out_dir: Path, method: str, seed: int, episodes: int) -> bool:
     except DamagedTrial as damaged:
         aside = _free_name(path.with_name(path.name + ".damaged"))
         path.rename(aside)
-        warnings.warn(f"{damaged}; moved to {aside.name}, and the trial runs again", stacklevel=2)
+        moved = [aside.name]
+        part = evaluations_path(path)
+        if part.exists():  # its per-maze part goes with it (the re-run writes both again)
+            part_aside = _free_name(part.with_name(part.name + ".damaged"))
+            part.rename(part_aside)
+            moved.append(part_aside.name)
+        warnings.warn(f"{damaged}; moved to {' and '.join(moved)}, and the trial runs again", stacklevel=2)
         return False
     return True
 
@@ -292,8 +334,23 @@ def write_reports(out_dir: Path, methods: Sequence[str], seeds: int, config: Exp
         "trial_seconds": seconds,
     }
     atomic_write_json(out_dir / "summary.json", summary)
-    plot_panels(rows, methods, out_dir / "panels.png", title=f"{config.body}: DAgger + active learning")
+    plot_panels(
+        rows,
+        methods,
+        out_dir / "panels.png",
+        title=f"{config.body}: DAgger + active learning",
+        untrained=untrained_by_seed(evaluations) or None,  # protocol 2: the curves start at the untrained success
+    )
     return summary
+
+
+def untrained_by_seed(evaluations: Sequence[dict[str, Any]]) -> dict[str, dict[int, float]]:
+    """``{method: {seed: success at episode 0}}`` of protocol 2's per-maze outcomes (``{}`` for none)."""
+    outcomes: dict[str, dict[int, list[bool]]] = {}
+    for row in evaluations:
+        if int(row["episode"]) == 0:
+            outcomes.setdefault(row["method"], {}).setdefault(int(row["seed"]), []).append(bool(row["success"]))
+    return {m: {s: sum(o) / len(o) for s, o in seeds.items()} for m, seeds in outcomes.items()}
 
 
 def _trials_in(episodes_csv: Path) -> set[tuple[str, int]]:

@@ -364,9 +364,11 @@ def save_trial(
     Protocol 2's per-maze outcomes go to ``trials/<method>_seed<k>.evaluations.csv``, before the rows.
     """
     path, text = trial_path(out_dir, method, seed), rows_to_csv(rows)
-    if evaluations:
-        atomic_write_text(evaluations_path(path), rows_to_csv(evaluations, EVALUATION_COLUMNS))
-    atomic_write_json(path.with_suffix(".json"), trial_record(text, seconds))  # rows and hash: damage is found
+    part = rows_to_csv(evaluations, EVALUATION_COLUMNS) if evaluations else None
+    if part is not None:
+        atomic_write_text(evaluations_path(path), part)
+    # Rows and hashes (the rows' and the per-maze part's): damage to either is found.
+    atomic_write_json(path.with_suffix(".json"), trial_record(text, seconds, part))
     atomic_write_text(path, text)  # last: its existence marks the trial done
     return path
 

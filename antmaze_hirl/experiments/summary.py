@@ -18,8 +18,11 @@ For each method, over its seeds (median, min and max):
 * ``labels_to_match_<baseline>``: labels at which the curve first reaches plain DAgger's median final
   success (:func:`~antmaze_hirl.experiments.curves.labels_to_reach`), and the ratio of its median to
   DAgger's own: the expert-cost figure of "equal success with fewer labels". A seed that never reaches it
-  counts as infinitely many labels in the median (``None`` if that is the median);
-* secondary: mean expert cost and attempts per episode, and labels to first reach 60% success.
+  counts as infinitely many labels in the median (``None`` if that is the median); 0 labels (a learner at
+  the target untrained, protocol 2) is a count like any: ratio 0.0 against DAgger's 40, 1.0 when both are 0,
+  ``None`` when DAgger needs 0 and the method more;
+* secondary: mean expert cost and attempts per episode, and labels to first reach 60% success
+  (``cost_to_60_percent``; in protocol 2 the untrained evaluation counts, at 0 labels).
 
 With protocol 2's per-maze outcomes (``evaluations``, ``evaluations.csv``) every curve starts at the
 trial's measured untrained success (``untrained_success``, per seed and pooled), the final evaluation is
@@ -61,8 +64,16 @@ def median_range(values: Sequence[float | None]) -> dict[str, float | None]:
     return {"median": float(np.median(present)), "min": float(np.min(present)), "max": float(np.max(present))}
 
 
-def cost_to_reach(rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS) -> float | None:
-    """Cumulative expert cost at the first learner-only evaluation with success >= ``target`` (one trial)."""
+def cost_to_reach(
+    rows: Sequence[dict[str, Any]], target: float = TARGET_SUCCESS, start: float | None = None
+) -> float | None:
+    """Cumulative expert cost at the first learner-only evaluation with success >= ``target`` (one trial).
+
+    ``start`` is the untrained learner's success (protocol 2's evaluation at episode 0): at or above
+    ``target`` the trial costs 0 labels. ``None`` (protocol 1, no untrained evaluation) skips it.
+    """
+    if start is not None and start >= target:
+        return 0.0
     for row in rows:
         if not math.isnan(row["eval_success"]) and row["eval_success"] >= target:
             return float(row["cumulative_expert_cost"])
@@ -173,7 +184,12 @@ def summarise(
             summary[method] = {"seeds": 0}
             continue
         per_seed = figures[method]
-        costs = [cost for trial in trials.values() if (cost := cost_to_reach(trial)) is not None]
+        # Protocol 2: the untrained evaluation counts (a learner at 60% untrained costs 0 labels).
+        costs = [
+            cost
+            for seed, trial in trials.items()
+            if (cost := cost_to_reach(trial, start=starts[method][seed] if evaluations else None)) is not None
+        ]
         method_rows = [row for trial in trials.values() for row in trial]
         summary[method] = {
             "seeds": len(trials),
@@ -199,11 +215,7 @@ def summarise(
             method: _labels_to_match(trials, target, starts[method]) for method, trials in grouped.items() if trials
         }
         for method, match in matches.items():
-            ratio = (
-                match["median"] / matches[baseline]["median"]
-                if match["median"] and matches[baseline]["median"]
-                else None
-            )
+            ratio = _ratio(match["median"], matches[baseline]["median"])
             summary[method][f"labels_to_match_{baseline}"] = {
                 **match,
                 f"ratio_vs_{baseline}": ratio,
@@ -214,6 +226,19 @@ def summarise(
                 "same_set": bool(evaluations),
             }
     return summary
+
+
+def _ratio(labels: float | None, baseline: float | None) -> float | None:
+    """``labels / baseline``: 0 labels is a count like any (0 vs DAgger's 40 is 0.0, 0 vs 0 is 1.0).
+
+    ``None`` where either never reaches the target (``None``), or the baseline needs 0 labels and this method more
+    (no finite ratio).
+    """
+    if labels is None or baseline is None:
+        return None
+    if baseline == 0:
+        return 1.0 if labels == 0 else None
+    return labels / baseline
 
 
 def _untrained(evaluations: Sequence[dict[str, Any]], seed: int) -> float:
