@@ -64,6 +64,13 @@ class BadInput(ValueError):
     """A malformed or out-of-range value from a participant's page (answered with HTTP 400)."""
 
 
+class TrialCannotStart(ProtocolError):
+    """The study's settings give a trial that cannot be built (e.g. a maze family too small to hold out; HTTP 409).
+
+    Nothing was written: the participant stays before the trial; the experimenter fixes the study's settings.
+    """
+
+
 class DamagedRecords(Exception):
     """A participant's saved files are damaged or missing, so their session cannot go on (HTTP 409).
 
@@ -302,10 +309,18 @@ class ParticipantSession:
                 raise ProtocolError(f"no trial to start: participant {self.participant.id} is at {self.phase!r}")
             trial = self.trial
             assert trial is not None  # "intro" is only set while a trial remains
-            self._log_event("trial_start", trial=trial.index)
+            # Build the trial (envs, trainer, first maze: all in memory) before anything is written, so a
+            # trial that cannot be built leaves the participant at "intro" with no trace on disk.
             self.phase = "label"
+            try:
+                self._open_trial(resume=False)
+            except ValueError as error:
+                self.phase, self._trial, self._run = "intro", None, None
+                raise TrialCannotStart(
+                    f"trial {trial.index} of participant {self.participant.id} cannot start: {error}"
+                ) from error
+            self._log_event("trial_start", trial=trial.index)
             self._save_progress()
-            self._open_trial(resume=False)
             return self.state()
 
     def label(self, query_id: Any, x: Any, y: Any, response_seconds: Any = None) -> dict[str, Any]:
