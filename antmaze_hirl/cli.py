@@ -37,6 +37,10 @@ example:
 _Subparsers = argparse._SubParsersAction
 STUDY_EXTRA_MODULES = ("fastapi", "starlette", "uvicorn", "statsmodels", "pandas")
 """What ``pip install 'antmaze_hirl[study]'`` adds: the study page's ASGI stack and its report's statistics."""
+STUDY_EXTRA_HINT = (
+    "from the project's checkout: pip install '.[study]' (an installed package: pip install 'antmaze_hirl[study]')"
+)
+"""How to add the study extra: the project is installed from its checkout, so the path form comes first."""
 _BODIES = sorted(BODY_SPECS)
 
 
@@ -460,7 +464,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         missing = [name for name in STUDY_EXTRA_MODULES if importlib.util.find_spec(name) is None]
         if missing:
             parser.exit(
-                2, f"antmaze-hirl study: error: needs {', '.join(missing)}: pip install 'antmaze_hirl[study]'\n"
+                2,
+                f"antmaze-hirl study: error: needs {', '.join(missing)}: {STUDY_EXTRA_HINT}\n",
             )
     # After parsing, so that --help and a usage error never load SB3 (which the checkpoint module imports).
     from antmaze_hirl.sb3_ext.checkpoint import CheckpointError

@@ -51,14 +51,14 @@ def test_core_modules_and_every_id_need_no_study_extra(tmp_path):
     assert result.stdout.strip().endswith("core ok")
 
 
-def test_the_study_command_names_the_extra_when_it_is_missing(tmp_path):
+def test_the_missing_extra_hint_says_how_to_install_it_from_a_checkout(tmp_path):
     code = "from antmaze_hirl.cli import main\nmain(['study', 'analyze', 'runs/study'])\n"
     result = run_blocked(code, tmp_path)
     assert result.returncode == 2
     # The last line, not the only one: older gymnasium-robotics warn on stderr as they register their ids.
     assert result.stderr.strip().splitlines()[-1] == (
         "antmaze-hirl study: error: needs fastapi, starlette, uvicorn, statsmodels, pandas: "
-        "pip install 'antmaze_hirl[study]'"
+        "from the project's checkout: pip install '.[study]' (an installed package: pip install 'antmaze_hirl[study]')"
     )
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "runs").exists()

@@ -180,3 +180,56 @@ def test_fuzzed_json_bodies_never_get_a_5xx_and_a_4xx_changes_nothing(served, da
     if response.status_code >= 400:
         assert isinstance(response.json()["error"], str)
         assert snapshot(folder) == before, (route, body, response.text)
+
+
+def test_study_init_refuses_a_maze_size_whose_family_has_no_selection_part(tmp_path):
+    """The 3x3 point family has no wall grid in the "selection" part: refused at init, naming the value."""
+    import argparse
+
+    from antmaze_hirl.study.cli import add_study_parser
+    from antmaze_hirl.study.settings import StudySettings
+
+    with pytest.raises(ValueError, match=r"maze_size 3 .*'selection'"):
+        StudySettings.for_body("point", maze_size=3)
+    with pytest.raises(ValueError, match="maze_size 3"):
+        StudySettings(body="point", maze_size=3, held_out_layouts=True)  # settings.json's path too
+    assert StudySettings(body="point", maze_size=3).maze_size == 3  # without held-out layouts every size draws
+    parser = argparse.ArgumentParser()
+    add_study_parser(parser.add_subparsers(dest="command"))
+    folder = tmp_path / "st4"
+    args = parser.parse_args(
+        ["study", "init", str(folder), "--body", "point", "--participants", "2", "--maze-size", "3"]
+    )
+    with pytest.raises(ValueError, match="maze_size 3") as refused:
+        args.handler(args)
+    assert "\n" not in str(refused.value)  # the CLI prints it as one line
+    assert not folder.exists()  # nothing written
+
+
+def test_a_trial_that_cannot_be_built_is_a_409_and_writes_nothing(tmp_path, monkeypatch):
+    """A ValueError while building the trial: a JSON 4xx, no progress or event written, and a retry is possible."""
+    from antmaze_hirl.study import session as session_module
+
+    folder = make_tiny_study(tmp_path / "study", participants=1)
+
+    def no_mazes(config, low_level=None):
+        raise ValueError("no layout in split 'selection' in 1000 draws")
+
+    real = session_module.TrialEnvs
+    monkeypatch.setattr(session_module, "TrialEnvs", no_mazes)
+    server = StudyServer(folder, token=TOKEN)
+    with (
+        server.running(),
+        httpx.Client(base_url=server.base_url, headers={"X-Study-Token": TOKEN}, timeout=120) as client,
+    ):
+        before = snapshot(folder)
+        refused = client.post("/api/participants/P01/start", json={})
+        assert refused.status_code == 409, refused.text
+        assert "cannot start" in refused.json()["error"] and "selection" in refused.json()["error"]
+        assert snapshot(folder) == before
+        state = client.get("/api/participants/P01/state").json()
+        assert state["phase"] == "intro"
+        monkeypatch.setattr(session_module, "TrialEnvs", real)
+        started = client.post("/api/participants/P01/start", json={})
+        assert started.status_code == 200, started.text
+        assert started.json()["phase"] == "label" and started.json()["query"] is not None

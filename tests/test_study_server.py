@@ -114,3 +114,34 @@ def test_the_overview_reads_saved_progress_without_building_sessions(tmp_path):
     with pytest.raises(UnknownParticipant, match="P99"):
         study.progress("P99")
     study.close()
+
+
+def test_a_click_on_a_wall_or_beyond_the_reach_circle_is_a_400_and_changes_nothing(served, client):
+    """The page's wall and reach checks are repeated on the server: a request sent around the page is refused."""
+    import numpy as np
+
+    from antmaze_hirl.envs.geometry import MazeGeometry
+
+    _, folder = served
+    if client.get("/api/participants/P01/state").json()["phase"] == "intro":
+        assert client.post("/api/participants/P01/start", json={}).status_code == 200
+    state = client.get("/api/participants/P01/state").json()
+    maze, agent = state["maze"], np.asarray(state["agent"])
+    geometry = MazeGeometry(maze["rows"], maze["cols"], maze["scale"])
+    walls = np.asarray(maze["walls"], dtype=bool)
+    low, high = (np.asarray(b) for b in maze["bounds"])
+    centres = [
+        (geometry.cell_to_xy((r, c)), bool(walls[r, c])) for r in range(maze["rows"]) for c in range(maze["cols"])
+    ]
+    inside = [(xy, wall) for xy, wall in centres if np.all(low <= xy) and np.all(xy <= high)]
+    wall = next(xy for xy, is_wall in inside if is_wall)
+    far = max((xy for xy, is_wall in inside if not is_wall), key=lambda xy: np.hypot(*(xy - agent)))
+    assert np.hypot(*(far - agent)) > state["max_distance"] + 0.1
+    before = snapshot(folder)
+    query = state["query"]["id"]
+    for xy, message in ((wall, "on a wall"), (far, "beyond the reach circle")):
+        response = client.post("/api/participants/P01/label", json={"query": query, "x": xy[0], "y": xy[1]})
+        assert response.status_code == 400, response.text
+        assert message in response.json()["error"] and f"{xy[0]:.3f}" in response.json()["error"]
+    assert snapshot(folder) == before
+    assert client.get("/api/participants/P01/state").json()["query"]["id"] == query  # still open

@@ -64,12 +64,25 @@ class BadInput(ValueError):
     """A malformed or out-of-range value from a participant's page (answered with HTTP 400)."""
 
 
+class TrialCannotStart(ProtocolError):
+    """The study's settings give a trial that cannot be built (e.g. a maze family too small to hold out; HTTP 409).
+
+    Nothing was written: the participant stays before the trial; the experimenter fixes the study's settings.
+    """
+
+
 class DamagedRecords(Exception):
     """A participant's saved files are damaged or missing, so their session cannot go on (HTTP 409).
 
     The message names the file; the experimenter repairs or removes it. Other participants are not affected.
     """
 
+
+CLICK_SLACK_PIXELS = 3.0
+"""Screen pixels past the reach circle a click may land and still count (study.js: the dashed line is 2 px)."""
+
+MIN_CANVAS_SCREEN_PIXELS = 520.0
+"""The smallest the page's 640-px canvas is shown (window 1024x640; study.css: max-height 100vh - 120px)."""
 
 LOGS = ("events.jsonl", "clicks.jsonl", "answers.jsonl", "episodes.csv")
 """A participant's append-only logs (events first: it records the trims of the others)."""
@@ -302,10 +315,18 @@ class ParticipantSession:
                 raise ProtocolError(f"no trial to start: participant {self.participant.id} is at {self.phase!r}")
             trial = self.trial
             assert trial is not None  # "intro" is only set while a trial remains
-            self._log_event("trial_start", trial=trial.index)
+            # Build the trial (envs, trainer, first maze: all in memory) before anything is written, so a
+            # trial that cannot be built leaves the participant at "intro" with no trace on disk.
             self.phase = "label"
+            try:
+                self._open_trial(resume=False)
+            except ValueError as error:
+                self.phase, self._trial, self._run = "intro", None, None
+                raise TrialCannotStart(
+                    f"trial {trial.index} of participant {self.participant.id} cannot start: {error}"
+                ) from error
+            self._log_event("trial_start", trial=trial.index)
             self._save_progress()
-            self._open_trial(resume=False)
             return self.state()
 
     def label(self, query_id: Any, x: Any, y: Any, response_seconds: Any = None) -> dict[str, Any]:
@@ -478,6 +499,22 @@ class ParticipantSession:
             raise BadInput(
                 f"click ({values[0]:.3f}, {values[1]:.3f}) is outside the maze: x in [{low[0]:.2f}, {high[0]:.2f}], "
                 f"y in [{low[1]:.2f}, {high[1]:.2f}]"
+            )
+        # The page's own checks (study.js, refusalOf), repeated: a request sent around the page is refused too.
+        inner = self._env.unwrapped
+        geometry = inner.geometry
+        point = np.asarray(values)
+        if not geometry.is_free(inner.layout.walls, point):
+            raise BadInput(f"click ({values[0]:.3f}, {values[1]:.3f}) is on a wall: the subgoal must be on the floor")
+        assert self._run is not None and self._run.request is not None
+        agent = STATE_LAYOUT.agent_xy(self._run.request.observation["state"])
+        distance = float(np.hypot(*(point - agent)))
+        # The page counts 3 screen pixels past the circle as inside; in metres, at the smallest on-screen canvas.
+        slack = CLICK_SLACK_PIXELS * float(np.max(geometry.high - geometry.low)) / MIN_CANVAS_SCREEN_PIXELS
+        if distance > self.max_distance + slack:
+            raise BadInput(
+                f"click ({values[0]:.3f}, {values[1]:.3f}) is {distance:.3f} m from the agent, beyond the reach "
+                f"circle's {self.max_distance:.3f} m (+{slack:.3f} m slack)"
             )
         return values[0], values[1]
 

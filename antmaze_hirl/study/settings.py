@@ -54,13 +54,16 @@ class StudySettings:
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
         if not isinstance(self.show_learner_subgoal, bool):
             raise ValueError(f"show_learner_subgoal must be true or false, got {self.show_learner_subgoal!r}")
+        if self.held_out_layouts:
+            check_family_splits(self.maze_size)
 
     @classmethod
     def for_body(cls, body: str, **overrides: Any) -> StudySettings:
         """The paper protocol's maze family and expert reach for ``body``, held-out layouts on, with ``overrides``.
 
         Raises:
-            ValueError: For an unknown body or setting.
+            ValueError: For an unknown body or setting, or a maze size whose family cannot be held out
+                (:func:`check_family_splits`).
         """
         known = {field.name for field in fields(cls)}
         unknown = sorted(set(overrides) - known)
@@ -84,6 +87,45 @@ class StudySettings:
             expert_max_distance=self.expert_max_distance,
             held_out_layouts=self.held_out_layouts,
         )
+
+
+STUDY_SPLITS = ("train", "selection", "eval")
+"""The parts of the layout partition a held-out study draws from: training, periodic and final evaluation."""
+
+
+def check_family_splits(maze_size: int) -> None:
+    """Checks that the random mazes of ``maze_size`` can be drawn in every part a held-out study uses.
+
+    Draws as the trial's envs do (:class:`~antmaze_hirl.envs.split_env.SplitMazeEnv` with the env's
+    default wall fraction and goal distance), so a study whose trial could not start is refused at ``study init``.
+
+    Raises:
+        ValueError: Naming ``maze_size`` and the part with no wall grid of that family.
+    """
+    import inspect
+
+    import numpy as np
+
+    from antmaze_hirl.envs.high_level import HighLevelMazeEnv
+    from antmaze_hirl.envs.layout_splits import sample_layout_in_split
+    from antmaze_hirl.envs.layouts import generate_layout
+
+    defaults = inspect.signature(HighLevelMazeEnv.__init__).parameters
+
+    def sample(rng: np.random.Generator) -> Any:
+        return generate_layout(
+            rng,
+            n_rows=maze_size,
+            n_cols=maze_size,
+            wall_fraction=defaults["wall_fraction"].default,
+            min_goal_distance=defaults["min_goal_cells"].default,
+        )
+
+    for split in STUDY_SPLITS:
+        try:
+            sample_layout_in_split(sample, np.random.default_rng(0), split)
+        except ValueError as error:
+            raise ValueError(f"maze_size {maze_size} cannot be used with held-out layouts: {error}") from None
 
 
 def save_settings(settings: StudySettings, study_dir: str | Path) -> Path:

@@ -126,6 +126,27 @@ def oracle_click(state: dict[str, Any]) -> np.ndarray:
     return np.clip(subgoal, inner_low, -inner_low)
 
 
+MAX_RECLICKS = 20
+"""Noisy clicks a simulated participant tries before settling for the oracle's own (which the page accepts)."""
+
+
+def page_accepts(state: dict[str, Any], xy: np.ndarray) -> bool:
+    """Whether the page sends a click at ``xy``: in bounds, on the floor, inside the reach circle.
+
+    As study.js's ``refusalOf`` without its 3-pixel slack, so the server (which allows the slack) accepts it too.
+    """
+    maze = state["maze"]
+    geometry = MazeGeometry(maze["rows"], maze["cols"], maze["scale"])
+    low, high = (np.asarray(bound) for bound in maze["bounds"])
+    distance = float(np.hypot(*(np.asarray(xy) - np.asarray(state["agent"]))))
+    return bool(
+        np.all(low <= xy)
+        and np.all(xy <= high)
+        and geometry.is_free(np.asarray(maze["walls"], dtype=bool), np.asarray(xy))
+        and distance <= state["max_distance"]
+    )
+
+
 def play_participant(
     client: StudyClient,
     participant_id: str,
@@ -159,7 +180,11 @@ def play_participant(
             click = oracle_click(state)
             if behaviour.noise > 0:
                 low, high = (np.asarray(bound) for bound in state["maze"]["bounds"])
-                click = np.clip(click + rng.normal(0.0, behaviour.noise, size=2), low, high)
+                for _ in range(MAX_RECLICKS):  # the page refuses a wall or a point past the circle: click again
+                    noisy = np.clip(click + rng.normal(0.0, behaviour.noise, size=2), low, high)
+                    if page_accepts(state, noisy):
+                        click = noisy
+                        break
             wait = float(rng.exponential(behaviour.delay)) if behaviour.delay > 0 else 0.0
             time.sleep(wait)
             started = time.perf_counter()
