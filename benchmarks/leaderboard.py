@@ -125,7 +125,7 @@ def results_table() -> str:
         lines.append(
             f"| `{report['suite']}` | {report['policy']} | {budget} | {success} | {goal_verdict(report)} | "
             f"{report['mean_attempts']:.1f} | {report['mean_low_level_steps']:.0f} | {report['flips']} | {wall} | "
-            f"[{path.name}](../benchmarks/results/benchmark/{path.name}) |"
+            f"`{path.name}` |"
         )
     for suite, what, command in NOT_RUN:
         lines.append(f"| `{suite}` | {what} | not run yet | not run yet | | | | | | {command} |")
