@@ -107,7 +107,7 @@ def results_table() -> str:
     )
     lines = [
         "| suite | policy | budget | success [95% Wilson] | oracle goal (>= 95%) | mean subgoals | "
-        "mean low-level steps | flips | wall time | file |",
+        "mean low-level steps | flips | wall time | file (in `benchmarks/results/benchmark/`) |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for path, report in reports:

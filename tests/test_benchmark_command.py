@@ -180,4 +180,4 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
     for path in reports:
         report = load_report(path)
         assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
-        assert f"]({'../benchmarks/results/benchmark/' + path.name})" in page
+        assert f"`{path.name}` |" in page
