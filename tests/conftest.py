@@ -8,6 +8,7 @@ import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.envs import PointGoToController
+from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
@@ -70,3 +71,25 @@ POINT_GOALS_SEED_3 = [
 def reset_goals(env, seed=3, resets=3):
     """``desired_goal`` of ``env.reset(seed=seed)`` and of the ``resets`` plain resets after it."""
     return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]
+
+
+TINY_PROTOCOL2 = ExperimentConfig(
+    body="point",
+    episodes=3,
+    eval_every=2,
+    eval_episodes=2,
+    final_eval_episodes=4,
+    maze_size=4,
+    gradient_steps=5,
+    held_out_layouts=True,
+    protocol=2,
+)
+"""A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation."""
+
+
+def finished_experiment(tmp_path_factory, name, config, seeds=2):
+    """Runs a tiny ``dagger`` experiment into a fresh folder: the folder and its files' bytes (TensorBoard left out)."""
+    folder = tmp_path_factory.mktemp(name)
+    run_experiment(["dagger"], seeds, config, folder, progress_bar=False, tensorboard=False)
+    files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
+    return folder, files

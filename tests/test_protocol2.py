@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import TINY_PROTOCOL2
 
 from antmaze_hirl.envs.layouts import canonical_wall_grid
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
@@ -18,17 +19,7 @@ from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
 
 RESULTS = Path(__file__).parents[1] / "benchmarks" / "results"
-TINY2 = ExperimentConfig(
-    body="point",
-    episodes=3,
-    eval_every=2,
-    eval_episodes=2,
-    final_eval_episodes=4,
-    maze_size=4,
-    gradient_steps=5,
-    held_out_layouts=True,
-    protocol=2,
-)
+TINY2 = TINY_PROTOCOL2
 
 
 def crafted_trial(method, seed, evaluations_by_episode, labels_per_episode=10, mazes=4):

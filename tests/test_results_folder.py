@@ -2,8 +2,10 @@
 
 import json
 import warnings
+from dataclasses import replace
 
 import pytest
+from conftest import TINY_PROTOCOL2, finished_experiment
 
 from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path, trial_record, write_reports
@@ -40,10 +42,7 @@ DAMAGE = {
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
     """A finished tiny experiment: its folder and its files' bytes."""
-    folder = tmp_path_factory.mktemp("results")
-    run_experiment(["dagger"], 2, TINY, folder, progress_bar=False, tensorboard=False)
-    files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
-    return folder, files
+    return finished_experiment(tmp_path_factory, "results", TINY)
 
 
 def test_each_trial_records_its_row_count_and_hash(finished):
@@ -111,17 +110,7 @@ def test_reports_are_not_replaced_with_fewer_trials_while_one_is_damaged(finishe
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
 
 
-TINY2 = ExperimentConfig(
-    body="point",
-    episodes=3,
-    eval_every=2,
-    eval_episodes=2,
-    final_eval_episodes=3,
-    maze_size=4,
-    gradient_steps=5,
-    held_out_layouts=True,
-    protocol=2,
-)
+TINY2 = replace(TINY_PROTOCOL2, final_eval_episodes=3)
 
 
 def changed_value(text):
@@ -138,10 +127,7 @@ PART_DAMAGE = {
 @pytest.fixture(scope="module")
 def finished2(tmp_path_factory):
     """A finished tiny protocol-2 experiment: its folder and its files' bytes."""
-    folder = tmp_path_factory.mktemp("results2")
-    run_experiment(["dagger"], 2, TINY2, folder, progress_bar=False, tensorboard=False)
-    files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
-    return folder, files
+    return finished_experiment(tmp_path_factory, "results2", TINY2)
 
 
 def copy_folder(source, folder):
