@@ -13,6 +13,7 @@ from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.schedules import BetaSchedule, InverseDecayBetaSchedule
 from antmaze_hirl.dagger.strategies import DAggerQuery, QueryStrategy, StartQuery
+from antmaze_hirl.dagger.streams import trainer_streams
 from antmaze_hirl.envs.layouts import bfs_distances
 from antmaze_hirl.envs.reach import as_finite_vector
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -196,7 +197,10 @@ class DAggerTrainer:
         expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
         policy: The learner (start-selecting strategies need an
             :class:`~antmaze_hirl.dagger.protocols.OffsetLearner`, such as ``HighLevelPolicy``).
-        rng: Source of all of the trainer's randomness (maze draws, switching, strategies).
+        rng: Spawns the trainer's three independent streams (:attr:`streams`): tasks (maze, goal, the env's
+            reset seed), the strategy's draws and ``"switch"`` mixing; ``rng`` itself is not drawn from, so
+            it may also be the learner's. A strategy's draws then never shift the tasks, and two methods
+            on the same ``rng`` train on the same mazes and goals (the start is the strategy's choice).
         strategy: Active-learning strategy; default plain DAgger.
         beta_schedule: Beta after ``k`` updates; default :class:`InverseDecayBetaSchedule` with d = 2.
         mixing: ``"blend"`` executes ``beta * expert + (1 - beta) * learner`` (the paper); ``"switch"``
@@ -237,6 +241,7 @@ class DAggerTrainer:
         self.expert = expert
         self.policy = policy
         self.rng = rng
+        self.streams = trainer_streams(rng)
         self.strategy = strategy if strategy is not None else DAggerQuery()
         if self.strategy.reads_policy_outputs and not isinstance(policy, OffsetLearner):
             raise ValueError(
@@ -310,18 +315,21 @@ class DAggerTrainer:
     def _update(self, steps: int) -> None:
         # One update: gradient steps on D, the strategy's own models, beta's next step.
         self._fit(steps)
-        self.strategy.on_update(self.dataset, steps, self.rng)
+        self.strategy.on_update(self.dataset, steps, self.streams.strategy)
         self.updates += 1
 
     def _episode_steps(self, executed: list[ExecutedStep]) -> Generator[LabelRequest, Any, EpisodeRecord]:
         # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
-        # The trainer's rng draws layout and goal; the start is the strategy's, else the env's reset places it.
-        task = self.env.unwrapped.sample_task(self.rng, draw_start=False)
+        # The task stream draws layout, goal and reset seed; the start is the strategy's, else the env's reset
+        # places it. The strategy draws from its own stream, so it never shifts the next episode's task.
+        task = self.env.unwrapped.sample_task(self.streams.tasks, draw_start=False)
+        reset_seed = int(self.streams.tasks.integers(2**31))
         if self._rest_body is not None:
-            start = self.strategy.choose_start(self._start_query(task.layout.walls, task.goal_xy), self.rng)
+            query = self._start_query(task.layout.walls, task.goal_xy)
+            start = self.strategy.choose_start(query, self.streams.strategy)
             if start is not None:
                 task = replace(task, start_xy=start)
-        obs, _ = self.env.reset(seed=int(self.rng.integers(2**31)), options=task.reset_options())
+        obs, _ = self.env.reset(seed=reset_seed, options=task.reset_options())
         if self._rest_body is None:
             self._rest_body = np.asarray(STATE_LAYOUT.body_observation(obs["state"]), dtype=np.float64)
         gating = self.strategy.gates
@@ -369,7 +377,7 @@ class DAggerTrainer:
             executed.append(ExecutedStep(subgoal, expert_subgoal, info, done, before))
         success = bool(info["is_success"])
         # Pruning sees the labels that were executed (those that led to the failure), not the ones asked after it.
-        removed = self.strategy.on_episode_end(self.dataset, episode, success, self.rng)
+        removed = self.strategy.on_episode_end(self.dataset, episode, success, self.streams.strategy)
         if gating and self.strategy.label_failures and not success:
             for observation, proposal, at in unasked:
                 label = yield LabelRequest(observation, proposal, episode, cost, beta, executes=False)
@@ -378,7 +386,8 @@ class DAggerTrainer:
         self.episodes_done += 1
         self.total_expert_cost += cost
         # The update itself waits for EpisodeRun.finish() (or the next start_episode()), so a person sees the
-        # episode's end at once; it draws from self.rng before the next episode does, so the numbers stay the same.
+        # episode's end at once; its draws are the learner's and the strategy's streams, not the tasks', so the
+        # numbers stay the same whenever it runs.
         # A strategy that updates after every step has no episode-end update (Alg. 4).
         self._update_due = (
             not self.strategy.updates_every_step
@@ -409,7 +418,7 @@ class DAggerTrainer:
 
     def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
         if self.mixing == "switch":
-            chosen = expert_subgoal if self.rng.random() < beta else learner_subgoal
+            chosen = expert_subgoal if self.streams.mixing.random() < beta else learner_subgoal
         else:
             chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
         chosen = self._clip(chosen)

@@ -14,13 +14,13 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 import torch
 from tqdm.auto import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, InverseDecayBetaSchedule, evaluate_high_level
 from antmaze_hirl.dagger.strategies import METHODS, make_strategy
+from antmaze_hirl.dagger.streams import trial_streams
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.split_env import SplitMazeEnv
@@ -172,8 +172,12 @@ def make_trainer(
     The experiment gives it the oracle; the user study gives it the person's page (same trainer, same numbers).
     The learner is ``config``'s (:func:`~antmaze_hirl.experiments.config.trial_learner`); ``policy_settings``
     are :class:`HighLevelPolicy` constructor settings over it (an ablation's variant).
+
+    The learner and the trainer get independent streams spawned from ``seed`` (:func:`trial_streams`),
+    and the trainer spawns its task and strategy streams from its own: on one seed, every method's learner
+    starts from the same weights and trains on the same mazes and goals.
     """
-    rng = np.random.default_rng(seed)
+    streams = trial_streams(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
     # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
     reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
@@ -186,8 +190,8 @@ def make_trainer(
     return DAggerTrainer(
         env=env,
         expert=expert,
-        policy=HighLevelPolicy.for_env(env, rng=rng, **{**reach, **(policy_settings or {})}),
-        rng=rng,
+        policy=HighLevelPolicy.for_env(env, rng=streams.learner, **{**reach, **(policy_settings or {})}),
+        rng=streams.trainer,
         strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),
         mixing=config.mixing,  # type: ignore[arg-type]
