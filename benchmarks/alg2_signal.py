@@ -1,14 +1,32 @@
 """Does a start-selection score carry a signal? Its ranking of unseen states above trained ones (issue 32).
 
-For each seed, a learner is trained by a few DAgger (``noise`` score) or multi-policy (ensemble score)
-episodes on the ``"train"`` part of the held-out layouts; the score is then taken at every state of its
-dataset (states it was trained on) and at the oracle's states on five ``"eval"``-part mazes (states it
-has not seen, walls held out up to symmetry). Printed and written per seed: the medians and the AUC,
-the probability that an unseen state scores above a trained one (0.5: no signal). ``noise`` is Alg. 2's
-spread of the class distribution under body noise (:data:`~antmaze_hirl.dagger.strategies.SIGNALS`),
-``multi_policy`` the ensemble members' spread of theirs.
+For each seed, a learner is trained by a few episodes of one trainer on the ``"train"`` part of the
+held-out layouts; each score is then taken at every state of its dataset (states it was trained on) and
+at the oracle's states on five ``"eval"``-part mazes (states it has not seen, walls held out up to
+symmetry). Printed and written per seed and score: the medians and the AUC, the probability that an
+unseen state scores above a trained one (0.5: no signal).
 
-Usage: python benchmarks/alg2_signal.py [--body point] [--seeds 4] [--episodes 5] [--out FILE]
+Trainers (``--methods``): ``dagger`` (corner starts: no score chose the trained states, the fair ground
+for comparing scores), ``noise_old`` (starts by the old noise score, as in the issue's measurement),
+``noise`` (starts by the new one) and ``multi_policy``. A trainer whose starts a score picks trains on
+the states that score ranked highest, which biases that score's AUC downwards; ``dagger`` has no such bias.
+
+Scores, old and new side by side:
+
+- ``noise_old``: protocol 2's noise score before issue 32, the variance of the class distribution under
+  body noise (``NoiseQuery(symmetries=False, measure="variance")``).
+- ``noise``: the ``noise`` method's score now (``NoiseQuery()``), the Jensen-Shannon divergence of the
+  class distributions of each state's body-noisy copies seen in the 8 symmetries of the square.
+- ``ensemble_old``: ``multi_policy``'s score, the members' variance of their class distributions
+  (``multi_policy`` trainer only).
+- ``ensemble_js``: the members' Jensen-Shannon divergence instead.
+
+Each is read two ways: ``at_state``, the state as it was (agent where it stood, its body moving), and
+``as_candidate``, the agent at its cell's centre with the body at rest, which is how ``choose_start``
+sees a candidate. ``untrained`` rows take the same scores from a fresh learner of the same settings
+(a fresh ensemble for the ensemble scores): how far the two state sets differ without any training.
+
+Usage: python benchmarks/alg2_signal.py [--body point] [--seeds 8] [--episodes 5] [--methods LIST] [--out FILE]
 """
 
 from __future__ import annotations
@@ -17,13 +35,14 @@ import argparse
 import shlex
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.dagger.strategies import NoiseQuery, StartQuery, spread
+from antmaze_hirl.dagger.strategies import NoiseQuery, StartQuery, class_probabilities, information_radius, spread
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
@@ -31,6 +50,10 @@ from antmaze_hirl.experts.oracle import PathOracle
 
 RESULTS = Path(__file__).parent / "results"
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
+VIEWS = ("at_state", "as_candidate")
+METHODS = ("dagger", "noise_old", "noise", "multi_policy")
+SCORES = {"noise_old": NoiseQuery(symmetries=False, measure="variance"), "noise": NoiseQuery()}
+"""The noise scores compared (their settings; each call gets its own rng)."""
 
 
 def oracle_states(env, oracle, episodes: int, seed: int) -> list[dict]:
@@ -46,24 +69,37 @@ def oracle_states(env, oracle, episodes: int, seed: int) -> list[dict]:
     return states
 
 
-def noise_scores(policy, states: list[dict], rng: np.random.Generator) -> np.ndarray:
-    """NoiseQuery's score at each state itself (its walls, agent, goal; one shared noise buffer)."""
-    strategy = NoiseQuery()
+def state_parts(policy, observation: dict, view: str, rest_body: np.ndarray) -> tuple:
+    """Walls, agent xy, goal xy and body of a state, the agent at its cell's centre at rest for ``as_candidate``."""
+    state = observation["state"]
+    agent = np.asarray(STATE_LAYOUT.agent_xy(state), dtype=np.float64)
+    body = np.asarray(STATE_LAYOUT.body_observation(state), dtype=np.float64)
+    if view == "as_candidate":
+        agent, body = policy.geometry.cell_to_xy(policy.geometry.xy_to_cell(agent)), rest_body
+    return (
+        policy.encoder.renderer.walls_from_image(observation["image"]),
+        agent,
+        np.asarray(STATE_LAYOUT.goal_xy(state)),
+        body,
+    )
+
+
+def noise_scores(strategy: NoiseQuery, policy, states, view: str, rest_body, rng: np.random.Generator) -> np.ndarray:
+    """``strategy``'s score at each state itself (one candidate: the state's own agent position)."""
     scores = []
     for observation in states:
-        state = observation["state"]
-        walls = policy.encoder.renderer.walls_from_image(observation["image"])
-        body = np.asarray(STATE_LAYOUT.body_observation(state), dtype=np.float64)
-        query = StartQuery(
-            walls, np.asarray(STATE_LAYOUT.goal_xy(state)), np.asarray(STATE_LAYOUT.agent_xy(state))[None], body, policy
-        )
+        walls, agent, goal, body = state_parts(policy, observation, view, rest_body)
+        query = StartQuery(walls, goal, agent[None], body, policy)
         scores.append(strategy.scores(query, np.random.default_rng(rng.integers(2**63)))[0])
     return np.array(scores)
 
 
-def ensemble_scores(strategy, policy, states: list[dict]) -> np.ndarray:
-    """The ensemble's spread of class distributions at each state."""
-    return np.array([spread(p) for p in strategy.member_probabilities(policy.encoder.encode_observations(states))])
+def ensemble_scores(members, policy, states, view: str, rest_body, measure: Callable) -> np.ndarray:
+    """``measure`` (variance or JS) across ``members``' class distributions at each state."""
+    parts = [state_parts(policy, observation, view, rest_body) for observation in states]
+    batch = policy.encoder.encode(*map(list, zip(*parts, strict=True)))
+    distributions = np.stack([class_probabilities(member, batch) for member in members], axis=1)
+    return np.array([measure(block) for block in distributions])
 
 
 def auc(unseen: np.ndarray, trained: np.ndarray) -> float:
@@ -71,22 +107,87 @@ def auc(unseen: np.ndarray, trained: np.ndarray) -> float:
     return float((unseen[:, None] > trained[None, :]).mean() + 0.5 * (unseen[:, None] == trained[None, :]).mean())
 
 
+def score_row(name: str, view: str, trained_state: str, s_trained: np.ndarray, s_unseen: np.ndarray) -> dict:
+    """One score's figures on one seed's two state sets."""
+    return {
+        "score": name,
+        "view": view,
+        "learner": trained_state,
+        "median_trained": float(np.median(s_trained)),
+        "median_unseen": float(np.median(s_unseen)),
+        "smallest_score": float(min(s_trained.min(), s_unseen.min())),
+        "auc_unseen_above_trained": auc(s_unseen, s_trained),
+    }
+
+
+def seed_scores(method: str, trainer, trained, unseen, seed: int) -> list[dict]:
+    """Every score of ``method``'s trainer (and of untrained stand-ins) on the two state sets, both views."""
+    policy, rest = trainer.policy, trainer._rest_body
+    fresh = policy.spawn(np.random.default_rng(10_000 + seed))
+    rows = []
+    for view in VIEWS:
+        for name, strategy in SCORES.items():
+            for learner, who in ((policy, "trained"), (fresh, "untrained")):
+                rng = np.random.default_rng(seed)
+                s_trained, s_unseen = (noise_scores(strategy, learner, s, view, rest, rng) for s in (trained, unseen))
+                rows.append(score_row(name, view, who, s_trained, s_unseen))
+        if method == "multi_policy":
+            members = trainer.strategy.members
+            stand_ins = [policy.spawn(np.random.default_rng(20_000 + seed + i)) for i in range(len(members))]
+            for name, measure in (("ensemble_old", spread), ("ensemble_js", information_radius)):
+                for group, who in ((members, "trained"), (stand_ins, "untrained")):
+                    s_trained, s_unseen = (
+                        ensemble_scores(group, policy, s, view, rest, measure) for s in (trained, unseen)
+                    )
+                    rows.append(score_row(name, view, who, s_trained, s_unseen))
+    return rows
+
+
+def summary(rows: list[dict]) -> list[dict]:
+    """Per (method, score, view, learner): the per-seed AUCs, their mean and smallest."""
+    groups: dict[tuple, list[float]] = {}
+    for row in rows:
+        key = (row["method"], row["score"], row["view"], row["learner"])
+        groups.setdefault(key, []).append(row["auc_unseen_above_trained"])
+    return [
+        {
+            "method": method,
+            "score": score,
+            "view": view,
+            "learner": learner,
+            "aucs": [round(value, 3) for value in aucs],
+            "mean_auc": round(float(np.mean(aucs)), 3),
+            "min_auc": round(float(np.min(aucs)), 3),
+        }
+        for (method, score, view, learner), aucs in groups.items()
+    ]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--body", choices=["point", "ant"], default="point")
-    parser.add_argument("--seeds", type=int, default=4)
+    parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--episodes", type=int, default=5)
-    parser.add_argument("--out", type=Path, default=RESULTS / "alg2_signal.json")
+    parser.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated trainers: {', '.join(METHODS)}")
+    parser.add_argument("--out", type=Path, default=None, help="default: results/alg2_signal[_ant].json")
     args = parser.parse_args()
+    if args.seeds < 1 or args.episodes < 1:
+        parser.error(f"--seeds and --episodes must be >= 1, got {args.seeds} and {args.episodes}")
+    methods = args.methods.split(",")
+    if not methods or not set(methods) <= set(METHODS):
+        parser.error(f"--methods must name some of {', '.join(METHODS)}, got {args.methods!r}")
+    out = args.out or RESULTS / ("alg2_signal.json" if args.body == "point" else f"alg2_signal_{args.body}.json")
     torch.set_num_threads(1)
     config = ExperimentConfig(body=args.body, held_out_layouts=True, **body_settings(args.body, held_out_layouts=True))
     rows = []
-    for method in ("noise", "multi_policy"):
+    for method in methods:
         for seed in range(args.seeds):
             start = time.perf_counter()
             env = make_env(config, split="train")
             oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
-            trainer = make_trainer(method, seed, config, env, oracle, policy_settings=GENERIC)
+            trainer = make_trainer(method.removesuffix("_old"), seed, config, env, oracle, policy_settings=GENERIC)
+            if method == "noise_old":
+                trainer.strategy = SCORES["noise_old"]
             for _ in range(args.episodes):
                 trainer.run_episode()
             trained = trainer.dataset.observations_by_id(trainer.dataset.ids())
@@ -94,28 +195,24 @@ def main() -> None:
             unseen = oracle_states(
                 held_out, PathOracle.for_env(held_out, max_distance=config.expert_max_distance), 5, 1000 + seed
             )
-            if method == "noise":
-                rng = np.random.default_rng(seed)
-                s_trained, s_unseen = (
-                    noise_scores(trainer.policy, trained, rng),
-                    noise_scores(trainer.policy, unseen, rng),
-                )
-            else:
-                s_trained = ensemble_scores(trainer.strategy, trainer.policy, trained)
-                s_unseen = ensemble_scores(trainer.strategy, trainer.policy, unseen)
-            row = {
-                "method": method,
-                "seed": seed,
-                "trained_states": len(s_trained),
-                "unseen_states": len(s_unseen),
-                "median_trained": float(np.median(s_trained)),
-                "median_unseen": float(np.median(s_unseen)),
-                "smallest_score": float(min(s_trained.min(), s_unseen.min())),
-                "auc_unseen_above_trained": auc(s_unseen, s_trained),
-                "seconds": round(time.perf_counter() - start, 1),
-            }
-            rows.append(row)
-            print(row, flush=True)
+            for row in seed_scores(method, trainer, trained, unseen, seed):
+                row = {
+                    "method": method,
+                    "seed": seed,
+                    "trained_states": len(trained),
+                    "unseen_states": len(unseen),
+                    **row,
+                }
+                rows.append(row)
+            print(
+                {"method": method, "seed": seed, "seconds": round(time.perf_counter() - start, 1)},
+                {
+                    f"{r['score']}/{r['view']}/{r['learner']}": round(r["auc_unseen_above_trained"], 3)
+                    for r in rows
+                    if r["method"] == method and r["seed"] == seed
+                },
+                flush=True,
+            )
             env.close()
             held_out.close()
     result = {
@@ -123,10 +220,13 @@ def main() -> None:
         "body": args.body,
         "learner": GENERIC,
         "episodes": args.episodes,
+        "summary": summary(rows),
         "rows": rows,
     }
-    atomic_write_json(args.out, result)
-    print("wrote", args.out)
+    atomic_write_json(out, result)
+    for line in result["summary"]:
+        print(line)
+    print("wrote", out)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ import pytest
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
+from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 from antmaze_hirl.dagger.strategies import (
     MultiPolicyQuery,
     NoiseQuery,
@@ -43,7 +44,7 @@ def test_the_noise_score_of_the_class_distribution_is_nonzero_where_the_offsets_
         policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **settings)
         query = start_query(policy, seed)
         probabilities = NoiseQuery().scores(query, np.random.default_rng(seed))
-        offsets = NoiseQuery(signal="offsets").scores(query, np.random.default_rng(seed))
+        offsets = NoiseQuery(signal="offsets", symmetries=False).scores(query, np.random.default_rng(seed))
         assert probabilities.min() > 1e-14, probabilities  # the body noise moves every distribution
         assert len(np.unique(probabilities)) == len(probabilities)  # no ties for the argmax to break by position
         zero_offsets += int((offsets < 1e-20).sum())
@@ -102,4 +103,45 @@ def test_chosen_starts_respect_min_goal_cells(make):
         steps = bfs_distances(query.walls, geometry.xy_to_cell(query.goal_xy))
         assert all(steps[geometry.xy_to_cell(xy)] >= 3 for xy in query.candidates)
         assert start is None or steps[geometry.xy_to_cell(start)] >= 3
+    env.close()
+
+
+class FrameLearner:
+    """A next-cell learner whose class distribution is a function of the encoded goal offset alone.
+
+    ``equivariant``: ``p(c) ~ exp(3 move_c . goal)`` answers every symmetric image of a state alike once
+    read back in the state's frame; otherwise ``p(c) ~ exp(3 move_c.x goal.x)`` favours the x axis.
+    """
+
+    head = "next_cell"
+    planar_dim = 6
+
+    def __init__(self, encoder, equivariant):
+        self.encoder, self.geometry, self.equivariant = encoder, encoder.geometry, equivariant
+
+    def class_probabilities(self, batch):
+        goal = batch.vectors[:, 0:2].astype(np.float64)
+        moves = np.asarray(NEXT_CELL_MOVES, dtype=np.float64)
+        logits = 3 * (goal @ moves.T if self.equivariant else goal[:, :1] * moves[None, :, 0])
+        weights = np.exp(logits - logits.max(axis=1, keepdims=True))
+        return weights / weights.sum(axis=1, keepdims=True)
+
+    def offsets(self, batch):
+        goal = batch.vectors[:, 0:2].astype(np.float64)
+        return goal if self.equivariant else np.abs(goal)
+
+
+@pytest.mark.parametrize("signal", ["probabilities", "offsets"])
+def test_symmetric_views_are_read_back_in_the_states_frame(signal):
+    # A learner that answers a state's 8 images alike scores 0 however its answers vary across states;
+    # one that does not scores above 0: the views are turned back before their spread is taken.
+    env = point_env()
+    encoder = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **GENERIC).encoder
+    query = start_query(FrameLearner(encoder, equivariant=True), 0)
+    same = NoiseQuery(signal=signal).scores(query, np.random.default_rng(0))
+    np.testing.assert_allclose(same, 0.0, atol=1e-9)
+    query = start_query(FrameLearner(encoder, equivariant=False), 0)
+    differ = NoiseQuery(signal=signal).scores(query, np.random.default_rng(0))
+    assert differ.min() > 1e-3, differ
+    assert np.all(NoiseQuery(signal=signal, symmetries=False).scores(query, np.random.default_rng(0)) < 1e-9)
     env.close()

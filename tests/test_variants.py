@@ -126,7 +126,7 @@ def noise_query(policy):
 def test_shared_noise_applies_one_buffer_to_every_candidate():
     policy = BodyEcho()
     query = noise_query(policy)
-    scores = NoiseQuery(n_noises=6, signal="offsets").scores(query, np.random.default_rng(0))
+    scores = NoiseQuery(n_noises=6, signal="offsets", symmetries=False).scores(query, np.random.default_rng(0))
     blocks = policy.bodies[-1].reshape(4, 6, 2)
     for block in blocks[1:]:
         np.testing.assert_array_equal(block, blocks[0])
@@ -136,7 +136,9 @@ def test_shared_noise_applies_one_buffer_to_every_candidate():
 
 def test_fresh_noise_reproduces_the_old_scores():
     query = noise_query(BodyEcho())
-    scores = NoiseQuery(n_noises=6, shared_noise=False, signal="offsets").scores(query, np.random.default_rng(3))
+    scores = NoiseQuery(n_noises=6, shared_noise=False, signal="offsets", symmetries=False).scores(
+        query, np.random.default_rng(3)
+    )
     # The scores before issue 12: one uniform draw of shape (candidates, noises, body).
     rng = np.random.default_rng(3)
     noisy = query.body_observation + rng.uniform(-1.0, 1.0, size=(4, 6, 2))

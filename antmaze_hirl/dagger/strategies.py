@@ -16,9 +16,17 @@ from typing import Any, ClassVar
 import numpy as np
 
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
-from antmaze_hirl.dagger.features import EncodedBatch
+from antmaze_hirl.dagger.features import SYMMETRIES, EncodedBatch
 from antmaze_hirl.dagger.gating import QuantileThreshold, ReferenceStates, RiskModel, disagreement
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
+from antmaze_hirl.dagger.symmetric_views import (
+    class_directions,
+    class_permutations,
+    learner_planar_dim,
+    offsets_in_original_frame,
+    probabilities_in_original_frame,
+    symmetric_views,
+)
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import bfs_distances
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -136,6 +144,25 @@ def spread(outputs: np.ndarray) -> float:
     return float(np.var(outputs, axis=0).sum())
 
 
+def information_radius(distributions: np.ndarray) -> float:
+    """Jensen-Shannon divergence of ``(n, classes)`` distributions: their mean's entropy less their mean entropy, nats.
+
+    Zero only where all ``n`` agree; it weighs a shift of probability by how much it changes the
+    distributions' information, where :func:`spread` weighs every class alike.
+    """
+    distributions = np.asarray(distributions, dtype=np.float64)
+
+    def entropy(p: np.ndarray) -> np.ndarray:
+        return -(p * np.log(np.clip(p, 1e-300, None))).sum(axis=-1)
+
+    return float(max(0.0, entropy(distributions.mean(axis=0)) - entropy(distributions).mean()))
+
+
+MEASURES = ("js", "variance")
+"""How :class:`NoiseQuery` measures the spread of its views' outputs: ``"js"`` (class distributions only),
+:func:`information_radius`; ``"variance"``, :func:`spread`."""
+
+
 SIGNALS = ("probabilities", "offsets")
 """What a variance-based start score measures the spread of (:class:`NoiseQuery`, :class:`MultiPolicyQuery`).
 
@@ -215,22 +242,50 @@ class NoiseQuery(QueryStrategy):
     offsets (``"offsets"``, protocol 1) of a next-cell head do not vary at all. Ties (a flat score, e.g.
     before the learner depends on the body) are broken at random (:func:`argmax_ties_random`).
 
+    With ``symmetries`` (the default since issue 32) each noisy state is also seen in the 8 symmetries of
+    the square, the learner's own augmentation group, and each view's output is read back in the state's
+    frame (:mod:`~antmaze_hirl.dagger.symmetric_views`): the spread is over all ``8 * n_noises`` views.
+    The learner has learnt to answer a trained state's images alike, not an unseen state's, so this
+    spread ranks unseen states above trained ones; body noise alone does not (AUC near 0.5,
+    ``benchmarks/alg2_signal.py``). The spread is ``measure`` (:data:`MEASURES`): by default the
+    Jensen-Shannon divergence of the views' class distributions (:func:`information_radius`), which
+    ranked better than their variance. Protocol 1's score is ``signal="offsets", symmetries=False``;
+    protocol 2's before issue 32, ``symmetries=False, measure="variance"``.
+
     Args:
         n_noises: Perturbations per candidate.
         noise_scale: Half-width of the uniform noise, in body-observation units.
         shared_noise: One noise buffer for all candidates (the paper's Alg. 2), else fresh noise per candidate.
         signal: ``"probabilities"`` or ``"offsets"`` (:data:`SIGNALS`).
+        symmetries: Also perturb by the 8 symmetries of the square (needs a learner that states its
+            ``planar_dim`` and, for ``"probabilities"``, a next-cell or heading head).
+        measure: ``"js"`` or ``"variance"`` (:data:`MEASURES`); ``None``: ``"js"`` for class
+            distributions, ``"variance"`` for offsets.
 
     Raises:
-        ValueError: If ``n_noises`` is below 2, ``noise_scale`` is negative or ``signal`` is unknown.
+        ValueError: If ``n_noises`` is below 2, ``noise_scale`` is negative, ``signal`` or ``measure`` is
+            unknown, or ``measure="js"`` is asked of offsets.
     """
 
     name = "noise"
     reads_policy_outputs = True
 
     def __init__(
-        self, n_noises: int = 10, noise_scale: float = 1.0, *, shared_noise: bool = True, signal: str = "probabilities"
+        self,
+        n_noises: int = 10,
+        noise_scale: float = 1.0,
+        *,
+        shared_noise: bool = True,
+        signal: str = "probabilities",
+        symmetries: bool = True,
+        measure: str | None = None,
     ) -> None:
+        signal = check_signal(signal)
+        measure = measure if measure is not None else ("js" if signal == "probabilities" else "variance")
+        if measure not in MEASURES:
+            raise ValueError(f"measure must be one of {list(MEASURES)}, got {measure!r}")
+        if measure == "js" and signal != "probabilities":
+            raise ValueError(f"measure 'js' compares class distributions: use signal='probabilities', not {signal!r}")
         if n_noises < 2:
             raise ValueError(f"n_noises must be >= 2 to measure a spread, got {n_noises}")
         if not noise_scale >= 0:
@@ -238,10 +293,12 @@ class NoiseQuery(QueryStrategy):
         self.n_noises = n_noises
         self.noise_scale = noise_scale
         self.shared_noise = shared_noise
-        self.signal = check_signal(signal)
+        self.signal = signal
+        self.symmetries = bool(symmetries)
+        self.measure = measure
 
     def scores(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray:
-        """Spread of the policy's outputs (``signal``) at each candidate."""
+        """Spread of the policy's outputs (``signal``) at each candidate, over its noisy (and symmetric) views."""
         body = query.body_observation
         if self.shared_noise:
             buffer = rng.uniform(-self.noise_scale, self.noise_scale, size=(self.n_noises, *body.shape))
@@ -252,11 +309,25 @@ class NoiseQuery(QueryStrategy):
             )
         agents = np.repeat(query.candidates, self.n_noises, axis=0)
         batch = query.encode(agents, noisy.reshape(-1, *body.shape))
-        outputs = (
-            class_probabilities(query.policy, batch) if self.signal == "probabilities" else query.policy.offsets(batch)
-        )
-        blocks = outputs.reshape(len(query.candidates), self.n_noises, outputs.shape[-1])
-        return np.array([spread(block) for block in blocks])
+        outputs = self._outputs(query.policy, batch)  # (candidates * noises, views, d)
+        blocks = outputs.reshape(len(query.candidates), -1, outputs.shape[-1])
+        measure = information_radius if self.measure == "js" else spread
+        return np.array([measure(block) for block in blocks])
+
+    def _outputs(self, policy: OffsetLearner, batch: EncodedBatch) -> np.ndarray:
+        # The measured output of every sample, (B, views, d): one view, or the 8 symmetric ones.
+        def read(encoded: EncodedBatch) -> np.ndarray:
+            return class_probabilities(policy, encoded) if self.signal == "probabilities" else policy.offsets(encoded)
+
+        if not self.symmetries:
+            return read(batch)[:, None]
+        views = read(symmetric_views(batch, learner_planar_dim(policy)))
+        views = views.reshape(len(SYMMETRIES), len(batch), views.shape[-1])
+        if self.signal == "probabilities":
+            back = probabilities_in_original_frame(views, class_permutations(class_directions(policy)))
+        else:
+            back = offsets_in_original_frame(views)
+        return back.transpose(1, 0, 2)
 
     def choose_start(self, query: StartQuery, rng: np.random.Generator) -> np.ndarray | None:
         """The candidate with the largest output spread (ties broken at random)."""
