@@ -17,6 +17,13 @@ Variants:
 
 Usage: python benchmarks/learner_ablation.py [--body point|ant] [--variants heading_cnn,next_cell_vin]
            [--seeds 0,1] [--episodes 100] [--trials-dir /tmp/ablation] [--out FILE]
+           [--untrained] [--selection-only] [--evaluation-envs 25]
+
+``--untrained`` also scores each trial's learner before its first label on the same selection mazes
+(protocol 2's rule: a main-protocol learner scores <= 20% there untrained); ``--selection-only`` leaves
+out the final (``"eval"`` part) evaluation, which a choice between variants must not read anyway;
+``--evaluation-envs N`` plays the evaluation mazes ``N`` at a time in lockstep (faster; the mazes are the
+same, but batched products round differently, so the trial files record it and a summary names it).
 
 ``--out`` defaults to ``benchmarks/results/learner_ablation.json`` for the point and
 ``learner_ablation_ant.json`` beside it for the ant.
@@ -62,7 +69,7 @@ from antmaze_hirl.experiments.config import (
 )
 from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.runner import make_env, make_trainer
-from antmaze_hirl.experiments.uncertainty import rate_with_interval
+from antmaze_hirl.experiments.uncertainty import pooled_rate, rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.experts.oracle import plan_subgoal
 
@@ -118,16 +125,30 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
 
 
 def run_variant_trial(
-    variant: str, seed: int, config: ExperimentConfig, policy_path: Path | None = None
+    variant: str,
+    seed: int,
+    config: ExperimentConfig,
+    policy_path: Path | None = None,
+    *,
+    untrained: bool = False,
+    final: bool = True,
 ) -> dict[str, Any]:
     """Trains one learner of ``variant`` from ``seed`` by DAgger with the oracle; its learner-only success.
 
-    With ``policy_path``, the trained policy is saved there (to look at its failures later).
+    With ``policy_path``, the trained policy is saved there (to look at its failures later). With
+    ``untrained``, the learner is also scored on the selection mazes before its first label; without
+    ``final``, the final (``"eval"`` part) evaluation is left out.
     """
     start = time.perf_counter()
     env = make_env(config, split="train")
     oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
     trainer = make_trainer("dagger", seed, config, env, oracle, policy_settings=variant_settings(variant, config))
+    sets = {"selection": ("selection", SELECTION_SEED, SELECTION_MAZES)}
+    if final:
+        sets["final"] = evaluation_sets(config)["final"]
+    evaluations = {}
+    if untrained:
+        evaluations["untrained_selection"] = evaluate_on(trainer.policy, config, sets["selection"])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
     if policy_path is not None:
@@ -138,20 +159,8 @@ def run_variant_trial(
         "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
         "held_out_states": held_out_agreement(trainer.policy, config),
     }
-    evaluations = {}
-    for name, (split, first_seed, mazes) in (
-        ("selection", ("selection", SELECTION_SEED, SELECTION_MAZES)),
-        ("final", evaluation_sets(config)["final"]),
-    ):
-        eval_env = make_env(config, split=split)
-        result = evaluate_high_level(trainer.policy, eval_env, episodes=mazes, seed=first_seed)
-        eval_env.close()
-        evaluations[name] = {
-            **rate_with_interval(result["success_rate"], mazes),
-            "mean_attempts": result["mean_attempts"],
-            "split": split,
-            "first_seed": first_seed,
-        }
+    for name, chosen in sets.items():
+        evaluations[name] = evaluate_on(trainer.policy, config, chosen)
     env.close()
     return {
         "variant": variant,
@@ -166,8 +175,29 @@ def run_variant_trial(
         "train_seconds": round(train_seconds, 1),
         "trial_seconds": round(time.perf_counter() - start, 1),
         "machine": machine(),
+        "evaluation_envs": config.evaluation_envs,
         **{f"{name}_success": figures for name, figures in evaluations.items()},
     }
+
+
+def evaluate_on(policy: Any, config: ExperimentConfig, chosen: tuple[str, int, int]) -> dict[str, Any]:
+    """``policy``'s learner-only success on the mazes ``(split, first seed, count)``, with its interval."""
+    split, first_seed, mazes = chosen
+    eval_env = make_env(config, split=split)
+    result = evaluate_high_level(policy, eval_env, episodes=mazes, seed=first_seed, num_envs=config.evaluation_envs)
+    eval_env.close()
+    return {
+        **rate_with_interval(result["success_rate"], mazes),
+        "mean_attempts": result["mean_attempts"],
+        "split": split,
+        "first_seed": first_seed,
+    }
+
+
+def median_rate(trials: list[dict[str, Any]], key: str) -> float | None:
+    """The median of ``trials[i][key]["rate"]`` over the trials that have it (``None``: none has)."""
+    rates = [t[key]["rate"] for t in trials if key in t]
+    return statistics.median(rates) if rates else None
 
 
 def machine() -> dict[str, Any]:
@@ -195,7 +225,9 @@ def summarise(trials: list[dict[str, Any]], config: ExperimentConfig) -> dict[st
         summary[variant] = {
             "policy_settings": variant_settings(variant, config),
             "seeds": [t["seed"] for t in mine],
-            "final_success_median": statistics.median(t["final_success"]["rate"] for t in mine),
+            "final_success_median": median_rate(mine, "final_success"),
+            "untrained_selection_success_median": median_rate(mine, "untrained_selection_success"),
+            "untrained_selection_successes": untrained_total(mine),
             "selection_success_median": statistics.median(t["selection_success"]["rate"] for t in mine),
             "selection_success_mean": round(statistics.mean(t["selection_success"]["rate"] for t in mine), 4),
             "held_out_agreement_median": statistics.median(t["oracle_cell_agreement"]["held_out_states"] for t in mine),
@@ -204,6 +236,23 @@ def summarise(trials: list[dict[str, Any]], config: ExperimentConfig) -> dict[st
             "trials": mine,
         }
     return summary
+
+
+UNTRAINED_LIMIT = 0.2
+"""Protocol 2's rule (issue 32): a main-protocol learner scores at most this untrained on the selection mazes."""
+
+
+def untrained_total(trials: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The untrained learners' selection successes pooled over seeds, their rate's Wilson interval, the rule's verdict.
+
+    Pooled over initialisations of one variant on the same mazes: the interval treats the mazes as
+    independent draws, which the seeds' shared mazes are not, so it is a rough bound (``None``: not measured).
+    """
+    measured = [t["untrained_selection_success"] for t in trials if "untrained_selection_success" in t]
+    if not measured:
+        return None
+    successes, mazes = sum(m["successes"] for m in measured), sum(m["episodes"] for m in measured)
+    return {**pooled_rate(successes, mazes), "meets_rule": successes / mazes <= UNTRAINED_LIMIT}
 
 
 def main() -> None:
@@ -215,6 +264,9 @@ def main() -> None:
     parser.add_argument("--trials-dir", type=Path, default=Path("/tmp/learner_ablation"))
     parser.add_argument("--out", type=Path, default=None, help="default: see the module docstring")
     parser.add_argument("--note", default=None, help="a line stored in the summary (where and how the trials ran)")
+    parser.add_argument("--untrained", action="store_true", help="also score each learner before its first label")
+    parser.add_argument("--selection-only", action="store_true", help="leave out the final ('eval' part) evaluation")
+    parser.add_argument("--evaluation-envs", type=int, default=1, help="mazes evaluated at once, in lockstep")
     args = parser.parse_args()
     prefix = BODY_FILE_PREFIX[args.body]
     args.out = args.out or RESULTS / ("learner_ablation.json" if args.body == "point" else "learner_ablation_ant.json")
@@ -224,11 +276,14 @@ def main() -> None:
     if unknown:
         parser.error(f"unknown variants {unknown}; choose from {sorted(VARIANTS)}")
     seeds = [int(seed) for seed in args.seeds.split(",")]
+    if args.evaluation_envs < 1:
+        parser.error(f"--evaluation-envs must be >= 1, got {args.evaluation_envs}")
     config = ExperimentConfig(
         body=args.body,
         episodes=args.episodes,
         held_out_layouts=True,
         eval_episodes=50,
+        evaluation_envs=args.evaluation_envs,
         **body_settings(args.body, held_out_layouts=True),
     )
     args.trials_dir.mkdir(parents=True, exist_ok=True)
@@ -236,14 +291,26 @@ def main() -> None:
         for variant in variants:
             path = args.trials_dir / f"{prefix}{variant}_e{args.episodes}_seed{seed}.json"
             if not path.exists():
-                atomic_write_json(path, run_variant_trial(variant, seed, config, path.with_suffix(".zip")))
+                trial = run_variant_trial(
+                    variant,
+                    seed,
+                    config,
+                    path.with_suffix(".zip"),
+                    untrained=args.untrained,
+                    final=not args.selection_only,
+                )
+                atomic_write_json(path, trial)
             trial = json.loads(path.read_text())
-            print(
-                f"{variant} seed {seed}: final {trial['final_success']['rate']:.2f} "
-                f"{trial['final_success']['wilson_95']}, selection {trial['selection_success']['rate']:.2f}, "
-                f"{trial['labels']} labels, agreement {trial['oracle_cell_agreement']}, {trial['trial_seconds']:.0f} s",
-                flush=True,
+            parts = [f"{variant} seed {seed}:"]
+            if "final_success" in trial:
+                parts.append(f"final {trial['final_success']['rate']:.2f} {trial['final_success']['wilson_95']},")
+            if "untrained_selection_success" in trial:
+                parts.append(f"untrained selection {trial['untrained_selection_success']['rate']:.2f},")
+            parts.append(
+                f"selection {trial['selection_success']['rate']:.2f}, {trial['labels']} labels, "
+                f"agreement {trial['oracle_cell_agreement']}, {trial['trial_seconds']:.0f} s"
             )
+            print(" ".join(parts), flush=True)
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
     trials = [t for t in trials if t.get("body", "point") == args.body and t["variant"] in VARIANTS]
     # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
@@ -270,6 +337,8 @@ def main() -> None:
                 "final_mazes": config.final_eval_episodes,
                 "interval": "95% Wilson",
                 "torch_threads": 1,
+                "evaluation_envs": args.evaluation_envs,
+                "untrained_limit": UNTRAINED_LIMIT,
                 "agreement_states": AGREEMENT_STATES,
                 "note": "trials recorded before block_walls existed list no block_walls: it was False",
             },
@@ -278,10 +347,18 @@ def main() -> None:
             "variants": summary,
         },
     )
-    print(f"\n{'variant':<21}{'final (median)':>16}{'selection (median)':>20}{'labels':>8}{'trial s':>9}")
+
+    def cell(value: float | None, width: int) -> str:
+        return f"{value:>{width}.2f}" if value is not None else f"{'-':>{width}}"
+
+    print(
+        f"\n{'variant':<21}{'untrained sel.':>15}{'final (median)':>16}{'selection (median)':>20}"
+        f"{'labels':>8}{'trial s':>9}"
+    )
     for name, figures in summary.items():
         print(
-            f"{name:<21}{figures['final_success_median']:>16.2f}{figures['selection_success_median']:>20.2f}"
+            f"{name:<21}{cell(figures['untrained_selection_success_median'], 15)}"
+            f"{cell(figures['final_success_median'], 16)}{figures['selection_success_median']:>20.2f}"
             f"{figures['labels_median']:>8.0f}{figures['trial_seconds_median']:>9.0f}"
         )
     print(f"wrote {args.out}")

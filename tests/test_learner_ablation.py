@@ -57,3 +57,21 @@ def test_a_summary_reads_its_own_bodys_trials_and_a_rerun_keeps_the_note(tmp_pat
     assert summary["variants"]["heading_cnn"]["final_success_median"] == 0.3  # the ant's trial, not the point's
     assert summary["protocol"]["body"] == "ant" and summary["protocol"]["maze_size"] == 4
     assert summary["note"] == "ran elsewhere" and len(summary["commands"]) == 2
+
+
+def test_the_untrained_rule_pools_the_seeds_and_a_selection_only_summary_has_no_final():
+    config = ExperimentConfig(body="point", held_out_layouts=True)
+    low = {"rate": 0.1, "successes": 5, "episodes": 50, "wilson_95": [0.04, 0.21]}
+    high = {"rate": 0.4, "successes": 20, "episodes": 50, "wilson_95": [0.28, 0.54]}
+    passing = [{**trial("next_cell_cnn", s), "untrained_selection_success": low} for s in (0, 1)]
+    failing = [{**trial("next_cell_vin", 0), "untrained_selection_success": low}]
+    failing.append({**trial("next_cell_vin", 1), "untrained_selection_success": high})
+    for record in passing:
+        del record["final_success"]  # --selection-only
+    summary = learner_ablation.summarise([*passing, *failing], config)
+    assert summary["next_cell_cnn"]["final_success_median"] is None
+    assert summary["next_cell_vin"]["final_success_median"] == 0.5
+    cnn, vin = (summary[name]["untrained_selection_successes"] for name in ("next_cell_cnn", "next_cell_vin"))
+    assert cnn["successes"] == 10 and cnn["meets_rule"]
+    assert vin["rate"] == 0.25 and not vin["meets_rule"]
+    assert learner_ablation.untrained_total([trial("heading_cnn", 0)]) is None  # not measured

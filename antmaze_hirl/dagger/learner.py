@@ -82,7 +82,9 @@ class SubgoalLearner:
         self.learning_rate = learning_rate
         self.batch_size = batch_size
         self.augment_symmetries = augment_symmetries
-        self.optimizer = th.optim.Adam(policy.network.parameters(), lr=learning_rate)
+        # foreach: one kernel per update op over all tensors instead of a loop of small ones; the same
+        # elementwise math, so the same weights bit for bit (benchmarks/trial_speed.py checks a trial's outcomes).
+        self.optimizer = th.optim.Adam(policy.network.parameters(), lr=learning_rate, foreach=True)
         self.gradient_steps = 0
         self.cache = EncodingCache()
 

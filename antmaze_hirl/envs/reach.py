@@ -17,7 +17,8 @@ from antmaze_hirl.envs.controllers import ActionSmoother
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layout_splits import LayoutSplit, check_split, sample_layout_in_split
 from antmaze_hirl.envs.layouts import MazeMap, generate_layout, validate_maze_map
-from antmaze_hirl.envs.simulator import Body, MazeSimulator, body_spec
+from antmaze_hirl.envs.simulator import Body, body_spec
+from antmaze_hirl.envs.simulator_pool import acquire_simulator, release_simulator
 
 REWARD_TYPES = ("sparse", "dense")
 
@@ -272,7 +273,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self.render_mode = render_mode
         self._include_contact_forces = include_contact_forces
         self._base_walls = validate_maze_map(maze_map)
-        self.sim = MazeSimulator(body, self._base_walls, include_contact_forces=include_contact_forces)
+        self.sim = acquire_simulator(body, self._base_walls, include_contact_forces=include_contact_forces)
         self.action_space = spaces.Box(-1.0, 1.0, shape=self.sim.action_space.shape, dtype=np.float32)
         xy_space = spaces.Box(-np.inf, np.inf, shape=(2,), dtype=np.float64)
         self.observation_space = spaces.Dict(
@@ -315,7 +316,7 @@ class ReachEnv(GoalEnv, EzPickle):
         return self._goal.copy()
 
     def set_walls(self, walls: np.ndarray) -> None:
-        """Swaps in another layout (rebuilds the MuJoCo model if the walls differ; takes ~10 ms)."""
+        """Swaps in another layout (a simulator of the new walls from the pool, else a rebuild of the MuJoCo model)."""
         walls = np.asarray(walls, dtype=bool)
         if walls.shape != self.sim.walls.shape:
             raise ValueError(f"new layout has shape {walls.shape}, this env's spaces are for {self.sim.walls.shape}")
@@ -326,8 +327,9 @@ class ReachEnv(GoalEnv, EzPickle):
         # differ in size from maze_map; a rebuild takes ~4 ms, against ~0.3 ms per ant step and far
         # more per gradient update, so every from-rest episode may draw a new one.
         if walls.shape != self.sim.walls.shape or not np.array_equal(walls, self.sim.walls):
-            self.sim.close()
-            self.sim = MazeSimulator(self.body, walls, include_contact_forces=self._include_contact_forces)
+            # The pool keeps the simulator of the maze this env leaves, so coming back to it skips the compile.
+            release_simulator(self.sim)
+            self.sim = acquire_simulator(self.body, walls, include_contact_forces=self._include_contact_forces)
             self._renderer = BirdseyeRenderer(self.sim.geometry)
             self._started = False  # the new simulator holds no body to chain from
 
@@ -456,7 +458,7 @@ class ReachEnv(GoalEnv, EzPickle):
         return self._renderer.rgb(self.walls, self._xy, self._goal)
 
     def close(self) -> None:
-        """Releases the simulator."""
+        """Releases the simulator (closes it: a closed env's simulator never goes back to the pool)."""
         self.sim.close()
 
     def _is_success(self) -> bool:

@@ -39,6 +39,7 @@ class MazeSimulator:
 
     def __init__(self, body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> None:
         self.body = body
+        self.include_contact_forces = bool(include_contact_forces)
         self.spec = body_spec(body)
         self.walls = np.array(walls, dtype=bool)
         self.geometry = MazeGeometry(self.walls.shape[0], self.walls.shape[1], self.spec.scale)

@@ -1,0 +1,99 @@
+"""Idle MuJoCo maze simulators kept by wall grid, so that an env coming back to a maze skips its compile.
+
+Building a :class:`~antmaze_hirl.envs.simulator.MazeSimulator` compiles the maze's MuJoCo model from XML,
+which takes most of a second on a loaded core, and an env builds one for every new layout. A protocol-2
+trial plays the same 100 evaluation mazes 11 times, so without a pool it compiles about 1,100 models for
+100 distinct grids. An env hands the simulator of the layout it leaves back to the pool and takes one
+for the layout it enters; a simulator is held by one env at a time.
+
+A reused simulator plays exactly as a fresh one: every episode starts with ``MazeSimulator.reset``, which
+resets the whole ``MjData`` (``mj_resetData``) and reseeds the body's noise, and the model itself is never
+changed except for the goal marker's site, which is visual only (``tests/test_simulator_pool.py``).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from antmaze_hirl.envs.simulator import Body, MazeSimulator
+
+__all__ = ["DEFAULT_CAPACITY", "SimulatorPool", "acquire_simulator", "release_simulator", "shared_pool"]
+
+DEFAULT_CAPACITY = 160
+"""Idle simulators the process keeps: a protocol-2 evaluation set (100 mazes) plus the training mazes
+between two evaluations, with room to spare. A point-mass simulator holds well under a megabyte."""
+
+_Key = tuple[str, bool, tuple[int, ...], bytes]
+
+
+class SimulatorPool:
+    """Idle simulators keyed by body, contact-force setting and wall grid, least recently released dropped first.
+
+    Args:
+        capacity: Idle simulators kept; releasing one more closes the least recently released. 0 keeps none.
+
+    Raises:
+        ValueError: If ``capacity`` is negative.
+    """
+
+    def __init__(self, capacity: int = DEFAULT_CAPACITY) -> None:
+        if capacity < 0:
+            raise ValueError(f"capacity must be >= 0, got {capacity}")
+        self.capacity = capacity
+        self._idle: OrderedDict[tuple[_Key, int], MazeSimulator] = OrderedDict()
+        self._released = 0  # a unique suffix per idle entry, so that one grid may have several idle simulators
+        self.hits = 0
+        self.misses = 0
+
+    def __len__(self) -> int:
+        return len(self._idle)
+
+    @staticmethod
+    def key(body: str, walls: np.ndarray, include_contact_forces: bool) -> _Key:
+        """The pool's key of a simulator for ``walls``."""
+        grid = np.asarray(walls, dtype=bool)
+        return body, bool(include_contact_forces), grid.shape, np.packbits(grid).tobytes()
+
+    def acquire(self, body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> MazeSimulator:
+        """An idle simulator of this maze if the pool has one (it leaves the pool), else a new one."""
+        wanted = self.key(body, walls, include_contact_forces)
+        for entry in reversed(self._idle):  # the most recently released first
+            if entry[0] == wanted:
+                self.hits += 1
+                return self._idle.pop(entry)
+        self.misses += 1
+        return MazeSimulator(body, walls, include_contact_forces=include_contact_forces)
+
+    def release(self, simulator: MazeSimulator) -> None:
+        """Takes back a simulator its env no longer uses; the caller must not touch it afterwards."""
+        key = self.key(simulator.body, simulator.walls, simulator.include_contact_forces)
+        self._released += 1
+        self._idle[(key, self._released)] = simulator
+        while len(self._idle) > self.capacity:
+            _, dropped = self._idle.popitem(last=False)
+            dropped.close()
+
+    def clear(self) -> None:
+        """Closes and drops every idle simulator."""
+        while self._idle:
+            self._idle.popitem()[1].close()
+
+
+_POOL = SimulatorPool()
+
+
+def shared_pool() -> SimulatorPool:
+    """The process's pool, which every :class:`~antmaze_hirl.envs.reach.ReachEnv` uses."""
+    return _POOL
+
+
+def acquire_simulator(body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> MazeSimulator:
+    """:meth:`SimulatorPool.acquire` on the process's pool."""
+    return _POOL.acquire(body, walls, include_contact_forces=include_contact_forces)
+
+
+def release_simulator(simulator: MazeSimulator) -> None:
+    """:meth:`SimulatorPool.release` on the process's pool."""
+    _POOL.release(simulator)
