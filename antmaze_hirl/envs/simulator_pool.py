@@ -21,9 +21,13 @@ from antmaze_hirl.envs.simulator import Body, MazeSimulator
 
 __all__ = ["DEFAULT_CAPACITY", "SimulatorPool", "acquire_simulator", "release_simulator", "shared_pool"]
 
-DEFAULT_CAPACITY = 160
-"""Idle simulators the process keeps: a protocol-2 evaluation set (100 mazes) plus the training mazes
-between two evaluations, with room to spare. A point-mass simulator holds well under a megabyte."""
+DEFAULT_CAPACITY = 120
+"""Idle simulators the process keeps. Between two protocol-2 evaluations the pool must hold the evaluation
+mazes the lockstep copies are not holding (75 of 100 with 25 copies) while the training mazes of 10
+episodes pass through; the least recently released go first, so those are the ones dropped. Memory: a
+point-mass simulator holds about 12 MiB (gymnasium-robotics' 800x4800 skybox texture is 11 MiB of its
+model), an ant one about 1 MiB, so a full pool of point simulators holds about 1.4 GiB per process; lower
+it with ``shared_pool().capacity = n``."""
 
 _Key = tuple[str, bool, tuple[int, ...], bytes]
 
