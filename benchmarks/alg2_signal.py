@@ -26,7 +26,10 @@ Each is read two ways: ``at_state``, the state as it was (agent where it stood, 
 sees a candidate. ``untrained`` rows take the same scores from a fresh learner of the same settings
 (a fresh ensemble for the ensemble scores): how far the two state sets differ without any training.
 
+``--fitted`` measures instead the unit test's setting (:func:`fitted_aucs`) over ``--seeds`` seeds.
+
 Usage: python benchmarks/alg2_signal.py [--body point] [--seeds 8] [--episodes 5] [--methods LIST] [--out FILE]
+       python benchmarks/alg2_signal.py --fitted --seeds 10
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ import numpy as np
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger import HighLevelPolicy
 from antmaze_hirl.dagger.strategies import NoiseQuery, StartQuery, class_probabilities, information_radius, spread
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
@@ -143,6 +147,61 @@ def seed_scores(method: str, trainer, trained, unseen, seed: int) -> list[dict]:
     return rows
 
 
+def fitted_aucs(env, seed: int, steps: int = 400) -> tuple[float, float]:
+    """AUCs of ``NoiseQuery()``, unseen above trained, for a learner fitted on two mazes and for an untrained one.
+
+    The generic learner (batch 16) is fitted ``steps`` Adam steps to the oracle's states on the mazes of
+    reset seeds ``100 * seed`` and ``+ 1``; the score is read at those states and at the oracle's states
+    on the mazes of ``100 * seed + 50`` to ``+ 53``, and again from the same learner untrained (how far
+    the two state sets differ without training). ``tests/test_alg2_signal.py`` asserts on it.
+    """
+    oracle = PathOracle.for_env(env)
+    trained, unseen = oracle_states(env, oracle, 2, 100 * seed), oracle_states(env, oracle, 4, 100 * seed + 50)
+    aucs = []
+    for fit in (True, False):
+        policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), batch_size=16, **GENERIC)
+        if fit:
+            policy.fit(policy.encoder.encode_observations(trained), np.stack([oracle(o) for o in trained]), steps)
+        unseen_scores, trained_scores = (
+            noise_scores(NoiseQuery(), policy, states, "at_state", None, np.random.default_rng(seed))
+            for states in (unseen, trained)
+        )
+        aucs.append(auc(unseen_scores, trained_scores))
+    return aucs[0], aucs[1]
+
+
+def fitted_margin(seeds: int, out: Path) -> None:
+    """Writes :func:`fitted_aucs` on 4x4 point mazes for seeds ``0 .. seeds - 1``: the test's margins."""
+    import gymnasium as gym
+
+    from antmaze_hirl.envs import PointGoToController
+
+    env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=4, low_level=PointGoToController())
+    rows = []
+    for seed in range(seeds):
+        fitted, untrained = fitted_aucs(env, seed)
+        rows.append({"seed": seed, "fitted_auc": fitted, "untrained_auc": untrained, "difference": fitted - untrained})
+        print(rows[-1], flush=True)
+    env.close()
+    windows = [rows[i : i + 2] for i in range(len(rows) - 1)]
+    result = {
+        "command": shlex.join(["python", "benchmarks/alg2_signal.py", *sys.argv[1:]]),
+        "what": "fitted_aucs: NoiseQuery() AUC unseen above trained, fitted and untrained (the unit test setting)",
+        "rows": rows,
+        "fitted_auc_min": min(r["fitted_auc"] for r in rows),
+        "difference_min": min(r["difference"] for r in rows),
+        "two_seed_mean_fitted_auc_min": min(np.mean([r["fitted_auc"] for r in w]) for w in windows)
+        if windows
+        else None,
+        "two_seed_mean_difference_min": min(np.mean([r["difference"] for r in w]) for w in windows)
+        if windows
+        else None,
+    }
+    atomic_write_json(out, result)
+    print({k: v for k, v in result.items() if k != "rows"})
+    print("wrote", out)
+
+
 def summary(rows: list[dict]) -> list[dict]:
     """Per (method, score, view, learner): the per-seed AUCs, their mean and smallest."""
     groups: dict[tuple, list[float]] = {}
@@ -169,15 +228,21 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=8)
     parser.add_argument("--episodes", type=int, default=5)
     parser.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated trainers: {', '.join(METHODS)}")
-    parser.add_argument("--out", type=Path, default=None, help="default: results/alg2_signal[_ant].json")
+    parser.add_argument("--out", type=Path, default=None, help="default: results/alg2_signal[_ant|_fitted].json")
+    parser.add_argument(
+        "--fitted", action="store_true", help="instead: the unit test's setting (fitted_aucs) over --seeds seeds"
+    )
     args = parser.parse_args()
     if args.seeds < 1 or args.episodes < 1:
         parser.error(f"--seeds and --episodes must be >= 1, got {args.seeds} and {args.episodes}")
     methods = args.methods.split(",")
     if not methods or not set(methods) <= set(METHODS):
         parser.error(f"--methods must name some of {', '.join(METHODS)}, got {args.methods!r}")
-    out = args.out or RESULTS / ("alg2_signal.json" if args.body == "point" else f"alg2_signal_{args.body}.json")
     torch.set_num_threads(1)
+    if args.fitted:
+        fitted_margin(args.seeds, args.out or RESULTS / "alg2_signal_fitted.json")
+        return
+    out = args.out or RESULTS / ("alg2_signal.json" if args.body == "point" else f"alg2_signal_{args.body}.json")
     config = ExperimentConfig(body=args.body, held_out_layouts=True, **body_settings(args.body, held_out_layouts=True))
     rows = []
     for method in methods:
