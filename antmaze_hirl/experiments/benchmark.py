@@ -14,7 +14,7 @@ respects that; with one episode per task the Wilson interval is already over ind
 
 Episodes are played by :data:`EPISODE_RUNNER`: with ``num_envs=1`` one after another on one env
 (:func:`play_serial`, how the committed results were made), with more on that many lockstep copies of the
-suite env (:func:`play_lockstep`, the [fast-hierarchy] vector env's parts: one batched low-level forward per
+suite env (:func:`play_episodes`, the [fast-hierarchy] vector env's parts: one batched low-level forward per
 low-level step for every maze still walking, one batched subgoal prediction where the policy has
 ``predict_batch``). Both play the same ``(task_id, seed)`` episodes with the same step limits. On the point
 suites the outcomes are identical (``tests/test_benchmark_lockstep.py``); a batched forward may round the last
@@ -89,8 +89,9 @@ def play_serial(
     env = make_env()
     space = env.action_space
     outcomes = []
+    bar = _progress_bar(len(episodes), progress)
     try:
-        for task_id, seed in _progress(episodes, progress):
+        for task_id, seed in episodes:
             obs, info = env.reset(seed=seed, options={"task_id": task_id})
             done = False
             while not done:
@@ -100,20 +101,16 @@ def play_serial(
                 obs, _, terminated, truncated, info = env.step(np.clip(action, space.low, space.high))
                 done = terminated or truncated
             outcomes.append(_outcome(task_id, seed, info))
+            if bar is not None:
+                bar.update()
     finally:
         env.close()
+        if bar is not None:
+            bar.close()
     return outcomes
 
 
-def _progress(episodes: Sequence[tuple[int, int]], progress: bool) -> Any:
-    if not progress:
-        return episodes
-    from tqdm import tqdm
-
-    return tqdm(episodes, desc="benchmark episodes", unit="episode")
-
-
-def play_lockstep(
+def play_episodes(
     make_env: Callable[[], Any],
     policy: Any,
     episodes: Sequence[tuple[int, int]],
@@ -121,16 +118,18 @@ def play_lockstep(
     num_envs: int = DEFAULT_NUM_ENVS,
     progress: bool = False,
 ) -> list[EpisodeOutcome]:
-    """Plays ``episodes`` on ``num_envs`` lockstep copies of an env from ``make_env`` (module docstring).
+    """Plays ``episodes``: :func:`play_serial` when ``num_envs == 1``, else on that many lockstep copies of an env.
 
-    The spec's ``max_episode_steps`` truncates each episode as ``gym.make``'s ``TimeLimit`` does serially.
+    The lockstep copies are those of one env from ``make_env`` (module docstring); the spec's
+    ``max_episode_steps`` truncates each episode there as ``gym.make``'s ``TimeLimit`` does serially.
     """
+    if num_envs == 1:
+        return play_serial(make_env, policy, episodes, progress=progress)
     from antmaze_hirl.dagger.evaluation import play_in_lockstep, release_copies
 
     _action_of(policy)  # the same refusal as serial, before any env is made
     env = make_env()
     inner = env.unwrapped
-    spec = getattr(env, "spec", None)
     bar = _progress_bar(len(episodes), progress)
     resets = [{"seed": seed, "options": {"task_id": task_id}} for task_id, seed in episodes]
     try:
@@ -139,7 +138,7 @@ def play_lockstep(
             inner,
             resets,
             num_envs=num_envs,
-            max_subgoals=getattr(spec, "max_episode_steps", None),
+            max_subgoals=getattr(env.spec, "max_episode_steps", None),
             on_episode_end=None if bar is None else bar.update,
         )
     finally:
@@ -167,20 +166,6 @@ def _progress_bar(total: int, progress: bool) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, desc="benchmark episodes", unit="episode")
-
-
-def play_episodes(
-    make_env: Callable[[], Any],
-    policy: Any,
-    episodes: Sequence[tuple[int, int]],
-    *,
-    num_envs: int = DEFAULT_NUM_ENVS,
-    progress: bool = False,
-) -> list[EpisodeOutcome]:
-    """:func:`play_serial` when ``num_envs == 1``, else :func:`play_lockstep`."""
-    if num_envs == 1:
-        return play_serial(make_env, policy, episodes, progress=progress)
-    return play_lockstep(make_env, policy, episodes, num_envs=num_envs, progress=progress)
 
 
 EPISODE_RUNNER = play_episodes
