@@ -71,7 +71,9 @@ def figure_points() -> tuple[list[Point], dict[str, float]]:
             if training["algorithm"] == "flat-sac-her":
                 series, kind = "flat SAC+HER, no hierarchy", "body steps"
             else:
-                series, kind = f"SB3 {training['algorithm'].upper()} on the high level", "high-level steps"
+                mazes = training.get("num_envs", 1)  # the older PPO row trained on one maze at a time
+                series = f"SB3 {training['algorithm'].upper()} on the high level, {mazes} maze{'s' * (mazes > 1)}"
+                kind = "high-level steps"
         else:
             continue
         low, high = report["wilson_95"]
@@ -105,8 +107,9 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
         mine = [point for point in points if point.series == series]
         xs = [point.x for point in mine]
         ys = [point.successes / point.episodes for point in mine]
-        errors = [[y - point.low for y, point in zip(ys, mine, strict=True)]]
-        errors.append([point.high - y for y, point in zip(ys, mine, strict=True)])
+        # Clipped at 0: the Wilson ends of 0/n and n/n can differ from the rate in the last bit.
+        errors = [[max(y - point.low, 0.0) for y, point in zip(ys, mine, strict=True)]]
+        errors.append([max(point.high - y, 0.0) for y, point in zip(ys, mine, strict=True)])
         kind = mine[0].x_kind
         # The untrained point (x = 0) sits in symlog's linear part: joined by a dotted line, not the curve's.
         bars = axes.errorbar(

@@ -96,6 +96,12 @@ def goal_verdict(report: dict) -> str:
     return "met" if report["wilson_95"][0] >= GOAL else "met by the rate; interval reaches below 95%"
 
 
+def training_budget(report: dict) -> int:
+    """A row's training budget for sorting: its expert labels, or its training steps (0 when untrained)."""
+    training = report.get("training", {})
+    return int(training.get("labels", training.get("steps_reached", training.get("high_level_steps", 0))))
+
+
 def results_table() -> str:
     """One row per committed report (suite order, then policy), then the rows not run yet."""
     reports = [(path, load_report(path)) for path in sorted(RESULTS.glob("*.json"))]
@@ -106,7 +112,7 @@ def results_table() -> str:
             order.index(item[1]["suite"]),
             item[1]["policy"] not in named,
             item[1]["policy"].split(",")[0],
-            item[1].get("training", {}).get("labels", 0),
+            training_budget(item[1]),
             -item[1]["episodes"],
         )
     )

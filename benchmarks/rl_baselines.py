@@ -17,7 +17,8 @@ exactly as ``antmaze-hirl benchmark point5`` scores any policy:
   walk crosses on its way; ``mean subgoals`` of that row counts re-issues).
 
 Training stops at ``--steps`` or after ``--max-minutes`` of wall time, whichever comes first; the report
-gives the steps reached (``training.steps_reached``), never the steps asked for. ``--score-only`` scores a
+gives the steps reached (``training.steps_reached``), never the steps asked for. ``--steps 0`` scores the
+untrained model (where each curve starts; ``point5_<algo>_rl_untrained.json``). ``--score-only`` scores a
 saved model again (with its training record) without training.
 
 Usage: python benchmarks/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
@@ -154,7 +155,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     model = make_model(args.algo, args.num_envs, args.seed)
     cap = WallClockCap(60 * args.max_minutes)
     started = time.perf_counter()
-    model.learn(total_timesteps=args.steps, callback=cap, progress_bar=False)
+    if args.steps > 0:  # --steps 0: the untrained model, where a learning curve starts
+        model.learn(total_timesteps=args.steps, callback=cap, progress_bar=False)
     seconds = time.perf_counter() - started
     model_path.parent.mkdir(parents=True, exist_ok=True)
     model.save(model_path)
@@ -166,7 +168,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "steps_asked": args.steps,
         "steps_reached": int(model.num_timesteps),
         "step_kind": step_kind,
-        "stopped_by": "wall-time cap" if cap.capped else "step budget",
+        "stopped_by": "wall-time cap" if cap.capped else "step budget" if args.steps else "untrained (--steps 0)",
         "max_minutes": args.max_minutes,
         "num_envs": 1 if args.algo == "flat-sac-her" else args.num_envs,
         "training_split": "train",
@@ -197,7 +199,8 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) ->
         what = f"SB3 {args.algo.upper()} on the high level, {record['steps_reached']:,} high-level steps"
     report["policy"] = f"{what}, seed {args.seed}"
     report["training"] = record
-    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl.json"
+    untrained = "_untrained" if record["steps_reached"] == 0 else ""
+    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl{untrained}.json"
     atomic_write_json(out, report)
     low, high = report["wilson_95"]
     print(f"{report['policy']}: {report['successes']}/{report['episodes']} [{low:.1%}, {high:.1%}] -> {out}")
@@ -207,7 +210,9 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) ->
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--algo", choices=sorted(SETTINGS), required=True)
-    parser.add_argument("--steps", type=int, default=200_000, help="step budget (high-level steps, or body steps)")
+    parser.add_argument(
+        "--steps", type=int, default=200_000, help="step budget (high-level steps, or body steps); 0: untrained"
+    )
     parser.add_argument("--max-minutes", type=float, default=20.0, help="wall-time cap on training")
     parser.add_argument("--num-envs", type=int, default=8, help="lockstep mazes for ppo/sac training")
     parser.add_argument("--score-num-envs", type=int, default=8, help="lockstep mazes for scoring")
@@ -215,10 +220,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("runs/rl_baselines"), help="folder for models")
     parser.add_argument("--score-only", action="store_true", help="score the saved model again; no training")
     args = parser.parse_args(argv)
-    if args.steps < 1 or args.num_envs < 1 or args.score_num_envs < 1 or not args.max_minutes > 0:
-        parser.error(f"--steps, --num-envs and --score-num-envs must be >= 1 and --max-minutes > 0, got {args}")
+    if args.steps < 0 or args.num_envs < 1 or args.score_num_envs < 1 or not args.max_minutes > 0:
+        parser.error(f"--steps must be >= 0, --num-envs and --score-num-envs >= 1 and --max-minutes > 0, got {args}")
     torch.set_num_threads(1)
-    model_path = args.out / f"{SUITE}_{args.algo}_seed{args.seed}.zip"
+    model_path = args.out / f"{SUITE}_{args.algo}_seed{args.seed}{'_untrained' if args.steps == 0 else ''}.zip"
     record_path = model_path.with_suffix(".training.json")
     if args.score_only:
         record = json.loads(record_path.read_text())
