@@ -123,6 +123,7 @@ def test_record_low_level_video_keeps_every_frame(monkeypatch, tmp_path):
     assert written == [(info["total_low_level_steps"] + 1, 30)]
 
 
+@pytest.mark.slow  # a fresh interpreter per body (MuJoCo reads MUJOCO_GL at import): CI's slow tier runs it
 @pytest.mark.parametrize("suite_id", [SUITE_ID, "antmaze_hirl/AntMaze-4x4-v0"])
 def test_the_mujoco_view_is_an_rgb_array_where_egl_works(suite_id):
     # In a fresh interpreter: MuJoCo picks its OpenGL backend from MUJOCO_GL when it is first imported.
