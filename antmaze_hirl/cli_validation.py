@@ -83,6 +83,7 @@ INT_BOUNDS: dict[str, IntBounds] = {
     "cpus_per_trial": _CORES,
     "evaluation_envs": IntBounds(1, 1024, "mazes evaluated at once"),
     "episodes_per_task": IntBounds(1, 10_000),
+    "num_envs": IntBounds(1, 1024, "mazes played at once; 1: one after another"),
     "port": IntBounds(0, 65535, "0: any free port"),
 }
 """Bounds of the integer options, by ``dest``; ``"COMMAND:dest"`` overrides for one (sub)command."""

@@ -2,8 +2,10 @@
 
 Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
 ``benchmarks/results/benchmark/`` (its figures, budget, wall time and file), or a "not run yet" row from
-:data:`NOT_RUN` with the command that would fill it. Nothing is typed in by hand: rerun this after adding a
-report. ``--check`` compares instead of writing (exit 1 on a difference).
+:data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
+figure and lists its points (``benchmarks/labels_vs_steps.py``, which draws the PNG from the same reports).
+Nothing is typed in by hand: rerun this after adding a report. ``--check`` compares instead of writing
+(exit 1 on a difference).
 
 Usage: python benchmarks/leaderboard.py [--check]
 """
@@ -13,6 +15,8 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+
+import labels_vs_steps
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
@@ -24,6 +28,7 @@ PAGE = ROOT / "docs" / "leaderboard.md"
 MARKERS = {
     "suites": ("<!-- suites:start -->", "<!-- suites:end -->"),
     "results": ("<!-- results:start -->", "<!-- results:end -->"),
+    "figure": ("<!-- figure:start -->", "<!-- figure:end -->"),
 }
 
 GOAL = 0.95
@@ -42,9 +47,9 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "SB3 PPO at 200k high-level steps; SB3 SAC on the high level",
-        "`python benchmarks/benchmark_sb3_high.py --algo ppo --steps 200000` / `--algo sac --steps N` "
-        "(only PPO at 2,048 steps ran in this session)",
+        "SB3 PPO and SAC on the high level at 200k high-level steps",
+        "`python benchmarks/rl_baselines.py --algo ppo --max-minutes 1000` (and `--algo sac`): the 20-minute runs "
+        "above reached far fewer steps on the shared machine",
     ),
     (
         "ant suites",
@@ -53,8 +58,8 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "flat SAC+HER (no hierarchy)",
-        "needs a flat-policy scorer (the command scores high-level policies only): not built yet",
+        "flat SAC+HER (no hierarchy) beyond 20 minutes",
+        "`python benchmarks/rl_baselines.py --algo flat-sac-her --max-minutes 1000`",
     ),
 ]
 """Baselines not measured yet: (suite, what, the command that would fill the row)."""
@@ -91,6 +96,12 @@ def goal_verdict(report: dict) -> str:
     return "met" if report["wilson_95"][0] >= GOAL else "met by the rate; interval reaches below 95%"
 
 
+def training_budget(report: dict) -> int:
+    """A row's training budget for sorting: its expert labels, or its training steps (0 when untrained)."""
+    training = report.get("training", {})
+    return int(training.get("labels", training.get("steps_reached", training.get("high_level_steps", 0))))
+
+
 def results_table() -> str:
     """One row per committed report (suite order, then policy), then the rows not run yet."""
     reports = [(path, load_report(path)) for path in sorted(RESULTS.glob("*.json"))]
@@ -101,7 +112,7 @@ def results_table() -> str:
             order.index(item[1]["suite"]),
             item[1]["policy"] not in named,
             item[1]["policy"].split(",")[0],
-            item[1].get("training", {}).get("labels", 0),
+            training_budget(item[1]),
             -item[1]["episodes"],
         )
     )
@@ -132,9 +143,18 @@ def results_table() -> str:
     return "\n".join(lines)
 
 
+def figure_section() -> str:
+    """The figure (drawn by ``benchmarks/labels_vs_steps.py``) and the table of its points."""
+    points, _ = labels_vs_steps.figure_points()
+    image = labels_vs_steps.FIGURE.relative_to(PAGE.parent).as_posix()
+    alt = "point5: success against expert labels (DAgger) and against environment steps (RL baselines)"
+    return f"![{alt}]({image})\n\n{labels_vs_steps.points_table(points)}"
+
+
 def page_text(current: str) -> str:
     """``current`` with the text between each pair of markers replaced by its table."""
-    for name, table in (("suites", suites_table()), ("results", results_table())):
+    sections = (("suites", suites_table()), ("results", results_table()), ("figure", figure_section()))
+    for name, table in sections:
         start, end = MARKERS[name]
         head, rest = current.split(start, 1)
         _, tail = rest.split(end, 1)

@@ -79,16 +79,17 @@ def test_a_tiny_sb3_zip_and_a_saved_dagger_learner_are_scored(ppo_zip, learner_z
         assert report["episodes"] == 2 and 0 <= report["successes"] <= 2
 
 
-def test_the_batched_runner_is_a_one_line_swap(monkeypatch):
+def test_the_runner_is_a_one_line_swap_and_gets_num_envs(monkeypatch):
     seen = []
 
-    def recording_runner(make_env, policy, episodes, *, progress=False):
-        seen.append(list(episodes))
+    def recording_runner(make_env, policy, episodes, *, num_envs, progress=False):
+        seen.append((list(episodes), num_envs))
         return benchmark.play_serial(make_env, policy, episodes, progress=progress)
 
     monkeypatch.setattr(benchmark, "EPISODE_RUNNER", recording_runner)
     score_policy("point5", "oracle", task_ids=[2])
-    assert seen == [[(2, 2)]]
+    score_policy("point5", "oracle", task_ids=[2], num_envs=1)
+    assert seen == [([(2, 2)], benchmark.DEFAULT_NUM_ENVS), ([(2, 2)], 1)]
 
 
 def run_cli(capsys, *argv):
@@ -106,8 +107,10 @@ def test_the_command_prints_the_table_and_writes_the_report(tmp_path, capsys):
     assert "2/2" in printed and "task 1" in printed and f"wrote {out}" in printed
     report = load_report(out)
     assert (
-        report["command"] == "antmaze-hirl benchmark point5 --policy oracle --episodes-per-task 1 --seed 0 --tasks 0,1"
+        report["command"]
+        == "antmaze-hirl benchmark point5 --policy oracle --episodes-per-task 1 --seed 0 --num-envs 8 --tasks 0,1"
     )
+    assert report["num_envs"] == 8
     assert report["success_rate"] == 1.0
 
 
@@ -119,6 +122,10 @@ def test_the_command_prints_the_table_and_writes_the_report(tmp_path, capsys):
         (["point5", "--policy", "random", "--tasks", "0,100"], r"task_id 100 is out of range for suite 'point5'"),
         (["point5", "--policy", "random", "--tasks", "a"], r"--tasks must be comma-separated integers, got 'a'"),
         (["point5", "--policy", "random", "--episodes-per-task", "0"], r"--episodes-per-task must be >= 1, got 0"),
+        (
+            ["point5", "--policy", "random", "--num-envs", "0"],
+            r"--num-envs must be >= 1 \(mazes played at once; 1: one after another\), got 0",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, message):

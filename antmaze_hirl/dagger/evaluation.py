@@ -11,6 +11,7 @@ outcome now and then (``docs/guides/vector-envs.md`` has the measured rate).
 from __future__ import annotations
 
 import weakref
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -99,24 +100,61 @@ def evaluation_outcomes(
 def _lockstep_episodes(
     policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int
 ) -> list[tuple[MazeLayout, dict[str, Any]]]:
+    resets = [{"seed": seed + episode} for episode in range(episodes)]
+    return play_in_lockstep(policy, env, resets, num_envs=num_envs)
+
+
+def play_in_lockstep(
+    policy: Any,
+    env: Any,
+    resets: Sequence[dict[str, Any]],
+    *,
+    num_envs: int,
+    max_subgoals: int | None = None,
+    on_episode_end: Callable[[], None] | None = None,
+) -> list[tuple[MazeLayout, dict[str, Any]]]:
+    """Plays one episode per entry of ``resets`` on up to ``num_envs`` lockstep copies of ``env``.
+
+    A sub-env whose episode ends starts the next entry at once; the policy predicts in one batch for every
+    sub-env that needs a subgoal (see :func:`evaluate_high_level`) and the low level acts in one batch for
+    every sub-env still walking.
+
+    Args:
+        policy: As :func:`evaluate_high_level`; subgoals are clipped to the env's action space.
+        env: The high-level env whose copies play (:func:`~antmaze_hirl.envs.vector.copies_of`).
+        resets: One episode each: the keywords of its ``reset`` (``seed``, ``options``).
+        num_envs: Sub-envs, at most ``len(resets)`` are made.
+        max_subgoals: Truncate an episode after this many subgoals, as ``gym.make``'s ``TimeLimit`` does
+            (``None``: only the env's own low-level budget).
+        on_episode_end: Called after every finished episode (a progress bar's update).
+
+    Returns:
+        Each episode's maze (as its reset drew it) and last ``info``, in the order of ``resets``.
+
+    Raises:
+        ValueError: If ``num_envs`` is below 1.
+    """
+    num_envs = min(check_num_envs(num_envs), len(resets))
     copies = _COPIES.setdefault(env, {})
     if num_envs not in copies:
         copies[num_envs] = copies_of(env, num_envs)
     envs = copies[num_envs]
     low_level = as_batch_controller(envs[0].controller, num_envs)
     space = envs[0].action_space
-    results: list[tuple[MazeLayout, dict[str, Any]] | None] = [None] * episodes
+    results: list[tuple[MazeLayout, dict[str, Any]] | None] = [None] * len(resets)
     playing: dict[int, int] = {}  # sub-env -> episode it plays
+    subgoals_set: dict[int, int] = {}
     observations: dict[int, dict[str, np.ndarray]] = {}
-    queued = iter(range(episodes))
+    queued = iter(range(len(resets)))
 
     def start_next(index: int) -> None:
         episode = next(queued, None)
         if episode is None:
             return
-        observations[index], _ = envs[index].reset(seed=seed + episode)
+        observations[index], _ = envs[index].reset(**resets[episode])
         low_level.reset(index)
         playing[index] = episode
+        subgoals_set[index] = 0
 
     for index in range(num_envs):
         start_next(index)
@@ -130,8 +168,13 @@ def _lockstep_episodes(
         walk_in_lockstep(envs, walks, low_level)
         for index in indices:
             observations[index], _, terminated, truncated, info = envs[index].end_subgoal(walks[index])
+            subgoals_set[index] += 1
+            if max_subgoals is not None and subgoals_set[index] >= max_subgoals:
+                truncated = True
             if terminated or truncated:
                 results[playing.pop(index)] = (envs[index].layout, info)
+                if on_episode_end is not None:
+                    on_episode_end()
                 start_next(index)
     return [played for played in results if played is not None]
 
@@ -149,3 +192,10 @@ def _predict_batch(policy: Any, observations: list[dict[str, np.ndarray]]) -> li
         subgoal = act(observation)
         subgoals.append(subgoal[0] if isinstance(subgoal, tuple) else subgoal)
     return subgoals
+
+
+def release_copies(env: Any) -> None:
+    """Closes and forgets the lockstep copies made of ``env`` (their simulators), if any."""
+    for envs in _COPIES.pop(env, {}).values():
+        for copy in envs:
+            copy.close()

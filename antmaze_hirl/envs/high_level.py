@@ -17,6 +17,7 @@ from antmaze_hirl.envs.controllers import as_controller, reset_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
+from antmaze_hirl.envs.rendering import RENDER_MODES, EpisodeFrames, check_render_settings
 from antmaze_hirl.envs.simulator import Body, body_spec
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.task import Task
@@ -167,15 +168,20 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             0.4 m); 0 turns it off.
         terminate_on_flip: Ant only: end the episode as a failure once the ant has flipped.
         reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
-        render_mode: ``"rgb_array"`` for a bird's-eye picture.
+        render_mode: ``"rgb_array"`` for a picture of now, ``"rgb_array_list"`` for one frame at the reset and one
+            after every low-level step (``render()`` returns those since its last call), e.g. for a video of the walk.
+        render_view: What the pictures show (:mod:`antmaze_hirl.envs.rendering`): ``"schematic"`` (the default,
+            the bird's-eye picture), ``"trail"`` (it, plus the path so far and the current subgoal) or ``"mujoco"``
+            (a MuJoCo camera over the maze, offscreen: needs ``MUJOCO_GL=egl`` or ``osmesa`` on a headless machine).
 
     Raises:
         ValueError: If ``low_level`` is missing, both ``min_goal_cells`` and ``min_goal_distance`` are
-            given, or a number is out of range.
+            given, a number is out of range, or the render mode or view is unknown.
+        RenderUnavailable: For ``render_view="mujoco"`` without ``MUJOCO_GL`` or a display.
 
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": list(RENDER_MODES), "render_fps": 4}
 
     def __init__(
         self,
@@ -197,6 +203,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         terminate_on_flip: bool = True,
         reach_kwargs: dict[str, Any] | None = None,
         render_mode: str | None = None,
+        render_view: str = "schematic",
     ) -> None:
         min_goal_cells = _renamed_min_goal_cells(min_goal_cells, min_goal_distance)
         if low_level is None:
@@ -223,14 +230,14 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             terminate_on_flip=terminate_on_flip,
             reach_kwargs=reach_kwargs,
             render_mode=render_mode,
+            render_view=render_view,
         )
         spec = body_spec(body)
         if max_steps < 1:
             raise ValueError(f"max_steps must be >= 1, got {max_steps}")
         if not 0 <= position_noise < 0.5:
             raise ValueError(f"position_noise must lie in [0, 0.5) cells, got {position_noise}")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        check_render_settings(render_mode, render_view)
         self.body = body
         self.render_mode = render_mode
         self.max_steps = int(max_steps)
@@ -257,6 +264,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 f"got {self.min_subgoal_distance}"
             )
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
+        self.frames = EpisodeFrames(render_mode, render_view, self.renderer)
         scale = self.geometry.scale
         self.action_space = spaces.Box(
             (self.geometry.low + scale).astype(np.float32),
@@ -316,6 +324,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         # A stateful controller (action smoothing, say) starts every episode afresh, so that episode
         # figures do not depend on the order episodes ran in.
         reset_controller(self.controller)
+        self.frames.start_episode(self)
         return self._get_obs(), {"is_success": self._goal_reached(), "attempts": 0, "total_low_level_steps": 0}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
@@ -380,6 +389,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         walk.done = bool(
             walk.success or walk.subgoal_reached or fell or horizon_over or self.total_low_level_steps >= self.max_steps
         )
+        self.frames.after_low_level_step(self, walk.subgoal)
 
     def end_subgoal(self, walk: SubgoalWalk) -> tuple[dict, float, bool, bool, dict]:
         """The last part of :meth:`step`: its ``(observation, reward, terminated, truncated, info)``."""
@@ -416,14 +426,13 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         pushed = self.agent_xy + offset * (self.min_subgoal_distance / distance)
         return np.clip(pushed, self.action_space.low, self.action_space.high), True
 
-    def render(self) -> np.ndarray | None:
-        """Bird's-eye RGB picture when ``render_mode="rgb_array"``."""
-        if self.render_mode != "rgb_array":
-            return None
-        return self.renderer.rgb(self.layout.walls, self.agent_xy, self.goal_xy)
+    def render(self) -> np.ndarray | list[np.ndarray] | None:
+        """The ``render_view`` picture now (``"rgb_array"``), or the frames since the last call (``rgb_array_list``)."""
+        return self.frames.render(self)
 
     def close(self) -> None:
-        """Releases the simulator."""
+        """Releases the simulator (and the MuJoCo view's renderer, if one was made)."""
+        self.frames.close()
         self.reach.close()
 
     def sample_layout(self, rng: np.random.Generator) -> MazeLayout:

@@ -251,7 +251,8 @@ class SuiteMazeEnv(HighLevelMazeEnv):
         suite: A name of :data:`~antmaze_hirl.envs.suite_specs.SUITE_SPECS`.
         low_level: SB3 model or callable ``goal observation -> action`` (required here; the registered ids
             plug in the shipped policy).
-        render_mode: As :class:`HighLevelMazeEnv`.
+        render_mode: As :class:`HighLevelMazeEnv` (``"rgb_array"``, or ``"rgb_array_list"``: every low-level step).
+        render_view: As :class:`HighLevelMazeEnv` (``"schematic"``, ``"trail"`` or ``"mujoco"``).
 
     Raises:
         ValueError: On an unknown suite or a damaged task list.
@@ -259,7 +260,9 @@ class SuiteMazeEnv(HighLevelMazeEnv):
 
     metadata: ClassVar[dict[str, Any]] = HighLevelMazeEnv.metadata
 
-    def __init__(self, suite: str, *, low_level: Any = None, render_mode: str | None = None) -> None:
+    def __init__(
+        self, suite: str, *, low_level: Any = None, render_mode: str | None = None, render_view: str = "schematic"
+    ) -> None:
         self.suite = check_suite_name(suite)
         self.tasks = suite_tasks(suite)
         shape = self.tasks[0].layout.walls.shape
@@ -270,8 +273,9 @@ class SuiteMazeEnv(HighLevelMazeEnv):
             low_level=low_level,
             max_steps=self.suite.max_low_level_steps,
             render_mode=render_mode,
+            render_view=render_view,
         )
-        EzPickle.__init__(self, suite, low_level=low_level, render_mode=render_mode)
+        EzPickle.__init__(self, suite, low_level=low_level, render_mode=render_mode, render_view=render_view)
         self.task_id = 0
 
     @property

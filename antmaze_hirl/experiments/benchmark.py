@@ -12,9 +12,15 @@ low-level steps, per suite and per task. With ``episodes_per_task > 1`` the epis
 maze, so the suite figure also carries a bootstrap interval over tasks (``task_bootstrap_95``), which
 respects that; with one episode per task the Wilson interval is already over independent mazes.
 
-Episodes are played by :data:`EPISODE_RUNNER` (serial here); a batched runner on a vector env takes its
-place by changing that one line, since it gets the env factory, the policy and the list of
-``(task_id, seed)`` and returns the same :class:`EpisodeOutcome` list.
+Episodes are played by :data:`EPISODE_RUNNER`: with ``num_envs=1`` one after another on one env
+(:func:`play_serial`, how the committed results were made), with more on that many lockstep copies of the
+suite env (:func:`play_episodes`, the [fast-hierarchy] vector env's parts: one batched low-level forward per
+low-level step for every maze still walking, one batched subgoal prediction where the policy has
+``predict_batch``). Both play the same ``(task_id, seed)`` episodes with the same step limits. On the point
+suites the outcomes are identical (``tests/test_benchmark_lockstep.py``); a batched forward may round the last
+bits differently, which MuJoCo can turn into another ant episode now and then
+(``benchmarks/results/lockstep_agreement.json``). The random policy draws its subgoals from one generator in
+the order it is asked, which the lockstep runner interleaves: same distribution, other draws than serial.
 """
 
 from __future__ import annotations
@@ -36,6 +42,10 @@ import numpy as np
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS, SuiteSpec, check_suite_name
 
 POLICY_KEYWORDS = ("oracle", "random")
+DEFAULT_NUM_ENVS = 8
+"""Lockstep mazes of :func:`score_policy` and ``antmaze-hirl benchmark``: 1.1-4.8x faster than serial in
+``benchmarks/results/lockstep_agreement.json`` (oracle and learner, both bodies), and a whole number of rounds
+on 100-episode protocols is not needed (a finished maze starts the next episode at once)."""
 BOOTSTRAP_RESAMPLES = 2000
 RESULTS_FORMAT = "antmaze_hirl.benchmark_result/1"
 
@@ -79,8 +89,9 @@ def play_serial(
     env = make_env()
     space = env.action_space
     outcomes = []
+    bar = _progress_bar(len(episodes), progress)
     try:
-        for task_id, seed in _progress(episodes, progress):
+        for task_id, seed in episodes:
             obs, info = env.reset(seed=seed, options={"task_id": task_id})
             done = False
             while not done:
@@ -89,31 +100,76 @@ def play_serial(
                     action = action[0]
                 obs, _, terminated, truncated, info = env.step(np.clip(action, space.low, space.high))
                 done = terminated or truncated
-            outcomes.append(
-                EpisodeOutcome(
-                    task_id,
-                    seed,
-                    bool(info["is_success"]),
-                    int(info["attempts"]),
-                    int(info["total_low_level_steps"]),
-                    bool(info.get("flipped", False)),
-                )
-            )
+            outcomes.append(_outcome(task_id, seed, info))
+            if bar is not None:
+                bar.update()
     finally:
         env.close()
+        if bar is not None:
+            bar.close()
     return outcomes
 
 
-def _progress(episodes: Sequence[tuple[int, int]], progress: bool) -> Any:
+def play_episodes(
+    make_env: Callable[[], Any],
+    policy: Any,
+    episodes: Sequence[tuple[int, int]],
+    *,
+    num_envs: int = DEFAULT_NUM_ENVS,
+    progress: bool = False,
+) -> list[EpisodeOutcome]:
+    """Plays ``episodes``: :func:`play_serial` when ``num_envs == 1``, else on that many lockstep copies of an env.
+
+    The lockstep copies are those of one env from ``make_env`` (module docstring); the spec's
+    ``max_episode_steps`` truncates each episode there as ``gym.make``'s ``TimeLimit`` does serially.
+    """
+    if num_envs == 1:
+        return play_serial(make_env, policy, episodes, progress=progress)
+    from antmaze_hirl.dagger.evaluation import play_in_lockstep, release_copies
+
+    _action_of(policy)  # the same refusal as serial, before any env is made
+    env = make_env()
+    inner = env.unwrapped
+    bar = _progress_bar(len(episodes), progress)
+    resets = [{"seed": seed, "options": {"task_id": task_id}} for task_id, seed in episodes]
+    try:
+        played = play_in_lockstep(
+            policy,
+            inner,
+            resets,
+            num_envs=num_envs,
+            max_subgoals=getattr(env.spec, "max_episode_steps", None),
+            on_episode_end=None if bar is None else bar.update,
+        )
+    finally:
+        release_copies(inner)
+        env.close()
+        if bar is not None:
+            bar.close()
+    return [_outcome(task_id, seed, info) for (task_id, seed), (_, info) in zip(episodes, played, strict=True)]
+
+
+def _outcome(task_id: int, seed: int, info: dict[str, Any]) -> EpisodeOutcome:
+    return EpisodeOutcome(
+        task_id,
+        seed,
+        bool(info["is_success"]),
+        int(info["attempts"]),
+        int(info["total_low_level_steps"]),
+        bool(info.get("flipped", False)),
+    )
+
+
+def _progress_bar(total: int, progress: bool) -> Any:
     if not progress:
-        return episodes
+        return None
     from tqdm import tqdm
 
-    return tqdm(episodes, desc="benchmark episodes", unit="episode")
+    return tqdm(total=total, desc="benchmark episodes", unit="episode")
 
 
-EPISODE_RUNNER = play_serial
-"""Plays a list of episodes; a batched vector-env runner with this signature replaces it in one line."""
+EPISODE_RUNNER = play_episodes
+"""Plays a list of ``(task_id, seed)`` episodes with ``num_envs`` mazes at once (1: serially)."""
 
 
 class RandomSubgoalPolicy:
@@ -288,6 +344,7 @@ def score_policy(
     seed: int = 0,
     task_ids: Sequence[int] | None = None,
     low_level: Any = None,
+    num_envs: int = DEFAULT_NUM_ENVS,
     progress: bool = False,
 ) -> dict[str, Any]:
     """Scores a high-level policy on every task (or ``task_ids``) of ``suite``.
@@ -300,13 +357,15 @@ def score_policy(
         seed: Episode ``j`` of task ``k`` resets with ``seed + k * K + j``; the random policy draws from it.
         task_ids: A subset of tasks (default all), e.g. for a quick check; the report says which ran.
         low_level: The low-level controller (default: the body's shipped policy).
+        num_envs: Mazes played at once in lockstep; 1 plays them one after another (module docstring).
         progress: Show a progress bar.
 
     Returns:
         The report (module docstring): suite figures, ``"tasks"`` per task, the policy, budget and wall time.
 
     Raises:
-        ValueError: On an unknown suite, ``episodes_per_task < 1``, a bad task id, or a bad policy file.
+        ValueError: On an unknown suite, ``episodes_per_task < 1``, ``num_envs < 1``, a bad task id, or a bad
+            policy file.
         FileNotFoundError: If a policy path names no file.
     """
     spec = check_suite_name(suite)
@@ -314,6 +373,9 @@ def score_policy(
     if isinstance(episodes_per_task, bool) or not isinstance(episodes_per_task, int) or episodes_per_task < 1:
         raise ValueError(f"episodes_per_task must be an integer >= 1, got {episodes_per_task!r}")
     from antmaze_hirl.envs.suites import check_task_id
+    from antmaze_hirl.envs.vector import check_num_envs
+
+    num_envs = check_num_envs(num_envs)
 
     ids = list(range(spec.n_tasks)) if task_ids is None else [check_task_id(k, spec.n_tasks, suite) for k in task_ids]
     if not ids:
@@ -329,7 +391,7 @@ def score_policy(
         acting, description = policy, getattr(policy, "__name__", type(policy).__name__)
     episodes = [(k, seed + k * episodes_per_task + j) for k in ids for j in range(episodes_per_task)]
     started = time.perf_counter()
-    outcomes = EPISODE_RUNNER(make_env, acting, episodes, progress=progress)
+    outcomes = EPISODE_RUNNER(make_env, acting, episodes, num_envs=num_envs, progress=progress)
     seconds = time.perf_counter() - started
     per_task = []
     for k in ids:
@@ -345,6 +407,7 @@ def score_policy(
         "low_level": _low_level_text(spec, low_level),
         "episodes_per_task": episodes_per_task,
         "seed": seed,
+        "num_envs": num_envs,
         "task_ids": "all" if task_ids is None else ids,
         **_figures(outcomes),
         "low_level_steps_total": int(sum(outcome.low_level_steps for outcome in outcomes)),
@@ -404,6 +467,13 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         help="episodes per task, K (default: the suite's protocol, 1 on point5/ant4, 20 on the fixed maps)",
     )
     parser.add_argument("--seed", type=int, default=0, help="episode j of task k resets with seed + k*K + j")
+    parser.add_argument(
+        "--num-envs",
+        type=int,
+        default=DEFAULT_NUM_ENVS,
+        help=f"mazes played at once in lockstep, one batched low-level forward per step (default {DEFAULT_NUM_ENVS}; "
+        "1: one after another, as the committed results were made)",
+    )
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
     parser.add_argument(
         "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
@@ -429,17 +499,19 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         raise ValueError(f"--episodes-per-task must be >= 1, got {args.episodes_per_task}")
     import torch
 
-    torch.set_num_threads(1)  # one env, batch-1 forwards: a second thread only contends (shared/README.md)
+    torch.set_num_threads(1)  # small-batch forwards: a second thread only contends (shared/README.md)
     report = score_policy(
         spec.name,
         args.policy,
         episodes_per_task=args.episodes_per_task,
         seed=args.seed,
         task_ids=_parse_task_ids(args.tasks),
+        num_envs=args.num_envs,
         progress=not args.no_progress,
     )
     command = ["antmaze-hirl", "benchmark", spec.name, "--policy", str(args.policy)]
     command += ["--episodes-per-task", str(report["episodes_per_task"]), "--seed", str(args.seed)]
+    command += ["--num-envs", str(args.num_envs)]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
     print(report_table(report, per_task=args.per_task or len(report["tasks"]) <= 10))
     if args.json is not None:
