@@ -148,3 +148,26 @@ def test_a_row_asked_for_twice_is_refused_before_any_episode():
         in_maze.run([None], ["u"], episodes=1, seed=0, smoothing=(0.0, 0.0))
     with pytest.raises(ValueError, match=r"a\.zip smoothing=0\.5"):
         in_maze.row_names([Path("a.zip"), Path("a.zip")], (0.0, 0.5))
+
+
+class SteerController:
+    """Torques from the goal offset and joint angles, row by row: batched rows equal single ones bit for bit."""
+
+    def __call__(self, observation):
+        return self.act_batch({key: value[None] for key, value in observation.items()})[0]
+
+    def act_batch(self, observations):
+        offset = observations["desired_goal"] - observations["achieved_goal"]
+        joints = observations["observation"][:, 7:15]
+        return np.tanh(np.tile(offset, 4) - joints)
+
+
+def test_lockstep_plays_the_serial_episodes(monkeypatch):
+    # More episodes than sub-envs, so a sub-env plays a second maze after its first ends (its paths restart).
+    monkeypatch.setattr(in_maze, "load_low_level", lambda body, path: SteerController())
+    monkeypatch.setattr(in_maze, "_MODELS", {})
+    serial = in_maze.run_chunk(None, 0.0, "u", range(5, 8), 2.0, num_envs=1)[2]
+    lockstep = in_maze.run_chunk(None, 0.0, "u", range(5, 8), 2.0, num_envs=2)[2]
+    assert len(serial["outcomes"]) == 3
+    del serial["seconds"], lockstep["seconds"]
+    np.testing.assert_equal(lockstep, serial)  # NaN turns (standstills) count as equal

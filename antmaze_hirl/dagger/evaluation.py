@@ -11,6 +11,8 @@ outcome now and then (``docs/guides/vector-envs.md`` has the measured rate).
 from __future__ import annotations
 
 import weakref
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -102,23 +104,81 @@ def _lockstep_episodes(
     copies = _COPIES.setdefault(env, {})
     if num_envs not in copies:
         copies[num_envs] = copies_of(env, num_envs)
-    envs = copies[num_envs]
-    low_level = as_batch_controller(envs[0].controller, num_envs)
+    played = play_in_lockstep(policy, copies[num_envs], range(seed, seed + episodes))
+    return [(episode.layout, episode.info) for episode in played]
+
+
+@dataclass(frozen=True)
+class LockstepEpisode:
+    """One episode played by :func:`play_in_lockstep`.
+
+    Attributes:
+        seed: The seed its maze was reset with.
+        layout: The maze as its reset drew it.
+        info: The env's last ``info`` (``is_success``, ``attempts``, ``total_low_level_steps``, ...).
+        truncated: Whether it ran out of its low-level step budget.
+    """
+
+    seed: int
+    layout: MazeLayout
+    info: dict[str, Any]
+    truncated: bool
+
+
+def play_in_lockstep(
+    policy: Any,
+    envs: Sequence[HighLevelMazeEnv],
+    seeds: Sequence[int],
+    *,
+    after_reset: Callable[[int, int], None] | None = None,
+    after_subgoal: Callable[[int, int, dict[str, Any], bool], None] | None = None,
+) -> list[LockstepEpisode]:
+    """Plays one episode per seed on ``envs``, ``len(envs)`` at once, and returns them in seed order.
+
+    Each sub-env takes the next seed as soon as its episode ends. ``policy`` predicts in one batch for every
+    sub-env that needs a subgoal (``predict_batch`` where it has one; subgoals are clipped to the action space);
+    the sub-envs' shared low-level controller acts in one batch for every sub-env still walking
+    (:func:`~antmaze_hirl.envs.vector.walk_in_lockstep`). An episode plays as the serial
+    :func:`~antmaze_hirl.rollout.play_episode` would play it with the same seed, up to the float rounding
+    of batched matrix products.
+
+    Args:
+        policy: As :func:`evaluate_high_level`'s.
+        envs: Unwrapped high-level envs sharing one low-level controller object (made by
+            :func:`~antmaze_hirl.envs.vector.copies_of`, or with the same arguments and controller).
+        seeds: One episode per seed.
+        after_reset: Called as ``after_reset(env_index, seed)`` after each reset, before the first subgoal
+            (e.g. to change that episode's step budget).
+        after_subgoal: Called as ``after_subgoal(env_index, seed, info, done)`` after each high-level step,
+            ``done`` on the episode's last.
+
+    Raises:
+        ValueError: If ``envs`` or ``seeds`` is empty, or the sub-envs do not share one controller.
+    """
+    envs, seeds = list(envs), list(seeds)
+    if not envs or not seeds:
+        raise ValueError(f"lockstep play needs sub-envs and seeds, got {len(envs)} sub-envs and {len(seeds)} seeds")
+    if any(env.controller is not envs[0].controller for env in envs):
+        raise ValueError("the lockstep sub-envs must share one low-level controller object (it is batched once)")
+    envs = envs[: len(seeds)]
+    low_level = as_batch_controller(envs[0].controller, len(envs))
     space = envs[0].action_space
-    results: list[tuple[MazeLayout, dict[str, Any]] | None] = [None] * episodes
-    playing: dict[int, int] = {}  # sub-env -> episode it plays
+    results: dict[int, LockstepEpisode] = {}
+    playing: dict[int, int] = {}  # sub-env -> position in seeds of the episode it plays
     observations: dict[int, dict[str, np.ndarray]] = {}
-    queued = iter(range(episodes))
+    queued = iter(range(len(seeds)))
 
     def start_next(index: int) -> None:
         episode = next(queued, None)
         if episode is None:
             return
-        observations[index], _ = envs[index].reset(seed=seed + episode)
+        observations[index], _ = envs[index].reset(seed=seeds[episode])
         low_level.reset(index)
         playing[index] = episode
+        if after_reset is not None:
+            after_reset(index, seeds[episode])
 
-    for index in range(num_envs):
+    for index in range(len(envs)):
         start_next(index)
     while playing:
         indices = sorted(playing)
@@ -130,10 +190,15 @@ def _lockstep_episodes(
         walk_in_lockstep(envs, walks, low_level)
         for index in indices:
             observations[index], _, terminated, truncated, info = envs[index].end_subgoal(walks[index])
-            if terminated or truncated:
-                results[playing.pop(index)] = (envs[index].layout, info)
+            done = bool(terminated or truncated)
+            seed = seeds[playing[index]]
+            if after_subgoal is not None:
+                after_subgoal(index, seed, info, done)
+            if done:
+                episode = playing.pop(index)
+                results[episode] = LockstepEpisode(seed, envs[index].layout, info, bool(truncated))
                 start_next(index)
-    return [played for played in results if played is not None]
+    return [results[episode] for episode in range(len(seeds))]
 
 
 def _predict_batch(policy: Any, observations: list[dict[str, np.ndarray]]) -> list[np.ndarray]:
