@@ -49,17 +49,25 @@ def evaluate_reach(
     Raises:
         ValueError: If ``episodes`` or ``num_envs`` is below 1.
     """
+    steps_used = reach_outcomes(policy, env, episodes=episodes, seed=seed, num_envs=num_envs)
+    successes = sum(steps is not None for steps in steps_used)
+    mean_steps = float(np.mean([env.horizon if steps is None else steps for steps in steps_used]))
+    return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": mean_steps}
+
+
+def reach_outcomes(policy: Any, env: ReachEnv, *, episodes: int, seed: int, num_envs: int = 1) -> list[int | None]:
+    """Each attempt of :func:`evaluate_reach` (same arguments): its steps to the first success, ``None`` on failure.
+
+    Raises:
+        ValueError: If ``episodes`` or ``num_envs`` is below 1.
+    """
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     num_envs = check_num_envs(num_envs)
     if num_envs == 1:
         controller = as_controller(policy)
-        steps_used = [_reach_once(env, controller, seed + episode) for episode in range(episodes)]
-    else:
-        steps_used = _reach_in_lockstep(policy, env, range(seed, seed + episodes), min(num_envs, episodes))
-    successes = sum(steps is not None for steps in steps_used)
-    mean_steps = float(np.mean([env.horizon if steps is None else steps for steps in steps_used]))
-    return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": mean_steps}
+        return [_reach_once(env, controller, seed + episode) for episode in range(episodes)]
+    return _reach_in_lockstep(policy, env, range(seed, seed + episodes), min(num_envs, episodes))
 
 
 def _reach_once(env: ReachEnv, controller: Any, seed: int) -> int | None:
