@@ -56,7 +56,7 @@ from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, play_in_lockstep
-from antmaze_hirl.envs.controllers import SmoothedController
+from antmaze_hirl.envs.controllers import SmoothedController, as_controller
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE, body_settings, evaluation_sets
@@ -425,7 +425,8 @@ def run_chunk(
     """
     torch.set_num_threads(1)
     model = worker_low_level(path)
-    controller = model if smoothing == 0 else SmoothedController(model, smoothing)
+    # One controller object for every maze of the chunk (a model would be wrapped anew by each env): batched once.
+    controller = as_controller(model) if smoothing == 0 else SmoothedController(model, smoothing)
     recorders = [family_env(family, controller) for _ in range(min(num_envs, len(seeds)))]
     oracle = PathOracle.for_env(recorders[0], max_distance=max_distance)
     try:
