@@ -29,8 +29,15 @@ per weight, each low level's actions smoothed exponentially (:class:`~antmaze_hi
 ``--chunk-episodes`` episodes in N processes; every episode resets with its own seed, so the figures do not
 depend on N (``seconds`` then sums the workers' time).
 
+``--num-envs N`` (default :data:`LOCKSTEP_ENVS`) plays up to N mazes of a chunk at once in lockstep: the
+oracle labels every maze that needs a subgoal, the low level acts in one batch for every maze still walking.
+The same mazes and seeds; a batched forward pass may round the last bits differently, which MuJoCo can turn
+into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often). ``--num-envs 1`` plays
+them one after another, the path every ``in_maze*.json`` committed before lockstep was made with: use it to
+replay one exactly.
+
 Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
-           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25]
+           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
 Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
