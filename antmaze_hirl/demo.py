@@ -33,6 +33,23 @@ class DemoResult:
     picture: Path
 
 
+def demo_setup(
+    body: str, *, maze_size: int | None = None, max_subgoal_distance: float | None = None, **env_kwargs: Any
+) -> tuple[gym.Env, PathOracle]:
+    """The demo's env and oracle (:func:`run_demo`'s arguments, same defaults), for playing its episodes elsewhere.
+
+    Raises:
+        ValueError: If ``body`` is unknown.
+    """
+    if body not in BODY_DEFAULTS:
+        raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_DEFAULTS)}")
+    defaults = BODY_DEFAULTS[body]
+    maze_size = maze_size if maze_size is not None else defaults["maze_size"]
+    distance = max_subgoal_distance if max_subgoal_distance is not None else defaults["expert_max_distance"]
+    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, **env_kwargs)
+    return env, PathOracle.for_env(env, max_distance=distance)
+
+
 def run_demo(
     body: str = "point",
     seed: int = 0,
@@ -57,13 +74,8 @@ def run_demo(
     Raises:
         ValueError: If ``body`` is unknown.
     """
-    if body not in BODY_DEFAULTS:
-        raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_DEFAULTS)}")
-    defaults = BODY_DEFAULTS[body]
-    maze_size = maze_size if maze_size is not None else defaults["maze_size"]
-    distance = max_subgoal_distance if max_subgoal_distance is not None else defaults["expert_max_distance"]
-    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, **env_kwargs)
-    episode = play_episode(env, PathOracle.for_env(env, max_distance=distance), seed=seed)
+    env, oracle = demo_setup(body, maze_size=maze_size, max_subgoal_distance=max_subgoal_distance, **env_kwargs)
+    episode = play_episode(env, oracle, seed=seed)
     env.close()
     steps = int(episode.info["total_low_level_steps"])
     picture = plot_played_episode(

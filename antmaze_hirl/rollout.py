@@ -32,11 +32,16 @@ class HighLevelEpisode:
     @property
     def outcome(self) -> str:
         """Why the episode ended: ``"success"``, ``"flipped"`` (the ant on its back) or ``"timed out"``."""
-        if self.success:
-            return "success"
-        if self.info.get("flipped"):
-            return "flipped"
-        return "timed out" if self.truncated else "ended"
+        return episode_outcome(self.info, truncated=self.truncated)
+
+
+def episode_outcome(info: dict[str, Any], *, truncated: bool) -> str:
+    """:attr:`HighLevelEpisode.outcome` from an episode's last ``info`` and whether it was truncated."""
+    if info["is_success"]:
+        return "success"
+    if info.get("flipped"):
+        return "flipped"
+    return "timed out" if truncated else "ended"
 
 
 def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevelEpisode:

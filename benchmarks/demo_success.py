@@ -5,7 +5,13 @@ distance) for seeds 0..N-1 and records each episode's outcome: success, flipped 
 succeeds at least as often as the oracle on the demo's maze family (``oracle_success_ant_3.json``, from
 ``paper_experiment.py --body ant --oracle-only``: 100 held-out 3x3 mazes), and on seed 0 (the demo's default).
 
-Usage: python benchmarks/demo_success.py [--bodies ant,point] [--seeds 20]
+The seeds play ``--num-envs`` at a time in lockstep (default 20: all of them at once), the oracle labelling every
+maze that needs a subgoal and the shipped low level acting in one batch for every maze still walking, without
+the demo's picture; the same mazes and seeds, though batched float rounding can change an ant episode now and
+then (``docs/guides/vector-envs.md``). ``--num-envs 1`` runs the demo itself seed after seed, as the results
+committed before lockstep were made.
+
+Usage: python benchmarks/demo_success.py [--bodies ant,point] [--seeds 20] [--num-envs 20]
 Updates benchmarks/results/demo_success.json (one entry per body run; other bodies' entries are kept).
 """
 
@@ -21,9 +27,12 @@ from pathlib import Path
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.demo import run_demo
+from antmaze_hirl.dagger.evaluation import play_in_lockstep
+from antmaze_hirl.demo import demo_setup, run_demo
+from antmaze_hirl.envs.vector import copies_of
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.runner import low_level_identity
+from antmaze_hirl.rollout import episode_outcome
 
 RESULTS = Path(__file__).parent / "results"
 OUT = RESULTS / "demo_success.json"
@@ -34,19 +43,40 @@ def oracle_success(body: str) -> float | None:
     return json.loads(path.read_text())["success_rate"] if path.exists() else None
 
 
-def measure(body: str, seeds: int) -> dict:
+def serial_outcomes(body: str, seeds: int) -> list[str]:
+    """Each seed's outcome from the demo itself (``run_demo``, picture and all), one seed after another."""
     outcomes = []
-    start = time.perf_counter()
     with tempfile.TemporaryDirectory() as pictures:
         for seed in range(seeds):
             result = run_demo(body=body, seed=seed, out_dir=pictures)
             outcomes.append(result.outcome)
             print(f"{body} seed {seed}: {result.outcome}, {result.subgoals} subgoals, {result.low_level_steps} steps")
+    return outcomes
+
+
+def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
+    """Each seed's outcome on the demo's env and oracle, ``num_envs`` mazes at once in lockstep (no picture)."""
+    env, oracle = demo_setup(body)
+    try:
+        played = play_in_lockstep(oracle, copies_of(env, min(num_envs, seeds)), range(seeds))
+    finally:
+        env.close()
+    outcomes = [episode_outcome(episode.info, truncated=episode.truncated) for episode in played]
+    for episode, outcome in zip(played, outcomes, strict=True):
+        steps, subgoals = episode.info["total_low_level_steps"], episode.info["attempts"]
+        print(f"{body} seed {episode.seed}: {outcome}, {subgoals} subgoals, {steps} steps")
+    return outcomes
+
+
+def measure(body: str, seeds: int, num_envs: int = 1) -> dict:
+    start = time.perf_counter()
+    outcomes = serial_outcomes(body, seeds) if num_envs == 1 else lockstep_outcomes(body, seeds, num_envs)
     successes = outcomes.count("success")
     oracle = oracle_success(body)
     return {
         "low_level_id": low_level_identity(body),  # the shipped policy the demo runs
         "seeds": f"0-{seeds - 1}",
+        "num_envs": num_envs,
         "settings": BODY_DEFAULTS[body],
         "successes": successes,
         "episodes": seeds,
@@ -64,11 +94,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--bodies", default="ant,point", help="comma-separated bodies")
     parser.add_argument("--seeds", type=int, default=20, help="seeds 0..N-1 per body")
+    parser.add_argument(
+        "--num-envs",
+        type=int,
+        default=20,
+        help="mazes played at once in lockstep; 1: the demo itself, seed after seed (exact replays)",
+    )
     args = parser.parse_args()
+    for name in ("seeds", "num_envs"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     torch.set_num_threads(1)
     results = json.loads(OUT.read_text()) if OUT.exists() else {}
     for body in args.bodies.split(","):
-        results[body] = measure(body, args.seeds)
+        results[body] = measure(body, args.seeds, args.num_envs)
         summary = {key: results[body][key] for key in ("successes", "episodes", "failures", "goal_met")}
         print(f"{body}: {summary}")
         atomic_write_json(OUT, results)  # after each body, so a long run keeps what it has

@@ -9,7 +9,10 @@ Per body, side by side:
   for each ``--num-envs`` N and each global torch thread count of ``--threads``, as low-level steps/s summed
   over the sub-envs;
 * ``serial, unscoped``: one ``gym.make`` env at torch's 2 threads with the single-thread inference scope
-  turned off (``SMALL_BATCH_ROWS = -1``), i.e. the low level as it ran before the scope.
+  turned off (``SMALL_BATCH_ROWS = -1``), i.e. the low level as it ran before the scope;
+* ``lockstep, SB3 predict``: the lockstep rows with the low level acting through SB3's ``model.predict``
+  (``controllers.DIRECT_PREDICT = False``), as before :class:`~antmaze_hirl.envs.controllers.PredictController`
+  ran the policy's predict steps itself (same actions bit for bit), just before each ``lockstep`` row.
 
 Ratios are to the raw baseline of the same body. Each row runs for ``--seconds`` (at least one high-level
 step of every sub-env); seeded, so every row plays the same mazes.
@@ -122,11 +125,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             oracle = PathOracle.for_env(env.envs[0], max_distance=expert_distance)
             for threads in args.threads:
                 th.set_num_threads(threads)
-                rate, steps = hierarchy_steps_per_s(env, oracle, args.seconds, args.seed)
-                body_rows.append(
-                    {"mode": "lockstep", "num_envs": num_envs, "torch_threads": threads, "steps_per_s": rate}
-                )
-                print(f"{body} N={num_envs} threads={threads}: {rate:,.0f} low-level steps/s ({steps})", flush=True)
+                for mode, direct in (("lockstep, SB3 predict", False), ("lockstep", True)):
+                    controllers.DIRECT_PREDICT = direct
+                    try:
+                        rate, steps = hierarchy_steps_per_s(env, oracle, args.seconds, args.seed)
+                    finally:
+                        controllers.DIRECT_PREDICT = True
+                    body_rows.append(
+                        {"mode": mode, "num_envs": num_envs, "torch_threads": threads, "steps_per_s": rate}
+                    )
+                    print(f"{body} {mode} N={num_envs} threads={threads}: {rate:,.0f} steps/s ({steps})", flush=True)
             env.close()
         th.set_num_threads(caller_threads)
         after = raw_steps_per_s(body, args.seconds, args.seed)
@@ -143,10 +151,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         rows.extend(body_rows)
         print(f"{body} raw {RAW_IDS[body]}: {before:,.0f} before, {after:,.0f} after", flush=True)
     th.set_num_threads(caller_threads)
-    print(f"{'body':6} {'mode':17} {'N':>3} {'thr':>3} {'steps/s':>9} {'x raw':>6} {'x best':>6}")
+    print(f"{'body':6} {'mode':21} {'N':>3} {'thr':>3} {'steps/s':>9} {'x raw':>6} {'x best':>6}")
     for row in rows:
         print(
-            f"{row['body']:6} {row['mode']:17} {row['num_envs']:>3} {row['torch_threads']:>3} "
+            f"{row['body']:6} {row['mode']:21} {row['num_envs']:>3} {row['torch_threads']:>3} "
             f"{row['steps_per_s']:>9,.0f} {row['ratio_to_raw']:>6.2f} {row['ratio_to_best']:>6.2f}"
         )
     report = {

@@ -29,8 +29,15 @@ per weight, each low level's actions smoothed exponentially (:class:`~antmaze_hi
 ``--chunk-episodes`` episodes in N processes; every episode resets with its own seed, so the figures do not
 depend on N (``seconds`` then sums the workers' time).
 
+``--num-envs N`` (default :data:`LOCKSTEP_ENVS`) plays up to N mazes of a chunk at once in lockstep: the
+oracle labels every maze that needs a subgoal, the low level acts in one batch for every maze still walking.
+The same mazes and seeds; a batched forward pass may round the last bits differently, which MuJoCo can turn
+into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often). ``--num-envs 1`` plays
+them one after another, the path every ``in_maze*.json`` committed before lockstep was made with: use it to
+replay one exactly.
+
 Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
-           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25]
+           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
 Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
@@ -55,8 +62,8 @@ from paper_experiment import RESULTS
 from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
-from antmaze_hirl.envs.controllers import SmoothedController
+from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, play_in_lockstep
+from antmaze_hirl.envs.controllers import SmoothedController, as_controller
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE, body_settings, evaluation_sets
@@ -88,8 +95,12 @@ MIN_TRAVEL = 0.2
 """Metres: a body that moved less over those steps is at a standstill, and a subgoal then asks for no turn."""
 EARLY_FLIP_STEPS = 10
 """Half a second: a flip this soon after a new subgoal is counted as one at the hand-off."""
-LISTS = ("steps", "limits", "turns", "subgoal_flipped", "flip_steps")
+PER_SUBGOAL = ("turns", "subgoal_flipped", "flip_steps")
+"""The raw figures' lists with one entry per subgoal (or per flip), concatenated in episode order."""
+LISTS = ("outcomes", "steps", "limits", *PER_SUBGOAL)
 """The per-episode and per-subgoal lists of the raw figures, concatenated in episode order by :func:`merge_raw`."""
+LOCKSTEP_ENVS = 25
+"""``--num-envs``'s default: mazes played at once (a chunk of 25 with ``--jobs``, 100 episodes in 4 rounds)."""
 COUNT_KEYS = {"success": "successes", "flip": "flips", "frozen": "frozen", "timeout": "timeouts"}
 """The JSON key of each outcome's count."""
 
@@ -121,21 +132,29 @@ class MazeEpisodeRecorder(gym.Wrapper):
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         """Resets the env, then (if asked) sets its step budget from the new layout's start and goal."""
         obs, info = self.env.reset(**kwargs)
+        self.begin_episode()
+        return obs, info
+
+    def begin_episode(self) -> None:
+        """What :meth:`reset` does after the env's reset (the lockstep path calls it on the unwrapped env's)."""
         inner = self.env.unwrapped
         if self.scale_step_limit:
             layout = inner.layout
             inner.max_steps = step_limit(layout.walls, layout.start_cell, layout.goal_cell, inner.geometry.scale)
         self.paths, self.turns = [], []
-        return obs, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """One subgoal; its low-level path is kept in :attr:`paths`, its turn in :attr:`turns`."""
         obs, reward, terminated, truncated, info = self.env.step(action)
+        self.record(info)
+        return obs, reward, terminated, truncated, info
+
+    def record(self, info: dict[str, Any]) -> None:
+        """Keeps one high-level step's path and turn (from its ``info``)."""
         path = np.asarray(info["agent_path"])
         walked = np.concatenate([*self.paths, path[:1]])[-(TRAVEL_STEPS + 1) :]  # the steps before this subgoal
         self.turns.append(turn_degrees(walked[0], walked[-1], info["subgoal"]))
         self.paths.append(path)
-        return obs, reward, terminated, truncated, info
 
     @property
     def max_steps(self) -> int:
@@ -205,36 +224,77 @@ def outcome(info: dict[str, Any], paths: list[np.ndarray]) -> str:
     return "frozen" if is_frozen(paths) else "timeout"
 
 
-def play_episodes(env: MazeEpisodeRecorder, oracle: Any, seeds: range) -> dict[str, Any]:
-    """The oracle's episodes with ``seeds`` on ``env``: raw outcome counts, subgoals, steps and step limits.
+def episode_figures(info: dict[str, Any], recorder: MazeEpisodeRecorder) -> dict[str, Any]:
+    """One finished episode's raw figures, from its last ``info`` and the recorder that watched it."""
+    return {
+        "outcome": outcome(info, recorder.paths),
+        "subgoals": int(info["attempts"]),
+        "steps": int(info["total_low_level_steps"]),
+        "limit": recorder.max_steps,
+        "turns": list(recorder.turns),
+        "subgoal_flipped": [False] * (len(recorder.turns) - 1) + [bool(info["flipped"])],
+        "flip_steps": [int(info["low_level_steps"])] if info["flipped"] else [],
+    }
 
-    The raw form of :func:`evaluate_family`'s figures, so that chunks of one family run in separate
-    processes add up (:func:`merge_raw`) to what one process would give.
-    """
+
+def raw_figures(episodes: list[dict[str, Any]], *, seconds: float, first_seed: int) -> dict[str, Any]:
+    """:func:`play_episodes`'s raw figures from each episode's :func:`episode_figures`, in seed order."""
     counts = dict.fromkeys(OUTCOMES, 0)
-    subgoals, steps, limits, turns, subgoal_flipped, flip_steps = 0, [], [], [], [], []
-    started = time.perf_counter()
-    for seed in seeds:
-        info = play_episode(env, oracle, seed=seed).info
-        counts[outcome(info, env.paths)] += 1
-        subgoals += info["attempts"]
-        steps.append(int(info["total_low_level_steps"]))
-        limits.append(env.max_steps)
-        turns.extend(env.turns)
-        subgoal_flipped.extend([False] * (len(env.turns) - 1) + [bool(info["flipped"])])
-        if info["flipped"]:
-            flip_steps.append(int(info["low_level_steps"]))
+    for episode in episodes:
+        counts[episode["outcome"]] += 1
     return {
         "counts": counts,
-        "subgoals": subgoals,
-        "steps": steps,
-        "limits": limits,
-        "turns": turns,
-        "subgoal_flipped": subgoal_flipped,
-        "flip_steps": flip_steps,
-        "seconds": time.perf_counter() - started,
-        "first_seed": seeds.start,
+        "subgoals": sum(episode["subgoals"] for episode in episodes),
+        "outcomes": [episode["outcome"] for episode in episodes],
+        "steps": [episode["steps"] for episode in episodes],
+        "limits": [episode["limit"] for episode in episodes],
+        **{key: [value for episode in episodes for value in episode[key]] for key in PER_SUBGOAL},
+        "seconds": seconds,
+        "first_seed": first_seed,
     }
+
+
+def play_episodes(env: MazeEpisodeRecorder, oracle: Any, seeds: range) -> dict[str, Any]:
+    """The oracle's episodes with ``seeds`` on ``env``, one after another: raw outcome counts, subgoals, steps, limits.
+
+    The raw form of :func:`evaluate_family`'s figures, so that chunks of one family run in separate
+    processes add up (:func:`merge_raw`) to what one process would give. The serial path: exact replays of
+    committed results.
+    """
+    started = time.perf_counter()
+    episodes = [episode_figures(play_episode(env, oracle, seed=seed).info, env) for seed in seeds]
+    return raw_figures(episodes, seconds=time.perf_counter() - started, first_seed=seeds.start)
+
+
+def play_episodes_lockstep(recorders: list[MazeEpisodeRecorder], oracle: Any, seeds: range) -> dict[str, Any]:
+    """:func:`play_episodes` on ``len(recorders)`` mazes at once, in lockstep (``play_in_lockstep``).
+
+    The same mazes and seeds; the oracle labels every maze that needs a subgoal, the shared low level acts
+    in one batch for every maze still walking. A batched forward pass may round the last bits differently
+    from a batch of one, which MuJoCo can amplify into another outcome (``docs/guides/vector-envs.md``).
+
+    Args:
+        recorders: Recorder-wrapped envs of one family sharing one low-level controller object.
+        oracle: The high level.
+        seeds: One episode per seed.
+    """
+    started = time.perf_counter()
+    figures: dict[int, dict[str, Any]] = {}
+
+    def after_subgoal(index: int, seed: int, info: dict[str, Any], done: bool) -> None:
+        recorders[index].record(info)
+        if done:
+            figures[seed] = episode_figures(info, recorders[index])
+
+    play_in_lockstep(
+        oracle,
+        [recorder.unwrapped for recorder in recorders],
+        seeds,
+        after_reset=lambda index, seed: recorders[index].begin_episode(),
+        after_subgoal=after_subgoal,
+    )
+    episodes = [figures[seed] for seed in seeds]
+    return raw_figures(episodes, seconds=time.perf_counter() - started, first_seed=seeds.start)
 
 
 def merge_raw(chunks: list[dict[str, Any]]) -> dict[str, Any]:
@@ -363,17 +423,27 @@ def worker_low_level(path: Path | None) -> Any:
 
 
 def run_chunk(
-    path: Path | None, smoothing: float, family: str, seeds: range, max_distance: float
+    path: Path | None, smoothing: float, family: str, seeds: range, max_distance: float, num_envs: int = 1
 ) -> tuple[str, str, dict[str, Any], str]:
-    """One chunk of episodes: ``(row name, family, raw figures, low-level id)``; runs in a worker process."""
+    """One chunk of episodes: ``(row name, family, raw figures, low-level id)``; runs in a worker process.
+
+    ``num_envs`` 1 plays the episodes one after another (:func:`play_episodes`); more plays up to that
+    many at once in lockstep (:func:`play_episodes_lockstep`), sharing one controller.
+    """
     torch.set_num_threads(1)
     model = worker_low_level(path)
-    controller = model if smoothing == 0 else SmoothedController(model, smoothing)
-    env = family_env(family, controller)
+    # One controller object for every maze of the chunk (a model would be wrapped anew by each env): batched once.
+    controller = as_controller(model) if smoothing == 0 else SmoothedController(model, smoothing)
+    recorders = [family_env(family, controller) for _ in range(min(num_envs, len(seeds)))]
+    oracle = PathOracle.for_env(recorders[0], max_distance=max_distance)
     try:
-        raw = play_episodes(env, PathOracle.for_env(env, max_distance=max_distance), seeds)
+        if len(recorders) == 1:
+            raw = play_episodes(recorders[0], oracle, seeds)
+        else:
+            raw = play_episodes_lockstep(recorders, oracle, seeds)
     finally:
-        env.close()
+        for recorder in recorders:
+            recorder.close()
     return row_name(path, smoothing), family, raw, low_level_identity("ant", model)
 
 
@@ -401,16 +471,19 @@ def run(
     max_distance: float | None = None,
     jobs: int = 1,
     chunk_episodes: int = 25,
+    num_envs: int = 1,
 ) -> dict[str, Any]:
     """Figures per low level (``None``: shipped), action smoothing and family, with success ratios to the first row.
 
     With ``jobs`` > 1 the episodes of every family are cut into chunks of ``chunk_episodes`` and played by a
     pool of processes; each episode resets with its own seed, so the figures are the same as with one.
+    ``num_envs`` > 1 plays up to that many mazes of a chunk at once in lockstep (``1``, the default: one
+    after another, as committed results were made).
     """
     row_names(low_levels, smoothing)
     max_distance = BODY_DEFAULTS["ant"]["expert_max_distance"] if max_distance is None else max_distance
     tasks = [
-        (path, alpha, family, seeds, max_distance)
+        (path, alpha, family, seeds, max_distance, num_envs)
         for path in low_levels
         for alpha in smoothing
         for family in families
@@ -478,6 +551,13 @@ def main() -> None:
     )
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (chunks of --chunk-episodes episodes)")
     parser.add_argument("--chunk-episodes", type=int, default=25, help="episodes per worker task with --jobs > 1")
+    parser.add_argument(
+        "--num-envs",
+        type=int,
+        default=LOCKSTEP_ENVS,
+        help=f"mazes played at once in lockstep (default {LOCKSTEP_ENVS}); 1: one after another, for exact "
+        "replays of results committed before lockstep",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS / "in_maze.json")
     args = parser.parse_args()
     try:
@@ -486,7 +566,7 @@ def main() -> None:
         row_names([None, *(args.low_level or [])], tuple(smoothing))
     except ValueError as error:
         parser.error(str(error))
-    for name in ("episodes", "jobs", "chunk_episodes"):
+    for name in ("episodes", "jobs", "chunk_episodes", "num_envs"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     if args.subgoal_distance is not None and not args.subgoal_distance > 0:
@@ -505,12 +585,14 @@ def main() -> None:
         max_distance=max_distance,
         jobs=args.jobs,
         chunk_episodes=args.chunk_episodes,
+        num_envs=args.num_envs,
     )
     atomic_write_json(
         args.out,
         {
             "command": shlex.join(["python", "benchmarks/in_maze.py", *sys.argv[1:]]),
             "expert_max_distance": max_distance,
+            "num_envs": args.num_envs,
             "step_limit": (
                 f"ant3, ant4: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))"
             ),

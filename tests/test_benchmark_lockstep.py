@@ -4,7 +4,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from antmaze_hirl.dagger.evaluation import play_in_lockstep, release_copies
+from antmaze_hirl.dagger.evaluation import play_on_copies, release_copies
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
 from antmaze_hirl.experiments.benchmark import score_policy
 
@@ -44,10 +44,11 @@ def test_lockstep_truncates_at_the_time_limit_as_gyms_time_limit_does():
                 break
         serial.append((info["attempts"], info["total_low_level_steps"], info["is_success"]))
     resets = [{"seed": task_id, "options": {"task_id": task_id}} for task_id in TASKS]
-    played = play_in_lockstep(oracle, env.unwrapped, resets, num_envs=4, max_subgoals=2)
+    played = play_on_copies(oracle, env.unwrapped, resets, num_envs=4, max_subgoals=2)
     release_copies(env.unwrapped)
     env.close()
-    assert [(i["attempts"], i["total_low_level_steps"], i["is_success"]) for _, i in played] == serial
+    infos = [episode.info for episode in played]
+    assert [(i["attempts"], i["total_low_level_steps"], i["is_success"]) for i in infos] == serial
     assert all(attempts == 2 for attempts, _, _ in serial)  # every oracle episode needs more than 2 subgoals
 
 

@@ -112,8 +112,24 @@ def test_eval_low_prints_and_writes_the_figures_of_seeded_subgoals(tmp_path, cap
     printed = json.loads(capsys.readouterr().out.splitlines()[-1])
     shipped = load_low_level("point")
     expected = evaluate_reach(shipped, ReachEnv("point", goal_radius=0.6), episodes=6, seed=3)
-    assert printed == json.loads(out.read_text()) == {**expected, "low_level_id": low_level_identity("point", shipped)}
+    identity = low_level_identity("point", shipped)
+    assert printed == json.loads(out.read_text()) == {**expected, "num_envs": 1, "low_level_id": identity}
     assert printed["low_level_id"].startswith("sha256:")
+
+
+def test_eval_low_in_lockstep_tries_the_serial_subgoals(capsys):
+    # The point's PD controller acts row by row, so lockstep must give the serial figures exactly.
+    from antmaze_hirl.envs.controllers import PointGoToController
+    from antmaze_hirl.envs.reach import ReachEnv
+    from antmaze_hirl.sb3_ext import evaluate_reach
+
+    serial = evaluate_reach(PointGoToController(kp=2.0), ReachEnv("point"), episodes=7, seed=11)
+    lockstep = evaluate_reach(PointGoToController(kp=2.0), ReachEnv("point"), episodes=7, seed=11, num_envs=3)
+    assert lockstep == serial and 0 < serial["success_rate"] < 1
+    assert main(["eval-low", "--body", "point", "--episodes", "4", "--num-envs", "3"]) == 0
+    assert json.loads(capsys.readouterr().out.splitlines()[-1])["num_envs"] == 3
+    with pytest.raises(ValueError, match="num_envs must be an integer >= 1, got 0"):
+        evaluate_reach(PointGoToController(), ReachEnv("point"), episodes=2, seed=0, num_envs=0)
 
 
 def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):

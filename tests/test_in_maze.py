@@ -148,3 +148,27 @@ def test_a_row_asked_for_twice_is_refused_before_any_episode():
         in_maze.run([None], ["u"], episodes=1, seed=0, smoothing=(0.0, 0.0))
     with pytest.raises(ValueError, match=r"a\.zip smoothing=0\.5"):
         in_maze.row_names([Path("a.zip"), Path("a.zip")], (0.0, 0.5))
+
+
+class SteerModel:
+    """An SB3-style model (``predict``): torques from the goal offset and joint angles, row by row.
+
+    Each env wraps a model in a controller of its own, so this checks that a chunk's mazes still share one;
+    its batched rows equal its single ones bit for bit.
+    """
+
+    def predict(self, observation, deterministic=True):
+        offset = observation["desired_goal"] - observation["achieved_goal"]
+        joints = observation["observation"][..., 7:15]
+        return np.tanh(np.concatenate([offset] * 4, axis=-1) - joints), None
+
+
+def test_lockstep_plays_the_serial_episodes(monkeypatch):
+    # More episodes than sub-envs, so a sub-env plays a second maze after its first ends (its paths restart).
+    monkeypatch.setattr(in_maze, "load_low_level", lambda body, path: SteerModel())
+    monkeypatch.setattr(in_maze, "_MODELS", {})
+    serial = in_maze.run_chunk(None, 0.0, "u", range(5, 8), 2.0, num_envs=1)[2]
+    lockstep = in_maze.run_chunk(None, 0.0, "u", range(5, 8), 2.0, num_envs=2)[2]
+    assert len(serial["outcomes"]) == 3
+    del serial["seconds"], lockstep["seconds"]
+    np.testing.assert_equal(lockstep, serial)  # NaN turns (standstills) count as equal

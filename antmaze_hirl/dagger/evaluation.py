@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import weakref
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -100,49 +101,105 @@ def evaluation_outcomes(
 def _lockstep_episodes(
     policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int
 ) -> list[tuple[MazeLayout, dict[str, Any]]]:
-    resets = [{"seed": seed + episode} for episode in range(episodes)]
-    return play_in_lockstep(policy, env, resets, num_envs=num_envs)
+    played = play_on_copies(policy, env, range(seed, seed + episodes), num_envs=num_envs)
+    return [(episode.layout, episode.info) for episode in played]
+
+
+@dataclass(frozen=True)
+class LockstepEpisode:
+    """One episode played by :func:`play_in_lockstep`.
+
+    Attributes:
+        seed: The seed its maze was reset with (``None`` if its reset gave none).
+        layout: The maze as its reset drew it.
+        info: The env's last ``info`` (``is_success``, ``attempts``, ``total_low_level_steps``, ...).
+        truncated: Whether it was truncated: out of its low-level step budget, or of ``max_subgoals``.
+    """
+
+    seed: int | None
+    layout: MazeLayout
+    info: dict[str, Any]
+    truncated: bool
+
+
+Reset = int | dict[str, Any]
+"""One episode's reset: a seed, or the keywords of ``reset`` (``seed``, ``options``)."""
+
+
+def play_on_copies(
+    policy: Any, env: Any, resets: Sequence[Reset], *, num_envs: int, **kwargs: Any
+) -> list[LockstepEpisode]:
+    """:func:`play_in_lockstep` on up to ``num_envs`` lockstep copies of ``env``, made once and kept.
+
+    The copies (:func:`~antmaze_hirl.envs.vector.copies_of`) are cached per ``env`` and ``num_envs``, so a
+    periodic evaluation compiles its simulators once; :func:`release_copies` closes them.
+
+    Args:
+        policy: As :func:`evaluate_high_level`'s.
+        env: The unwrapped high-level env whose copies play.
+        resets: As :func:`play_in_lockstep`'s.
+        num_envs: Sub-envs; at most ``len(resets)`` are made.
+        **kwargs: :func:`play_in_lockstep`'s keywords.
+
+    Raises:
+        ValueError: If ``num_envs`` is below 1 or ``resets`` is empty.
+    """
+    num_envs = check_num_envs(num_envs)
+    if not resets:
+        raise ValueError("lockstep play needs at least one reset, got none")
+    num_envs = min(num_envs, len(resets))
+    copies = _COPIES.setdefault(env, {})
+    if num_envs not in copies:
+        copies[num_envs] = copies_of(env, num_envs)
+    return play_in_lockstep(policy, copies[num_envs], resets, **kwargs)
 
 
 def play_in_lockstep(
     policy: Any,
-    env: Any,
-    resets: Sequence[dict[str, Any]],
+    envs: Sequence[HighLevelMazeEnv],
+    resets: Sequence[Reset],
     *,
-    num_envs: int,
     max_subgoals: int | None = None,
+    after_reset: Callable[[int, int | None], None] | None = None,
+    after_subgoal: Callable[[int, int | None, dict[str, Any], bool], None] | None = None,
     on_episode_end: Callable[[], None] | None = None,
-) -> list[tuple[MazeLayout, dict[str, Any]]]:
-    """Plays one episode per entry of ``resets`` on up to ``num_envs`` lockstep copies of ``env``.
+) -> list[LockstepEpisode]:
+    """Plays one episode per entry of ``resets`` on ``envs``, ``len(envs)`` at once, in the order of ``resets``.
 
-    A sub-env whose episode ends starts the next entry at once; the policy predicts in one batch for every
-    sub-env that needs a subgoal (see :func:`evaluate_high_level`) and the low level acts in one batch for
-    every sub-env still walking.
+    Each sub-env takes the next reset as soon as its episode ends. ``policy`` predicts in one batch for every
+    sub-env that needs a subgoal (``predict_batch`` where it has one; subgoals are clipped to the action space);
+    the sub-envs' shared low-level controller acts in one batch for every sub-env still walking
+    (:func:`~antmaze_hirl.envs.vector.walk_in_lockstep`). An episode plays as the serial
+    :func:`~antmaze_hirl.rollout.play_episode` would play it with the same reset, up to the float rounding
+    of batched matrix products.
 
     Args:
-        policy: As :func:`evaluate_high_level`; subgoals are clipped to the env's action space.
-        env: The high-level env whose copies play (:func:`~antmaze_hirl.envs.vector.copies_of`).
-        resets: One episode each: the keywords of its ``reset`` (``seed``, ``options``).
-        num_envs: Sub-envs, at most ``len(resets)`` are made.
+        policy: As :func:`evaluate_high_level`'s.
+        envs: Unwrapped high-level envs sharing one low-level controller object (made by
+            :func:`~antmaze_hirl.envs.vector.copies_of`, or with the same arguments and controller).
+        resets: One episode each: a seed, or the keywords of its ``reset`` (``seed``, ``options``).
         max_subgoals: Truncate an episode after this many subgoals, as ``gym.make``'s ``TimeLimit`` does
             (``None``: only the env's own low-level budget).
+        after_reset: Called as ``after_reset(env_index, seed)`` after each reset, before the first subgoal
+            (e.g. to change that episode's step budget).
+        after_subgoal: Called as ``after_subgoal(env_index, seed, info, done)`` after each high-level step,
+            ``done`` on the episode's last.
         on_episode_end: Called after every finished episode (a progress bar's update).
 
-    Returns:
-        Each episode's maze (as its reset drew it) and last ``info``, in the order of ``resets``.
-
     Raises:
-        ValueError: If ``num_envs`` is below 1.
+        ValueError: If ``envs`` or ``resets`` is empty, or the sub-envs do not share one controller.
     """
-    num_envs = min(check_num_envs(num_envs), len(resets))
-    copies = _COPIES.setdefault(env, {})
-    if num_envs not in copies:
-        copies[num_envs] = copies_of(env, num_envs)
-    envs = copies[num_envs]
-    low_level = as_batch_controller(envs[0].controller, num_envs)
+    envs = list(envs)
+    resets = [reset if isinstance(reset, dict) else {"seed": int(reset)} for reset in resets]
+    if not envs or not resets:
+        raise ValueError(f"lockstep play needs sub-envs and resets, got {len(envs)} sub-envs and {len(resets)} resets")
+    if any(env.controller is not envs[0].controller for env in envs):
+        raise ValueError("the lockstep sub-envs must share one low-level controller object (it is batched once)")
+    envs = envs[: len(resets)]
+    low_level = as_batch_controller(envs[0].controller, len(envs))
     space = envs[0].action_space
-    results: list[tuple[MazeLayout, dict[str, Any]] | None] = [None] * len(resets)
-    playing: dict[int, int] = {}  # sub-env -> episode it plays
+    results: dict[int, LockstepEpisode] = {}
+    playing: dict[int, int] = {}  # sub-env -> position in resets of the episode it plays
     subgoals_set: dict[int, int] = {}
     observations: dict[int, dict[str, np.ndarray]] = {}
     queued = iter(range(len(resets)))
@@ -155,8 +212,10 @@ def play_in_lockstep(
         low_level.reset(index)
         playing[index] = episode
         subgoals_set[index] = 0
+        if after_reset is not None:
+            after_reset(index, resets[episode].get("seed"))
 
-    for index in range(num_envs):
+    for index in range(len(envs)):
         start_next(index)
     while playing:
         indices = sorted(playing)
@@ -171,12 +230,17 @@ def play_in_lockstep(
             subgoals_set[index] += 1
             if max_subgoals is not None and subgoals_set[index] >= max_subgoals:
                 truncated = True
-            if terminated or truncated:
-                results[playing.pop(index)] = (envs[index].layout, info)
+            done = bool(terminated or truncated)
+            seed = resets[playing[index]].get("seed")
+            if after_subgoal is not None:
+                after_subgoal(index, seed, info, done)
+            if done:
+                episode = playing.pop(index)
+                results[episode] = LockstepEpisode(seed, envs[index].layout, info, bool(truncated))
                 if on_episode_end is not None:
                     on_episode_end()
                 start_next(index)
-    return [played for played in results if played is not None]
+    return [results[episode] for episode in range(len(resets))]
 
 
 def _predict_batch(policy: Any, observations: list[dict[str, np.ndarray]]) -> list[np.ndarray]:

@@ -19,6 +19,11 @@ GoalObservation = dict[str, np.ndarray]
 SMALL_BATCH_ROWS = 256
 """Inference on at most this many rows runs on one torch thread (:func:`inference_threads`)."""
 
+DIRECT_PREDICT = True
+""":class:`PredictController` runs an SB3 policy's ``predict`` steps itself, skipping per-call overhead with
+the same actions bit for bit; ``False`` calls ``model.predict`` (``benchmarks/hierarchy_throughput.py``'s
+reference rows)."""
+
 _forked_child = False
 
 
@@ -104,10 +109,13 @@ class PredictController:
     def __init__(self, model: Any, *, deterministic: bool = True) -> None:
         self.model = model
         self.deterministic = deterministic
+        self._policy = _direct_policy(model)
 
     def __call__(self, observation: GoalObservation) -> np.ndarray:
         """Returns the model's action for ``observation``."""
         with inference_threads(1):
+            if DIRECT_PREDICT and self._policy is not None and isinstance(observation, dict):
+                return self._act_directly(observation, 1).reshape(self._policy.action_space.shape)
             action, _ = self.model.predict(observation, deterministic=self.deterministic)
         return np.asarray(action)
 
@@ -119,8 +127,47 @@ class PredictController:
         """
         rows = len(next(iter(observations.values())))
         with inference_threads(rows):
+            if DIRECT_PREDICT and self._policy is not None:
+                return self._act_directly(observations, rows)
             actions, _ = self.model.predict(observations, deterministic=self.deterministic)
         return np.asarray(actions).reshape(rows, -1)
+
+    def _act_directly(self, observations: GoalObservation, rows: int) -> np.ndarray:
+        # SB3's BasePolicy.predict for a Dict observation and a Box action space, step for step, without what
+        # costs a millisecond per call on a loaded machine and changes nothing here: set_training_mode(False)
+        # walks every module (the policy is checked to be in eval mode instead), and a deep copy of the
+        # observation. The same tensors reach the same _predict, so the actions are the same bit for bit.
+        policy = self._policy
+        if policy.training:
+            policy.set_training_mode(False)
+        torch = sys.modules["torch"]
+        spaces = policy.observation_space.spaces
+        with torch.no_grad():
+            tensors = {
+                key: torch.as_tensor(np.array(value).reshape((-1, *spaces[key].shape)), device=policy.device)
+                for key, value in observations.items()
+            }
+            actions = policy._predict(tensors, deterministic=self.deterministic)
+        actions = actions.cpu().numpy().reshape((-1, *policy.action_space.shape))
+        if policy.squash_output:
+            return policy.unscale_action(actions).reshape(rows, -1)
+        return np.clip(actions, policy.action_space.low, policy.action_space.high).reshape(rows, -1)
+
+
+def _direct_policy(model: Any) -> Any:
+    # The SB3 policy of an SB3 model (or the policy itself) whose predict PredictController may run
+    # directly: Dict observations without images, a Box action space; None for anything else (predict is used).
+    policy = getattr(model, "policy", model)
+    needed = ("_predict", "unscale_action", "set_training_mode", "observation_space", "action_space", "device")
+    if not all(hasattr(policy, name) for name in needed) or "torch" not in sys.modules:
+        return None
+    observation_space, action_space = policy.observation_space, policy.action_space
+    if type(action_space).__name__ != "Box" or type(observation_space).__name__ != "Dict":
+        return None
+    for space in observation_space.spaces.values():
+        if type(space).__name__ != "Box" or len(space.shape) != 1:  # images would need SB3's transposing
+            return None
+    return policy
 
 
 def reset_controller(controller: Any) -> None:

@@ -125,7 +125,7 @@ def play_episodes(
     """
     if num_envs == 1:
         return play_serial(make_env, policy, episodes, progress=progress)
-    from antmaze_hirl.dagger.evaluation import play_in_lockstep, release_copies
+    from antmaze_hirl.dagger.evaluation import play_on_copies, release_copies
 
     _action_of(policy)  # the same refusal as serial, before any env is made
     env = make_env()
@@ -133,7 +133,7 @@ def play_episodes(
     bar = _progress_bar(len(episodes), progress)
     resets = [{"seed": seed, "options": {"task_id": task_id}} for task_id, seed in episodes]
     try:
-        played = play_in_lockstep(
+        played = play_on_copies(
             policy,
             inner,
             resets,
@@ -146,7 +146,7 @@ def play_episodes(
         env.close()
         if bar is not None:
             bar.close()
-    return [_outcome(task_id, seed, info) for (task_id, seed), (_, info) in zip(episodes, played, strict=True)]
+    return [_outcome(task_id, seed, episode.info) for (task_id, seed), episode in zip(episodes, played, strict=True)]
 
 
 def _outcome(task_id: int, seed: int, info: dict[str, Any]) -> EpisodeOutcome:

@@ -11,8 +11,9 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 from antmaze_hirl.atomic_io import atomic_write_text
-from antmaze_hirl.envs.controllers import as_controller
+from antmaze_hirl.envs.controllers import as_batch_controller, as_controller
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.envs.vector import check_num_envs
 from antmaze_hirl.sb3_ext.loading import save_policy
 
 
@@ -22,6 +23,7 @@ def evaluate_reach(
     *,
     episodes: int,
     seed: int,
+    num_envs: int = 1,
 ) -> dict[str, float | int]:
     """Runs ``episodes`` subgoal-reaching attempts, episode ``i`` reset with seed ``seed + i``.
 
@@ -35,25 +37,87 @@ def evaluate_reach(
         seed: Base seed; the same seed gives the same subgoals. Sets overlap by construction
             (``seed=1`` shares episodes 1..n-1 of ``seed=0``), so disjoint test sets need base seeds at
             least ``episodes`` apart; a prefix is a subset (100 episodes are the first 100 of 200).
+        num_envs: ``1`` plays the attempts one after another on ``env`` (exact replays of committed
+            results). More plays up to that many at once on copies of ``env``, the policy acting for all of
+            them in one batch per step (:func:`~antmaze_hirl.envs.controllers.as_batch_controller`): the
+            same subgoals and seeds, but a batched forward pass may round the last bits differently, which
+            the simulator can turn into another outcome now and then.
 
     Returns:
         ``{"success_rate", "episodes", "mean_steps"}``, steps counted to first success (H on failure).
 
+    Raises:
+        ValueError: If ``episodes`` or ``num_envs`` is below 1.
+    """
+    steps_used = reach_outcomes(policy, env, episodes=episodes, seed=seed, num_envs=num_envs)
+    successes = sum(steps is not None for steps in steps_used)
+    mean_steps = float(np.mean([env.horizon if steps is None else steps for steps in steps_used]))
+    return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": mean_steps}
+
+
+def reach_outcomes(policy: Any, env: ReachEnv, *, episodes: int, seed: int, num_envs: int = 1) -> list[int | None]:
+    """Each attempt of :func:`evaluate_reach` (same arguments): its steps to the first success, ``None`` on failure.
+
+    Raises:
+        ValueError: If ``episodes`` or ``num_envs`` is below 1.
     """
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
-    controller = as_controller(policy)
-    successes, steps_used = 0, []
-    for episode in range(episodes):
-        obs, info = env.reset(seed=seed + episode)
-        steps, done, reached = 0, False, info["is_success"]
-        while not (done or reached):
-            obs, _, terminated, truncated, info = env.step(controller(obs))
-            steps += 1
-            done, reached = terminated or truncated, info["is_success"]
-        successes += int(reached)
-        steps_used.append(steps if reached else env.horizon)
-    return {"success_rate": successes / episodes, "episodes": episodes, "mean_steps": float(np.mean(steps_used))}
+    num_envs = check_num_envs(num_envs)
+    if num_envs == 1:
+        controller = as_controller(policy)
+        return [_reach_once(env, controller, seed + episode) for episode in range(episodes)]
+    return _reach_in_lockstep(policy, env, range(seed, seed + episodes), min(num_envs, episodes))
+
+
+def _reach_once(env: ReachEnv, controller: Any, seed: int) -> int | None:
+    # Steps to the first success, or None on failure.
+    obs, info = env.reset(seed=seed)
+    steps, done, reached = 0, False, info["is_success"]
+    while not (done or reached):
+        obs, _, terminated, truncated, info = env.step(controller(obs))
+        steps += 1
+        done, reached = terminated or truncated, info["is_success"]
+    return steps if reached else None
+
+
+def _reach_in_lockstep(policy: Any, env: ReachEnv, seeds: range, num_envs: int) -> list[int | None]:
+    # The attempts of _reach_once, num_envs at a time on copies of env: one batched action per step.
+    envs = [type(env)(*env._ezpickle_args, **env._ezpickle_kwargs) for _ in range(num_envs)]
+    low_level = as_batch_controller(policy, num_envs)
+    results: dict[int, int | None] = {}
+    playing: dict[int, tuple[int, int]] = {}  # sub-env -> (seed, steps so far)
+    observations: dict[int, dict[str, np.ndarray]] = {}
+    queued = iter(seeds)
+
+    def start_next(index: int) -> None:
+        for seed in queued:
+            observations[index], info = envs[index].reset(seed=seed)
+            low_level.reset(index)
+            if not info["is_success"]:
+                playing[index] = (seed, 0)
+                return
+            results[seed] = 0  # reached at its reset: no step taken, as in _reach_once
+
+    try:
+        for index in range(num_envs):
+            start_next(index)
+        while playing:
+            indices = sorted(playing)
+            batch = {key: np.stack([observations[i][key] for i in indices]) for key in observations[indices[0]]}
+            actions = low_level(batch, np.asarray(indices))
+            for index, action in zip(indices, actions, strict=True):
+                seed, steps = playing[index]
+                observations[index], _, terminated, truncated, info = envs[index].step(action)
+                playing[index] = (seed, steps + 1)
+                if info["is_success"] or terminated or truncated:
+                    results[seed] = steps + 1 if info["is_success"] else None
+                    del playing[index]
+                    start_next(index)
+    finally:
+        for sub_env in envs:
+            sub_env.close()
+    return [results[seed] for seed in seeds]
 
 
 def snapshot_step(path: Path) -> int | None:
