@@ -15,6 +15,7 @@ from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import as_controller, reset_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
+from antmaze_hirl.envs.profiles import DEFAULT_MAX_STEPS, maze_env_id
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
 from antmaze_hirl.envs.simulator import Body, body_spec
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -164,7 +165,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         min_goal_cells: int = DEFAULT_MIN_GOAL_CELLS,
         low_level: Any = None,
         horizon: int | None = None,
-        max_steps: int = 500,
+        max_steps: int = DEFAULT_MAX_STEPS,
         goal_threshold: float | None = None,
         position_noise: float = 0.25,
         pixels_per_cell: int = 8,
@@ -177,7 +178,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         if low_level is None:
             raise ValueError(
                 f"HighLevelMazeEnv needs a low-level controller: pass low_level=<SB3 model or callable obs -> "
-                f"action>, or make it with gym.make('antmaze_hirl/{str(body).capitalize()}Maze-v0') to use the "
+                f"action>, or make it with gym.make('{maze_env_id(str(body))}') to use the "
                 f"shipped policy"
             )
         EzPickle.__init__(
