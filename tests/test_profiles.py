@@ -50,6 +50,10 @@ def test_the_seed_table_is_the_values_of_before():
     from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 
     assert inspect.signature(SuccessRateCallback).parameters["seed"].default == 10_000
+    from antmaze_hirl.cli import build_parser
+
+    # eval-low's --seed default restates the table's value (left in cli.py while eval-low is being edited).
+    assert build_parser().parse_args(["eval-low", "--body", "point"]).seed == profiles.SEEDS.low_level_report_subgoals
 
 
 def test_the_ids_and_the_maze_families_are_the_values_of_before():

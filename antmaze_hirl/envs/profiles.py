@@ -152,7 +152,8 @@ class SeedTable:
     """The first seed of each disjoint seed range. Episode ``i`` of a set resets with ``first + i``.
 
     Attributes:
-        held_out: Held-out mazes: every final evaluation, ``eval-high``, ``benchmarks/in_maze.py``.
+        held_out: Held-out mazes: the experiment's final evaluation (``evaluate_high_level``'s default) and
+            ``benchmarks/in_maze.py``.
         low_level_selection_mazes: The mazes ``benchmarks/select_low_level.py`` picked the shipped ant on.
         selection: The periodic evaluations' mazes under ``held_out_layouts`` (the ``"selection"`` part).
         low_level_curve: Subgoal seeds of ``train-low``'s held-out success curve (:class:`SuccessRateCallback`).
