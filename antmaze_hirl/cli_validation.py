@@ -82,7 +82,6 @@ INT_BOUNDS: dict[str, IntBounds] = {
     "jobs": _CORES,
     "cpus_per_trial": _CORES,
     "evaluation_envs": IntBounds(1, 1024, "mazes evaluated at once"),
-    "num_envs": IntBounds(1, 1024, "episodes played at once"),
     "episodes_per_task": IntBounds(1, 10_000),
     "num_envs": IntBounds(1, 1024, "mazes played at once; 1: one after another"),
     "port": IntBounds(0, 65535, "0: any free port"),

@@ -8,6 +8,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.plotting import plot_played_episode
@@ -46,7 +47,7 @@ def demo_setup(
     defaults = BODY_DEFAULTS[body]
     maze_size = maze_size if maze_size is not None else defaults["maze_size"]
     distance = max_subgoal_distance if max_subgoal_distance is not None else defaults["expert_max_distance"]
-    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, **env_kwargs)
+    env = gym.make(maze_env_id(body), maze_size=maze_size, **env_kwargs)
     return env, PathOracle.for_env(env, max_distance=distance)
 
 

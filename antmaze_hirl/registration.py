@@ -10,21 +10,18 @@ from __future__ import annotations
 
 import gymnasium as gym
 
+from antmaze_hirl.envs.profiles import maze_env_id, reach_env_id
 from antmaze_hirl.envs.suite_specs import SUITE_ENTRY_POINT, SUITE_SPECS
 
 VECTOR_ENTRY_POINTS: dict[str, str] = {
-    "antmaze_hirl/AntReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
-    "antmaze_hirl/PointReach-v0": "antmaze_hirl.envs.vector:make_reach_vector_env",
-    "antmaze_hirl/AntMaze-v0": "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env",
-    "antmaze_hirl/PointMaze-v0": "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env",
+    **{reach_env_id(body): "antmaze_hirl.envs.vector:make_reach_vector_env" for body in ("ant", "point")},
+    **{maze_env_id(body): "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env" for body in ("ant", "point")},
 }
 """Each id's native vector env (``gym.make_vec(id, N)``, ``vectorization_mode="vector_entry_point"``)."""
 
 ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
-    "antmaze_hirl/AntReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "ant"}),
-    "antmaze_hirl/PointReach-v0": ("antmaze_hirl.envs.reach:ReachEnv", {"body": "point"}),
-    "antmaze_hirl/AntMaze-v0": ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": "ant"}),
-    "antmaze_hirl/PointMaze-v0": ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": "point"}),
+    **{reach_env_id(body): ("antmaze_hirl.envs.reach:ReachEnv", {"body": body}) for body in ("ant", "point")},
+    **{maze_env_id(body): ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": body}) for body in ("ant", "point")},
 }
 """Registered ids: entry point and default keyword arguments."""
 

@@ -63,25 +63,26 @@ from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, play_in_lockstep
+from antmaze_hirl.envs import profiles
 from antmaze_hirl.envs.controllers import SmoothedController, as_controller
 from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
-from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE, body_settings, evaluation_sets
+from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-FAMILIES = ("ant3", "ant4", "u", "medium", "large")
+FAMILIES = tuple(name for name, family in profiles.MAZE_FAMILIES.items() if family.split != "selection")
 """The reported families (``--families``)."""
-SELECTION_FAMILIES = {"select4": 4, "select6": 6}
+SELECTION_FAMILIES = {name: f.maze_size for name, f in profiles.MAZE_FAMILIES.items() if f.split == "selection"}
 """Families for picking a policy, never reported: random layouts of this many free cells per side from the
 ``selection`` part of the layout partition (no wall grid of ``ant4``'s ``eval`` part or of training's ``train``
 part). ``select4`` is ``ant4``'s family (500 steps); ``select6`` has ``medium``'s 8x8 grid and, like the standard
 maps, a step limit scaled to the path. ``benchmarks/select_low_level.py`` plays them from maze seed 2,000,000."""
-STEPS_PER_METRE = 40
+STEPS_PER_METRE = profiles.STEPS_PER_METRE
 """Step budget per metre of shortest cell path: a 0.5 m/s average, half the ~1 m/s of a straight walk."""
-MIN_STEPS = 500
+MIN_STEPS = profiles.MIN_STEPS
 """No standard-map episode gets fewer steps than the high-level env's default budget."""
 FROZEN_SUBGOALS = 5
 FROZEN_RADIUS = 1.0
@@ -364,7 +365,7 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
         settings = body_settings("ant", held_out_layouts=True, maze_size=SELECTION_FAMILIES.get(family))
         config = ExperimentConfig(body="ant", held_out_layouts=True, **settings)
         split = "selection" if family in SELECTION_FAMILIES else evaluation_sets(config)["final"][0]
-        scaled = config.maze_size > HELD_OUT_MAZE_SIZE["ant"]  # ant4's 500 steps; larger mazes scale to the path
+        scaled = profiles.MAZE_FAMILIES[family].step_limit is None  # ant4's 500 steps; larger mazes scale to the path
         return MazeEpisodeRecorder(make_env(config, low_level, split=split), scale_step_limit=scaled)
     if family not in STANDARD_MAPS or family == "open":
         raise ValueError(f"unknown maze family {family!r}; choose from {[*FAMILIES, *SELECTION_FAMILIES]}")

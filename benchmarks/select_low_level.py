@@ -50,14 +50,18 @@ from in_maze import run as play_families
 from paper_experiment import RESULTS
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-SELECTION_MAZE_SEED = 2_000_000
+SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
 # Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.
-RESERVED_SUBGOAL_SEEDS = (range(0, 1_000), range(10_000, 20_000))
+RESERVED_SUBGOAL_SEEDS = (
+    range(SEEDS.low_level_report_subgoals, SEEDS.low_level_report_subgoals + 1_000),
+    range(SEEDS.low_level_curve, SEEDS.low_level_curve + 10_000),
+)
 
 
 def selection_families(*, held_out_layouts: bool, large_mazes: bool) -> list[str]:
@@ -122,7 +126,8 @@ def score_rows(
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
-    parser.add_argument("--seed", type=int, default=100_000, help="first subgoal seed of the selection eval-low")
+    first_seed = SEEDS.low_level_selection_subgoals
+    parser.add_argument("--seed", type=int, default=first_seed, help="first subgoal seed of the selection eval-low")
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--mazes", type=int, default=50, help="mazes per family")
     parser.add_argument("--min-step", type=int, default=0, help="skip snapshots before this step")

@@ -87,9 +87,28 @@ TINY_PROTOCOL2 = ExperimentConfig(
 """A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation."""
 
 
-def finished_experiment(tmp_path_factory, name, config, seeds=2):
-    """Runs a tiny ``dagger`` experiment into a fresh folder: the folder and its files' bytes (TensorBoard left out)."""
+def finished_experiment(tmp_path_factory, name, config, seeds=2, low_level=None):
+    """Runs a tiny ``dagger`` experiment into a fresh folder: the folder and its files' bytes (TensorBoard left out).
+
+    ``low_level`` goes to ``run_experiment`` (``None``: the body's shipped policy).
+    """
     folder = tmp_path_factory.mktemp(name)
-    run_experiment(["dagger"], seeds, config, folder, progress_bar=False, tensorboard=False)
+    run_experiment(["dagger"], seeds, config, folder, low_level=low_level, progress_bar=False, tensorboard=False)
     files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
     return folder, files
+
+
+@pytest.fixture(scope="session")
+def finished_protocol2(tmp_path_factory):
+    """:data:`TINY_PROTOCOL2` run once per session with 2 seeds: the folder and its files' bytes. Read-only:
+    a test that writes into it copies it first (:func:`copy_results`)."""
+    return finished_experiment(tmp_path_factory, "protocol2", TINY_PROTOCOL2)
+
+
+def copy_results(source, folder):
+    """Copies a results folder's files (TensorBoard left out) into ``folder``."""
+    for path in source.rglob("*"):
+        if path.is_file() and "tb" not in path.relative_to(source).parts:
+            target = folder / path.relative_to(source)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(path.read_bytes())

@@ -155,8 +155,8 @@ def test_task_id_selects_the_task_and_a_plain_reset_draws_one_with_np_random():
         assert info["task_id"] == task_id and inner.layout == task.layout
         assert inner.geometry.xy_to_cell(inner.agent_xy) == task.layout.start_cell
         assert inner.geometry.xy_to_cell(inner.goal_xy) == task.layout.goal_cell
-    drawn = [env.reset(seed=seed)[1]["task_id"] for seed in range(20)]
-    assert drawn == [env.reset(seed=seed)[1]["task_id"] for seed in range(20)]
+    drawn = [env.reset(seed=seed)[1]["task_id"] for seed in range(10)]  # each new layout compiles a model
+    assert drawn == [env.reset(seed=seed)[1]["task_id"] for seed in range(10)]
     assert len(set(drawn)) > 5
 
 

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 import torch as th
 
+from antmaze_hirl import dagger
 from antmaze_hirl.dagger import (
     STRATEGIES,
     DAggerQuery,
     Demonstration,
     DemonstrationDataset,
-    ExponentialBetaSchedule,
     HighLevelPolicy,
     InverseDecayBetaSchedule,
     OffsetLearner,
@@ -193,22 +193,22 @@ def test_no_op_subgoal_check_matches_the_push_out():
     assert info["subgoal_extended"]
 
 
-def test_renamed_beta_schedule_and_its_deprecated_alias():
+def test_inverse_decay_beta_schedule_and_the_removed_alias():
     assert [InverseDecayBetaSchedule(2.0)(k) for k in range(3)] == [1.0, 0.5, 0.25]
+    assert InverseDecayBetaSchedule(3.0)(2) == 1 / 9
     with pytest.raises(ValueError, match=r"imitation's ExponentialBetaSchedule .* its 0.5 is d = 2 here"):
         InverseDecayBetaSchedule(0.5)
     with pytest.raises(ValueError, match="decay d must be >= 1, got -1"):
         InverseDecayBetaSchedule(-1)
-    with pytest.warns(DeprecationWarning, match="renamed InverseDecayBetaSchedule"):
-        old = ExponentialBetaSchedule(3.0)
-    assert isinstance(old, InverseDecayBetaSchedule) and old(2) == 1 / 9
+    import antmaze_hirl.dagger.schedules as schedules
+
+    assert not hasattr(dagger, "ExponentialBetaSchedule") and not hasattr(schedules, "ExponentialBetaSchedule")
 
 
 def test_query_strategy_is_the_base_and_dagger_query_plain_dagger():
     assert STRATEGIES["dagger"] is DAggerQuery and issubclass(DAggerQuery, QueryStrategy)
-    with pytest.warns(DeprecationWarning, match="use DAggerQuery"):
-        strategy = QueryStrategy()
-    assert type(strategy) is DAggerQuery and strategy.name == "dagger"
+    assert type(QueryStrategy()) is QueryStrategy and QueryStrategy.name == ""  # no longer turned into DAgger
+    assert DAggerQuery().name == "dagger"
 
 
 def test_learner_settings_are_checked():

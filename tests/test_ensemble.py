@@ -28,9 +28,11 @@ def member(tmp_path, name, *, seed, algo="td3", **changes):
     return path
 
 
-@pytest.fixture
-def members(tmp_path):
-    return [member(tmp_path, f"m{seed}", seed=seed) for seed in range(3)]
+@pytest.fixture(scope="module")
+def members(tmp_path_factory):
+    """Three member zips, saved once per module (the tests only read them)."""
+    folder = tmp_path_factory.mktemp("members")
+    return [member(folder, f"m{seed}", seed=seed) for seed in range(3)]
 
 
 def observations(count):

@@ -88,20 +88,19 @@ def test_a_maze_made_without_low_level_drives_the_shipped_policy_and_pickles_wit
     assert pickle.loads(pickle.dumps(controller)).model is controller.model
 
 
-def test_deprecated_names_still_work_with_a_warning():
-    with pytest.warns(DeprecationWarning, match="renamed min_goal_cells"):
-        env = gym.make("antmaze_hirl/PointMaze-v0", min_goal_distance=4, low_level=PointGoToController())
-    assert env.unwrapped.min_goal_cells == 4
-    with pytest.warns(DeprecationWarning, match="renamed min_goal_cells"):
-        assert env.unwrapped.min_goal_distance == 4
-    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="min_goal_cells=5 and min_goal_distance=4"):
-        HighLevelMazeEnv("point", min_goal_cells=5, min_goal_distance=4, low_level=PointGoToController())
+def test_the_names_removed_in_0_2_0_are_errors():
+    with pytest.raises(TypeError, match="min_goal_distance"):
+        HighLevelMazeEnv("point", min_goal_distance=4, low_level=PointGoToController())
+    env = HighLevelMazeEnv("point", min_goal_cells=4, low_level=PointGoToController())
+    assert env.min_goal_cells == 4 and not hasattr(env, "min_goal_distance")
+    env.close()
     reach = ReachEnv("point", maze_map="u")
-    with pytest.warns(DeprecationWarning, match="'goal' is renamed 'goal_xy'"):
-        obs, _ = reach.reset(seed=0, options={"goal": [1.0, 1.0]})
+    obs, _ = reach.reset(seed=0, options={"goal_xy": [1.0, 1.0]})
     np.testing.assert_array_equal(obs["desired_goal"], [1.0, 1.0])
-    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="not also its deprecated name 'goal'"):
-        reach.reset(seed=0, options={"goal": [1.0, 1.0], "goal_xy": [1.0, 1.0]})
+    # The old key is refused, not ignored: ignoring it would draw a random subgoal instead of the one given.
+    with pytest.raises(ValueError, match=r"^ReachEnv's reset option 'goal' is now 'goal_xy': got options\['goal'\]="):
+        reach.reset(seed=0, options={"goal": [1.0, 1.0]})
+    reach.close()
 
 
 @pytest.mark.parametrize("env_class", [ReachEnv, HighLevelMazeEnv])

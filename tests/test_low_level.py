@@ -510,16 +510,14 @@ def test_the_committed_training_configs_load(name):
     ReachEnv("ant", **config.env_kwargs).close()
 
 
-def test_renamed_sb3_ext_names_still_work_with_a_warning():
+def test_the_names_removed_in_0_2_0_are_gone():
     import importlib
-    import sys
 
-    from antmaze_hirl.sb3_ext import checkpoint, loading, shipped
+    import antmaze_hirl.sb3_ext as sb3_ext
+    from antmaze_hirl.sb3_ext import checkpoint
 
-    with pytest.warns(DeprecationWarning, match="renamed RunCheckpointCallback"):
-        assert checkpoint.CheckpointCallback is checkpoint.RunCheckpointCallback
-    sys.modules.pop("antmaze_hirl.sb3_ext.policies", None)
-    with pytest.warns(DeprecationWarning, match="sb3_ext.policies is deprecated"):
-        policies = importlib.import_module("antmaze_hirl.sb3_ext.policies")
-    assert policies.load_low_level is loading.load_low_level
-    assert policies.shipped_policy_path is shipped.shipped_policy_path
+    assert not hasattr(checkpoint, "CheckpointCallback") and "CheckpointCallback" not in dir(sb3_ext)
+    with pytest.raises(AttributeError, match="CheckpointCallback"):
+        sb3_ext.CheckpointCallback  # noqa: B018
+    with pytest.raises(ModuleNotFoundError, match=r"antmaze_hirl\.sb3_ext\.policies"):
+        importlib.import_module("antmaze_hirl.sb3_ext.policies")

@@ -79,15 +79,13 @@ def test_a_curve_of_one_point_gets_a_marker_and_an_error_bar():
 def test_importing_the_plotting_modules_keeps_the_users_backend():
     code = (
         "import matplotlib; matplotlib.use('svg'); import warnings; warnings.simplefilter('ignore');"
-        "import antmaze_hirl.plotting, antmaze_hirl.experiments.plots, antmaze_hirl.study.figures;"
+        "import antmaze_hirl.plotting, antmaze_hirl.study.figures;"
         "print(matplotlib.get_backend())"
     )
     result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
     assert result.stdout.split() == ["svg"]
 
 
-def test_the_old_experiments_plots_module_warns_and_forwards():
-    sys.modules.pop("antmaze_hirl.experiments.plots", None)
-    with pytest.warns(DeprecationWarning, match=r"experiments.plots is deprecated: .* antmaze_hirl.plotting"):
-        plots = importlib.import_module("antmaze_hirl.experiments.plots")
-    assert (plots.plot_panels, plots.draw_band) == (plotting.plot_panels, plotting.draw_band)
+def test_the_old_experiments_plots_module_is_removed():
+    with pytest.raises(ModuleNotFoundError, match=r"antmaze_hirl\.experiments\.plots"):
+        importlib.import_module("antmaze_hirl.experiments.plots")

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import TINY_PROTOCOL2
+from conftest import TINY_PROTOCOL2, copy_results
 
 from antmaze_hirl.envs.layouts import canonical_wall_grid
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
@@ -122,8 +122,8 @@ def test_protocol_settings_are_checked_and_the_schedule_includes_the_untrained_l
         ExperimentConfig(protocol=3, held_out_layouts=True)
 
 
-def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(tmp_path):
-    run_experiment(["dagger"], 2, TINY2, tmp_path, progress_bar=False, tensorboard=False)
+def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(finished_protocol2):
+    tmp_path, _ = finished_protocol2  # TINY2, 2 seeds, run once per session (read only)
     summary = json.loads((tmp_path / "summary.json").read_text())
     untrained = summary["methods"]["dagger"]["untrained_success"]
     assert len(untrained["per_seed"]) == 2 and "cluster_bootstrap_95" in untrained["pooled"]
@@ -151,15 +151,18 @@ def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(tmp_path)
     assert training.isdisjoint({grid_class(row["layout"]) for row in evaluations})
 
 
-def test_lockstep_evaluation_gives_the_serial_per_maze_outcomes_on_the_point(tmp_path):
+def test_lockstep_evaluation_gives_the_serial_per_maze_outcomes_on_the_point(finished_protocol2, tmp_path):
     # The point's low level and learner are exact in lockstep (benchmarks/lockstep_agreement.py: 100/100):
-    # evaluation_envs changes how the mazes are played, not which mazes or what happens in them.
+    # evaluation_envs changes how the mazes are played, not which mazes or what happens in them. The serial
+    # run is seed 0 of the session's TINY2 folder (each trial is seeded by its own rng, whatever the seed count).
+    serial_folder, _ = finished_protocol2
     runs = {}
-    for envs in (1, 3):
-        out = tmp_path / f"envs{envs}"
-        run_experiment(["dagger"], 1, replace(TINY2, evaluation_envs=envs), out, progress_bar=False, tensorboard=False)
-        with (out / "evaluations.csv").open() as handle:
-            runs[envs] = [{k: v for k, v in row.items()} for row in csv.DictReader(handle)]
+    with (serial_folder / "evaluations.csv").open() as handle:
+        runs[1] = [dict(row) for row in csv.DictReader(handle) if row["seed"] == "0"]
+    out = tmp_path / "envs3"
+    run_experiment(["dagger"], 1, replace(TINY2, evaluation_envs=3), out, progress_bar=False, tensorboard=False)
+    with (out / "evaluations.csv").open() as handle:
+        runs[3] = [dict(row) for row in csv.DictReader(handle)]
     assert len(runs[1]) == 3 * TINY2.final_eval_episodes
     assert runs[1] == runs[3]
 
@@ -222,11 +225,11 @@ def test_the_success_curves_start_at_the_untrained_success():
     assert episodes.tolist() == [2.0, 4.0] and labels.tolist() == [20.0, 40.0] and success.shape == (2, 2)
 
 
-def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(tmp_path, monkeypatch):
+def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(finished_protocol2, tmp_path, monkeypatch):
     import antmaze_hirl.plotting as plotting
     from antmaze_hirl.experiments.results_folder import read_evaluations, write_reports
 
-    run_experiment(["dagger"], 2, TINY2, tmp_path, progress_bar=False, tensorboard=False)
+    copy_results(finished_protocol2[0], tmp_path)  # TINY2, 2 seeds; the reports are rewritten here
     drawn = []
     real = plotting.draw_band
     monkeypatch.setattr(

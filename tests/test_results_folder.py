@@ -2,11 +2,11 @@
 
 import json
 import warnings
-from dataclasses import replace
 
 import pytest
-from conftest import TINY_PROTOCOL2, finished_experiment
+from conftest import TINY_PROTOCOL2, copy_results, finished_experiment
 
+from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path, trial_record, write_reports
 from antmaze_hirl.experiments.runner import run_experiment
@@ -14,6 +14,8 @@ from antmaze_hirl.experiments.runner import run_experiment
 TINY = ExperimentConfig(
     body="point", episodes=3, eval_every=2, eval_episodes=2, final_eval_episodes=3, maze_size=3, gradient_steps=5
 )
+GO_TO = PointGoToController()
+"""The protocol-1 folder's low level: the scripted go-to (what is checked here is the folder, not the walking)."""
 
 
 def cut_line(text):
@@ -42,7 +44,7 @@ DAMAGE = {
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
     """A finished tiny experiment: its folder and its files' bytes."""
-    return finished_experiment(tmp_path_factory, "results", TINY)
+    return finished_experiment(tmp_path_factory, "results", TINY, low_level=GO_TO)
 
 
 def test_each_trial_records_its_row_count_and_hash(finished):
@@ -67,22 +69,24 @@ def test_a_damaged_trial_is_named_by_file_with_and_without_its_hash(finished, tm
         check_trial(path, TINY.episodes)
 
 
-@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def integration_except(first, kinds):
+    """``kinds`` for ``parametrize``: ``first`` in the unit tier, the others ``integration`` (same code path
+    once detected; each kind's detection is checked in the unit tier by the tests above)."""
+    return [kind if kind == first else pytest.param(kind, marks=pytest.mark.integration) for kind in sorted(kinds)]
+
+
+@pytest.mark.parametrize("kind", integration_except("cut line", DAMAGE))
 def test_a_damaged_trial_is_rerun_on_resume_and_nothing_is_overwritten_with_less(finished, tmp_path, kind):
     source, files = finished
     folder = tmp_path / "results"
     (folder / "trials").mkdir(parents=True)
-    for path in source.rglob("*"):
-        if path.is_file() and "tb" not in path.relative_to(source).parts:
-            target = folder / path.relative_to(source)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(path.read_bytes())
+    copy_results(source, folder)
     damaged = trial_path(folder, "dagger", 1)
     damaged.write_text(DAMAGE[kind](damaged.read_text()))
     damaged_bytes = damaged.read_bytes()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        run_experiment(["dagger"], 2, TINY, folder, progress_bar=False, tensorboard=False)
+        run_experiment(["dagger"], 2, TINY, folder, low_level=GO_TO, progress_bar=False, tensorboard=False)
     named = [str(w.message) for w in caught if "dagger_seed1.csv" in str(w.message)]
     assert named and "runs again" in named[0], [str(w.message) for w in caught]
     assert (folder / "trials" / "dagger_seed1.csv.damaged").read_bytes() == damaged_bytes  # kept, not deleted
@@ -98,11 +102,7 @@ def test_reports_are_not_replaced_with_fewer_trials_while_one_is_damaged(finishe
 
     source, files = finished
     folder = tmp_path / "results"
-    for path in source.rglob("*"):
-        if path.is_file() and "tb" not in path.relative_to(source).parts:
-            target = folder / path.relative_to(source)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(path.read_bytes())
+    copy_results(source, folder)
     trial_path(folder, "dagger", 1).write_text("")
     with pytest.warns(UserWarning, match=r"dagger_seed1\.csv: its bytes do not match the SHA-256"):
         write_reports(folder, ["dagger"], 2, TINY)
@@ -110,7 +110,7 @@ def test_reports_are_not_replaced_with_fewer_trials_while_one_is_damaged(finishe
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
 
 
-TINY2 = replace(TINY_PROTOCOL2, final_eval_episodes=3)
+TINY2 = TINY_PROTOCOL2
 
 
 def changed_value(text):
@@ -124,18 +124,10 @@ PART_DAMAGE = {
 }
 
 
-@pytest.fixture(scope="module")
-def finished2(tmp_path_factory):
-    """A finished tiny protocol-2 experiment: its folder and its files' bytes."""
-    return finished_experiment(tmp_path_factory, "results2", TINY2)
-
-
-def copy_folder(source, folder):
-    for path in source.rglob("*"):
-        if path.is_file() and "tb" not in path.relative_to(source).parts:
-            target = folder / path.relative_to(source)
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(path.read_bytes())
+@pytest.fixture
+def finished2(finished_protocol2):
+    """A finished tiny protocol-2 experiment (conftest's, shared with test_protocol2): its folder and files' bytes."""
+    return finished_protocol2
 
 
 def damage_part(part, kind):
@@ -156,7 +148,7 @@ def test_a_protocol_2_record_holds_its_evaluations_part_and_older_records_still_
     assert len(record["evaluations"]["sha256"]) == 64
     assert len(check_trial(path, TINY2.episodes)) == TINY2.episodes
     # A record from before the part was recorded loads, part or no part (structure of the rows only).
-    copy_folder(folder, tmp_path)
+    copy_results(folder, tmp_path)
     old = trial_path(tmp_path, "dagger", 0)
     old.with_suffix(".json").write_text(json.dumps({k: v for k, v in record.items() if k != "evaluations"}))
     old.with_suffix(".evaluations.csv").unlink()
@@ -165,20 +157,32 @@ def test_a_protocol_2_record_holds_its_evaluations_part_and_older_records_still_
     assert "evaluations" not in trial_record("a\n1\n", 1.0)
 
 
-@pytest.mark.parametrize("kind", sorted(PART_DAMAGE))
-def test_a_damaged_evaluations_part_is_named_and_its_trial_rerun_on_resume(finished2, tmp_path, kind):
-    source, files = finished2
-    folder = tmp_path / "results"
-    copy_folder(source, folder)
+def damaged_part_folder(source, folder, kind):
+    """A copy of ``source`` with seed 1's evaluations part damaged by ``kind``: trial csv, part, damaged bytes."""
+    copy_results(source, folder)
     rows_csv = trial_path(folder, "dagger", 1)
     part = rows_csv.with_suffix(".evaluations.csv")
     damage_part(part, kind)
-    damaged_bytes = part.read_bytes() if part.exists() else None
+    return rows_csv, part, (part.read_bytes() if part.exists() else None)
+
+
+@pytest.mark.parametrize("kind", sorted(PART_DAMAGE))
+def test_a_damaged_evaluations_part_is_named_and_the_old_reports_kept(finished2, tmp_path, kind):
+    source, files = finished2
+    folder = tmp_path / "results"
+    rows_csv, _, _ = damaged_part_folder(source, folder, kind)
     with pytest.raises(DamagedTrial, match=r"dagger_seed1\.evaluations\.csv"):
         check_trial(rows_csv, TINY2.episodes)
     with pytest.warns(UserWarning, match=r"left out of the reports: .*dagger_seed1\.evaluations\.csv"):
         write_reports(folder, ["dagger"], 2, TINY2)  # no bare ValueError from summarise; old reports kept
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
+
+
+@pytest.mark.parametrize("kind", integration_except("missing part", PART_DAMAGE))
+def test_a_damaged_evaluations_part_is_named_and_its_trial_rerun_on_resume(finished2, tmp_path, kind):
+    source, files = finished2
+    folder = tmp_path / "results"
+    rows_csv, part, damaged_bytes = damaged_part_folder(source, folder, kind)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         run_experiment(["dagger"], 2, TINY2, folder, progress_bar=False, tensorboard=False)

@@ -89,6 +89,7 @@ def run_main(monkeypatch, *args):
     select_low_level.main()
 
 
+@pytest.mark.integration  # end to end: the script's main plays the shipped ant in mazes
 def test_main_scores_each_row_once_and_reuses_the_cache(monkeypatch, tmp_path, capsys):
     out = tmp_path / "selection.json"
     flags = [SHIPPED, "--held-out-layouts", "--episodes", 2, "--mazes", 1, "--action-smoothing", "0,0.5", "--out", out]

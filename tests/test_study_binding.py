@@ -1,27 +1,26 @@
 """Token and binding: the token from the environment, long enough; a wildcard host prints a URL that works."""
 
 import json
-import os
-import subprocess
-import sys
 
 import httpx
 import pytest
 from study_helpers import make_tiny_study
 
+from antmaze_hirl.cli import main
 from antmaze_hirl.study.plan import load_plan
 from antmaze_hirl.study.server import MIN_TOKEN_CHARS, TOKEN_ENV, StudyServer, resolve_token, url_host_and_allowed
 
 
-def test_a_token_under_16_characters_is_refused(tmp_path):
+def test_a_token_under_16_characters_is_refused(tmp_path, monkeypatch, capsys):
     folder = make_tiny_study(tmp_path / "study")
     with pytest.raises(ValueError, match=f"at least {MIN_TOKEN_CHARS} characters, got 15"):
         StudyServer(folder, token="x" * 15)
-    env = {**os.environ, TOKEN_ENV: "short"}
-    command = [sys.executable, "-m", "antmaze_hirl.cli", "study", "serve", str(folder), "--port", "0"]
-    served = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
-    assert served.returncode == 2 and served.stderr.count("\n") == 1, served.stderr
-    assert "at least 16 characters, got 5" in served.stderr
+    monkeypatch.setenv(TOKEN_ENV, "short")
+    with pytest.raises(SystemExit) as exited:  # the CLI in-process, as the console script runs it
+        main(["study", "serve", str(folder), "--port", "0"])
+    stderr = capsys.readouterr().err
+    assert exited.value.code == 2 and stderr.count("\n") == 1, stderr
+    assert "at least 16 characters, got 5" in stderr
     assert not (folder / "server.lock").exists() or StudyServer(folder, token="y" * 16).stop() is None  # released
 
 

@@ -3,6 +3,7 @@
 import csv
 import json
 import pickle
+import shutil
 import threading
 import time
 
@@ -33,13 +34,21 @@ def play_one_episode(session):
     session.next_episode()
 
 
-@pytest.fixture
-def one_episode_in(tmp_path):
+@pytest.fixture(scope="module")
+def one_episode_template(tmp_path_factory):
     """A participant one episode into a three-episode trial (no practice), session closed as after a kill."""
-    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=3, practice=0)
+    folder = make_tiny_study(tmp_path_factory.mktemp("template") / "study", methods=("dagger",), episodes=3, practice=0)
     session = open_session(folder)
     play_one_episode(session)
     session.close()
+    return folder
+
+
+@pytest.fixture
+def one_episode_in(one_episode_template, tmp_path):
+    """A fresh copy of :func:`one_episode_template` (played once per module): its folder and the participant's."""
+    folder = tmp_path / "study"
+    shutil.copytree(one_episode_template, folder)
     return folder, folder / "participants" / "P01"
 
 

@@ -162,9 +162,8 @@ _JSON = st.recursive(
 )
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(data=st.data())
-def test_fuzzed_json_bodies_never_get_a_5xx_and_a_4xx_changes_nothing(served, data):
+def fuzzed_json_body_is_refused_or_served(served, data):
+    """One fuzzed POST: never a 5xx, and a 4xx names its error and leaves the folder as it was."""
     _, folder, client = served
     route = data.draw(st.sampled_from(sorted(ROUTE_FIELDS)), label="route")
     state = client.get("/api/participants/P01/state").json()
@@ -180,6 +179,16 @@ def test_fuzzed_json_bodies_never_get_a_5xx_and_a_4xx_changes_nothing(served, da
     if response.status_code >= 400:
         assert isinstance(response.json()["error"], str)
         assert snapshot(folder) == before, (route, body, response.text)
+
+
+_FUZZ = {"deadline": None, "suppress_health_check": [HealthCheck.function_scoped_fixture]}
+# The unit tier fuzzes 30 bodies; the slow tier (CI's second run) the full 120 of before.
+test_fuzzed_json_bodies_never_get_a_5xx_and_a_4xx_changes_nothing = settings(max_examples=30, **_FUZZ)(
+    given(data=st.data())(fuzzed_json_body_is_refused_or_served)
+)
+test_fuzzed_json_bodies_120_examples = pytest.mark.slow(
+    settings(max_examples=120, **_FUZZ)(given(data=st.data())(fuzzed_json_body_is_refused_or_served))
+)
 
 
 def test_study_init_refuses_a_maze_size_whose_family_has_no_selection_part(tmp_path):

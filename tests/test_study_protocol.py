@@ -8,6 +8,7 @@ import sys
 import pytest
 from study_helpers import FakeClock, click_once, make_tiny_study, open_session
 
+from antmaze_hirl.cli import main
 from antmaze_hirl.study.server import TOKEN_ENV, StudyServer
 from antmaze_hirl.study.session import ProtocolError
 from antmaze_hirl.study.store import StudyInUse
@@ -18,19 +19,31 @@ def rows_of(folder, participant="P01"):
         return list(csv.DictReader(handle))
 
 
-def test_a_second_server_on_one_folder_refuses_naming_the_holders_pid(tmp_path):
+def test_a_second_server_on_one_folder_refuses_naming_the_holders_pid(tmp_path, monkeypatch, capsys):
     folder = make_tiny_study(tmp_path / "study")
     with StudyServer(folder).running():
         with pytest.raises(StudyInUse, match=f"already served by PID {os.getpid()}"):
             StudyServer(folder)
+        monkeypatch.setenv(TOKEN_ENV, "a-long-enough-token-0123")
+        with pytest.raises(SystemExit) as exited:  # the CLI in-process: one line, no traceback
+            main(["study", "serve", str(folder), "--port", "0"])
+        stderr = capsys.readouterr().err
+        assert exited.value.code == 2
+        assert stderr.count("\n") == 1 and f"PID {os.getpid()}" in stderr and "Traceback" not in stderr, stderr
+    with StudyServer(folder).running():  # released on stop: the next server gets the folder
+        pass
+
+
+@pytest.mark.integration
+def test_a_second_server_in_another_process_is_refused_naming_the_holders_pid(tmp_path):
+    folder = make_tiny_study(tmp_path / "study")
+    with StudyServer(folder).running():
         env = {**os.environ, TOKEN_ENV: "a-long-enough-token-0123"}
         command = [sys.executable, "-m", "antmaze_hirl.cli", "study", "serve", str(folder), "--port", "0"]
         second = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120)
         assert second.returncode == 2
         assert second.stderr.count("\n") == 1 and f"PID {os.getpid()}" in second.stderr, second.stderr
         assert "Traceback" not in second.stderr
-    with StudyServer(folder).running():  # released on stop: the next server gets the folder
-        pass
 
 
 def test_next_and_start_are_refused_while_paused(tmp_path):

@@ -149,12 +149,13 @@ VECTOR_MODES = {
 
 def vector_cases() -> list:
     # A spawned maze worker imports torch and loads the shipped policy afresh (about 45 s for three on two
-    # cores): those two cases are marked slow; every other id and mode runs by default.
+    # cores): those two cases are marked slow. A spawned reach worker starts a fresh interpreter too (about
+    # 5 s): integration. Every other id and mode runs in the unit tier.
     cases = []
     for env_id in sorted(ENV_IDS):
         for name, (mode, vector_kwargs) in VECTOR_MODES.items():
-            slow = name == "async-spawn" and env_id in MAZE_IDS
-            marks = [pytest.mark.slow] if slow else []
+            spawned = name == "async-spawn"
+            marks = [pytest.mark.slow if env_id in MAZE_IDS else pytest.mark.integration] if spawned else []
             cases.append(pytest.param(env_id, mode, vector_kwargs, id=f"{name}-{env_id}", marks=marks))
     return cases
 

@@ -1,7 +1,4 @@
-"""DAgger for the high level: trainer, beta schedules, active-learning strategies, data, policy, learner.
-
-``ExponentialBetaSchedule`` is a deprecated alias of :class:`InverseDecayBetaSchedule`.
-"""
+"""DAgger for the high level: trainer, beta schedules, active-learning strategies, data, policy, learner."""
 
 from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluate_high_level
@@ -11,7 +8,6 @@ from antmaze_hirl.dagger.policy import SubgoalPolicy
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.schedules import (
     BetaSchedule,
-    ExponentialBetaSchedule,
     InverseDecayBetaSchedule,
     LinearBetaSchedule,
 )
@@ -39,7 +35,6 @@ __all__ = [
     "Demonstration",
     "DemonstrationDataset",
     "EpisodeRecord",
-    "ExponentialBetaSchedule",
     "GatedQuery",
     "HighLevelPolicy",
     "InverseDecayBetaSchedule",

@@ -10,6 +10,7 @@ import numpy as np
 
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
 from antmaze_hirl.envs.controllers import as_controller
+from antmaze_hirl.envs.profiles import maze_env_id
 
 
 class HierarchicalAgent:
@@ -35,7 +36,7 @@ class HierarchicalAgent:
 
     def make_env(self, body: str, **kwargs: Any) -> gym.Env:
         """The full maze env for ``body`` with this agent's low level plugged in."""
-        return gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", low_level=self.low_level, **kwargs)
+        return gym.make(maze_env_id(body), low_level=self.low_level, **kwargs)
 
     def predict(
         self,

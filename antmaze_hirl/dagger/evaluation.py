@@ -20,10 +20,11 @@ import numpy as np
 from antmaze_hirl.envs.controllers import as_batch_controller, inference_threads
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv, SubgoalWalk
 from antmaze_hirl.envs.layouts import MazeLayout
+from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.vector import check_num_envs, copies_of, walk_in_lockstep
 from antmaze_hirl.rollout import play_episode
 
-HELD_OUT_SEED = 1_000_000
+HELD_OUT_SEED = SEEDS.held_out
 """Episode ``i`` of an evaluation resets with seed ``HELD_OUT_SEED + i``, a seed range no training run uses.
 
 Held out by seed only: a family with few wall grids repeats training mazes at these seeds (the ant's 3x3

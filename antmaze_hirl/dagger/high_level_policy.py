@@ -12,6 +12,7 @@ from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder
 from antmaze_hirl.dagger.learner import LEARNER_SETTINGS, SubgoalLearner
 from antmaze_hirl.dagger.policy import POLICY_SETTINGS, SubgoalPolicy, read_policy_file
 from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.profiles import BODY_PROFILES
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
@@ -35,15 +36,16 @@ def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     (``benchmarks/results/learner_ablation_ant.json``). The ant's heading head, its default before,
     scored 52% against 77%.
     """
-    if body == "point":
+    profile = BODY_PROFILES.get(body)
+    if profile is None:
+        return {}
+    if profile.learner_plans:
         return {
-            "head": "next_cell",
+            "head": profile.learner_head,
             "planning_iterations": planning_rounds(geometry.n_rows, geometry.n_cols),
             "block_walls": True,
         }
-    if body == "ant":
-        return {"head": "next_cell"}
-    return {}
+    return {"head": profile.learner_head}
 
 
 class HighLevelPolicy:

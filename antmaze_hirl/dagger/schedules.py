@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import abc
-import warnings
 
 
 class BetaSchedule(abc.ABC):
@@ -50,22 +49,6 @@ class InverseDecayBetaSchedule(BetaSchedule):
         negative power underflows quietly to 0.0, the limit beta has long reached by then.
         """
         return self.beta0 * self.decay ** -float(updates)
-
-
-class ExponentialBetaSchedule(InverseDecayBetaSchedule):
-    """Deprecated name of :class:`InverseDecayBetaSchedule` (it clashed with ``imitation``'s class).
-
-    Warns ``DeprecationWarning``; takes the same ``d >= 1``.
-    """
-
-    def __init__(self, decay: float = 2.0, beta0: float = 1.0) -> None:
-        warnings.warn(
-            "antmaze_hirl's ExponentialBetaSchedule is renamed InverseDecayBetaSchedule (it divides by d >= 1, "
-            "unlike imitation's ExponentialBetaSchedule); the old name will be removed",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        super().__init__(decay, beta0)
 
 
 class LinearBetaSchedule(BetaSchedule):

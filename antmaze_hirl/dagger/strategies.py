@@ -8,7 +8,6 @@ any trainer setting.
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -59,8 +58,7 @@ class StartQuery:
 class QueryStrategy:
     """Base of the active-learning strategies: hooks the trainer calls, each a no-op here.
 
-    A subclass sets :attr:`name` and overrides the hooks it needs. Instantiating the base itself is
-    deprecated (it used to be plain DAgger): it warns and gives a :class:`DAggerQuery`.
+    A subclass sets :attr:`name` and overrides the hooks it needs; plain DAgger is :class:`DAggerQuery`.
     """
 
     name: ClassVar[str] = ""
@@ -81,17 +79,6 @@ class QueryStrategy:
     the beta mix does not apply. Otherwise every step is asked and executes the beta mix."""
     label_failures: bool = False
     """Whether, after a failed episode, the expert labels its unasked states (read only when :attr:`gates`)."""
-
-    def __new__(cls, *args: Any, **kwargs: Any) -> QueryStrategy:
-        """A new strategy; ``QueryStrategy()`` itself gives a :class:`DAggerQuery`, with a warning."""
-        if cls is QueryStrategy:
-            warnings.warn(
-                "QueryStrategy() as plain DAgger is deprecated: use DAggerQuery() (QueryStrategy is the base now)",
-                DeprecationWarning,
-                stacklevel=2,
-            )
-            cls = DAggerQuery
-        return super().__new__(cls)
 
     def attach(self, learner: Learner) -> None:
         """Called once by the trainer with its learner (for strategies that build models like it)."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -16,6 +15,7 @@ from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import as_controller, reset_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import MazeLayout, MazeMap, generate_layout, layout_from_map
+from antmaze_hirl.envs.profiles import DEFAULT_MAX_STEPS, maze_env_id
 from antmaze_hirl.envs.reach import ReachEnv, as_finite_vector, as_free_point
 from antmaze_hirl.envs.rendering import RENDER_MODES, EpisodeFrames, check_render_settings
 from antmaze_hirl.envs.simulator import Body, body_spec
@@ -25,24 +25,6 @@ from antmaze_hirl.envs.task import Task
 STATE_AGENT_XY = STATE_LAYOUT.agent_slice  # older names of STATE_LAYOUT's slices, kept for existing imports
 STATE_GOAL_XY = STATE_LAYOUT.goal_slice
 DEFAULT_MIN_GOAL_CELLS = 3
-
-_MIN_GOAL_DISTANCE_RENAMED = (
-    "HighLevelMazeEnv's min_goal_distance is renamed min_goal_cells (it counts grid steps; ReachEnv's "
-    "min_goal_distance is metres); the old name will be removed"
-)
-
-
-def _renamed_min_goal_cells(min_goal_cells: int, min_goal_distance: int | None) -> int:
-    """``min_goal_cells``, or the deprecated ``min_goal_distance`` when that is given (with a warning)."""
-    if min_goal_distance is None:
-        return min_goal_cells
-    warnings.warn(_MIN_GOAL_DISTANCE_RENAMED, DeprecationWarning, stacklevel=3)
-    if min_goal_cells != DEFAULT_MIN_GOAL_CELLS:
-        raise ValueError(
-            f"pass min_goal_cells only, not also its deprecated name min_goal_distance: got min_goal_cells="
-            f"{min_goal_cells} and min_goal_distance={min_goal_distance}"
-        )
-    return min_goal_distance
 
 
 class AgentPath:
@@ -147,9 +129,6 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         maze_size: Free cells of random layouts, ``n`` or ``(rows, cols)``.
         wall_fraction: Share of interior cells that random layouts turn into walls.
         min_goal_cells: Least grid steps on the shortest path from the start cell to the goal cell.
-        min_goal_distance: Deprecated name of ``min_goal_cells`` (it counts grid steps, while
-            :class:`ReachEnv`'s ``min_goal_distance`` is metres); warns ``DeprecationWarning`` and is
-            used only while ``min_goal_cells`` keeps its default.
         low_level: SB3 model or callable ``goal observation -> action`` (required). ``gym.make`` of
             ``antmaze_hirl/AntMaze-v0`` or ``antmaze_hirl/PointMaze-v0`` without it plugs in the policy
             shipped for the body (:func:`antmaze_hirl.sb3_ext.shipped.make_maze_env`).
@@ -175,8 +154,8 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             (a MuJoCo camera over the maze, offscreen: needs ``MUJOCO_GL=egl`` or ``osmesa`` on a headless machine).
 
     Raises:
-        ValueError: If ``low_level`` is missing, both ``min_goal_cells`` and ``min_goal_distance`` are
-            given, a number is out of range, or the render mode or view is unknown.
+        ValueError: If ``low_level`` is missing, a number is out of range, or the render mode or view is
+            unknown.
         RenderUnavailable: For ``render_view="mujoco"`` without ``MUJOCO_GL`` or a display.
 
     """
@@ -191,10 +170,9 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         maze_size: int | tuple[int, int] = 5,
         wall_fraction: float = 0.3,
         min_goal_cells: int = DEFAULT_MIN_GOAL_CELLS,
-        min_goal_distance: int | None = None,
         low_level: Any = None,
         horizon: int | None = None,
-        max_steps: int = 500,
+        max_steps: int = DEFAULT_MAX_STEPS,
         goal_threshold: float | None = None,
         position_noise: float = 0.25,
         pixels_per_cell: int = 8,
@@ -205,11 +183,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         render_mode: str | None = None,
         render_view: str = "schematic",
     ) -> None:
-        min_goal_cells = _renamed_min_goal_cells(min_goal_cells, min_goal_distance)
         if low_level is None:
             raise ValueError(
                 f"HighLevelMazeEnv needs a low-level controller: pass low_level=<SB3 model or callable obs -> "
-                f"action>, or make it with gym.make('antmaze_hirl/{str(body).capitalize()}Maze-v0') to use the "
+                f"action>, or make it with gym.make('{maze_env_id(str(body))}') to use the "
                 f"shipped policy"
             )
         EzPickle.__init__(
@@ -281,12 +258,6 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.goal_xy = np.zeros(2)
         self.attempts = 0
         self.total_low_level_steps = 0
-
-    @property
-    def min_goal_distance(self) -> int:
-        """Deprecated name of :attr:`min_goal_cells` (grid steps, not metres)."""
-        warnings.warn(_MIN_GOAL_DISTANCE_RENAMED, DeprecationWarning, stacklevel=2)
-        return self.min_goal_cells
 
     @property
     def agent_xy(self) -> np.ndarray:

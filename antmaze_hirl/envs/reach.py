@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import numbers
-import warnings
 from typing import Any, ClassVar
 
 import numpy as np
@@ -51,21 +50,14 @@ def as_free_point(value: Any, geometry: MazeGeometry, walls: np.ndarray, name: s
 
 
 def _goal_option(options: dict[str, Any]) -> Any:
-    """The ``"goal_xy"`` reset option, or its deprecated name ``"goal"`` (with a warning); ``None`` if neither."""
-    if "goal" not in options:
-        return options.get("goal_xy")
-    warnings.warn(
-        "ReachEnv's reset option 'goal' is renamed 'goal_xy' (the key HighLevelMazeEnv reads); the old key "
-        "will be removed",
-        DeprecationWarning,
-        stacklevel=3,
-    )
-    if options.get("goal_xy") is not None:
-        raise ValueError(
-            f"pass options['goal_xy'] only, not also its deprecated name 'goal': got {options['goal_xy']!r} "
-            f"and {options['goal']!r}"
-        )
-    return options["goal"]
+    """The ``"goal_xy"`` reset option; ``None`` if not given.
+
+    Raises:
+        ValueError: For the key ``"goal"``, removed in 0.2.0 (silently ignoring it would draw a random subgoal).
+    """
+    if "goal" in options:
+        raise ValueError(f"ReachEnv's reset option 'goal' is now 'goal_xy': got options['goal']={options['goal']!r}")
+    return options.get("goal_xy")
 
 
 INFO_PENALTIES = ("flip_penalty", "tilt_penalty")
@@ -340,12 +332,11 @@ class ReachEnv(GoalEnv, EzPickle):
             seed: Seeds ``self.np_random`` (the only source of randomness).
             options: Optional ``"start_xy"`` (exact body xy; default a random free cell centre with
                 ±0.25 cell of noise) and ``"goal_xy"`` (exact subgoal xy; default sampled near the body),
-                the keys :class:`HighLevelMazeEnv` reads too. ``"goal"`` is a deprecated name of
-                ``"goal_xy"`` (warns ``DeprecationWarning``).
+                the keys :class:`HighLevelMazeEnv` reads too.
 
         Raises:
-            ValueError: If a given start or goal is NaN, or outside the maze's free space, or both
-                ``"goal_xy"`` and ``"goal"`` are given.
+            ValueError: If a given start or goal is NaN, or outside the maze's free space, or the
+                option ``"goal"`` (``"goal_xy"`` since 0.2.0) is given.
 
         """
         super().reset(seed=seed)

@@ -7,6 +7,7 @@ from typing import Any, TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
 from antmaze_hirl.envs.layout_splits import LayoutSplit
+from antmaze_hirl.envs.profiles import BODY_PROFILES, SEEDS
 
 DEFAULT_METHODS = ("dagger", "noise", "multi_policy", "reward", "reward_per_step", "aggrevate")
 """Every query strategy of :data:`antmaze_hirl.dagger.strategies.STRATEGIES`: the paper's four methods, its
@@ -26,15 +27,13 @@ class BodyDefaults(TypedDict):
 
 
 BODY_DEFAULTS: dict[str, BodyDefaults] = {
-    # The point walks one-cell (1 m) oracle subgoals through 5x5 mazes.
-    "point": {"maze_size": 5, "expert_max_distance": None},
-    # At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps (25 s) cover about 20 m: too short for
-    # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (README, the ant experiment).
-    "ant": {"maze_size": 3, "expert_max_distance": 2.0},
+    body: {"maze_size": profile.maze_size, "expert_max_distance": profile.oracle_reach_m}
+    for body, profile in BODY_PROFILES.items()
 }
-"""Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's."""
+"""Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's
+(:data:`~antmaze_hirl.envs.profiles.BODY_PROFILES`, which says why)."""
 
-HELD_OUT_MAZE_SIZE: dict[str, int] = {"point": 5, "ant": 4}
+HELD_OUT_MAZE_SIZE: dict[str, int] = {body: profile.held_out_maze_size for body, profile in BODY_PROFILES.items()}
 """Maze size of the held-out-layouts protocol per body. Holding layouts out needs a family with many wall
 grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968, on which the oracle driving the
 shipped ant (stage 6) succeeds on 97% of 100 held-out mazes, 95% Wilson interval 91.5-99.0%, in 500 steps
@@ -63,7 +62,7 @@ def body_settings(
     return BodyDefaults(**settings)
 
 
-SELECTION_SEED = 3_000_000
+SELECTION_SEED = SEEDS.selection
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
 range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
 the 2,000,000 on of ``benchmarks/select_low_level.py``'s mazes, which chose the shipped ant low level."""

@@ -23,6 +23,7 @@ from antmaze_hirl.dagger.strategies import METHODS, make_strategy
 from antmaze_hirl.dagger.streams import trial_streams
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.experiments.backends import Backend, import_ray, run_tasks
 from antmaze_hirl.experiments.config import (
@@ -94,7 +95,7 @@ def make_env(config: ExperimentConfig, low_level: Any = None, *, split: LayoutSp
         if low_level is None:  # what the registered ids plug in by default
             settings["low_level"] = ShippedPolicyController(config.body)
         return SplitMazeEnv(config.body, split=split, **settings)
-    return gym.make(f"antmaze_hirl/{config.body.capitalize()}Maze-v0", **settings)
+    return gym.make(maze_env_id(config.body), **settings)
 
 
 class TrialEnvs:

@@ -20,10 +20,8 @@ _EXPORTS = {
     "save_checkpoint": "antmaze_hirl.sb3_ext.checkpoint",
     "save_policy": "antmaze_hirl.sb3_ext.loading",
     "train_low_level": "antmaze_hirl.sb3_ext.training",
-    # Deprecated alias of RunCheckpointCallback: the checkpoint module warns when it is resolved.
-    "CheckpointCallback": "antmaze_hirl.sb3_ext.checkpoint",
 }
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = [name for name in _EXPORTS if name != "CheckpointCallback"]
+__all__ = list(_EXPORTS)

@@ -13,7 +13,6 @@ import os
 import re
 import shutil
 import tempfile
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -131,7 +130,7 @@ class RunCheckpointCallback(BaseCallback):
     transitions and its weights have had every update of those steps.
 
     Named apart from SB3's ``CheckpointCallback(save_freq, save_path, ...)``, which writes model files in
-    place and keeps no replay buffer or run identity; ``CheckpointCallback`` here is a deprecated alias.
+    place and keeps no replay buffer or run identity.
 
     Args:
         directory: Checkpoint folder.
@@ -175,16 +174,3 @@ class RunCheckpointCallback(BaseCallback):
         self._last_saved = self._progress()
         if self.verbose:
             print(f"checkpoint saved: {folder}")
-
-
-def __getattr__(name: str) -> type[RunCheckpointCallback]:
-    # PEP 562: the old name still works, with a warning, for code written before the rename.
-    if name == "CheckpointCallback":
-        warnings.warn(
-            "CheckpointCallback is renamed RunCheckpointCallback (SB3 has a CheckpointCallback with another "
-            "signature); the old name will be removed",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return RunCheckpointCallback
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

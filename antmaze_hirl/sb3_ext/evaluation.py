@@ -12,6 +12,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 
 from antmaze_hirl.atomic_io import atomic_write_text
 from antmaze_hirl.envs.controllers import as_batch_controller, as_controller
+from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.envs.vector import check_num_envs
 from antmaze_hirl.sb3_ext.loading import save_policy
@@ -158,7 +159,7 @@ class SuccessRateCallback(BaseCallback):
         *,
         eval_freq: int,
         episodes: int,
-        seed: int = 10_000,
+        seed: int = SEEDS.low_level_curve,
         csv_path: str | Path | None = None,
         snapshot_dir: str | Path | None = None,
         verbose: int = 0,

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from antmaze_hirl.envs.controllers import PredictController
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
 from antmaze_hirl.envs.layouts import MazeMap
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.envs.simulator import Body, body_spec
 from antmaze_hirl.envs.vector import HighLevelVectorEnv, check_num_envs
 
@@ -75,7 +76,7 @@ def make_maze_env(
     """
     if low_level is None:
         if not shipped_policy_path(body).exists():
-            name = f"antmaze_hirl/{body.capitalize()}Maze-v0"
+            name = maze_env_id(body)
             raise ValueError(
                 f"{name} needs a low-level controller: pass low_level=<SB3 model or callable obs -> action>, "
                 f"e.g. gym.make('{name}', low_level=model)"

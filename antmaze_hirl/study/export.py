@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.study.data import participant_dir
 from antmaze_hirl.study.plan import load_plan
 
@@ -169,7 +170,7 @@ def study_env_spec(study_dir: str | Path, body: str) -> Any:
 
     from antmaze_hirl.study.settings import SETTINGS_FILE, load_settings
 
-    spec = gym.spec(f"antmaze_hirl/{body.capitalize()}Maze-v0")
+    spec = gym.spec(maze_env_id(body))
     if (Path(study_dir) / SETTINGS_FILE).exists():
         spec = dataclasses.replace(spec, kwargs={**spec.kwargs, "maze_size": load_settings(study_dir).maze_size})
     return spec
