@@ -57,9 +57,12 @@ def serial_outcomes(body: str, seeds: int) -> list[str]:
 def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
     """Each seed's outcome on the demo's env and oracle, ``num_envs`` mazes at once in lockstep (no picture)."""
     env, oracle = demo_setup(body)
+    copies = copies_of(env, min(num_envs, seeds))
     try:
-        played = play_in_lockstep(oracle, copies_of(env, min(num_envs, seeds)), range(seeds))
+        played = play_in_lockstep(oracle, copies, range(seeds))
     finally:
+        for copy in copies:
+            copy.close()
         env.close()
     outcomes = [episode_outcome(episode.info, truncated=episode.truncated) for episode in played]
     for episode, outcome in zip(played, outcomes, strict=True):

@@ -67,3 +67,32 @@ def test_a_pool_of_capacity_zero_keeps_nothing_and_a_negative_one_is_refused():
     assert len(pool) == 0 and pool.acquire("point", np.asarray(OPEN, dtype=bool)) is not simulator
     with pytest.raises(ValueError, match="capacity must be >= 0, got -1"):
         SimulatorPool(capacity=-1)
+
+
+def test_threads_acquiring_and_releasing_at_once_never_get_one_simulator_twice():
+    # The study server steps participants' sessions on several threads; each may move to a new maze.
+    import threading
+
+    pool = SimulatorPool(capacity=4)
+    walls = np.asarray(OPEN, dtype=bool)
+    pool.release(pool.acquire("point", walls))
+    held, errors = [], []
+
+    def work() -> None:
+        try:
+            for _ in range(5):
+                simulator = pool.acquire("point", walls)
+                held.append(id(simulator))
+                pool.release(simulator)
+        except Exception as error:  # any error in a thread fails the test below
+            errors.append(error)
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert errors == []
+    assert pool.hits + pool.misses == 21 and len(pool) <= 4
+    pool.clear()
+    assert len(pool) == 0

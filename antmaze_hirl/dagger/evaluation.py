@@ -102,7 +102,10 @@ def evaluation_outcomes(
 def _lockstep_episodes(
     policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int
 ) -> list[tuple[MazeLayout, dict[str, Any]]]:
-    played = play_on_copies(policy, env, range(seed, seed + episodes), num_envs=num_envs)
+    # The serial path plays the env as given, TimeLimit included; lockstep copies are unwrapped, so the limit
+    # is applied here in the same way.
+    max_subgoals = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+    played = play_on_copies(policy, env, range(seed, seed + episodes), num_envs=num_envs, max_subgoals=max_subgoals)
     return [(episode.layout, episode.info) for episode in played]
 
 

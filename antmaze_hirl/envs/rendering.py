@@ -1,8 +1,8 @@
 """What a high-level maze env's ``render()`` draws: the 2D schematic, the schematic with the walk, or a MuJoCo camera.
 
-:class:`HighLevelMazeEnv <parameter name="render_view"... ` documentation lives with the env; this module holds
-the drawing and the frame bookkeeping, so the env only tells it when an episode starts and when the body
-has taken a low-level step.
+The ``render_view`` keyword is documented with :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv`;
+this module holds the drawing and the frame bookkeeping, so the env only tells it when an episode starts
+and when the body has taken a low-level step.
 
 Views (``render_view``):
 

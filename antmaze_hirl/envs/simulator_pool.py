@@ -13,6 +13,7 @@ changed except for the goal marker's site, which is visual only (``tests/test_si
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -47,6 +48,7 @@ class SimulatorPool:
             raise ValueError(f"capacity must be >= 0, got {capacity}")
         self.capacity = capacity
         self._idle: OrderedDict[tuple[_Key, int], MazeSimulator] = OrderedDict()
+        self._lock = threading.Lock()
         self._released = 0  # a unique suffix per idle entry, so that one grid may have several idle simulators
         self.hits = 0
         self.misses = 0
@@ -63,26 +65,33 @@ class SimulatorPool:
     def acquire(self, body: Body, walls: np.ndarray, *, include_contact_forces: bool = False) -> MazeSimulator:
         """An idle simulator of this maze if the pool has one (it leaves the pool), else a new one."""
         wanted = self.key(body, walls, include_contact_forces)
-        for entry in reversed(self._idle):  # the most recently released first
-            if entry[0] == wanted:
-                self.hits += 1
-                return self._idle.pop(entry)
-        self.misses += 1
+        with self._lock:  # the study server steps participants' sessions on several threads
+            for entry in reversed(self._idle):  # the most recently released first
+                if entry[0] == wanted:
+                    self.hits += 1
+                    return self._idle.pop(entry)
+            self.misses += 1
         return MazeSimulator(body, walls, include_contact_forces=include_contact_forces)
 
     def release(self, simulator: MazeSimulator) -> None:
         """Takes back a simulator its env no longer uses; the caller must not touch it afterwards."""
         key = self.key(simulator.body, simulator.walls, simulator.include_contact_forces)
-        self._released += 1
-        self._idle[(key, self._released)] = simulator
-        while len(self._idle) > self.capacity:
-            _, dropped = self._idle.popitem(last=False)
-            dropped.close()
+        dropped = []
+        with self._lock:
+            self._released += 1
+            self._idle[(key, self._released)] = simulator
+            while len(self._idle) > self.capacity:
+                dropped.append(self._idle.popitem(last=False)[1])
+        for old in dropped:
+            old.close()
 
     def clear(self) -> None:
         """Closes and drops every idle simulator."""
-        while self._idle:
-            self._idle.popitem()[1].close()
+        with self._lock:
+            dropped = list(self._idle.values())
+            self._idle.clear()
+        for old in dropped:
+            old.close()
 
 
 _POOL = SimulatorPool()

@@ -84,7 +84,8 @@ def _reach_once(env: ReachEnv, controller: Any, seed: int) -> int | None:
 
 def _reach_in_lockstep(policy: Any, env: ReachEnv, seeds: range, num_envs: int) -> list[int | None]:
     # The attempts of _reach_once, num_envs at a time on copies of env: one batched action per step.
-    envs = [type(env)(*env._ezpickle_args, **env._ezpickle_kwargs) for _ in range(num_envs)]
+    inner = env.unwrapped  # a gym.make env's wrappers carry no constructor arguments; the ReachEnv does
+    envs = [type(inner)(*inner._ezpickle_args, **inner._ezpickle_kwargs) for _ in range(num_envs)]
     low_level = as_batch_controller(policy, num_envs)
     results: dict[int, int | None] = {}
     playing: dict[int, tuple[int, int]] = {}  # sub-env -> (seed, steps so far)
