@@ -1,14 +1,13 @@
 """Rendering high-level episodes: the unchanged schematic, one frame per low-level step, the trail, MuJoCo's camera."""
 
 import itertools
-import os
-import subprocess
 import sys
 import textwrap
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from egl_helpers import run_under_egl
 
 from antmaze_hirl.envs.rendering import SUBGOAL_RGB, TRAIL_RGB, RenderUnavailable
 from antmaze_hirl.experts import PathOracle
@@ -150,9 +149,4 @@ def test_the_mujoco_view_is_an_rgb_array_where_egl_works(suite_id):
         env.close()
         """
     )
-    env = {**os.environ, "MUJOCO_GL": "egl"}
-    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr[-2000:]
-    if "UNAVAILABLE" in result.stdout:
-        pytest.skip(f"no EGL here: {result.stdout.strip()}")
-    assert "FRAMES" in result.stdout
+    assert "FRAMES" in run_under_egl(script)

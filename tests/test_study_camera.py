@@ -1,11 +1,9 @@
 """The ant's camera view on the study page: a MuJoCo render where OpenGL works, a clear 404 where it does not."""
 
-import os
-import subprocess
-import sys
 import textwrap
 
 import pytest
+from egl_helpers import run_under_egl
 from study_helpers import make_tiny_study
 
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
@@ -50,9 +48,4 @@ def test_an_ant_trial_serves_a_png_camera_frame_with_egl(tmp_path):
         session.close()
         """
     )
-    env = {**os.environ, "MUJOCO_GL": "egl"}
-    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr[-2000:]
-    if "UNAVAILABLE" in result.stdout:
-        pytest.skip(f"no EGL here: {result.stdout.strip()}")
-    assert "FRAME" in result.stdout
+    assert "FRAME" in run_under_egl(script)
