@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import math
 import multiprocessing
 import shlex
 import sys
@@ -65,7 +64,8 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, play_in_lockstep
 from antmaze_hirl.envs import profiles
 from antmaze_hirl.envs.controllers import SmoothedController, as_controller
-from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
+from antmaze_hirl.envs.layouts import STANDARD_MAPS
+from antmaze_hirl.envs.suites import path_step_limit as step_limit
 from antmaze_hirl.experiments import ExperimentConfig, wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, body_settings, evaluation_sets
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
@@ -104,15 +104,6 @@ LOCKSTEP_ENVS = 25
 """``--num-envs``'s default: mazes played at once (a chunk of 25 with ``--jobs``, 100 episodes in 4 rounds)."""
 COUNT_KEYS = {"success": "successes", "flip": "flips", "frozen": "frozen", "timeout": "timeouts"}
 """The JSON key of each outcome's count."""
-
-
-def step_limit(walls: np.ndarray, start_cell: tuple[int, int], goal_cell: tuple[int, int], scale: float) -> int:
-    """``max(MIN_STEPS, ceil(STEPS_PER_METRE * L))``, ``L`` the shortest 4-connected cell path in metres.
-
-    ``L`` counts cell centre to cell centre (grid steps times ``scale``), so the detours around walls count.
-    """
-    metres = (len(shortest_path(walls, start_cell, goal_cell)) - 1) * scale
-    return max(MIN_STEPS, math.ceil(STEPS_PER_METRE * metres))
 
 
 class MazeEpisodeRecorder(gym.Wrapper):

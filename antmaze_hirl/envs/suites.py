@@ -56,6 +56,7 @@ from antmaze_hirl.envs.layouts import (
     validate_maze_map,
     wall_grid_string,
 )
+from antmaze_hirl.envs.profiles import MIN_STEPS, STEPS_PER_METRE
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS, SuiteSpec, check_suite_name
 
 SUITES_FILE = "benchmark_suites.json"
@@ -66,8 +67,6 @@ range apart from the evaluations' (1,000,000), the low-level selection's (2,000,
 evaluations' (3,000,000)."""
 WALL_FRACTION = 0.3
 """The random families' share of interior walls (:class:`HighLevelMazeEnv`'s default)."""
-MIN_STEPS = 500
-STEPS_PER_METRE = 40
 
 FIXED_MAP_TASKS: dict[str, list[tuple[tuple[int, int], tuple[int, int]]]] = {
     # Corner to corner around the U, both ways, and three shorter ones; every goal >= 3 grid steps away.
@@ -131,10 +130,18 @@ class SuiteTask:
         return cls(layout, int(entry["max_low_level_steps"]))
 
 
-def scaled_step_limit(layout: MazeLayout, scale: float) -> int:
-    """``max(500, ceil(40 * L))``, ``L`` the shortest 4-connected cell path from start to goal in metres."""
-    metres = (len(shortest_path(layout.walls, layout.start_cell, layout.goal_cell)) - 1) * scale
+def path_step_limit(walls: np.ndarray, start_cell: tuple[int, int], goal_cell: tuple[int, int], scale: float) -> int:
+    """``max(MIN_STEPS, ceil(STEPS_PER_METRE * L))``, ``L`` the shortest 4-connected cell path in metres.
+
+    ``L`` counts cell centre to cell centre (grid steps times ``scale``), so the detours around walls count.
+    """
+    metres = (len(shortest_path(walls, start_cell, goal_cell)) - 1) * scale
     return max(MIN_STEPS, math.ceil(STEPS_PER_METRE * metres))
+
+
+def scaled_step_limit(layout: MazeLayout, scale: float) -> int:
+    """:func:`path_step_limit` from ``layout``'s start cell to its goal cell."""
+    return path_step_limit(layout.walls, layout.start_cell, layout.goal_cell, scale)
 
 
 def fixed_map(spec: SuiteSpec) -> MazeMap:
