@@ -198,9 +198,12 @@ class DAggerTrainer:
         policy: The learner (start-selecting strategies need an
             :class:`~antmaze_hirl.dagger.protocols.OffsetLearner`, such as ``HighLevelPolicy``).
         rng: Spawns the trainer's three independent streams (:attr:`streams`): tasks (maze, goal, the env's
-            reset seed), the strategy's draws and ``"switch"`` mixing; ``rng`` itself is not drawn from, so
-            it may also be the learner's. A strategy's draws then never shift the tasks, and two methods
-            on the same ``rng`` train on the same mazes and goals (the start is the strategy's choice).
+            reset seed), the strategy's draws and ``"switch"`` mixing. Spawning draws nothing from ``rng``
+            (unless it has no seed sequence: see :func:`~antmaze_hirl.dagger.streams.spawn_generators`), so
+            it may also be the learner's, and a strategy's draws never shift the tasks. Two trainers built
+            from equal fresh Generators (``default_rng(seed)`` each, as ``make_trainer`` does) train on the
+            same mazes and goals (the start is the strategy's choice); two built from one Generator object
+            do not, since each spawn advances its spawn counter.
         strategy: Active-learning strategy; default plain DAgger.
         beta_schedule: Beta after ``k`` updates; default :class:`InverseDecayBetaSchedule` with d = 2.
         mixing: ``"blend"`` executes ``beta * expert + (1 - beta) * learner`` (the paper); ``"switch"``
