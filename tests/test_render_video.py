@@ -122,6 +122,24 @@ def test_record_low_level_video_keeps_every_frame(monkeypatch, tmp_path):
     assert written == [(info["total_low_level_steps"] + 1, 30)]
 
 
+def test_record_low_level_video_writes_an_mp4_of_every_low_level_step(tmp_path):
+    # The real writer: MoviePy comes with the `video` extra, which CI installs; elsewhere the reason is shown.
+    pytest.importorskip("moviepy", reason="writing a video needs the video extra: pip install 'antmaze_hirl[video]'")
+    import imageio.v3 as iio
+
+    from antmaze_hirl.envs.video import RecordLowLevelVideo
+
+    env = gym.make(SUITE_ID, render_mode="rgb_array_list", render_view="trail")
+    env = RecordLowLevelVideo(env, str(tmp_path), episode_trigger=lambda episode: True, fps=30, disable_logger=True)
+    _, info = play_oracle_episode(env, collect=False)
+    env.close()
+    (video,) = tmp_path.glob("*.mp4")
+    frames = list(iio.imiter(video))
+    # One frame at the reset and one per low-level step, as the writer was handed them (checked above).
+    assert len(frames) == info["total_low_level_steps"] + 1
+    assert frames[0].shape[-1] == 3 and not np.array_equal(frames[0], frames[-1])
+
+
 @pytest.mark.slow  # a fresh interpreter per body (MuJoCo reads MUJOCO_GL at import): CI's slow tier runs it
 @pytest.mark.parametrize("suite_id", [SUITE_ID, "antmaze_hirl/AntMaze-4x4-v0"])
 def test_the_mujoco_view_is_an_rgb_array_where_egl_works(suite_id):

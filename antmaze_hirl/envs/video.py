@@ -12,7 +12,7 @@ shows the walk::
     env = gym.make("antmaze_hirl/PointMaze-5x5-v0", render_mode="rgb_array_list", render_view="trail")
     env = RecordLowLevelVideo(env, "videos", episode_trigger=lambda episode: True)
 
-Writing the file needs MoviePy (``pip install "gymnasium[other]"``), as for ``RecordVideo``.
+Writing the file needs MoviePy (``pip install "antmaze_hirl[video]"``), as for ``RecordVideo``.
 """
 
 from __future__ import annotations
