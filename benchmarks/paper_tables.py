@@ -10,7 +10,7 @@ the seeds both runs hold. The two runs must share the final mazes (body, maze si
 episodes); a note names every other setting they differ in.
 
 Usage:
-  python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point
+  python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point [--tables cost,per-label,effort]
   cd benchmarks/results && python ../paper_tables.py paper_experiment_ant --beside paper_experiment_ant_stage5
 """
 
@@ -25,6 +25,9 @@ from typing import Any
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
+
+TABLES = ("cost", "per-label", "effort", "beside")
+"""The tables this prints, in order; ``beside`` only with ``--beside``."""
 
 # The settings that fix a seed's final evaluation mazes: two runs are paired by seed only when they agree.
 SAME_MAZES = ("body", "maze_size", "held_out_layouts", "final_eval_episodes")
@@ -264,12 +267,24 @@ def main() -> None:
     parser.add_argument(
         "--names", default="this run,beside", help="the two runs' column names, comma-separated (default: %(default)s)"
     )
+    parser.add_argument(
+        "--tables",
+        default=None,
+        help=f"print only these tables, comma-separated from {list(TABLES)}, without the goals "
+        "(what the docs' generated blocks paste; default: every table and the goals)",
+    )
     args = parser.parse_args()
     names = tuple(part.strip() for part in args.names.split(","))
     if len(names) != 2 or not all(names):
         parser.error(f"--names takes two comma-separated names, got {args.names!r}")
     if args.beside is None and args.names != parser.get_default("names"):
         parser.error(f"--names {args.names!r} names the --beside columns: pass --beside too")
+    chosen = list(TABLES) if args.tables is None else [name.strip() for name in args.tables.split(",")]
+    unknown = [name for name in chosen if name not in TABLES]
+    if unknown or not chosen:
+        parser.error(f"--tables takes names from {list(TABLES)}, got {args.tables!r}")
+    if "beside" in chosen and args.beside is None and args.tables is not None:
+        parser.error("--tables beside needs --beside FOLDER")
     summary = _load_summary(parser, args.folder)
     # Both summaries are read before anything is printed, so a bad --beside fails alone on one line.
     beside = None
@@ -278,12 +293,12 @@ def main() -> None:
             beside = beside_table(summary, _load_summary(parser, args.beside, per_label=False), names)
         except ValueError as error:
             parser.error(f"--beside {args.beside}: {error}")
-    print(cost_table(summary), end="\n\n")
-    print(per_label_table(summary), end="\n\n")
-    print(effort_table(summary))
+    tables = {"cost": cost_table(summary), "per-label": per_label_table(summary), "effort": effort_table(summary)}
     if beside is not None:
-        print("", beside, sep="\n")
-    print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
+        tables["beside"] = beside
+    print("\n\n".join(tables[name] for name in chosen if name in tables))
+    if args.tables is None:
+        print("\ngoals:", json.dumps(summary.get("goals", {}), indent=1))
 
 
 if __name__ == "__main__":
