@@ -1,0 +1,62 @@
+"""scripts/protocol2_rerun.sh: the checkpoint that carries the background rerun across fresh machines."""
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "protocol2_rerun.sh"
+
+
+def run(tmp_path, *args):
+    env = {**os.environ, "PROTOCOL2_WORK": str(tmp_path / "work"), "PROTOCOL2_CHECKPOINTS": str(tmp_path / "ckpt")}
+    return subprocess.run(["bash", str(SCRIPT), *args], env=env, capture_output=True, text=True, check=False)
+
+
+def test_a_checkpoint_restores_the_finished_trials_byte_for_byte(tmp_path):
+    folder = tmp_path / "work" / "point_p2_36dafd8"
+    (folder / "trials").mkdir(parents=True)
+    files = {
+        "config.json": '{"body": "point"}',
+        "provenance.json": '{"git_commit": "36dafd8"}',
+        "trials/dagger_seed0.csv": "method,seed\ndagger,0\n",
+        "trials/dagger_seed0.json": '{"seconds": 1.0}',
+    }
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    (folder / "summary.json").write_text("{}")  # rewritten from the trials: not packed
+    packed = run(tmp_path, "checkpoint", "point")
+    assert packed.returncode == 0, packed.stderr
+    assert "packed 1 trials of point" in packed.stdout
+    for path in sorted(folder.rglob("*"), reverse=True):
+        path.unlink() if path.is_file() else path.rmdir()
+    restored = run(tmp_path, "restore", "point")
+    assert restored.returncode == 0, restored.stderr
+    assert "restored 1 trials of point" in restored.stdout
+    assert {str(p.relative_to(folder)): p.read_text() for p in folder.rglob("*") if p.is_file()} == files
+    assert "point: 1 of 70 trials" in run(tmp_path, "status").stdout
+
+
+def test_restore_leaves_a_folder_that_already_has_trials(tmp_path):
+    (tmp_path / "ckpt").mkdir()
+    trials = tmp_path / "work" / "ant_p2_36dafd8" / "trials"
+    trials.mkdir(parents=True)
+    (trials / "dagger_seed0.json").write_text("{}")
+    assert run(tmp_path, "restore", "ant").stdout == ""
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [(["checkpoint", "car"], "BODY must be point or ant, got 'car'"), (["fly"], "got 'fly'")],
+)
+def test_a_bad_body_or_command_is_one_line_naming_it(tmp_path, args, message):
+    result = run(tmp_path, *args)
+    assert result.returncode == 2
+    assert message in result.stderr and result.stderr.count("\n") == 1
+
+
+def test_checkpoint_without_trials_fails_naming_the_folder(tmp_path):
+    result = run(tmp_path, "checkpoint", "ant")
+    assert result.returncode == 1
+    assert "no trials in" in result.stderr and "ant_p2_36dafd8" in result.stderr
