@@ -194,3 +194,28 @@ def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
     # docs/paper-claims.md: "Pruning removed 137 of `reward`'s 4,903 labels (2.8%)".
     assert (figures["labels_removed_by_pruning"], figures["labels_spent"]) == (137, 4903)
     assert figures["episodes_to_60_percent"]["median"] == 30.0
+
+
+def test_the_threshold_is_split_over_the_readings_a_claim_tries():
+    differences = [0.05, 0.04, 0.06, 0.03, 0.07, -0.03, 0.05, 0.02, -0.04, 0.08]  # p = 0.035 with 10 pairs
+    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.05).outcome == pc.SUPPORTS
+    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.025).outcome == pc.UNDECIDED
+    rows = rows_of([body(name) for name in pc.BODIES])
+    assert rows[1].measurement.startswith("threshold p < 0.025<br>")  # reward and reward_per_step
+    assert rows[3].measurement.startswith("threshold p < 0.05<br>")  # multi_policy alone
+    assert rows[6].measurement.startswith("threshold p < 0.01;")  # five active methods
+
+
+def test_passing_sixty_percent_at_the_hundredth_episode_is_not_under_a_hundred():
+    last = {method: dict.fromkeys(range(10), 100.0) for method in (*pc.ACTIVE, "dagger", "aggrevate")}
+    row = rows_of([body(name, episodes=last) for name in pc.BODIES])[4]
+    assert row.verdict == pc.DOES_NOT_HOLD and "0 of 10 seeds under 100 episodes" in row.measurement
+
+
+def test_saving_expert_cost_needs_the_ratio_not_only_fewer_labels():
+    # noise needs 0.6x DAgger's labels on every seed: significantly fewer, but not <= 0.3x.
+    fewer = [0.6 * (500.0 + 10 * seed) for seed in range(10)]
+    rows = rows_of([body(name, labels={"noise": fewer}) for name in pc.BODIES])
+    assert rows[6].outcomes["noise"] == {"point": pc.CONTRADICTS, "ant": pc.CONTRADICTS}
+    assert rows[6].verdict == pc.DOES_NOT_HOLD
+    assert "`noise` 327 (10 of 10 reach it), 0.60x, p = 0.00195: contradicts" in rows[6].measurement
