@@ -219,3 +219,29 @@ def test_saving_expert_cost_needs_the_ratio_not_only_fewer_labels():
     assert rows[6].outcomes["noise"] == {"point": pc.CONTRADICTS, "ant": pc.CONTRADICTS}
     assert rows[6].verdict == pc.DOES_NOT_HOLD
     assert "`noise` 327 (10 of 10 reach it), 0.60x, p = 0.00195: contradicts" in rows[6].measurement
+
+
+def test_episodes_to_sixty_percent_are_read_from_the_episode_rows():
+    def row(seed, episode, success):
+        labels = 10.0 * (episode + 1)
+        return {
+            "method": "dagger",
+            "seed": seed,
+            "episode": episode,
+            "eval_success": success,
+            "cumulative_expert_cost": labels,
+        }
+
+    rows = [row(0, 9, 0.4), row(0, 19, 0.65), row(1, 9, 0.5), row(1, 99, 0.55), row(2, 9, math.nan)]
+    summary = {"methods": {"dagger": figures([0.8, 0.8, 0.8], [0.8] * 3, [500.0] * 3, [500.0] * 3)}}
+    # Seed 0 passes after 20 episodes, seed 1 never; seed 2's untrained learner is at 70% already.
+    summary["methods"]["dagger"]["untrained_success"]["per_seed"] = [0.0, 0.0, 0.7]
+    assert pc.episodes_to_target(rows, summary) == {"dagger": {0: 20.0, 1: None, 2: 0.0}}
+
+
+def test_the_claims_doc_quotes_the_table_printed_on_the_interim_folders(monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)
+    pc.main(["--protocol2", "benchmarks/results/protocol2_interim/point", "benchmarks/results/protocol2_interim/ant"])
+    doc = (ROOT / "docs" / "paper-claims.md").read_text()
+    quoted = doc.split("<!-- interim claims table: begin -->\n")[1].split("\n<!-- interim claims table: end -->")[0]
+    assert quoted == capsys.readouterr().out.rstrip("\n"), "rerun the command and paste its table"
