@@ -638,7 +638,7 @@ def claim_saving(bodies: Sequence[Body]) -> Claim:
             outcomes[name][body.name] = finding.outcome
         dagger = body.method(BASELINE)
         texts.append(
-            f"{body.name}: labels to DAgger's {_pct(dagger['labels_to_match_dagger']['target'])}, DAgger "
+            f"{body.name}: labels to DAgger's {_pct(dagger.get('labels_to_match_dagger', {}).get('target'))}, DAgger "
             f"{_labels_to_match(dagger)}; " + "; ".join(f.text for f in found.values()) + f"; body: {outcome}"
         )
     verdict, leaning = combine_readings([combine_bodies(per_body)])
