@@ -1,0 +1,247 @@
+"""The protocol-2 claims table of ``benchmarks/paper_claims.py``: its verdicts on crafted summaries."""
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from antmaze_hirl.experiments.uncertainty import paired_comparison
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+import paper_claims as pc
+
+ROOT = Path(__file__).resolve().parents[1]
+INTERIM = ROOT / "benchmarks" / "results" / "protocol2_interim"
+JITTER = [0.0, 0.01, -0.01, 0.02, -0.02, 0.0, 0.01, -0.01, 0.02, -0.02]
+
+
+def _median(values):
+    return float(np.median([math.inf if v is None else v for v in values]))
+
+
+def figures(rates, dagger_rates, labels, dagger_labels, untrained=0.01):
+    """A method's summary.json figures, as ``summarise`` writes them, from per-seed rates and labels."""
+    seeds = len(rates)
+    target = float(np.median(dagger_rates))
+    median = _median(labels)
+    theirs = _median(dagger_labels)
+    out = {
+        "seeds": seeds,
+        "final_success": {
+            "median": float(np.median(rates)),
+            "min": min(rates),
+            "max": max(rates),
+            "per_seed": [{"seed": seed, "rate": rate} for seed, rate in enumerate(rates)],
+        },
+        "labels_to_match_dagger": {
+            "target": target,
+            "median": median if math.isfinite(median) else None,
+            "per_seed": labels,
+            "seeds_reached": sum(v is not None for v in labels),
+            "ratio_vs_dagger": median / theirs if math.isfinite(median) and math.isfinite(theirs) else None,
+        },
+        "total_labels": {"median": 1000.0, "min": 950.0, "max": 1050.0},
+        "untrained_success": {
+            "median": untrained,
+            "min": untrained,
+            "max": untrained,
+            "per_seed": [untrained] * seeds,
+            "pooled": {"rate": untrained},
+        },
+        "cost_to_60_percent": {"median": 150.0, "seeds_reached": seeds},
+        "mean_expert_cost_per_episode": 10.0,
+    }
+    if rates is not dagger_rates:
+        out["vs_dagger"] = {"final_success": paired_comparison(rates, dagger_rates[:seeds])}
+    return out
+
+
+def body(name, seeds=10, gain=None, labels=None, untrained=0.01, episodes=None):
+    """A protocol-2 body: DAgger, every active method and ``aggrevate``.
+
+    Each method is at DAgger's success (+-1 point) and labels, unless ``gain`` (a share of success over
+    DAgger's) or ``labels`` (per-seed labels to DAgger's success) says otherwise.
+    """
+    gain, labels = gain or {}, labels or {}
+    dagger_rates = [0.8 + JITTER[seed] for seed in range(seeds)]
+    dagger_labels = [500.0 + 10 * seed for seed in range(seeds)]
+    methods = {"dagger": figures(dagger_rates, dagger_rates, dagger_labels, dagger_labels, untrained)}
+    for method in (*pc.ACTIVE, "aggrevate"):
+        shift = gain.get(method, 0.0)
+        rates = [round(rate + shift + JITTER[(seed + 3) % 10] / 2, 3) for seed, rate in enumerate(dagger_rates)]
+        methods[method] = figures(rates, dagger_rates, labels.get(method, dagger_labels), dagger_labels, untrained)
+    summary = {"config": {"body": name, "protocol": 2, "episodes": 100}, "methods": methods}
+    return pc.Body(name, Path(name), summary, episodes)
+
+
+def rows_of(bodies):
+    return {row.number: row for row in pc.protocol2_claims(bodies)}
+
+
+def test_a_clear_effect_on_ten_seeds_holds():
+    fewer = [100.0 + 5 * seed for seed in range(10)]  # 0.2x DAgger's labels on every seed
+    bodies = [body(name, gain={"reward": 0.15, "aggrevate": -0.2}, labels={"gated": fewer}) for name in pc.BODIES]
+    rows = rows_of(bodies)
+    assert rows[1].verdict == pc.HOLDS and rows[1].printed == "holds"
+    assert rows[1].outcomes["reward"] == {"point": pc.SUPPORTS, "ant": pc.SUPPORTS}
+    # reward_per_step is at DAgger's success (its CI excludes a 5-point gain), but one reading holding is enough.
+    assert rows[1].outcomes["reward_per_step"]["point"] == pc.CONTRADICTS
+    assert rows[5].verdict == pc.HOLDS and rows[5].printed.startswith("holds (bounded:")
+    assert rows[6].verdict == pc.HOLDS and rows[6].outcomes["gated"]["ant"] == pc.SUPPORTS
+    assert rows[7].verdict == pc.NOT_TESTABLE
+    table = pc.markdown(bodies, list(rows.values()))
+    assert table.startswith("Protocol 2 claims:") and table.count("10 seeds per method (complete)") == 2
+
+
+def test_the_opposite_effect_or_an_excluded_one_does_not_hold():
+    more = [700.0 + 5 * seed for seed in range(10)]
+    bodies = [
+        body(name, gain={"multi_policy": 0.1, "aggrevate": 0.1}, labels={"reward": more, "reward_per_step": more})
+        for name in pc.BODIES
+    ]
+    rows = rows_of(bodies)
+    # reward at DAgger's success +-1 point: the CI excludes the claimed 5-point gain.
+    assert rows[1].verdict == pc.DOES_NOT_HOLD
+    assert rows[2].verdict == pc.DOES_NOT_HOLD  # more labels than DAgger, significantly
+    assert rows[3].verdict == pc.DOES_NOT_HOLD  # multi_policy is better, significantly
+    # aggrevate beating DAgger with a dense Q says nothing of a sparse-reward AggreVaTeD.
+    assert rows[5].verdict == pc.NOT_TESTABLE
+    # No method reaches DAgger's success at <= 0.3x its labels: every CI of labels - 0.3x DAgger's is above 0.
+    assert rows[6].verdict == pc.DOES_NOT_HOLD
+    assert "does not hold" in rows[6].printed
+
+
+def test_five_seeds_are_inconclusive_and_interim_whatever_the_effect():
+    bodies = [body(name, seeds=5, gain={"reward": 0.15, "reward_per_step": 0.15}) for name in pc.BODIES]
+    row = rows_of(bodies)[1]
+    # Every seed better by about 15 points, but 5 pairs cannot go below p = 0.0625.
+    assert row.verdict == pc.INCONCLUSIVE
+    assert "p = 0.0625 (n = 5, floor 0.0625), CI [-inf, +inf]: undecided" in row.measurement
+    assert row.printed == "interim: leaning holds (direction only)"
+
+
+def test_a_method_short_of_ten_seeds_makes_the_folder_interim():
+    full = body("point", gain={"reward": 0.15})
+    short = body("ant", gain={"reward": 0.15})
+    short.summary["methods"]["gated"] = figures([0.8] * 9, [0.8] * 9, [500.0] * 9, [500.0] * 9)
+    assert not full.interim and short.interim and short.seeds == (9, 10)
+    rows = rows_of([full, short])
+    # The tests decide it, but on an interim folder the row only leans; claim 7 needs people, not seeds.
+    assert rows[1].verdict == pc.HOLDS and rows[1].printed == "interim: leaning holds"
+    assert all(row.printed.startswith("interim: leaning ") for n, row in rows.items() if n != 7)
+    table = pc.markdown([full, short], list(rows.values()))
+    assert "Protocol 2 claims (INTERIM: not a result)" in table
+    assert "- ant: `ant`, 9-10 seeds per method (INTERIM" in table
+    assert "- point: `point`, 10 seeds per method (complete)" in table
+
+
+def test_sixty_percent_counts_episodes_from_the_untrained_success():
+    fast = {method: dict.fromkeys(range(10), 30.0) for method in (*pc.ACTIVE, "dagger", "aggrevate")}
+    rows = rows_of([body(name, episodes=fast) for name in pc.BODIES])
+    assert rows[4].verdict == pc.HOLDS and "10 of 10 seeds under 100 episodes" in rows[4].measurement
+    slow = {method: dict.fromkeys(range(10), None) for method in fast}
+    assert rows_of([body(name, episodes=slow) for name in pc.BODIES])[4].verdict == pc.DOES_NOT_HOLD
+    # An untrained learner at 60% already: the claim is about learning, so it cannot be tested.
+    assert rows_of([body(name, untrained=0.7, episodes=fast) for name in pc.BODIES])[4].verdict == pc.NOT_TESTABLE
+    # Without episodes.csv there are no episode counts: it cannot hold, only lean.
+    row = rows_of([body(name) for name in pc.BODIES])[4]
+    assert row.verdict == pc.INCONCLUSIVE and row.leaning == "holds (direction only)"
+    assert "untrained 1.0% pooled" in row.measurement
+
+
+def test_the_interval_inverts_the_signed_rank_test():
+    assert pc.signed_rank_interval([1, 2, 3, 4, 5]) == (-math.inf, math.inf)
+    assert pc.signed_rank_interval([3, 1, 4, 1, 5, 9]) == (1.0, 9.0)  # 6 pairs: the extreme Walsh averages
+    differences = [0.5, -1.0, 2.0, 3.0, 1.5, 4.0, -0.5, 2.5, 6.0, 1.0]
+    walsh = sorted((a + b) / 2 for i, a in enumerate(differences) for b in differences[i:])
+    # 10 pairs: the two-sided 5% critical value of T is 8, so the bounds are the 9th Walsh average from each end.
+    assert pc.signed_rank_interval(differences) == (walsh[8], walsh[-9])
+    assert [pc.smallest_p(n) for n in (3, 5, 10)] == [0.25, 0.0625, 2 / 1024]
+    with pytest.raises(ValueError, match="confidence must lie in"):
+        pc.signed_rank_interval([1.0, 2.0], confidence=1.5)
+
+
+def test_the_committed_interim_folders_print_an_interim_table(tmp_path, capsys):
+    out = tmp_path / "claims.json"
+    pc.main(["--protocol2", str(INTERIM / "point"), str(INTERIM / "ant"), "--json", str(out)])
+    table = capsys.readouterr().out
+    assert table.startswith("Protocol 2 claims (INTERIM: not a result):")
+    assert table.count("(INTERIM: fewer than 10 seeds, no verdict is final)") == 2
+    written = json.loads(out.read_text())
+    assert written["interim"] and [row["number"] for row in written["claims"]] == list(range(1, 8))
+    for row in written["claims"][:6]:
+        assert row["printed"].startswith("interim: leaning "), row
+        assert f"**{row['printed']}** |" in table
+
+
+def test_bad_folders_are_one_line_errors(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        pc.main(["--protocol2", str(INTERIM / "ant"), str(INTERIM / "point")])
+    assert "is of body 'ant', but it was passed as the point folder" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        pc.main(["--protocol2", str(ROOT / "benchmarks" / "results" / "paper_experiment_point"), str(INTERIM / "ant")])
+    assert "has config.protocol 1, not 2: read it without --protocol2" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        pc.main(["--protocol2", str(tmp_path), str(INTERIM / "ant")])
+    assert f"no summary.json in {tmp_path}" in capsys.readouterr().err
+
+
+def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
+    figures = pc.claims(ROOT / "benchmarks" / "results" / "paper_experiment_ant")["methods"]["reward"]
+    # docs/paper-claims.md: "Pruning removed 137 of `reward`'s 4,903 labels (2.8%)".
+    assert (figures["labels_removed_by_pruning"], figures["labels_spent"]) == (137, 4903)
+    assert figures["episodes_to_60_percent"]["median"] == 30.0
+
+
+def test_the_threshold_is_split_over_the_readings_a_claim_tries():
+    differences = [0.05, 0.04, 0.06, 0.03, 0.07, -0.03, 0.05, 0.02, -0.04, 0.08]  # p = 0.035 with 10 pairs
+    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.05).outcome == pc.SUPPORTS
+    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.025).outcome == pc.UNDECIDED
+    rows = rows_of([body(name) for name in pc.BODIES])
+    assert rows[1].measurement.startswith("threshold p < 0.025<br>")  # reward and reward_per_step
+    assert rows[3].measurement.startswith("threshold p < 0.05<br>")  # multi_policy alone
+    assert rows[6].measurement.startswith("threshold p < 0.01;")  # five active methods
+
+
+def test_passing_sixty_percent_at_the_hundredth_episode_is_not_under_a_hundred():
+    last = {method: dict.fromkeys(range(10), 100.0) for method in (*pc.ACTIVE, "dagger", "aggrevate")}
+    row = rows_of([body(name, episodes=last) for name in pc.BODIES])[4]
+    assert row.verdict == pc.DOES_NOT_HOLD and "0 of 10 seeds under 100 episodes" in row.measurement
+
+
+def test_saving_expert_cost_needs_the_ratio_not_only_fewer_labels():
+    # noise needs 0.6x DAgger's labels on every seed: significantly fewer, but not <= 0.3x.
+    fewer = [0.6 * (500.0 + 10 * seed) for seed in range(10)]
+    rows = rows_of([body(name, labels={"noise": fewer}) for name in pc.BODIES])
+    assert rows[6].outcomes["noise"] == {"point": pc.CONTRADICTS, "ant": pc.CONTRADICTS}
+    assert rows[6].verdict == pc.DOES_NOT_HOLD
+    assert "`noise` 327 (10 of 10 reach it), 0.60x, p = 0.00195: contradicts" in rows[6].measurement
+
+
+def test_episodes_to_sixty_percent_are_read_from_the_episode_rows():
+    def row(seed, episode, success):
+        labels = 10.0 * (episode + 1)
+        return {
+            "method": "dagger",
+            "seed": seed,
+            "episode": episode,
+            "eval_success": success,
+            "cumulative_expert_cost": labels,
+        }
+
+    rows = [row(0, 9, 0.4), row(0, 19, 0.65), row(1, 9, 0.5), row(1, 99, 0.55), row(2, 9, math.nan)]
+    summary = {"methods": {"dagger": figures([0.8, 0.8, 0.8], [0.8] * 3, [500.0] * 3, [500.0] * 3)}}
+    # Seed 0 passes after 20 episodes, seed 1 never; seed 2's untrained learner is at 70% already.
+    summary["methods"]["dagger"]["untrained_success"]["per_seed"] = [0.0, 0.0, 0.7]
+    assert pc.episodes_to_target(rows, summary) == {"dagger": {0: 20.0, 1: None, 2: 0.0}}
+
+
+def test_the_claims_doc_quotes_the_table_printed_on_the_interim_folders(monkeypatch, capsys):
+    monkeypatch.chdir(ROOT)
+    pc.main(["--protocol2", "benchmarks/results/protocol2_interim/point", "benchmarks/results/protocol2_interim/ant"])
+    doc = (ROOT / "docs" / "paper-claims.md").read_text()
+    quoted = doc.split("<!-- interim claims table: begin -->\n")[1].split("\n<!-- interim claims table: end -->")[0]
+    assert quoted == capsys.readouterr().out.rstrip("\n"), "rerun the command and paste its table"
