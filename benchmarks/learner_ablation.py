@@ -115,7 +115,7 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
             continue
         agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
         label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, max_distance=reach, clearance=0.2 * geometry.scale
+            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
         )
         walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
     env.close()
@@ -141,7 +141,7 @@ def run_variant_trial(
     """
     start = time.perf_counter()
     env = make_env(config, split="train")
-    oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
     trainer = make_trainer("dagger", seed, config, env, oracle, policy_settings=variant_settings(variant, config))
     sets = {"selection": ("selection", SELECTION_SEED, SELECTION_MAZES)}
     if final:

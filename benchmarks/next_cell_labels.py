@@ -54,7 +54,7 @@ def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generat
             if cell == layout.goal_cell or geometry.xy_to_cell(agent) != cell:
                 continue
             label = plan_subgoal(
-                layout.walls, geometry, agent, goal_xy, max_distance=reach, clearance=0.2 * geometry.scale
+                layout.walls, geometry, agent, goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
             )
             row, col = np.subtract(shortest_path(layout.walls, cell, layout.goal_cell)[1], cell)
             agents.append(agent), subgoals.append(label), path_steps.append((col, -row))

@@ -114,7 +114,7 @@ def test_reach_env_spaces_reward_and_success(body):
     env = ReachEnv(body)
     obs, info = env.reset(seed=0)
     assert obs["observation"].shape == ({"ant": 27, "point": 2}[body],)
-    assert 0 < np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"]) <= env.goal_radius
+    assert 0 < np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"]) <= env.sample_radius_m
     assert info["is_success"] is False
     # vectorised compute_reward, as HER calls it on a batch
     achieved = np.zeros((5, 2))
@@ -129,11 +129,11 @@ def test_reach_env_spaces_reward_and_success(body):
 
 
 def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
-    env = ReachEnv("point", horizon=7, goal_radius=0.8)
+    env = ReachEnv("point", horizon=7, sample_radius_m=0.8)
     for seed in range(20):
         obs, _ = env.reset(seed=seed)
         distance = np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"])
-        assert env.min_goal_distance <= distance <= 0.8
+        assert env.min_sample_radius_m <= distance <= 0.8
         assert env.sim.geometry.segment_is_free(env.walls, obs["achieved_goal"], obs["desired_goal"])
     truncations = [env.step(np.zeros(2))[3] for _ in range(7)]
     assert truncations == [False] * 6 + [True]

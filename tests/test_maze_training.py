@@ -32,7 +32,7 @@ def flip(env):
 
 
 def test_maze_resets_draw_random_layouts_of_the_given_sizes_with_goals_in_sight():
-    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, np.int64(4)], goal_radius=3.0)
+    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, np.int64(4)], sample_radius_m=3.0)
     env.reset(seed=0)
     shapes, layouts = set(), set()
     for _ in range(30):

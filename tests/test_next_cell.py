@@ -119,12 +119,12 @@ def test_next_cell_subgoals_are_cell_centres_or_the_goal_within_reach():
     goal = policy.geometry.cell_to_xy((2, 3)) + np.array([0.1, -0.2])  # off-centre, one cell north
     batch = policy.encoder.encode([walls], [agent], [goal], [np.zeros(2)])
     north, east, north_east = (NEXT_CELL_MOVES.index(move) for move in ((0, 1), (1, 0), (1, 1)))
-    to_goal = policy.cell_offsets(batch, np.array([north]))[0] * policy.max_offset
+    to_goal = policy.cell_offsets(batch, np.array([north]))[0] * policy.subgoal_reach_m
     np.testing.assert_allclose(to_goal, goal - agent, atol=1e-6)  # the goal itself, not its cell's centre
-    to_east = policy.cell_offsets(batch, np.array([east]))[0] * policy.max_offset
+    to_east = policy.cell_offsets(batch, np.array([east]))[0] * policy.subgoal_reach_m
     np.testing.assert_allclose(to_east, [0.8, -0.1], atol=1e-6)
     diagonal = policy.cell_offsets(batch, np.array([north_east]))[0]
-    assert np.linalg.norm(diagonal) == pytest.approx(1.0)  # pulled back to max_offset, like the oracle
+    assert np.linalg.norm(diagonal) == pytest.approx(1.0)  # pulled back to subgoal_reach_m, like the oracle
 
 
 def test_symmetries_map_cell_steps_as_they_map_the_grid():
@@ -184,14 +184,14 @@ def test_each_body_defaults_to_its_ablations_next_cell_head():
 def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller):
     env = gym.make("antmaze_hirl/AntMaze-v0", maze_size=3, low_level=still_controller, max_steps=300)
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, max_offset=2.0)
+    policy = HighLevelPolicy.for_env(env, rng=rng, subgoal_reach_m=2.0)
     assert (policy.config()["head"], policy.config()["planning_iterations"], policy.config()["block_walls"]) == (
         "next_cell",
         0,
         False,
     )
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env, max_distance=2.0), policy=policy, rng=rng, gradient_steps=5
+        env=env, expert=PathOracle.for_env(env, subgoal_reach_m=2.0), policy=policy, rng=rng, gradient_steps=5
     )
     trainer.run_episode()  # labels, then the update
     assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
@@ -205,7 +205,7 @@ def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
     # The ant's oracle gives 2 m subgoals in 4 m cells: one from near a cell's centre ends inside that cell.
     geometry = MazeGeometry(6, 6, 4.0)
     policy = SubgoalPolicy(
-        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), max_offset=2.0, head="next_cell"
+        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), subgoal_reach_m=2.0, head="next_cell"
     )
     centre = geometry.cell_to_xy((2, 2))
     agents = np.stack([centre] * 4 + [centre + np.array([0.5, 0.0])])
@@ -226,9 +226,9 @@ def test_the_experiment_gives_the_learner_its_oracles_reach():
     from antmaze_hirl.experiments.runner import make_trainer
 
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
-    oracle = PathOracle.for_env(env, max_distance=0.6)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=0.6)
     trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", expert_max_distance=0.6), env, oracle)
-    assert trainer.policy.max_offset == pytest.approx(0.6)
+    assert trainer.policy.subgoal_reach_m == pytest.approx(0.6)
     default = make_trainer("dagger", 0, ExperimentConfig(body="point"), env, PathOracle.for_env(env))
-    assert default.policy.max_offset == pytest.approx(env.unwrapped.geometry.scale)
+    assert default.policy.subgoal_reach_m == pytest.approx(env.unwrapped.geometry.scale)
     env.close()

@@ -582,7 +582,7 @@ class GatedQuery(QueryStrategy):
 
     At each high-level step the learner proposes a subgoal; the gate opens, and the expert is asked, where
     a :class:`BaggedEnsemble`'s members disagree on the state (their mean distance from their mean
-    subgoal, in units of the learner's ``max_offset``: :func:`~antmaze_hirl.dagger.gating.disagreement`)
+    subgoal, in units of the learner's ``subgoal_reach_m``: :func:`~antmaze_hirl.dagger.gating.disagreement`)
     more than the threshold. An asked step's label is aggregated and the expert's subgoal is executed (the
     expert takes over for the step, as in ThriftyDAgger and HG-DAgger; the trainer's beta mix does not
     apply); an unasked step executes the learner's subgoal, adds nothing to D and costs nothing. The
@@ -657,7 +657,7 @@ class GatedQuery(QueryStrategy):
         self.label_failures = label_failures
         self.risk_model: RiskModel | None = None
         self.outcomes: list[tuple[np.ndarray, bool]] = []  # (risk features, failed) of every executed step
-        self.max_offset = 1.0
+        self.subgoal_reach_m = 1.0
         self._last: tuple[int, EncodedBatch] | None = None  # the encoding of the observation gated last
 
     @property
@@ -666,11 +666,11 @@ class GatedQuery(QueryStrategy):
         return "gated" if isinstance(self.inner, DAggerQuery) else f"gated+{self.inner.name}"
 
     def attach(self, learner: Learner) -> None:
-        """Attaches the inner strategy and the ensemble to the learner; reads its ``max_offset``."""
+        """Attaches the inner strategy and the ensemble to the learner; reads its ``subgoal_reach_m``."""
         self.inner.attach(learner)
         if self.ensemble is not self.inner:
             self.ensemble.attach(learner)
-        self.max_offset = float(getattr(learner, "max_offset", 1.0))
+        self.subgoal_reach_m = float(getattr(learner, "subgoal_reach_m", 1.0))
 
     def novelty(self, encoded: EncodedBatch) -> np.ndarray:
         """The ensemble's disagreement at each encoded state (``inf`` before the first update: ask)."""
@@ -734,7 +734,7 @@ class GatedQuery(QueryStrategy):
 
     def _offset(self, observation: dict[str, np.ndarray], subgoal: np.ndarray) -> np.ndarray:
         agent = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
-        return ((np.asarray(subgoal, dtype=np.float64) - agent) / self.max_offset)[None]
+        return ((np.asarray(subgoal, dtype=np.float64) - agent) / self.subgoal_reach_m)[None]
 
 
 STRATEGIES: dict[str, type[QueryStrategy]] = {

@@ -91,7 +91,7 @@ class ReachEnv(GoalEnv, EzPickle):
     """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
 
     Each episode places the body in a random free cell of ``maze_map`` (or where ``options`` say) and
-    samples a subgoal uniformly (by area) in the ring ``min_goal_distance..goal_radius`` around it, in
+    samples a subgoal uniformly (by area) in the ring ``min_sample_radius_m..sample_radius_m`` around it, in
     free space and in line of sight (a straight walk can reach it). The episode is truncated after ``horizon`` steps.
 
     Observation ``Dict``:
@@ -113,8 +113,8 @@ class ReachEnv(GoalEnv, EzPickle):
             their body explicitly.
         maze_map: Layout, a list of rows or a standard map name. Default ``"open"`` (3x5 free cells).
         horizon: Steps per episode, H. Default per body: ant 100, point 50.
-        goal_radius: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
-        min_goal_distance: Smallest subgoal distance, metres. Default: the distance threshold.
+        sample_radius_m: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
+        min_sample_radius_m: Smallest subgoal distance, metres. Default: the distance threshold.
         distance_threshold: Reach radius, metres. Default per body: ant 0.45, point 0.2.
         reward_type: ``"sparse"`` or ``"dense"``.
         action_scale: Multiplier in ``(0, 1]`` on actions. Default per body: ant 0.5, point 1. The
@@ -169,8 +169,8 @@ class ReachEnv(GoalEnv, EzPickle):
         maze_map: str | MazeMap = "open",
         *,
         horizon: int | None = None,
-        goal_radius: float | None = None,
-        min_goal_distance: float | None = None,
+        sample_radius_m: float | None = None,
+        min_sample_radius_m: float | None = None,
         distance_threshold: float | None = None,
         reward_type: str = "sparse",
         action_scale: float | None = None,
@@ -192,8 +192,8 @@ class ReachEnv(GoalEnv, EzPickle):
             body,
             maze_map,
             horizon=horizon,
-            goal_radius=goal_radius,
-            min_goal_distance=min_goal_distance,
+            sample_radius_m=sample_radius_m,
+            min_sample_radius_m=min_sample_radius_m,
             distance_threshold=distance_threshold,
             reward_type=reward_type,
             action_scale=action_scale,
@@ -213,19 +213,21 @@ class ReachEnv(GoalEnv, EzPickle):
         spec = body_spec(body)
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)
-        self.goal_radius = float(goal_radius if goal_radius is not None else spec.scale)
+        self.sample_radius_m = float(sample_radius_m if sample_radius_m is not None else spec.scale)
         self.distance_threshold = float(
             distance_threshold if distance_threshold is not None else spec.distance_threshold
         )
-        self.min_goal_distance = float(min_goal_distance if min_goal_distance is not None else self.distance_threshold)
+        self.min_sample_radius_m = float(
+            min_sample_radius_m if min_sample_radius_m is not None else self.distance_threshold
+        )
         if self.horizon < 1:
             raise ValueError(f"horizon must be >= 1, got {horizon}")
-        if self.min_goal_distance < 0:
-            raise ValueError(f"min_goal_distance must be >= 0 metres, got {self.min_goal_distance}")
-        if not self.min_goal_distance < self.goal_radius:
+        if self.min_sample_radius_m < 0:
+            raise ValueError(f"min_sample_radius_m must be >= 0 metres, got {self.min_sample_radius_m}")
+        if not self.min_sample_radius_m < self.sample_radius_m:
             raise ValueError(
-                f"goal_radius {self.goal_radius} m leaves no room for subgoals: it must exceed "
-                f"min_goal_distance {self.min_goal_distance} m (default: the success threshold)"
+                f"sample_radius_m {self.sample_radius_m} m leaves no room for subgoals: it must exceed "
+                f"min_sample_radius_m {self.min_sample_radius_m} m (default: the success threshold)"
             )
         if self.distance_threshold <= 0:
             raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
@@ -393,13 +395,13 @@ class ReachEnv(GoalEnv, EzPickle):
         return self._get_obs()
 
     def sample_goal(self) -> np.ndarray:
-        """A subgoal in free space and line of sight, ``min_goal_distance..goal_radius`` from the body.
+        """A subgoal in free space and line of sight, ``min_sample_radius_m..sample_radius_m`` from the body.
 
         Falls back to the body's own cell centre if 1000 draws find none (a body squeezed into a corner).
         """
         geometry = self.sim.geometry
         for _ in range(1000):
-            radius = np.sqrt(self.np_random.uniform(self.min_goal_distance**2, self.goal_radius**2))
+            radius = np.sqrt(self.np_random.uniform(self.min_sample_radius_m**2, self.sample_radius_m**2))
             angle = self.np_random.uniform(0, 2 * np.pi)
             goal = self._xy + radius * np.array([np.cos(angle), np.sin(angle)])
             if geometry.segment_is_free(self.walls, self._xy, goal):

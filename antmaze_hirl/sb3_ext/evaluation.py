@@ -33,7 +33,7 @@ def evaluate_reach(
 
     Args:
         policy: SB3 model or callable goal observation -> action (acting deterministically).
-        env: The reach env; its ``goal_radius`` is the largest subgoal distance tested.
+        env: The reach env; its ``sample_radius_m`` is the largest subgoal distance tested.
         episodes: Number of attempts (>= 1).
         seed: Base seed; the same seed gives the same subgoals. Sets overlap by construction
             (``seed=1`` shares episodes 1..n-1 of ``seed=0``), so disjoint test sets need base seeds at

@@ -290,7 +290,7 @@ class ParticipantSession:
             "agent": [float(v) for v in STATE_LAYOUT.agent_xy(observation["state"])],
             "goal": [float(v) for v in STATE_LAYOUT.goal_xy(observation["state"])],
             "trail": self._trail,
-            "max_distance": self.max_distance,
+            "subgoal_reach_m": self.subgoal_reach_m,
             "goal_radius": float(inner.goal_threshold),
             "learner_subgoal": (
                 [float(v) for v in request.learner_subgoal]
@@ -300,7 +300,7 @@ class ParticipantSession:
         }
 
     @property
-    def max_distance(self) -> float:
+    def subgoal_reach_m(self) -> float:
         """The circle around the agent: the farthest subgoal the expert is asked to click, metres."""
         distance = self.settings.expert_max_distance
         return float(distance if distance is not None else self._env.unwrapped.geometry.scale)
@@ -511,10 +511,10 @@ class ParticipantSession:
         distance = float(np.hypot(*(point - agent)))
         # The page counts 3 screen pixels past the circle as inside; in metres, at the smallest on-screen canvas.
         slack = CLICK_SLACK_PIXELS * float(np.max(geometry.high - geometry.low)) / MIN_CANVAS_SCREEN_PIXELS
-        if distance > self.max_distance + slack:
+        if distance > self.subgoal_reach_m + slack:
             raise BadInput(
                 f"click ({values[0]:.3f}, {values[1]:.3f}) is {distance:.3f} m from the agent, beyond the reach "
-                f"circle's {self.max_distance:.3f} m (+{slack:.3f} m slack)"
+                f"circle's {self.subgoal_reach_m:.3f} m (+{slack:.3f} m slack)"
             )
         return values[0], values[1]
 
