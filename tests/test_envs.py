@@ -120,7 +120,7 @@ def test_reach_env_spaces_reward_and_success(body):
     achieved = np.zeros((5, 2))
     desired = np.stack([np.array([d, 0.0]) for d in (0.0, 0.1, 0.44, 0.46, 3.0)])
     rewards = env.compute_reward(achieved, desired, [{}] * 5)
-    np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.distance_threshold).astype(float))
+    np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.success_radius_m).astype(float))
     dense = ReachEnv(body, reward_type="dense").compute_reward(achieved, desired, None)
     np.testing.assert_allclose(dense, np.exp(-np.linalg.norm(desired, axis=1)))
     env.reset(seed=0, options={"goal_xy": obs["achieved_goal"]})
@@ -200,7 +200,7 @@ def test_high_level_step_info_and_subgoal_errors():
     near = inner.agent_xy + np.array([0.1, 0.0])
     _, reward, terminated, truncated, info = env.step(near)
     assert info["subgoal_reached"] and info["attempts"] == 1 and info["low_level_steps"] < inner.reach.horizon
-    assert np.linalg.norm(info["agent_path"][-1] - near) <= inner.reach.distance_threshold
+    assert np.linalg.norm(info["agent_path"][-1] - near) <= inner.reach.success_radius_m
     assert info["agent_path"].shape == (info["low_level_steps"] + 1, 2)
     assert (reward, terminated, truncated) == (0.0, False, False)
     with pytest.raises(ValueError, match=r"subgoal must be finite, got \[nan, 0.0\]"):
@@ -213,7 +213,7 @@ def test_subgoals_inside_the_reach_radius_are_pushed_out_along_their_heading(sti
     env = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller)
     env.reset(seed=0)
     agent = env.unwrapped.agent_xy
-    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.distance_threshold == 0.9
+    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.success_radius_m == 0.9
     info = env.step(agent + np.array([0.0, 0.1]))[4]
     assert info["subgoal_extended"] and not info["subgoal_reached"]
     np.testing.assert_allclose(info["subgoal"] - env.unwrapped.agent_xy, [0.0, 0.9], atol=0.02)
@@ -265,7 +265,7 @@ def test_reaching_the_goal_terminates_with_reward(still_controller):
         total_reward += reward
         done = terminated or truncated
     assert terminated and not truncated and total_reward == 1.0 and info["is_success"]
-    assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.goal_threshold
+    assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.success_radius_m
 
 
 @pytest.mark.parametrize("body", ["ant", "point"])

@@ -103,9 +103,9 @@ class ReachEnv(GoalEnv, EzPickle):
     Action: the body's own ``Box(-1, 1)`` (ant: 8 joint torques, point: 2 forces), multiplied by
     ``action_scale`` before it reaches the actuators.
 
-    Reward: ``sparse`` gives 1.0 within ``distance_threshold`` of the subgoal, else 0.0 (the
+    Reward: ``sparse`` gives 1.0 within ``success_radius_m`` of the subgoal, else 0.0 (the
     gymnasium-robotics convention); ``dense`` gives ``exp(-distance)``. ``info["is_success"]`` says
-    whether the body is within the threshold now.
+    whether the body is within ``success_radius_m`` now.
 
     Args:
         body: ``"point"`` (PointMaze ball in 1 m cells; the default, as in :class:`HighLevelMazeEnv`:
@@ -113,9 +113,10 @@ class ReachEnv(GoalEnv, EzPickle):
             their body explicitly.
         maze_map: Layout, a list of rows or a standard map name. Default ``"open"`` (3x5 free cells).
         horizon: Steps per episode, H. Default per body: ant 100, point 50.
-        sample_radius_m: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
-        min_sample_radius_m: Smallest subgoal distance, metres. Default: the distance threshold.
-        distance_threshold: Reach radius, metres. Default per body: ant 0.45, point 0.2.
+        sample_radius_m: Largest subgoal distance, metres (not the oracle's reach). Default: one maze cell
+            (ant 4 m, point 1 m).
+        min_sample_radius_m: Smallest subgoal distance, metres. Default: ``success_radius_m``.
+        success_radius_m: How near the subgoal counts as reached, metres. Default per body: ant 0.45, point 0.2.
         reward_type: ``"sparse"`` or ``"dense"``.
         action_scale: Multiplier in ``(0, 1]`` on actions. Default per body: ant 0.5, point 1. The
             paper's rllab Ant used a (-30, 30) control range with gear 1; Gymnasium's Ant-v5, used here,
@@ -171,7 +172,7 @@ class ReachEnv(GoalEnv, EzPickle):
         horizon: int | None = None,
         sample_radius_m: float | None = None,
         min_sample_radius_m: float | None = None,
-        distance_threshold: float | None = None,
+        success_radius_m: float | None = None,
         reward_type: str = "sparse",
         action_scale: float | None = None,
         terminate_on_flip: bool = False,
@@ -194,7 +195,7 @@ class ReachEnv(GoalEnv, EzPickle):
             horizon=horizon,
             sample_radius_m=sample_radius_m,
             min_sample_radius_m=min_sample_radius_m,
-            distance_threshold=distance_threshold,
+            success_radius_m=success_radius_m,
             reward_type=reward_type,
             action_scale=action_scale,
             terminate_on_flip=terminate_on_flip,
@@ -214,11 +215,9 @@ class ReachEnv(GoalEnv, EzPickle):
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)
         self.sample_radius_m = float(sample_radius_m if sample_radius_m is not None else spec.scale)
-        self.distance_threshold = float(
-            distance_threshold if distance_threshold is not None else spec.distance_threshold
-        )
+        self.success_radius_m = float(success_radius_m if success_radius_m is not None else spec.success_radius_m)
         self.min_sample_radius_m = float(
-            min_sample_radius_m if min_sample_radius_m is not None else self.distance_threshold
+            min_sample_radius_m if min_sample_radius_m is not None else self.success_radius_m
         )
         if self.horizon < 1:
             raise ValueError(f"horizon must be >= 1, got {horizon}")
@@ -227,10 +226,10 @@ class ReachEnv(GoalEnv, EzPickle):
         if not self.min_sample_radius_m < self.sample_radius_m:
             raise ValueError(
                 f"sample_radius_m {self.sample_radius_m} m leaves no room for subgoals: it must exceed "
-                f"min_sample_radius_m {self.min_sample_radius_m} m (default: the success threshold)"
+                f"min_sample_radius_m {self.min_sample_radius_m} m (default: success_radius_m)"
             )
-        if self.distance_threshold <= 0:
-            raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
+        if self.success_radius_m <= 0:
+            raise ValueError(f"success_radius_m must be > 0, got {success_radius_m}")
         if reward_type not in REWARD_TYPES:
             raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
         if action_scale is not None and not 0 < action_scale <= 1:
@@ -436,7 +435,7 @@ class ReachEnv(GoalEnv, EzPickle):
         if self.reward_type == "dense":
             reward = np.exp(-distance)
         else:
-            reward = (distance <= self.distance_threshold).astype(np.float64)
+            reward = (distance <= self.success_radius_m).astype(np.float64)
         if self.flip_penalty > 0:
             reward = reward - self.flip_penalty * flipped_flags(info, np.shape(distance))
         if self.tilt_penalty > 0:
@@ -455,7 +454,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self.sim.close()
 
     def _is_success(self) -> bool:
-        return bool(np.linalg.norm(self._xy - self._goal) <= self.distance_threshold)
+        return bool(np.linalg.norm(self._xy - self._goal) <= self.success_radius_m)
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         return {

@@ -28,7 +28,7 @@ def evaluate_reach(
 ) -> dict[str, float | int]:
     """Runs ``episodes`` subgoal-reaching attempts, episode ``i`` reset with seed ``seed + i``.
 
-    An attempt succeeds when the body comes within the env's ``distance_threshold`` of the subgoal
+    An attempt succeeds when the body comes within the env's ``success_radius_m`` of the subgoal
     at any step of the horizon (the high-level env stops there too).
 
     Args:

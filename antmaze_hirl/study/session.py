@@ -291,7 +291,7 @@ class ParticipantSession:
             "goal": [float(v) for v in STATE_LAYOUT.goal_xy(observation["state"])],
             "trail": self._trail,
             "subgoal_reach_m": self.subgoal_reach_m,
-            "goal_radius": float(inner.goal_threshold),
+            "success_radius_m": float(inner.success_radius_m),
             "learner_subgoal": (
                 [float(v) for v in request.learner_subgoal]
                 if self.settings.show_learner_subgoal and request is not None

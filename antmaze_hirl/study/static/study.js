@@ -161,7 +161,7 @@ function drawScene(trail, agent) {
     }
   }));
   // goal: its reach radius, at least a visible dot
-  drawDisc(maze, state.goal, state.goal_radius, "rgba(220,40,40,0.85)", 6);
+  drawDisc(maze, state.goal, state.success_radius_m, "rgba(220,40,40,0.85)", 6);
   // trail
   if (trail.length > 1) {
     ctx.beginPath();
