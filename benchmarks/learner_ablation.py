@@ -121,7 +121,7 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
     env.close()
     batch = policy.encoder.encode(walls, agents, goals, [at_rest] * len(agents))
     agents = np.stack(agents)
-    return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
+    return cell_agreement(policy, agents, agents + policy.subgoal_reach_m * policy.offsets(batch), np.stack(labels))
 
 
 def run_variant_trial(

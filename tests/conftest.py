@@ -58,9 +58,9 @@ def make_point_trainer(strategy=None, seed=0, *, env=None, policy=None, policy_s
     return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=strategy, **kwargs)
 
 
-# The goals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A
+# The subgoals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A
 # feature that is off (probability 0) must draw nothing from the env's stream, or committed figures change.
-POINT_GOALS_SEED_3 = [
+POINT_SUBGOALS_SEED_3 = [
     [0.51083038, -0.41789375],
     [1.34843411, 0.76218861],
     [-1.16531856, 1.07518948],
@@ -68,7 +68,7 @@ POINT_GOALS_SEED_3 = [
 ]
 
 
-def reset_goals(env, seed=3, resets=3):
+def reset_subgoals(env, seed=3, resets=3):
     """``desired_goal`` of ``env.reset(seed=seed)`` and of the ``resets`` plain resets after it."""
     return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]
 

@@ -4,7 +4,7 @@ import pickle
 import gymnasium as gym
 import numpy as np
 import pytest
-from conftest import POINT_GOALS_SEED_3, StillController, reset_goals
+from conftest import POINT_SUBGOALS_SEED_3, StillController, reset_subgoals
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
@@ -95,12 +95,34 @@ def test_the_names_removed_in_0_2_0_are_errors():
     assert env.min_goal_cells == 4 and not hasattr(env, "min_goal_distance")
     env.close()
     reach = ReachEnv("point", maze_map="u")
-    obs, _ = reach.reset(seed=0, options={"goal_xy": [1.0, 1.0]})
+    obs, _ = reach.reset(seed=0, options={"subgoal_xy": [1.0, 1.0]})
     np.testing.assert_array_equal(obs["desired_goal"], [1.0, 1.0])
-    # The old key is refused, not ignored: ignoring it would draw a random subgoal instead of the one given.
-    with pytest.raises(ValueError, match=r"^ReachEnv's reset option 'goal' is now 'goal_xy': got options\['goal'\]="):
-        reach.reset(seed=0, options={"goal": [1.0, 1.0]})
+    np.testing.assert_array_equal(reach.subgoal_xy, [1.0, 1.0])
+    # The old keys are refused, not ignored: ignoring one would draw a random subgoal instead of the one given.
+    for key in ("goal", "goal_xy"):
+        message = rf"^ReachEnv's reset option '{key}' is now 'subgoal_xy' \(0.2.0\): got options\['{key}'\]="
+        with pytest.raises(ValueError, match=message):
+            reach.reset(seed=0, options={key: [1.0, 1.0]})
+    assert not hasattr(reach, "goal") and not hasattr(reach, "set_goal")
     reach.close()
+
+
+RENAMED_KEYWORDS = [
+    (ReachEnv, "goal_radius", "sample_radius_m"),
+    (ReachEnv, "min_goal_distance", "min_sample_radius_m"),
+    (ReachEnv, "distance_threshold", "success_radius_m"),
+    (HighLevelMazeEnv, "goal_threshold", "success_radius_m"),
+]
+
+
+@pytest.mark.parametrize(("env_class", "old", "new"), RENAMED_KEYWORDS, ids=[old for _, old, _ in RENAMED_KEYWORDS])
+def test_keywords_renamed_in_0_2_0_fail_with_a_type_error_naming_them(env_class, old, new):
+    kwargs = {"low_level": PointGoToController()} if env_class is HighLevelMazeEnv else {}
+    with pytest.raises(TypeError, match=old):
+        env_class("point", **kwargs, **{old: 0.5})
+    env = env_class("point", **kwargs, **{new: 0.5})
+    assert getattr(env, new) == 0.5 and not hasattr(env, old)
+    env.close()
 
 
 @pytest.mark.parametrize("env_class", [ReachEnv, HighLevelMazeEnv])
@@ -123,12 +145,12 @@ def test_reach_env_spaces_reward_and_success(body):
     np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.success_radius_m).astype(float))
     dense = ReachEnv(body, reward_type="dense").compute_reward(achieved, desired, None)
     np.testing.assert_allclose(dense, np.exp(-np.linalg.norm(desired, axis=1)))
-    env.reset(seed=0, options={"goal_xy": obs["achieved_goal"]})
+    env.reset(seed=0, options={"subgoal_xy": obs["achieved_goal"]})
     _, reward, _, _, info = env.step(np.zeros(env.action_space.shape))
     assert info["is_success"] and reward == 1.0
 
 
-def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
+def test_reach_env_truncates_at_horizon_and_samples_subgoals_within_radius():
     env = ReachEnv("point", horizon=7, sample_radius_m=0.8)
     for seed in range(20):
         obs, _ = env.reset(seed=seed)
@@ -144,7 +166,10 @@ def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
     [
         (lambda env: env.step(np.array([np.nan, 0.0])), r"action must be finite, got \[nan, 0.0\]"),
         (lambda env: env.step(np.zeros(3)), r"action must have shape \(2,\), got shape \(3,\)"),
-        (lambda env: env.reset(options={"goal_xy": [100.0, 0.0]}), r"goal_xy \[100.0, 0.0\] is not in a free cell"),
+        (
+            lambda env: env.reset(options={"subgoal_xy": [100.0, 0.0]}),
+            r"subgoal_xy \[100.0, 0.0\] is not in a free cell",
+        ),
         (lambda env: env.reset(options={"start_xy": [0.0, -1.5]}), r"start_xy \[0.0, -1.5\] is not in a free cell"),
     ],
 )
@@ -290,12 +315,12 @@ def test_terminate_on_flip_catches_an_ant_on_its_back():
     assert env.step(np.zeros(8))[2]
 
 
-def test_chained_reset_keeps_the_moving_body_and_draws_a_new_goal():
+def test_chained_reset_keeps_the_moving_body_and_draws_a_new_subgoal():
     env = ReachEnv("ant", chain_probability=1.0)
     env.reset(seed=0)
     for _ in range(20):
         env.step(env.action_space.sample())
-    qpos, qvel, old_goal = env.sim.data.qpos.copy(), env.sim.data.qvel.copy(), env.goal
+    qpos, qvel, old_goal = env.sim.data.qpos.copy(), env.sim.data.qvel.copy(), env.subgoal_xy
     obs, _ = env.reset()
     np.testing.assert_array_equal(env.sim.data.qpos, qpos)
     np.testing.assert_array_equal(env.sim.data.qvel, qvel)
@@ -318,9 +343,11 @@ def test_chaining_never_continues_a_flipped_ant():
 
 
 def test_chaining_off_keeps_the_random_stream_and_a_new_layout_starts_afresh():
-    np.testing.assert_allclose(reset_goals(ReachEnv("point", chain_probability=0.0)), POINT_GOALS_SEED_3, rtol=1e-6)
+    np.testing.assert_allclose(
+        reset_subgoals(ReachEnv("point", chain_probability=0.0)), POINT_SUBGOALS_SEED_3, rtol=1e-6
+    )
     # The check can fail: chaining on at a chance that never chains still takes a draw per plain reset.
-    assert not np.allclose(reset_goals(ReachEnv("point", chain_probability=1e-12)), POINT_GOALS_SEED_3)
+    assert not np.allclose(reset_subgoals(ReachEnv("point", chain_probability=1e-12)), POINT_SUBGOALS_SEED_3)
     chained = ReachEnv("point", "u", chain_probability=1.0)
     chained.reset(seed=0)
     for _ in range(10):

@@ -289,7 +289,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.layout = task.layout
         self.goal_xy = task.goal_xy
         self.reach.reset(
-            seed=int(self.np_random.integers(2**31)), options={"start_xy": task.start_xy, "goal_xy": self.goal_xy}
+            seed=int(self.np_random.integers(2**31)), options={"start_xy": task.start_xy, "subgoal_xy": self.goal_xy}
         )
         self.attempts = 0
         self.total_low_level_steps = 0
@@ -343,7 +343,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
     def start_walk(self, subgoal: np.ndarray, clipped: bool) -> SubgoalWalk:
         """Sets a subgoal that :meth:`check_subgoal` returned (pushed out if too near) and starts its walk."""
         subgoal, extended = self._push_out(subgoal)
-        low_obs = self.reach.set_goal(subgoal)
+        low_obs = self.reach.set_subgoal(subgoal)
         self.attempts += 1
         walk = SubgoalWalk(subgoal, clipped, extended, low_obs, [self.reach.agent_xy])
         walk.done = self.total_low_level_steps >= self.max_steps
@@ -416,9 +416,9 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 n_rows=n_rows,
                 n_cols=n_cols,
                 wall_fraction=self.wall_fraction,
-                min_goal_distance=self.min_goal_cells,
+                min_goal_cells=self.min_goal_cells,
             )
-        return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_cells)
+        return layout_from_map(self._fixed_map, rng, min_goal_cells=self.min_goal_cells)
 
     def sample_task(
         self,
