@@ -126,7 +126,7 @@ def score_row(name: str, view: str, trained_state: str, s_trained: np.ndarray, s
 
 def seed_scores(method: str, trainer, trained, unseen, seed: int) -> list[dict]:
     """Every score of ``method``'s trainer (and of untrained stand-ins) on the two state sets, both views."""
-    policy, rest = trainer.policy, trainer._rest_body
+    policy, rest = trainer.learner, trainer._rest_body
     fresh = policy.spawn(np.random.default_rng(10_000 + seed))
     rows = []
     for view in VIEWS:

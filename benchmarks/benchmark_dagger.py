@@ -65,7 +65,7 @@ def main() -> int:
             trainer.run_episode()
         training_seconds += time.perf_counter() - started
         labels = trainer.total_expert_cost
-        path = trainer.policy.save(args.out / f"{args.learner}_s{args.seed}_{target}.zip")
+        path = trainer.learner.save(args.out / f"{args.learner}_s{args.seed}_{target}.zip")
         report = score_policy("point5", str(path))
         report["policy"] = f"DAgger (plain), {args.learner} learner, seed {args.seed}, {labels} labels"
         report["training"] = {

@@ -148,19 +148,19 @@ def run_variant_trial(
         sets["final"] = evaluation_sets(config)["final"]
     evaluations = {}
     if untrained:
-        evaluations["untrained_selection"] = evaluate_on(trainer.policy, config, sets["selection"])
+        evaluations["untrained_selection"] = evaluate_on(trainer.learner, config, sets["selection"])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
     if policy_path is not None:
-        trainer.policy.save(policy_path)
+        trainer.learner.save(policy_path)
     data = trainer.dataset
-    own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
+    own = trainer.learner.predict_batch(data.observations_by_id(data.ids()))
     agreement = {
-        "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
-        "held_out_states": held_out_agreement(trainer.policy, config),
+        "training_labels": cell_agreement(trainer.learner, data.agent_xy(), own, data.subgoals()),
+        "held_out_states": held_out_agreement(trainer.learner, config),
     }
     for name, chosen in sets.items():
-        evaluations[name] = evaluate_on(trainer.policy, config, chosen)
+        evaluations[name] = evaluate_on(trainer.learner, config, chosen)
     env.close()
     return {
         "variant": variant,
@@ -170,7 +170,7 @@ def run_variant_trial(
         "episodes": config.episodes,
         "labels": trainer.total_expert_cost,
         "training_successes": int(sum(record.success for record in records)),
-        "gradient_steps": trainer.policy.gradient_steps,
+        "gradient_steps": trainer.learner.gradient_steps,
         "oracle_cell_agreement": agreement,
         "train_seconds": round(train_seconds, 1),
         "trial_seconds": round(time.perf_counter() - start, 1),

@@ -40,7 +40,7 @@ def trained_learner(env: gym.Env, oracle: PathOracle, episodes: int, seed: int) 
     """A learner trained by DAgger (the trainer's defaults) for ``episodes`` episodes on ``env``'s training seeds."""
     rng = np.random.default_rng(seed)
     policy = HighLevelPolicy.for_env(env, rng=rng)
-    DAggerTrainer(env=env, expert=oracle, policy=policy, rng=rng).train(episodes)
+    DAggerTrainer(env=env, expert=oracle, learner=policy, rng=rng).train(episodes)
     return policy
 
 

@@ -45,17 +45,17 @@ def point_maze(**kwargs):
     return gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController(), **settings)
 
 
-def make_point_trainer(strategy=None, seed=0, *, env=None, policy=None, policy_settings=None, **kwargs):
+def make_point_trainer(strategy=None, seed=0, *, env=None, learner=None, policy_settings=None, **kwargs):
     """A DAgger trainer on :func:`point_maze` (or ``env``) with the oracle as expert, seeded by ``seed``.
 
-    ``policy(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
+    ``learner(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
     the other keyword arguments go to ``DAggerTrainer`` (default ``gradient_steps=5``).
     """
     env = env if env is not None else point_maze()
     rng = np.random.default_rng(seed)
-    learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if policy is None else policy(env, rng)
+    learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if learner is None else learner(env, rng)
     kwargs = {"gradient_steps": 5, **kwargs}
-    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=strategy, **kwargs)
+    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=learner, rng=rng, strategy=strategy, **kwargs)
 
 
 # The subgoals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A

@@ -102,7 +102,7 @@ def test_chosen_starts_respect_min_goal_cells(make):
     recording = Recording(strategy)
     policy = HighLevelPolicy.for_env(env, rng=rng, **GENERIC)
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, gradient_steps=2
+        env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, strategy=strategy, gradient_steps=2
     )
     trainer.train(4)
     geometry = env.unwrapped.geometry

@@ -163,7 +163,7 @@ def test_trainer_draws_its_task_with_sample_task():
     env = point_env()
     rng = np.random.default_rng(3)
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=HighLevelPolicy.for_env(env, rng=rng), rng=rng
+        env=env, expert=PathOracle.for_env(env), learner=HighLevelPolicy.for_env(env, rng=rng), rng=rng
     )
     drawn = []
     sample_task = env.unwrapped.sample_task

@@ -157,16 +157,16 @@ def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations, 
     policy = HighLevelPolicy.for_env(
         env, rng=rng, head="next_cell", planning_iterations=planning_iterations, block_walls=block_walls
     )
-    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
+    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
-    assert trainer.policy.gradient_steps == 10
-    loaded = HighLevelPolicy.load(trainer.policy.save(tmp_path / "high.zip"))
-    assert loaded.config() == trainer.policy.config()
+    assert trainer.learner.gradient_steps == 10
+    loaded = HighLevelPolicy.load(trainer.learner.save(tmp_path / "high.zip"))
+    assert loaded.config() == trainer.learner.config()
     assert (loaded.config()["head"], loaded.config()["block_walls"]) == ("next_cell", block_walls)
     obs, _ = env.reset(seed=3)
-    np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
-    spawned = trainer.policy.spawn(np.random.default_rng(1))
-    assert spawned.config() == trainer.policy.config()
+    np.testing.assert_array_equal(loaded.predict(obs), trainer.learner.predict(obs))
+    spawned = trainer.learner.spawn(np.random.default_rng(1))
+    assert spawned.config() == trainer.learner.config()
 
 
 def test_each_body_defaults_to_its_ablations_next_cell_head():
@@ -191,12 +191,12 @@ def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller)
         False,
     )
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env, subgoal_reach_m=2.0), policy=policy, rng=rng, gradient_steps=5
+        env=env, expert=PathOracle.for_env(env, subgoal_reach_m=2.0), learner=policy, rng=rng, gradient_steps=5
     )
     trainer.run_episode()  # labels, then the update
-    assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
+    assert trainer.learner.gradient_steps == 5 and len(trainer.dataset) > 0
     observation, _ = env.reset(seed=1)
-    subgoal = trainer.policy.predict(observation)
+    subgoal = trainer.learner.predict(observation)
     # within the oracle's reach
     assert np.linalg.norm(subgoal - STATE_LAYOUT.agent_xy(observation["state"])) <= 2.0 + 1e-6
 
@@ -228,7 +228,7 @@ def test_the_experiment_gives_the_learner_its_oracles_reach():
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
     oracle = PathOracle.for_env(env, subgoal_reach_m=0.6)
     trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", expert_max_distance=0.6), env, oracle)
-    assert trainer.policy.subgoal_reach_m == pytest.approx(0.6)
+    assert trainer.learner.subgoal_reach_m == pytest.approx(0.6)
     default = make_trainer("dagger", 0, ExperimentConfig(body="point"), env, PathOracle.for_env(env))
-    assert default.policy.subgoal_reach_m == pytest.approx(env.unwrapped.geometry.scale)
+    assert default.learner.subgoal_reach_m == pytest.approx(env.unwrapped.geometry.scale)
     env.close()

@@ -40,19 +40,21 @@ class StartQuery:
         goal_xy: The episode's goal, metres.
         candidates: Candidate start positions, ``(n, 2)`` metres (free cell centres).
         body_observation: The body's observation at rest (the non-position part of the state).
-        policy: The current learner.
+        learner: The current learner.
     """
 
     walls: np.ndarray
     goal_xy: np.ndarray
     candidates: np.ndarray
     body_observation: np.ndarray
-    policy: OffsetLearner
+    learner: OffsetLearner
 
     def encode(self, agent_xy: np.ndarray, body_observations: np.ndarray) -> EncodedBatch:
         """Encodes the agent at each of ``agent_xy`` with the matching body observation."""
         n = len(agent_xy)
-        return self.policy.encoder.encode([self.walls] * n, list(agent_xy), [self.goal_xy] * n, list(body_observations))
+        return self.learner.encoder.encode(
+            [self.walls] * n, list(agent_xy), [self.goal_xy] * n, list(body_observations)
+        )
 
 
 class QueryStrategy:
@@ -296,7 +298,7 @@ class NoiseQuery(QueryStrategy):
             )
         agents = np.repeat(query.candidates, self.n_noises, axis=0)
         batch = query.encode(agents, noisy.reshape(-1, *body.shape))
-        outputs = self._outputs(query.policy, batch)  # (candidates * noises, views, d)
+        outputs = self._outputs(query.learner, batch)  # (candidates * noises, views, d)
         blocks = outputs.reshape(len(query.candidates), -1, outputs.shape[-1])
         measure = information_radius if self.measure == "js" else spread
         return np.array([measure(block) for block in blocks])

@@ -191,7 +191,7 @@ def make_trainer(
     return DAggerTrainer(
         env=env,
         expert=expert,
-        policy=HighLevelPolicy.for_env(env, rng=streams.learner, **{**reach, **(policy_settings or {})}),
+        learner=HighLevelPolicy.for_env(env, rng=streams.learner, **{**reach, **(policy_settings or {})}),
         rng=streams.trainer,
         strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),
@@ -247,8 +247,8 @@ def run_trial_with_evaluations(
 
     def evaluate(episodes_done: int, final: bool) -> dict[str, Any]:
         if not config.evaluates_untrained:  # protocol 1, as it always ran
-            return envs.evaluate(trainer.policy, final=final)
-        outcomes = envs.evaluate_mazes(trainer.policy, final=final)
+            return envs.evaluate(trainer.learner, final=final)
+        outcomes = envs.evaluate_mazes(trainer.learner, final=final)
         trial = {"method": method, "seed": seed, "episode": episodes_done, "labels": trainer.total_expert_cost}
         evaluations.extend({**trial, **outcome} for outcome in outcomes)
         return summarise_mazes(outcomes)

@@ -624,7 +624,7 @@ class ParticipantSession:
         }
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:
-            row.update(self._envs.evaluate(state.trainer.policy, final=final))
+            row.update(self._envs.evaluate(state.trainer.learner, final=final))
         state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
         state.successes += int(record.success)
         state.demonstrations.success.append(bool(record.success))
@@ -642,7 +642,7 @@ class ParticipantSession:
     def _close_trial(self) -> None:
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
-        state.trainer.policy.save(self._trial_folder / "learner.zip")
+        state.trainer.learner.save(self._trial_folder / "learner.zip")
         self._last_trial = {
             "label": trial.label,
             "practice": trial.practice,
