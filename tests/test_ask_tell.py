@@ -20,7 +20,7 @@ def drive_by_hand(trainer, episodes):
             requests.append(run.request)
             executed = run.answer(oracle.label(run.request.observation))
             assert len(executed) == 1
-            assert run.done or executed[0].info["attempts"] == run.request.step  # the next request's index
+            assert run.done or executed[0].info["attempts"] == run.request.label_index  # the next request's index
         records.append(run.record)
     return records, requests
 
@@ -43,7 +43,7 @@ def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
     run = trainer.start_episode()
     request = run.request
     np.testing.assert_array_equal(request.learner_subgoal, trainer.learner.predict(request.observation))
-    assert (request.episode, request.step, request.beta) == (0, 0, 1.0)
+    assert (request.episode, request.label_index, request.beta) == (0, 0, 1.0)
     label = trainer.expert.label(request.observation)
     (step,) = run.answer(label)
     np.testing.assert_array_equal(step.expert_subgoal, label)
@@ -53,7 +53,7 @@ def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
     np.testing.assert_allclose(
         step.info["agent_path"][0], STATE_LAYOUT.agent_xy(request.observation["state"]), atol=1e-6
     )
-    assert run.request is None or run.request.step == 1
+    assert run.request is None or run.request.label_index == 1
 
 
 def test_a_bad_label_is_refused_and_leaves_the_episode_as_it_was():

@@ -222,7 +222,7 @@ def test_an_episode_can_end_without_a_request_and_a_request_can_come_after_unask
     run = late.start_episode()
     if run.done:  # reached within two steps: nothing to check on this maze
         pytest.skip("the goal was reached before the third step")
-    assert len(run.executed) == 2 and run.request.step == 0
+    assert len(run.executed) == 2 and run.request.label_index == 0
     np.testing.assert_array_equal(run.request.observation["state"], late.env.unwrapped._get_obs()["state"])
 
 

@@ -60,7 +60,8 @@ class LabelRequest:
         observation: The high-level observation to label.
         learner_subgoal: What the learner proposes here (a page may show it).
         episode: Training episode index, from 0.
-        step: Label index within the episode, from 0.
+        label_index: Label index within the episode, from 0 (the expert cost so far; not the high-level
+            step, which a gating strategy may have walked unasked).
         beta: The expert's weight in the executed mix this episode.
         executes: Whether the label is executed; ``False`` for the labels a gating strategy asks for after
             a failed episode (of states the learner passed unasked), which only join D.
@@ -69,7 +70,7 @@ class LabelRequest:
     observation: dict[str, np.ndarray]
     learner_subgoal: np.ndarray
     episode: int
-    step: int
+    label_index: int
     beta: float
     executes: bool = True
 

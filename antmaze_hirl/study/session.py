@@ -267,14 +267,14 @@ class ParticipantSession:
             return state
 
     def _labels_this_episode(self) -> int:
-        return 0 if self._run is None or self._run.request is None else self._run.request.step
+        return 0 if self._run is None or self._run.request is None else self._run.request.label_index
 
     def _scene(self, observation: dict[str, np.ndarray], request: Any) -> dict[str, Any]:
         inner = self._env.unwrapped
         geometry = inner.geometry
         return {
             "query": (
-                {"id": self._query_id, "step": request.step, "executes": request.executes}
+                {"id": self._query_id, "step": request.label_index, "executes": request.executes}
                 if request is not None
                 else None
             ),
@@ -363,7 +363,7 @@ class ParticipantSession:
                     "participant": self.participant.id,
                     "trial": self.trial.index,
                     "episode": request.episode,
-                    "step": request.step,
+                    "step": request.label_index,  # the log key of 0.1.0
                     "query": query_id,
                     "time": now,
                     "x": subgoal[0],
