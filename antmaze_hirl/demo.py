@@ -21,7 +21,7 @@ class DemoResult:
 
     Attributes:
         success: Whether the body reached the goal.
-        outcome: ``"success"``, ``"flipped"`` or ``"timed out"`` (see :attr:`HighLevelEpisode.outcome`).
+        outcome: ``"success"``, ``"flip"`` or ``"timeout"`` (see :attr:`HighLevelEpisode.outcome`).
         subgoals: Subgoals the oracle chose.
         low_level_steps: Low-level steps in all.
         picture: The written PNG.

@@ -224,16 +224,16 @@ def test_a_failed_demo_says_why(tmp_path, monkeypatch):
     titles = []
     monkeypatch.setattr(demo, "plot_played_episode", lambda env, episode, out, title: titles.append(title) or out)
     result = demo.run_demo("point", seed=0, out_dir=tmp_path, max_steps=5)
-    assert (result.success, result.outcome, result.low_level_steps) == (False, "timed out", 5)
-    assert titles == ["point, seed 0: timed out, 1 subgoals, 5 steps"]
+    assert (result.success, result.outcome, result.low_level_steps) == (False, "timeout", 5)
+    assert titles == ["point, seed 0: timeout, 1 subgoals, 5 steps"]
 
 
 @pytest.mark.parametrize(
     ("info", "truncated", "outcome"),
     [
         ({"is_success": True, "flipped": False}, False, "success"),
-        ({"is_success": False, "flipped": True}, False, "flipped"),
-        ({"is_success": False, "flipped": False}, True, "timed out"),
+        ({"is_success": False, "flipped": True}, False, "flip"),
+        ({"is_success": False, "flipped": False}, True, "timeout"),
     ],
 )
 def test_episode_outcome_names_why_it_ended(info, truncated, outcome):
