@@ -329,7 +329,7 @@ def test_point_velocity_is_augmented_with_the_maze():
     agent, goal = GEOMETRY.cell_to_xy((1, 1)) + 0.1, GEOMETRY.cell_to_xy((1, 3))
     velocity = np.array([0.3, -0.2])
     batch = encoder.encode([walls] * 32, [agent] * 32, [goal] * 32, [velocity] * 32)
-    augmented, _ = augment(batch, np.zeros((32, 2), np.float32), np.random.default_rng(1), planar_dim=6)
+    augmented, _ = augment(batch, np.zeros((32, 2), np.float32), np.random.default_rng(1), planar_feature_dim=6)
     original = batch.vectors[0]
     for vector in augmented.vectors:
         # a symmetry preserves the angle between the goal offset and the velocity, and both lengths

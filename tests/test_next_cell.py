@@ -134,7 +134,7 @@ def test_symmetries_map_cell_steps_as_they_map_the_grid():
     goal = policy.geometry.cell_to_xy((2, 4))  # north-east
     batch = policy.encoder.encode([walls] * 64, [agent] * 64, [goal] * 64, [np.zeros(2)] * 64)
     steps = np.tile([[1.0, 1.0]], (64, 1)).astype(np.float32)
-    moved, labels = augment(batch, steps, np.random.default_rng(0), planar_dim=policy.planar_dim)
+    moved, labels = augment(batch, steps, np.random.default_rng(0), planar_feature_dim=policy.planar_feature_dim)
     for grid, label in zip(moved.grids, next_cell_classes(labels), strict=True):
         dx, dy = NEXT_CELL_MOVES[label]
         assert grid[1, CENTRE - dy, CENTRE + dx] == 1.0  # the label still points at the goal

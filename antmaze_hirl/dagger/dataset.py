@@ -33,9 +33,9 @@ class Demonstration:
     def __post_init__(self) -> None:
         if self.image.ndim != 3 or self.image.dtype != np.uint8:
             raise ValueError(f"image must be uint8 (3, H, W), got {self.image.dtype} {self.image.shape}")
-        if self.state.ndim != 1 or self.state.shape[0] < STATE_LAYOUT.planar_dim:
+        if self.state.ndim != 1 or self.state.shape[0] < STATE_LAYOUT.positions_dim:
             raise ValueError(
-                f"state must be a vector of at least {STATE_LAYOUT.planar_dim} values, got shape {self.state.shape}"
+                f"state must be a vector of at least {STATE_LAYOUT.positions_dim} values, got shape {self.state.shape}"
             )
         if self.subgoal.shape != (2,) or not np.all(np.isfinite(self.subgoal)):
             raise ValueError(f"subgoal must be 2 finite values, got {self.subgoal!r}")

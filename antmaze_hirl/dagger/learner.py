@@ -124,7 +124,9 @@ class SubgoalLearner:
             minibatch = EncodedBatch(batch.grids[index], batch.vectors[index])
             labels = targets[index]
             if self.augment_symmetries:
-                minibatch, labels = augment(minibatch, labels, self.rng, planar_dim=self.policy.planar_dim)
+                minibatch, labels = augment(
+                    minibatch, labels, self.rng, planar_feature_dim=self.policy.planar_feature_dim
+                )
             outputs = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
             if self.policy.head == "next_cell":
                 loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))

@@ -18,7 +18,7 @@ import torch as th
 from torch import nn
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
-from antmaze_hirl.dagger.features import PLANAR_DIM, EncodedBatch, ObservationEncoder
+from antmaze_hirl.dagger.features import OFFSET_FEATURE_DIM, EncodedBatch, ObservationEncoder
 from antmaze_hirl.dagger.network import (
     NEXT_CELL_MOVES,
     NextCellNetwork,
@@ -141,9 +141,13 @@ class SubgoalPolicy(nn.Module):
                 )
 
     @property
-    def planar_dim(self) -> int:
-        """Leading world-frame xy features: goal and in-cell offsets, and a 2-D body state (the point's velocity)."""
-        return PLANAR_DIM + (2 if self.body_dim == 2 else 0)
+    def planar_feature_dim(self) -> int:
+        """Leading encoded features that turn with the maze (xy pairs): goal and in-cell offsets, and a 2-D body state.
+
+        The point's velocity is such a body state; the ant's is not. :func:`~antmaze_hirl.dagger.features.augment`
+        and the symmetric views turn these features.
+        """
+        return OFFSET_FEATURE_DIM + (2 if self.body_dim == 2 else 0)
 
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> Any:
         """The network's outputs for an encoded batch.

@@ -21,7 +21,7 @@ from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.symmetric_views import (
     class_directions,
     class_permutations,
-    learner_planar_dim,
+    learner_planar_feature_dim,
     offsets_in_original_frame,
     probabilities_in_original_frame,
     symmetric_views,
@@ -247,7 +247,7 @@ class NoiseQuery(QueryStrategy):
         shared_noise: One noise buffer for all candidates (the paper's Alg. 2), else fresh noise per candidate.
         signal: ``"probabilities"`` or ``"offsets"`` (:data:`SIGNALS`).
         symmetries: Also perturb by the 8 symmetries of the square (needs a learner that states its
-            ``planar_dim`` and, for ``"probabilities"``, a next-cell or heading head).
+            ``planar_feature_dim`` and, for ``"probabilities"``, a next-cell or heading head).
         measure: ``"js"`` or ``"variance"`` (:data:`MEASURES`); ``None``: ``"js"`` for class
             distributions, ``"variance"`` for offsets.
 
@@ -310,7 +310,7 @@ class NoiseQuery(QueryStrategy):
 
         if not self.symmetries:
             return read(batch)[:, None]
-        views = read(symmetric_views(batch, learner_planar_dim(policy)))
+        views = read(symmetric_views(batch, learner_planar_feature_dim(policy)))
         views = views.reshape(len(SYMMETRIES), len(batch), views.shape[-1])
         if self.signal == "probabilities":
             back = probabilities_in_original_frame(views, class_permutations(class_directions(policy)))
