@@ -4,7 +4,8 @@
 ``int`` or ``float`` option a type that refuses values outside its bounds, NaN and infinity, with a
 one-line error and exit status 2, before a handler imports torch or writes a file. An option missing
 from :data:`INT_BOUNDS` / :data:`FLOAT_BOUNDS` is a programming error raised when the parser is built,
-so a new option cannot skip validation.
+so a new option cannot skip validation. :func:`renamed_option` turns an option 0.2.0 renamed into a one-line
+error naming its new spelling (the package's commands and the benchmark scripts use it).
 
 Bounds are sanity limits, not tuning advice: seeds fit a 31-bit word so that the ``seed + i`` that
 evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; counts stop well before a
