@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import apply_bounds
+from antmaze_hirl.cli_validation import apply_bounds, renamed_option
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -96,11 +96,12 @@ def _add_demo(subparsers: _Subparsers) -> None:
         help=f"free cells per side (default: per body, {_per_body(_DEFAULT_SIZES)})",
     )
     parser.add_argument(
-        "--max-subgoal-distance",
+        "--subgoal-reach-m",
         type=float,
         default=None,
         help="the oracle's farthest subgoal, metres (default: per body, ant 2 m, point one cell)",
     )
+    renamed_option(parser, "--max-subgoal-distance", "--subgoal-reach-m")
     parser.set_defaults(handler=_run_demo)
 
 
@@ -112,7 +113,7 @@ def _run_demo(args: argparse.Namespace) -> int:
         seed=args.seed,
         out_dir=args.out,
         maze_size=args.maze_size,
-        max_subgoal_distance=args.max_subgoal_distance,
+        subgoal_reach_m=args.subgoal_reach_m,
     )
     print(
         f"{result.outcome}: {result.subgoals} subgoals, {result.low_level_steps} low-level steps; "
@@ -209,8 +210,12 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
         "--seed", type=int, default=0, help="subgoal i uses seed SEED+i, so disjoint sets need seeds --episodes apart"
     )
     parser.add_argument(
-        "--max-distance", type=float, default=None, help="largest subgoal distance, metres (default: one cell)"
+        "--sample-radius-m",
+        type=float,
+        default=None,
+        help="largest distance of the subgoals drawn, metres: ReachEnv's sample_radius_m (default: one cell)",
     )
+    renamed_option(parser, "--max-distance", "--sample-radius-m")
     parser.add_argument(
         "--num-envs",
         type=int,
@@ -231,9 +236,9 @@ def _run_eval_low(args: argparse.Namespace) -> int:
     from antmaze_hirl.sb3_ext.loading import load_low_level
 
     try:
-        env = ReachEnv(args.body, goal_radius=args.max_distance)
+        env = ReachEnv(args.body, sample_radius_m=args.sample_radius_m)
     except ValueError as error:
-        raise ValueError(f"--max-distance {args.max_distance}: {error}") from error
+        raise ValueError(f"--sample-radius-m {args.sample_radius_m}: {error}") from error
     policy = load_low_level(args.body, path=args.policy)
     num_envs = args.num_envs or EVAL_LOW_ENVS[args.body]
     result = {
@@ -325,11 +330,13 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     )
     parser.add_argument("--decay", type=float, default=defaults.decay, help="d in beta <- beta / d")
     parser.add_argument(
-        "--expert-max-distance",
+        "--subgoal-reach-m",
         type=float,
         default=None,
-        help="the oracle's farthest subgoal, metres (default: per body, point one cell, ant 2 m)",
+        help="the oracle's farthest subgoal, metres: ExperimentConfig.expert_max_distance "
+        "(default: per body, point one cell, ant 2 m)",
     )
+    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument(
         "--held-out-layouts",
         action="store_true",
@@ -401,7 +408,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
             args.body,
             held_out_layouts=held_out,
             maze_size=args.maze_size,
-            expert_max_distance=args.expert_max_distance,
+            expert_max_distance=args.subgoal_reach_m,
         ),
     )
     summary = run_experiment(

@@ -21,7 +21,7 @@ class DemoResult:
 
     Attributes:
         success: Whether the body reached the goal.
-        outcome: ``"success"``, ``"flipped"`` or ``"timed out"`` (see :attr:`HighLevelEpisode.outcome`).
+        outcome: ``"success"``, ``"flip"`` or ``"timeout"`` (see :attr:`HighLevelEpisode.outcome`).
         subgoals: Subgoals the oracle chose.
         low_level_steps: Low-level steps in all.
         picture: The written PNG.
@@ -35,7 +35,7 @@ class DemoResult:
 
 
 def demo_setup(
-    body: str, *, maze_size: int | None = None, max_subgoal_distance: float | None = None, **env_kwargs: Any
+    body: str, *, maze_size: int | None = None, subgoal_reach_m: float | None = None, **env_kwargs: Any
 ) -> tuple[gym.Env, PathOracle]:
     """The demo's env and oracle (:func:`run_demo`'s arguments, same defaults), for playing its episodes elsewhere.
 
@@ -46,9 +46,9 @@ def demo_setup(
         raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_DEFAULTS)}")
     defaults = BODY_DEFAULTS[body]
     maze_size = maze_size if maze_size is not None else defaults["maze_size"]
-    distance = max_subgoal_distance if max_subgoal_distance is not None else defaults["expert_max_distance"]
+    distance = subgoal_reach_m if subgoal_reach_m is not None else defaults["expert_max_distance"]
     env = gym.make(maze_env_id(body), maze_size=maze_size, **env_kwargs)
-    return env, PathOracle.for_env(env, max_distance=distance)
+    return env, PathOracle.for_env(env, subgoal_reach_m=distance)
 
 
 def run_demo(
@@ -57,7 +57,7 @@ def run_demo(
     out_dir: str | Path = "runs/demo",
     *,
     maze_size: int | None = None,
-    max_subgoal_distance: float | None = None,
+    subgoal_reach_m: float | None = None,
     **env_kwargs: Any,
 ) -> DemoResult:
     """Runs one oracle-driven episode on a random maze and writes ``out_dir/demo.png``.
@@ -68,14 +68,14 @@ def run_demo(
         out_dir: Folder for the picture.
         maze_size: Free cells per side. Default per body, as in the body's experiment
             (:data:`~antmaze_hirl.experiments.config.BODY_DEFAULTS`): point 5, ant 3.
-        max_subgoal_distance: The oracle's farthest subgoal, metres. Default per body: point one cell
+        subgoal_reach_m: The oracle's farthest subgoal, metres. Default per body: point one cell
             (1 m), ant 2 m (the shipped ant reaches 2 m subgoals far more reliably than 4 m ones).
         **env_kwargs: Passed to ``gym.make`` (e.g. ``low_level=``, ``max_steps=``).
 
     Raises:
         ValueError: If ``body`` is unknown.
     """
-    env, oracle = demo_setup(body, maze_size=maze_size, max_subgoal_distance=max_subgoal_distance, **env_kwargs)
+    env, oracle = demo_setup(body, maze_size=maze_size, subgoal_reach_m=subgoal_reach_m, **env_kwargs)
     episode = play_episode(env, oracle, seed=seed)
     env.close()
     steps = int(episode.info["total_low_level_steps"])

@@ -31,7 +31,11 @@ class HighLevelEpisode:
 
     @property
     def outcome(self) -> str:
-        """Why the episode ended: ``"success"``, ``"flipped"`` (the ant on its back) or ``"timed out"``."""
+        """Why the episode ended: ``"success"``, ``"flip"`` (the ant on its back), ``"timeout"`` or ``"ended"``.
+
+        The spellings of ``benchmarks/in_maze.py``, which splits a ``"frozen"`` timeout off the rest; ``"ended"``
+        is any other end (a step limit of a wrapper, say).
+        """
         return episode_outcome(self.info, truncated=self.truncated)
 
 
@@ -40,8 +44,8 @@ def episode_outcome(info: dict[str, Any], *, truncated: bool) -> str:
     if info["is_success"]:
         return "success"
     if info.get("flipped"):
-        return "flipped"
-    return "timed out" if truncated else "ended"
+        return "flip"
+    return "timeout" if truncated else "ended"
 
 
 def play_episode(env: Any, policy: Any, *, seed: int | None = None) -> HighLevelEpisode:

@@ -55,7 +55,7 @@ def main() -> int:
     torch.set_num_threads(1)
     config = ExperimentConfig(body="point", held_out_layouts=True, **body_settings("point", held_out_layouts=True))
     env = make_env(config, split="train")
-    expert = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    expert = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
     trainer = make_trainer("dagger", args.seed, config, env, expert, policy_settings=LEARNERS[args.learner])
     command = shlex.join(["python", "benchmarks/benchmark_dagger.py", *sys.argv[1:]])
     training_seconds = 0.0
@@ -65,7 +65,7 @@ def main() -> int:
             trainer.run_episode()
         training_seconds += time.perf_counter() - started
         labels = trainer.total_expert_cost
-        path = trainer.policy.save(args.out / f"{args.learner}_s{args.seed}_{target}.zip")
+        path = trainer.learner.save(args.out / f"{args.learner}_s{args.seed}_{target}.zip")
         report = score_policy("point5", str(path))
         report["policy"] = f"DAgger (plain), {args.learner} learner, seed {args.seed}, {labels} labels"
         report["training"] = {

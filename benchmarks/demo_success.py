@@ -1,7 +1,7 @@
 """How often ``antmaze-hirl demo`` succeeds on its defaults, and why it fails when it does.
 
 Runs the demo (the scripted oracle driving the shipped low level, per-body default maze size and subgoal
-distance) for seeds 0..N-1 and records each episode's outcome: success, flipped or timed out. Goal: the ant
+distance) for seeds 0..N-1 and records each episode's outcome: success, flip or timeout. Goal: the ant
 succeeds at least as often as the oracle on the demo's maze family (``oracle_success_ant_3.json``, from
 ``paper_experiment.py --body ant --oracle-only``: 100 held-out 3x3 mazes), and on seed 0 (the demo's default).
 

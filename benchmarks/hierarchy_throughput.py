@@ -74,10 +74,10 @@ def hierarchy_steps_per_s(env: Any, oracle: PathOracle, seconds: float, seed: in
     return steps / (time.perf_counter() - start), steps
 
 
-def serial_steps_per_s(body: str, oracle_distance: float | None, seconds: float, seed: int) -> tuple[float, int]:
+def serial_steps_per_s(body: str, subgoal_reach_m: float | None, seconds: float, seed: int) -> tuple[float, int]:
     """Low-level steps/s of one ``gym.make`` env, as :func:`hierarchy_steps_per_s` counts them."""
     env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=MAZE_SIZES[body])
-    oracle = PathOracle.for_env(env, max_distance=oracle_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=subgoal_reach_m)
     obs, _ = env.reset(seed=seed)
     steps, start = 0, time.perf_counter()
     while steps == 0 or time.perf_counter() - start < seconds:
@@ -106,23 +106,23 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     baselines = {}
     for body in args.bodies:
-        expert_distance = 2.0 if body == "ant" else None  # the ant experiment's oracle reach
+        subgoal_reach_m = 2.0 if body == "ant" else None  # the ant experiment's oracle reach
         before = raw_steps_per_s(body, args.seconds, args.seed)
         body_rows = []
         th.set_num_threads(2)
         small, controllers.SMALL_BATCH_ROWS = controllers.SMALL_BATCH_ROWS, -1  # the low level as before the scope
         try:
-            rate, steps = serial_steps_per_s(body, expert_distance, args.seconds, args.seed)
+            rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed)
         finally:
             controllers.SMALL_BATCH_ROWS = small
         body_rows.append({"mode": "serial, unscoped", "num_envs": 1, "torch_threads": 2, "steps_per_s": rate})
         for threads in args.threads:
             th.set_num_threads(threads)
-            rate, steps = serial_steps_per_s(body, expert_distance, args.seconds, args.seed)
+            rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed)
             body_rows.append({"mode": "serial", "num_envs": 1, "torch_threads": threads, "steps_per_s": rate})
         for num_envs in args.num_envs:
             env = gym.make_vec(f"antmaze_hirl/{body.capitalize()}Maze-v0", num_envs, maze_size=MAZE_SIZES[body])
-            oracle = PathOracle.for_env(env.envs[0], max_distance=expert_distance)
+            oracle = PathOracle.for_env(env.envs[0], subgoal_reach_m=subgoal_reach_m)
             for threads in args.threads:
                 th.set_num_threads(threads)
                 for mode, direct in (("lockstep, SB3 predict", False), ("lockstep", True)):

@@ -25,9 +25,9 @@ Success rates carry a 95% Wilson interval; ``flips_per_subgoal`` is flips over s
 
 Inference-time candidates against flips, measured without retraining: ``--action-smoothing 0,0.3,0.5`` adds a row
 per weight, each low level's actions smoothed exponentially (:class:`~antmaze_hirl.envs.SmoothedController`);
-``--subgoal-distance D`` changes the oracle's farthest subgoal for every row. ``--jobs N`` plays chunks of
-``--chunk-episodes`` episodes in N processes; every episode resets with its own seed, so the figures do not
-depend on N (``seconds`` then sums the workers' time).
+``--subgoal-reach-m D`` (``--subgoal-distance`` before 0.2.0) changes the oracle's farthest subgoal for every row.
+``--jobs N`` plays chunks of ``--chunk-episodes`` episodes in N processes; every episode resets with its own seed,
+so the figures do not depend on N (``seconds`` then sums the workers' time).
 
 ``--num-envs N`` (default :data:`LOCKSTEP_ENVS`) plays up to N mazes of a chunk at once in lockstep: the
 oracle labels every maze that needs a subgoal, the low level acts in one batch for every maze still walking.
@@ -37,7 +37,7 @@ them one after another, the path every ``in_maze*.json`` committed before lockst
 replay one exactly.
 
 Usage: python benchmarks/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
-           [--action-smoothing 0[,A...]] [--subgoal-distance 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
+           [--action-smoothing 0[,A...]] [--subgoal-reach-m 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
 Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
@@ -61,6 +61,7 @@ from paper_experiment import RESULTS
 from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, play_in_lockstep
 from antmaze_hirl.envs import profiles
 from antmaze_hirl.envs.controllers import SmoothedController, as_controller
@@ -415,7 +416,7 @@ def worker_low_level(path: Path | None) -> Any:
 
 
 def run_chunk(
-    path: Path | None, smoothing: float, family: str, seeds: range, max_distance: float, num_envs: int = 1
+    path: Path | None, smoothing: float, family: str, seeds: range, subgoal_reach_m: float, num_envs: int = 1
 ) -> tuple[str, str, dict[str, Any], str]:
     """One chunk of episodes: ``(row name, family, raw figures, low-level id)``; runs in a worker process.
 
@@ -427,7 +428,7 @@ def run_chunk(
     # One controller object for every maze of the chunk (a model would be wrapped anew by each env): batched once.
     controller = as_controller(model) if smoothing == 0 else SmoothedController(model, smoothing)
     recorders = [family_env(family, controller) for _ in range(min(num_envs, len(seeds)))]
-    oracle = PathOracle.for_env(recorders[0], max_distance=max_distance)
+    oracle = PathOracle.for_env(recorders[0], subgoal_reach_m=subgoal_reach_m)
     try:
         if len(recorders) == 1:
             raw = play_episodes(recorders[0], oracle, seeds)
@@ -460,7 +461,7 @@ def run(
     episodes: int,
     seed: int,
     smoothing: tuple[float, ...] = (0.0,),
-    max_distance: float | None = None,
+    subgoal_reach_m: float | None = None,
     jobs: int = 1,
     chunk_episodes: int = 25,
     num_envs: int = 1,
@@ -473,9 +474,9 @@ def run(
     after another, as committed results were made).
     """
     row_names(low_levels, smoothing)
-    max_distance = BODY_DEFAULTS["ant"]["expert_max_distance"] if max_distance is None else max_distance
+    subgoal_reach_m = BODY_DEFAULTS["ant"]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
     tasks = [
-        (path, alpha, family, seeds, max_distance, num_envs)
+        (path, alpha, family, seeds, subgoal_reach_m, num_envs)
         for path in low_levels
         for alpha in smoothing
         for family in families
@@ -535,12 +536,13 @@ def main() -> None:
         help="comma-separated weights A of the previous action (a_t = A a_t-1 + (1 - A) raw_t), each a row; 0: none",
     )
     parser.add_argument(
-        "--subgoal-distance",
+        "--subgoal-reach-m",
         type=float,
         default=None,
         help=f"the oracle's farthest subgoal, metres (default {BODY_DEFAULTS['ant']['expert_max_distance']}: "
         "the ant experiment's)",
     )
+    renamed_option(parser, "--subgoal-distance", "--subgoal-reach-m")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (chunks of --chunk-episodes episodes)")
     parser.add_argument("--chunk-episodes", type=int, default=25, help="episodes per worker task with --jobs > 1")
     parser.add_argument(
@@ -561,20 +563,20 @@ def main() -> None:
     for name in ("episodes", "jobs", "chunk_episodes", "num_envs"):
         if getattr(args, name) < 1:
             parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
-    if args.subgoal_distance is not None and not args.subgoal_distance > 0:
-        parser.error(f"--subgoal-distance must be > 0 metres, got {args.subgoal_distance}")
+    if args.subgoal_reach_m is not None and not args.subgoal_reach_m > 0:
+        parser.error(f"--subgoal-reach-m must be > 0 metres, got {args.subgoal_reach_m}")
     missing = [str(path) for path in args.low_level or [] if not path.is_file()]
     if missing:
         parser.error(f"--low-level files not found: {missing}")
     torch.set_num_threads(1)
-    max_distance = args.subgoal_distance or BODY_DEFAULTS["ant"]["expert_max_distance"]
+    subgoal_reach_m = args.subgoal_reach_m or BODY_DEFAULTS["ant"]["expert_max_distance"]
     results = run(
         [None, *(args.low_level or [])],
         families,
         episodes=args.episodes,
         seed=args.seed,
         smoothing=tuple(smoothing),
-        max_distance=max_distance,
+        subgoal_reach_m=subgoal_reach_m,
         jobs=args.jobs,
         chunk_episodes=args.chunk_episodes,
         num_envs=args.num_envs,
@@ -583,7 +585,7 @@ def main() -> None:
         args.out,
         {
             "command": shlex.join(["python", "benchmarks/in_maze.py", *sys.argv[1:]]),
-            "expert_max_distance": max_distance,
+            "expert_max_distance": subgoal_reach_m,
             "num_envs": args.num_envs,
             "step_limit": (
                 f"ant3, ant4: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))"

@@ -115,13 +115,13 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
             continue
         agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
         label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, max_distance=reach, clearance=0.2 * geometry.scale
+            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
         )
         walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
     env.close()
     batch = policy.encoder.encode(walls, agents, goals, [at_rest] * len(agents))
     agents = np.stack(agents)
-    return cell_agreement(policy, agents, agents + policy.max_offset * policy.offsets(batch), np.stack(labels))
+    return cell_agreement(policy, agents, agents + policy.subgoal_reach_m * policy.offsets(batch), np.stack(labels))
 
 
 def run_variant_trial(
@@ -141,26 +141,26 @@ def run_variant_trial(
     """
     start = time.perf_counter()
     env = make_env(config, split="train")
-    oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
     trainer = make_trainer("dagger", seed, config, env, oracle, policy_settings=variant_settings(variant, config))
     sets = {"selection": ("selection", SELECTION_SEED, SELECTION_MAZES)}
     if final:
         sets["final"] = evaluation_sets(config)["final"]
     evaluations = {}
     if untrained:
-        evaluations["untrained_selection"] = evaluate_on(trainer.policy, config, sets["selection"])
+        evaluations["untrained_selection"] = evaluate_on(trainer.learner, config, sets["selection"])
     records = [trainer.run_episode() for _ in range(config.episodes)]
     train_seconds = time.perf_counter() - start
     if policy_path is not None:
-        trainer.policy.save(policy_path)
+        trainer.learner.save(policy_path)
     data = trainer.dataset
-    own = trainer.policy.predict_batch(data.observations_by_id(data.ids()))
+    own = trainer.learner.predict_batch(data.observations_by_id(data.ids()))
     agreement = {
-        "training_labels": cell_agreement(trainer.policy, data.agent_xy(), own, data.subgoals()),
-        "held_out_states": held_out_agreement(trainer.policy, config),
+        "training_labels": cell_agreement(trainer.learner, data.agent_xy(), own, data.subgoals()),
+        "held_out_states": held_out_agreement(trainer.learner, config),
     }
     for name, chosen in sets.items():
-        evaluations[name] = evaluate_on(trainer.policy, config, chosen)
+        evaluations[name] = evaluate_on(trainer.learner, config, chosen)
     env.close()
     return {
         "variant": variant,
@@ -170,7 +170,7 @@ def run_variant_trial(
         "episodes": config.episodes,
         "labels": trainer.total_expert_cost,
         "training_successes": int(sum(record.success for record in records)),
-        "gradient_steps": trainer.policy.gradient_steps,
+        "gradient_steps": trainer.learner.gradient_steps,
         "oracle_cell_agreement": agreement,
         "train_seconds": round(train_seconds, 1),
         "trial_seconds": round(time.perf_counter() - start, 1),

@@ -40,7 +40,7 @@ def trained_learner(env: gym.Env, oracle: PathOracle, episodes: int, seed: int) 
     """A learner trained by DAgger (the trainer's defaults) for ``episodes`` episodes on ``env``'s training seeds."""
     rng = np.random.default_rng(seed)
     policy = HighLevelPolicy.for_env(env, rng=rng)
-    DAggerTrainer(env=env, expert=oracle, policy=policy, rng=rng).train(episodes)
+    DAggerTrainer(env=env, expert=oracle, learner=policy, rng=rng).train(episodes)
     return policy
 
 
@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     for body in args.bodies:
         settings = body_settings(body)
         env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=settings["maze_size"])
-        oracle = PathOracle.for_env(env, max_distance=settings["expert_max_distance"])
+        oracle = PathOracle.for_env(env, subgoal_reach_m=settings["expert_max_distance"])
         learner = trained_learner(env, oracle, args.train_episodes, args.seed)
         for name, policy in (("oracle", oracle), (f"learner ({args.train_episodes} DAgger episodes)", learner)):
             row = {"body": body, "maze_size": settings["maze_size"], "high_level": name}

@@ -128,7 +128,7 @@ def shipped_figures(episodes: int, sets: int) -> dict[str, dict]:
         }
         figures[body] = {
             "low_level_id": low_level_identity(body, policy),
-            "max_distance_m": env.goal_radius,
+            "max_distance_m": env.sample_radius_m,
             **per_set[0],
             "disjoint_sets": {str(seed): result["success_rate"] for seed, result in per_set.items()},
             "pooled_success_rate": round(sum(result["success_rate"] for result in per_set.values()) / sets, 4),

@@ -45,7 +45,7 @@ def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generat
     geometry = MazeGeometry(size + 2, size + 2, body_spec("ant").scale)
     agents, subgoals, path_steps, is_goal, is_own_centre = [], [], [], [], []
     for _ in range(mazes):
-        layout = generate_layout(rng, n_rows=size, n_cols=size, min_goal_distance=3)
+        layout = generate_layout(rng, n_rows=size, n_cols=size, min_goal_cells=3)
         goal_xy = geometry.cell_to_xy(layout.goal_cell) + rng.uniform(-0.25, 0.25, size=2) * geometry.scale
         free = np.argwhere(~layout.walls)
         for _ in range(states):
@@ -54,7 +54,7 @@ def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generat
             if cell == layout.goal_cell or geometry.xy_to_cell(agent) != cell:
                 continue
             label = plan_subgoal(
-                layout.walls, geometry, agent, goal_xy, max_distance=reach, clearance=0.2 * geometry.scale
+                layout.walls, geometry, agent, goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
             )
             row, col = np.subtract(shortest_path(layout.walls, cell, layout.goal_cell)[1], cell)
             agents.append(agent), subgoals.append(label), path_steps.append((col, -row))
@@ -94,14 +94,14 @@ def main() -> None:
     labels = sample_labels(args.mazes, args.states, args.spread, np.random.default_rng(args.seed))
     geometry, reach = labels["geometry"], labels["reach"]
     steps = {}
-    for rule, max_offset in (("old", geometry.scale), ("new", reach)):
+    for rule, subgoal_reach_m in (("old", geometry.scale), ("new", reach)):
         # At a whole cell's reach cell_steps reads the cell each label lies in (the old rule); at 2 m it carries.
         policy = SubgoalPolicy(
             geometry,
             pixels_per_cell=8,
             body_dim=0,
             rng=np.random.default_rng(0),
-            max_offset=max_offset,
+            subgoal_reach_m=subgoal_reach_m,
             head="next_cell",
         )
         steps[rule] = policy.cell_steps(labels["agents"], labels["subgoals"])

@@ -31,7 +31,7 @@ family has only 48 wall grids). At half torque the shipped ant walks ~0.7-1 m/s,
 Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
            [--address RAY_ADDRESS] [--cpus-per-trial 1] [--evaluation-envs 25] [--seeds 5] [--episodes 100]
            [--maze-size N]
-           [--expert-max-distance METRES] [--methods dagger,noise,multi_policy,reward]
+           [--subgoal-reach-m METRES] [--methods dagger,noise,multi_policy,reward]
            [--protocol 1|2] [--held-out-layouts --eval-episodes 50] [--allow-code-change]
        python benchmarks/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
 """
@@ -46,6 +46,7 @@ from pathlib import Path
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
@@ -107,7 +108,7 @@ def oracle_success(config: ExperimentConfig, low_level_path: Path | None = None)
     low_level = load_low_level(config.body, low_level_path) if low_level_path is not None else None
     split, seed, episodes = evaluation_sets(config)["final"]
     env = make_env(config, low_level, split=split)
-    oracle = PathOracle.for_env(env, max_distance=config.expert_max_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
     result = evaluate_high_level(oracle, env, episodes=episodes, seed=seed)
     return {
         "low_level": "shipped" if low_level_path is None else str(low_level_path),
@@ -136,7 +137,13 @@ def main() -> None:
         default=None,
         help="default: BODY_DEFAULTS (HELD_OUT_MAZE_SIZE with --held-out-layouts)",
     )
-    parser.add_argument("--expert-max-distance", type=float, default=None, help="metres; default: BODY_DEFAULTS")
+    parser.add_argument(
+        "--subgoal-reach-m",
+        type=float,
+        default=None,
+        help="the oracle's farthest subgoal, ExperimentConfig.expert_max_distance; default: BODY_DEFAULTS",
+    )
+    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-episodes", type=int, default=None, help="mazes per periodic evaluation (default 20)")
     parser.add_argument("--held-out-layouts", action="store_true", help="ExperimentConfig.held_out_layouts")
     parser.add_argument(
@@ -175,7 +182,7 @@ def main() -> None:
             args.body,
             held_out_layouts=args.held_out_layouts,
             maze_size=args.maze_size,
-            expert_max_distance=args.expert_max_distance,
+            expert_max_distance=args.subgoal_reach_m,
         )
     )
     if args.eval_episodes is not None:

@@ -42,7 +42,7 @@ UNTRAINED_LIMIT = 0.2
 def untrained_success(config: ExperimentConfig, variant: str, seed: int, split: str, first: int, mazes: int) -> dict:
     """One fresh learner of ``variant`` (initialised from ``seed``) on ``mazes`` mazes of ``split``."""
     env = make_env(config, split=split)
-    reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
+    reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
     policy = HighLevelPolicy.for_env(
         env, rng=np.random.default_rng(seed), **{**reach, **variant_settings(variant, config)}
     )

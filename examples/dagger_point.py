@@ -33,7 +33,7 @@ rng = np.random.default_rng(args.seed)
 
 # 2. Learner, expert, and the trainer with an active-learning strategy.
 policy = HighLevelPolicy.for_env(env, rng=rng)
-trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=NoiseQuery())
+trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, strategy=NoiseQuery())
 records = trainer.train(args.episodes, progress_bar=True)
 print(f"expert labels: {trainer.total_expert_cost} over {len(records)} episodes")
 

@@ -45,22 +45,22 @@ def point_maze(**kwargs):
     return gym.make("antmaze_hirl/PointMaze-v0", low_level=PointGoToController(), **settings)
 
 
-def make_point_trainer(strategy=None, seed=0, *, env=None, policy=None, policy_settings=None, **kwargs):
+def make_point_trainer(strategy=None, seed=0, *, env=None, learner=None, policy_settings=None, **kwargs):
     """A DAgger trainer on :func:`point_maze` (or ``env``) with the oracle as expert, seeded by ``seed``.
 
-    ``policy(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
+    ``learner(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
     the other keyword arguments go to ``DAggerTrainer`` (default ``gradient_steps=5``).
     """
     env = env if env is not None else point_maze()
     rng = np.random.default_rng(seed)
-    learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if policy is None else policy(env, rng)
+    learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if learner is None else learner(env, rng)
     kwargs = {"gradient_steps": 5, **kwargs}
-    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=strategy, **kwargs)
+    return DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=learner, rng=rng, strategy=strategy, **kwargs)
 
 
-# The goals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A
+# The subgoals of ReachEnv("point") at reset(seed=3) and the three plain resets after it, recorded at 0.2.0. A
 # feature that is off (probability 0) must draw nothing from the env's stream, or committed figures change.
-POINT_GOALS_SEED_3 = [
+POINT_SUBGOALS_SEED_3 = [
     [0.51083038, -0.41789375],
     [1.34843411, 0.76218861],
     [-1.16531856, 1.07518948],
@@ -68,7 +68,7 @@ POINT_GOALS_SEED_3 = [
 ]
 
 
-def reset_goals(env, seed=3, resets=3):
+def reset_subgoals(env, seed=3, resets=3):
     """``desired_goal`` of ``env.reset(seed=seed)`` and of the ``resets`` plain resets after it."""
     return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]
 

@@ -18,7 +18,7 @@ from antmaze_hirl.dagger.strategies import (
     argmax_ties_random,
     class_probabilities,
 )
-from antmaze_hirl.dagger.symmetric_views import class_directions, class_permutations, learner_planar_dim
+from antmaze_hirl.dagger.symmetric_views import class_directions, class_permutations, learner_planar_feature_dim
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.layouts import bfs_distances, generate_layout
 
@@ -102,7 +102,7 @@ def test_chosen_starts_respect_min_goal_cells(make):
     recording = Recording(strategy)
     policy = HighLevelPolicy.for_env(env, rng=rng, **GENERIC)
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, strategy=strategy, gradient_steps=2
+        env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, strategy=strategy, gradient_steps=2
     )
     trainer.train(4)
     geometry = env.unwrapped.geometry
@@ -122,7 +122,7 @@ class FrameLearner:
     """
 
     head = "next_cell"
-    planar_dim = 6
+    planar_feature_dim = 6
 
     def __init__(self, encoder, equivariant):
         self.encoder, self.geometry, self.equivariant = encoder, encoder.geometry, equivariant
@@ -174,8 +174,8 @@ def test_bad_symmetric_settings_are_clear_errors():
         NoiseQuery(measure="kl")
     with pytest.raises(ValueError, match="measure 'js' compares class distributions: use signal='probabilities'"):
         NoiseQuery(signal="offsets", measure="js")
-    with pytest.raises(ValueError, match="object states no planar_dim"):
-        learner_planar_dim(object())
+    with pytest.raises(ValueError, match="object states no planar_feature_dim"):
+        learner_planar_feature_dim(object())
     with pytest.raises(ValueError, match="classes of unknown directions"):
         class_directions(object())
 

@@ -20,7 +20,7 @@ def drive_by_hand(trainer, episodes):
             requests.append(run.request)
             executed = run.answer(oracle.label(run.request.observation))
             assert len(executed) == 1
-            assert run.done or executed[0].info["attempts"] == run.request.step  # the next request's index
+            assert run.done or executed[0].info["attempts"] == run.request.label_index  # the next request's index
         records.append(run.record)
     return records, requests
 
@@ -42,8 +42,8 @@ def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
     trainer = make_point_trainer()
     run = trainer.start_episode()
     request = run.request
-    np.testing.assert_array_equal(request.learner_subgoal, trainer.policy.predict(request.observation))
-    assert (request.episode, request.step, request.beta) == (0, 0, 1.0)
+    np.testing.assert_array_equal(request.learner_subgoal, trainer.learner.predict(request.observation))
+    assert (request.episode, request.label_index, request.beta) == (0, 0, 1.0)
     label = trainer.expert.label(request.observation)
     (step,) = run.answer(label)
     np.testing.assert_array_equal(step.expert_subgoal, label)
@@ -53,7 +53,7 @@ def test_requests_carry_the_learners_proposal_and_the_steps_report_what_ran():
     np.testing.assert_allclose(
         step.info["agent_path"][0], STATE_LAYOUT.agent_xy(request.observation["state"]), atol=1e-6
     )
-    assert run.request is None or run.request.step == 1
+    assert run.request is None or run.request.label_index == 1
 
 
 def test_a_bad_label_is_refused_and_leaves_the_episode_as_it_was():
@@ -95,12 +95,12 @@ def test_the_update_waits_for_finish_or_the_next_episode():
         run.finish()
     while not run.done:
         run.answer(trainer.expert.label(run.request.observation))
-    assert (trainer.updates, trainer.policy.gradient_steps) == (0, 0)  # the page shows the end before any training
+    assert (trainer.updates, trainer.learner.gradient_steps) == (0, 0)  # the page shows the end before any training
     run.finish()
     run.finish()  # a second call has nothing left to do
-    assert (trainer.updates, trainer.policy.gradient_steps) == (1, 5)
+    assert (trainer.updates, trainer.learner.gradient_steps) == (1, 5)
     second = trainer.start_episode()
     while not second.done:
         second.answer(trainer.expert.label(second.request.observation))
     trainer.start_episode()  # an unfinished update runs before the next episode draws its maze
-    assert (trainer.updates, trainer.policy.gradient_steps) == (2, 10)
+    assert (trainer.updates, trainer.learner.gradient_steps) == (2, 10)

@@ -36,7 +36,7 @@ def family_sampler(maze_size):
         n_rows=maze_size,
         n_cols=maze_size,
         wall_fraction=suites.WALL_FRACTION,
-        min_goal_distance=DEFAULT_MIN_GOAL_CELLS,
+        min_goal_cells=DEFAULT_MIN_GOAL_CELLS,
     )
 
 

@@ -1,3 +1,4 @@
+import argparse
 import base64
 import importlib.util
 import json
@@ -49,7 +50,7 @@ def test_every_subcommand_help_shows_defaults_an_example_and_no_markup(command, 
     assert f"example:\n  antmaze-hirl {command} " in text
     subparser = build_parser()._subparsers._group_actions[0].choices[command]
     for action in subparser._actions:
-        if action.dest == "help":
+        if action.dest == "help" or action.help == argparse.SUPPRESS:  # help itself; options renamed in 0.2.0
             continue
         assert action.help, f"{command} {action.option_strings} has no help line"
         # Every option says its default: argparse's "(default: X)", or "(required)" / its own "(default: ...)".
@@ -107,11 +108,11 @@ def test_eval_low_prints_and_writes_the_figures_of_seeded_subgoals(tmp_path, cap
     from antmaze_hirl.sb3_ext import evaluate_reach
 
     out = tmp_path / "deep" / "eval.json"
-    args = ["eval-low", "--body", "point", "--episodes", "6", "--seed", "3", "--max-distance", "0.6"]
+    args = ["eval-low", "--body", "point", "--episodes", "6", "--seed", "3", "--sample-radius-m", "0.6"]
     assert main([*args, "--json", str(out)]) == 0
     printed = json.loads(capsys.readouterr().out.splitlines()[-1])
     shipped = load_low_level("point")
-    expected = evaluate_reach(shipped, ReachEnv("point", goal_radius=0.6), episodes=6, seed=3)
+    expected = evaluate_reach(shipped, ReachEnv("point", sample_radius_m=0.6), episodes=6, seed=3)
     identity = low_level_identity("point", shipped)
     assert printed == json.loads(out.read_text()) == {**expected, "num_envs": 1, "low_level_id": identity}
     assert printed["low_level_id"].startswith("sha256:")
@@ -134,14 +135,41 @@ def test_eval_low_in_lockstep_tries_the_serial_subgoals(capsys):
 
 def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
-        main(["eval-low", "--body", "ant", "--episodes", "2", "--max-distance", "0.3"])
+        main(["eval-low", "--body", "ant", "--episodes", "2", "--sample-radius-m", "0.3"])
     assert exit_info.value.code == 2
-    assert "eval-low: error: --max-distance 0.3: goal_radius 0.3 m leaves no room" in capsys.readouterr().err
+    assert "eval-low: error: --sample-radius-m 0.3: sample_radius_m 0.3 m leaves no room" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
     assert "train-low: error: no checkpoint to resume in" in capsys.readouterr().err
     with pytest.raises(CheckpointError, match="no checkpoint to resume"):
         main(["--traceback", "train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
+
+
+RENAMED_OPTIONS = [
+    (["demo"], "--max-subgoal-distance", "--subgoal-reach-m"),
+    (["eval-low", "--body", "point"], "--max-distance", "--sample-radius-m"),
+    (["experiment", "--out", "runs/x"], "--expert-max-distance", "--subgoal-reach-m"),
+    (
+        ["study", "init", "runs/study", "--body", "point", "--participants", "2"],
+        "--expert-max-distance",
+        "--subgoal-reach-m",
+    ),
+]
+
+
+@pytest.mark.parametrize(("command", "old", "new"), RENAMED_OPTIONS, ids=[old for _, old, _ in RENAMED_OPTIONS])
+def test_an_option_renamed_in_0_2_0_stops_in_one_line_naming_the_new_one(command, old, new, capsys):
+    prog = "antmaze-hirl " + " ".join(command[:2] if command[0] == "study" else command[:1])
+    for tail in ([old, "2"], [old]):
+        with pytest.raises(SystemExit) as exit_info:
+            build_parser().parse_args([*command, *tail])
+        assert exit_info.value.code == 2
+        assert capsys.readouterr().err == f"{prog}: error: {old} was renamed {new} in 0.2.0\n"
+    assert getattr(build_parser().parse_args([*command, new, "2"]), new[2:].replace("-", "_")) == 2.0
+    with pytest.raises(SystemExit):
+        build_parser().parse_args([*command, "--help"])
+    shown = capsys.readouterr().out
+    assert new in shown and old not in shown  # hidden: not an alias
 
 
 @pytest.mark.integration
@@ -196,16 +224,16 @@ def test_a_failed_demo_says_why(tmp_path, monkeypatch):
     titles = []
     monkeypatch.setattr(demo, "plot_played_episode", lambda env, episode, out, title: titles.append(title) or out)
     result = demo.run_demo("point", seed=0, out_dir=tmp_path, max_steps=5)
-    assert (result.success, result.outcome, result.low_level_steps) == (False, "timed out", 5)
-    assert titles == ["point, seed 0: timed out, 1 subgoals, 5 steps"]
+    assert (result.success, result.outcome, result.low_level_steps) == (False, "timeout", 5)
+    assert titles == ["point, seed 0: timeout, 1 subgoals, 5 steps"]
 
 
 @pytest.mark.parametrize(
     ("info", "truncated", "outcome"),
     [
         ({"is_success": True, "flipped": False}, False, "success"),
-        ({"is_success": False, "flipped": True}, False, "flipped"),
-        ({"is_success": False, "flipped": False}, True, "timed out"),
+        ({"is_success": False, "flipped": True}, False, "flip"),
+        ({"is_success": False, "flipped": False}, True, "timeout"),
     ],
 )
 def test_episode_outcome_names_why_it_ended(info, truncated, outcome):

@@ -76,8 +76,8 @@ def test_refused_values_write_nothing_and_import_no_torch(tmp_path):
     cases = [
         ["experiment", "--decay", "nan", "--out", str(out)],
         ["experiment", "--maze-size", "99999999999999999999", "--out", str(out)],
-        ["experiment", "--expert-max-distance", "inf", "--out", str(out)],
-        ["study", "init", str(out), "--body", "point", "--participants", "2", "--expert-max-distance", "inf"],
+        ["experiment", "--subgoal-reach-m", "inf", "--out", str(out)],
+        ["study", "init", str(out), "--body", "point", "--participants", "2", "--subgoal-reach-m", "inf"],
     ]
     env = {**os.environ, "PYTHONPATH": os.getcwd()}
     for argv in cases:

@@ -160,7 +160,7 @@ def test_blend_executes_the_beta_mix_and_counts_labels():
     expert_label = trainer.expert.label
 
     def recording_label(obs):
-        labels.append((expert_label(obs), trainer.policy.predict(obs), STATE_LAYOUT.agent_xy(obs["state"])))
+        labels.append((expert_label(obs), trainer.learner.predict(obs), STATE_LAYOUT.agent_xy(obs["state"])))
         return labels[-1][0]
 
     trainer.expert.label = recording_label
@@ -192,7 +192,7 @@ def test_a_mix_the_agent_already_reaches_is_replaced_by_the_experts_subgoal():
     trainer = DAggerTrainer(
         env=env,
         expert=PathOracle.for_env(env),
-        policy=CornerSeeker(policy.encoder),
+        learner=CornerSeeker(policy.encoder),
         rng=rng,
         beta_schedule=InverseDecayBetaSchedule(decay=1.0, beta0=0.0),
         gradient_steps=0,
@@ -205,7 +205,7 @@ def test_a_mix_the_agent_already_reaches_is_replaced_by_the_experts_subgoal():
 def test_switch_mixing_and_per_step_updates_run():
     trainer = make_point_trainer(mixing="switch", per_step_gradient_steps=2, gradient_steps=5)
     record = trainer.run_episode()
-    assert trainer.policy.gradient_steps == 2 * record.expert_cost + 5
+    assert trainer.learner.gradient_steps == 2 * record.expert_cost + 5
     assert trainer.updates == 1 and trainer.beta == 0.5
 
 
@@ -223,7 +223,7 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
     for seed in range(5):
         trainer = make_point_trainer(seed=seed, gradient_steps=100)
 
-        def distance_to_the_experts_labels(policy=trainer.policy):
+        def distance_to_the_experts_labels(policy=trainer.learner):
             return np.mean([np.linalg.norm(policy.predict(obs) - oracle.label(obs)) for obs in observations])
 
         untrained = distance_to_the_experts_labels()
@@ -245,9 +245,9 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
 def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
     trainer = make_point_trainer(seed=0, policy_settings=settings, gradient_steps=300)
     eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
-    untrained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
+    untrained = evaluate_high_level(trainer.learner, eval_env, episodes=30)
     trainer.train(20)
-    trained = evaluate_high_level(trainer.policy, eval_env, episodes=30)
+    trained = evaluate_high_level(trainer.learner, eval_env, episodes=30)
     assert trained["success_rate"] >= max(untrained["success_rate"] + gain, least), (untrained, trained)
 
 
@@ -261,12 +261,12 @@ def test_policy_save_load_round_trip_and_bad_files(tmp_path, head, planning_iter
     policy = HighLevelPolicy.for_env(
         env, rng=rng, head=head, planning_iterations=planning_iterations, block_walls=False
     )
-    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
+    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
-    path = trainer.policy.save(tmp_path / "high.zip")
+    path = trainer.learner.save(tmp_path / "high.zip")
     loaded = HighLevelPolicy.load(path)
     obs, _ = env.reset(seed=3)
-    np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
+    np.testing.assert_array_equal(loaded.predict(obs), trainer.learner.predict(obs))
     (tmp_path / "bad.zip").write_text("junk")
     with pytest.raises(ValueError, match="is not a high-level policy file"):
         HighLevelPolicy.load(tmp_path / "bad.zip")
@@ -315,10 +315,12 @@ def test_start_selecting_strategies_need_the_heading_policy():
         DAggerTrainer(
             env=env,
             expert=PathOracle.for_env(env),
-            policy=OtherLearner(),
+            learner=OtherLearner(),
             rng=np.random.default_rng(0),
             strategy=NoiseQuery(),
         )
+    with pytest.raises(TypeError, match="policy"):  # the keyword is learner= since 0.2.0
+        DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=OtherLearner(), rng=np.random.default_rng(0))
 
 
 def test_point_velocity_is_augmented_with_the_maze():
@@ -327,7 +329,7 @@ def test_point_velocity_is_augmented_with_the_maze():
     agent, goal = GEOMETRY.cell_to_xy((1, 1)) + 0.1, GEOMETRY.cell_to_xy((1, 3))
     velocity = np.array([0.3, -0.2])
     batch = encoder.encode([walls] * 32, [agent] * 32, [goal] * 32, [velocity] * 32)
-    augmented, _ = augment(batch, np.zeros((32, 2), np.float32), np.random.default_rng(1), planar_dim=6)
+    augmented, _ = augment(batch, np.zeros((32, 2), np.float32), np.random.default_rng(1), planar_feature_dim=6)
     original = batch.vectors[0]
     for vector in augmented.vectors:
         # a symmetry preserves the angle between the goal offset and the velocity, and both lengths

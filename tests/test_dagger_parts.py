@@ -1,6 +1,8 @@
 """The dagger package's parts and contracts: dataset, policy, learner, state layout, task sampler, names."""
 
+import json
 import pickle
+import zipfile
 from pathlib import Path
 
 import gymnasium as gym
@@ -121,6 +123,11 @@ def test_policy_is_a_module_and_loads_the_v2_zip_format(tmp_path):
     resaved = HighLevelPolicy.load(loaded.save(tmp_path / "again.zip"))
     assert resaved.config() == loaded.config()
     np.testing.assert_array_equal(resaved.predict(obs), recorded)
+    # The file keeps format 2's key for the reach; Python reads it as subgoal_reach_m.
+    with zipfile.ZipFile(tmp_path / "again.zip") as archive, zipfile.ZipFile(V2_ZIP) as original:
+        written, shipped = (json.loads(z.read("meta.json"))["config"] for z in (archive, original))
+    assert "subgoal_reach_m" not in written and written["max_offset"] == shipped["max_offset"]
+    assert loaded.subgoal_reach_m == shipped["max_offset"] == loaded.config()["subgoal_reach_m"]
 
 
 def test_state_layout_reads_agent_goal_and_body():
@@ -163,7 +170,7 @@ def test_trainer_draws_its_task_with_sample_task():
     env = point_env()
     rng = np.random.default_rng(3)
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=HighLevelPolicy.for_env(env, rng=rng), rng=rng
+        env=env, expert=PathOracle.for_env(env), learner=HighLevelPolicy.for_env(env, rng=rng), rng=rng
     )
     drawn = []
     sample_task = env.unwrapped.sample_task

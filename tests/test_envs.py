@@ -4,7 +4,7 @@ import pickle
 import gymnasium as gym
 import numpy as np
 import pytest
-from conftest import POINT_GOALS_SEED_3, StillController, reset_goals
+from conftest import POINT_SUBGOALS_SEED_3, StillController, reset_subgoals
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
@@ -95,12 +95,34 @@ def test_the_names_removed_in_0_2_0_are_errors():
     assert env.min_goal_cells == 4 and not hasattr(env, "min_goal_distance")
     env.close()
     reach = ReachEnv("point", maze_map="u")
-    obs, _ = reach.reset(seed=0, options={"goal_xy": [1.0, 1.0]})
+    obs, _ = reach.reset(seed=0, options={"subgoal_xy": [1.0, 1.0]})
     np.testing.assert_array_equal(obs["desired_goal"], [1.0, 1.0])
-    # The old key is refused, not ignored: ignoring it would draw a random subgoal instead of the one given.
-    with pytest.raises(ValueError, match=r"^ReachEnv's reset option 'goal' is now 'goal_xy': got options\['goal'\]="):
-        reach.reset(seed=0, options={"goal": [1.0, 1.0]})
+    np.testing.assert_array_equal(reach.subgoal_xy, [1.0, 1.0])
+    # The old keys are refused, not ignored: ignoring one would draw a random subgoal instead of the one given.
+    for key in ("goal", "goal_xy"):
+        message = rf"^ReachEnv's reset option '{key}' is now 'subgoal_xy' \(0.2.0\): got options\['{key}'\]="
+        with pytest.raises(ValueError, match=message):
+            reach.reset(seed=0, options={key: [1.0, 1.0]})
+    assert not hasattr(reach, "goal") and not hasattr(reach, "set_goal")
     reach.close()
+
+
+RENAMED_KEYWORDS = [
+    (ReachEnv, "goal_radius", "sample_radius_m"),
+    (ReachEnv, "min_goal_distance", "min_sample_radius_m"),
+    (ReachEnv, "distance_threshold", "success_radius_m"),
+    (HighLevelMazeEnv, "goal_threshold", "success_radius_m"),
+]
+
+
+@pytest.mark.parametrize(("env_class", "old", "new"), RENAMED_KEYWORDS, ids=[old for _, old, _ in RENAMED_KEYWORDS])
+def test_keywords_renamed_in_0_2_0_fail_with_a_type_error_naming_them(env_class, old, new):
+    kwargs = {"low_level": PointGoToController()} if env_class is HighLevelMazeEnv else {}
+    with pytest.raises(TypeError, match=old):
+        env_class("point", **kwargs, **{old: 0.5})
+    env = env_class("point", **kwargs, **{new: 0.5})
+    assert getattr(env, new) == 0.5 and not hasattr(env, old)
+    env.close()
 
 
 @pytest.mark.parametrize("env_class", [ReachEnv, HighLevelMazeEnv])
@@ -114,26 +136,26 @@ def test_reach_env_spaces_reward_and_success(body):
     env = ReachEnv(body)
     obs, info = env.reset(seed=0)
     assert obs["observation"].shape == ({"ant": 27, "point": 2}[body],)
-    assert 0 < np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"]) <= env.goal_radius
+    assert 0 < np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"]) <= env.sample_radius_m
     assert info["is_success"] is False
     # vectorised compute_reward, as HER calls it on a batch
     achieved = np.zeros((5, 2))
     desired = np.stack([np.array([d, 0.0]) for d in (0.0, 0.1, 0.44, 0.46, 3.0)])
     rewards = env.compute_reward(achieved, desired, [{}] * 5)
-    np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.distance_threshold).astype(float))
+    np.testing.assert_array_equal(rewards, (np.linalg.norm(desired, axis=1) <= env.success_radius_m).astype(float))
     dense = ReachEnv(body, reward_type="dense").compute_reward(achieved, desired, None)
     np.testing.assert_allclose(dense, np.exp(-np.linalg.norm(desired, axis=1)))
-    env.reset(seed=0, options={"goal_xy": obs["achieved_goal"]})
+    env.reset(seed=0, options={"subgoal_xy": obs["achieved_goal"]})
     _, reward, _, _, info = env.step(np.zeros(env.action_space.shape))
     assert info["is_success"] and reward == 1.0
 
 
-def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
-    env = ReachEnv("point", horizon=7, goal_radius=0.8)
+def test_reach_env_truncates_at_horizon_and_samples_subgoals_within_radius():
+    env = ReachEnv("point", horizon=7, sample_radius_m=0.8)
     for seed in range(20):
         obs, _ = env.reset(seed=seed)
         distance = np.linalg.norm(obs["desired_goal"] - obs["achieved_goal"])
-        assert env.min_goal_distance <= distance <= 0.8
+        assert env.min_sample_radius_m <= distance <= 0.8
         assert env.sim.geometry.segment_is_free(env.walls, obs["achieved_goal"], obs["desired_goal"])
     truncations = [env.step(np.zeros(2))[3] for _ in range(7)]
     assert truncations == [False] * 6 + [True]
@@ -144,7 +166,10 @@ def test_reach_env_truncates_at_horizon_and_samples_goals_within_radius():
     [
         (lambda env: env.step(np.array([np.nan, 0.0])), r"action must be finite, got \[nan, 0.0\]"),
         (lambda env: env.step(np.zeros(3)), r"action must have shape \(2,\), got shape \(3,\)"),
-        (lambda env: env.reset(options={"goal_xy": [100.0, 0.0]}), r"goal_xy \[100.0, 0.0\] is not in a free cell"),
+        (
+            lambda env: env.reset(options={"subgoal_xy": [100.0, 0.0]}),
+            r"subgoal_xy \[100.0, 0.0\] is not in a free cell",
+        ),
         (lambda env: env.reset(options={"start_xy": [0.0, -1.5]}), r"start_xy \[0.0, -1.5\] is not in a free cell"),
     ],
 )
@@ -200,7 +225,7 @@ def test_high_level_step_info_and_subgoal_errors():
     near = inner.agent_xy + np.array([0.1, 0.0])
     _, reward, terminated, truncated, info = env.step(near)
     assert info["subgoal_reached"] and info["attempts"] == 1 and info["low_level_steps"] < inner.reach.horizon
-    assert np.linalg.norm(info["agent_path"][-1] - near) <= inner.reach.distance_threshold
+    assert np.linalg.norm(info["agent_path"][-1] - near) <= inner.reach.success_radius_m
     assert info["agent_path"].shape == (info["low_level_steps"] + 1, 2)
     assert (reward, terminated, truncated) == (0.0, False, False)
     with pytest.raises(ValueError, match=r"subgoal must be finite, got \[nan, 0.0\]"):
@@ -213,7 +238,7 @@ def test_subgoals_inside_the_reach_radius_are_pushed_out_along_their_heading(sti
     env = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller)
     env.reset(seed=0)
     agent = env.unwrapped.agent_xy
-    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.distance_threshold == 0.9
+    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.success_radius_m == 0.9
     info = env.step(agent + np.array([0.0, 0.1]))[4]
     assert info["subgoal_extended"] and not info["subgoal_reached"]
     np.testing.assert_allclose(info["subgoal"] - env.unwrapped.agent_xy, [0.0, 0.9], atol=0.02)
@@ -265,7 +290,7 @@ def test_reaching_the_goal_terminates_with_reward(still_controller):
         total_reward += reward
         done = terminated or truncated
     assert terminated and not truncated and total_reward == 1.0 and info["is_success"]
-    assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.goal_threshold
+    assert np.linalg.norm(env.unwrapped.agent_xy - env.unwrapped.goal_xy) <= env.unwrapped.success_radius_m
 
 
 @pytest.mark.parametrize("body", ["ant", "point"])
@@ -290,12 +315,12 @@ def test_terminate_on_flip_catches_an_ant_on_its_back():
     assert env.step(np.zeros(8))[2]
 
 
-def test_chained_reset_keeps_the_moving_body_and_draws_a_new_goal():
+def test_chained_reset_keeps_the_moving_body_and_draws_a_new_subgoal():
     env = ReachEnv("ant", chain_probability=1.0)
     env.reset(seed=0)
     for _ in range(20):
         env.step(env.action_space.sample())
-    qpos, qvel, old_goal = env.sim.data.qpos.copy(), env.sim.data.qvel.copy(), env.goal
+    qpos, qvel, old_goal = env.sim.data.qpos.copy(), env.sim.data.qvel.copy(), env.subgoal_xy
     obs, _ = env.reset()
     np.testing.assert_array_equal(env.sim.data.qpos, qpos)
     np.testing.assert_array_equal(env.sim.data.qvel, qvel)
@@ -318,9 +343,11 @@ def test_chaining_never_continues_a_flipped_ant():
 
 
 def test_chaining_off_keeps_the_random_stream_and_a_new_layout_starts_afresh():
-    np.testing.assert_allclose(reset_goals(ReachEnv("point", chain_probability=0.0)), POINT_GOALS_SEED_3, rtol=1e-6)
+    np.testing.assert_allclose(
+        reset_subgoals(ReachEnv("point", chain_probability=0.0)), POINT_SUBGOALS_SEED_3, rtol=1e-6
+    )
     # The check can fail: chaining on at a chance that never chains still takes a draw per plain reset.
-    assert not np.allclose(reset_goals(ReachEnv("point", chain_probability=1e-12)), POINT_GOALS_SEED_3)
+    assert not np.allclose(reset_subgoals(ReachEnv("point", chain_probability=1e-12)), POINT_SUBGOALS_SEED_3)
     chained = ReachEnv("point", "u", chain_probability=1.0)
     chained.reset(seed=0)
     for _ in range(10):

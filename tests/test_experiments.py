@@ -147,7 +147,7 @@ def test_expert_max_distance_reaches_the_oracle(monkeypatch):
 
     def recording_for_env(env, **kwargs):
         oracle = for_env(env, **kwargs)
-        seen.append(oracle.max_distance)
+        seen.append(oracle.subgoal_reach_m)
         return oracle
 
     monkeypatch.setattr(runner.PathOracle, "for_env", recording_for_env)

@@ -207,7 +207,7 @@ class NeverAsk(QueryStrategy):
 
 
 def test_an_episode_can_end_without_a_request_and_a_request_can_come_after_unasked_steps():
-    trainer = make_point_trainer(NeverAsk(), policy=Perfect)
+    trainer = make_point_trainer(NeverAsk(), learner=Perfect)
     first = trainer.start_episode()
     assert first.request is not None and first.executed == []  # D is empty: the gate is open
     while not first.done:
@@ -217,12 +217,12 @@ def test_an_episode_can_end_without_a_request_and_a_request_can_come_after_unask
     assert run.done and run.request is None and run.record.expert_cost == 0
     assert len(run.executed) == run.record.attempts > 0 and not any(step.asked for step in run.executed)
     run.finish()
-    late = make_point_trainer(EveryOtherStep(first_asked=2), policy=Perfect, env=point_maze(min_goal_cells=3))
+    late = make_point_trainer(EveryOtherStep(first_asked=2), learner=Perfect, env=point_maze(min_goal_cells=3))
     late.train(1)
     run = late.start_episode()
     if run.done:  # reached within two steps: nothing to check on this maze
         pytest.skip("the goal was reached before the third step")
-    assert len(run.executed) == 2 and run.request.step == 0
+    assert len(run.executed) == 2 and run.request.label_index == 0
     np.testing.assert_array_equal(run.request.observation["state"], late.env.unwrapped._get_obs()["state"])
 
 
@@ -240,7 +240,7 @@ class CornerSeeker:
 
 
 def test_a_no_op_proposal_opens_the_gate():
-    trainer = make_point_trainer(NeverAsk(), policy=CornerSeeker, env=point_maze(max_steps=200))
+    trainer = make_point_trainer(NeverAsk(), learner=CornerSeeker, env=point_maze(max_steps=200))
     records, walked = drive_by_hand(trainer, 4)
     # Unasked, the agent would park in the corner and repeat the no-op until the step budget ran out.
     assert max(r.attempts for r in records) < 60 and sum(r.expert_cost for r in records[1:]) > 0
@@ -345,10 +345,10 @@ def test_a_short_point_run_spends_fewer_labels_than_attempts_and_learns():
     eval_env = point_maze()
     gains = []
     for seed in range(3):
-        trainer = make_point_trainer(GatedQuery(), seed, gradient_steps=100, policy=heading)
-        untrained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
+        trainer = make_point_trainer(GatedQuery(), seed, gradient_steps=100, learner=heading)
+        untrained = evaluate_high_level(trainer.learner, eval_env, episodes=15)
         records = trainer.train(8)
-        trained = evaluate_high_level(trainer.policy, eval_env, episodes=15)
+        trained = evaluate_high_level(trainer.learner, eval_env, episodes=15)
         labels, attempts = sum(r.expert_cost for r in records), sum(r.attempts for r in records)
         assert labels < attempts, (seed, labels, attempts)
         gains.append(trained["success_rate"] - untrained["success_rate"])

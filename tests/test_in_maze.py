@@ -1,5 +1,6 @@
 """benchmarks/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
 
+import importlib
 import sys
 from pathlib import Path
 
@@ -43,7 +44,7 @@ def test_a_still_ant_on_the_u_map_runs_out_of_its_scaled_budget_frozen():
     env = in_maze.MazeEpisodeRecorder(
         gym.make("antmaze_hirl/AntMaze-v0", maze_map="u", low_level=StillController()), scale_step_limit=True
     )
-    figures = in_maze.evaluate_family(env, PathOracle.for_env(env, max_distance=2.0), episodes=1, seed=0)
+    figures = in_maze.evaluate_family(env, PathOracle.for_env(env, subgoal_reach_m=2.0), episodes=1, seed=0)
     layout = env.unwrapped.layout
     assert env.max_steps == in_maze.step_limit(layout.walls, layout.start_cell, layout.goal_cell, 4.0)
     assert figures["mean_low_level_steps"] == env.max_steps
@@ -137,7 +138,7 @@ def test_the_recorder_keeps_one_turn_per_subgoal():
         gym.make("antmaze_hirl/AntMaze-v0", maze_map="u", low_level=StillController(), max_steps=60),
         scale_step_limit=False,
     )
-    raw = in_maze.play_episodes(env, PathOracle.for_env(env, max_distance=2.0), range(3, 4))
+    raw = in_maze.play_episodes(env, PathOracle.for_env(env, subgoal_reach_m=2.0), range(3, 4))
     assert len(raw["turns"]) == len(raw["subgoal_flipped"]) == raw["subgoals"] == len(env.paths)
     assert np.isnan(raw["turns"]).all()  # a still ant never travels: every subgoal is set at a standstill
     assert not any(raw["subgoal_flipped"])
@@ -172,3 +173,17 @@ def test_lockstep_plays_the_serial_episodes(monkeypatch):
     assert len(serial["outcomes"]) == 3
     del serial["seconds"], lockstep["seconds"]
     np.testing.assert_equal(lockstep, serial)  # NaN turns (standstills) count as equal
+
+
+@pytest.mark.parametrize(
+    ("script", "argv"),
+    [("in_maze", ["--subgoal-distance", "2"]), ("paper_experiment", ["--body", "ant", "--expert-max-distance", "2"])],
+)
+def test_a_benchmark_option_renamed_in_0_2_0_stops_in_one_line_naming_the_new_one(script, argv, monkeypatch, capsys):
+    module = importlib.import_module(script)
+    monkeypatch.setattr(sys, "argv", [f"{script}.py", *argv])
+    with pytest.raises(SystemExit) as exit_info:
+        module.main()
+    assert exit_info.value.code == 2
+    old = next(arg for arg in argv if arg not in ("--body", "ant", "2"))
+    assert capsys.readouterr().err == f"{script}.py: error: {old} was renamed --subgoal-reach-m in 0.2.0\n"

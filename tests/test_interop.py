@@ -21,7 +21,11 @@ def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
     env = point_env()
     rng = np.random.default_rng(0)
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=HighLevelPolicy.for_env(env, rng=rng), rng=rng, gradient_steps=2
+        env=env,
+        expert=PathOracle.for_env(env),
+        learner=HighLevelPolicy.for_env(env, rng=rng),
+        rng=rng,
+        gradient_steps=2,
     )
     trainer.train(2)
     transitions = to_transitions(trainer.dataset)
@@ -59,7 +63,7 @@ def test_bc_serves_as_dagger_learner_with_reward_based_filtering():
     learner = BCLearner(env, rng=rng, batch_size=4)
     before = [p.detach().clone() for p in learner.bc.policy.parameters()]
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env), policy=learner, rng=rng, strategy=RewardBasedQuery(), gradient_steps=4
+        env=env, expert=PathOracle.for_env(env), learner=learner, rng=rng, strategy=RewardBasedQuery(), gradient_steps=4
     )
     records = trainer.train(3)
     assert trainer.updates == 3 and records[-1].dataset_size == len(trainer.dataset) >= 4

@@ -57,8 +57,8 @@ def test_unreachable_goal_and_start_are_named():
 
 
 def test_layout_from_map_rejects_impossible_goal_distance():
-    with pytest.raises(ValueError, match="min_goal_distance=10"):
-        layout_from_map(SMALL, np.random.default_rng(0), min_goal_distance=10)
+    with pytest.raises(ValueError, match="min_goal_cells=10"):
+        layout_from_map(SMALL, np.random.default_rng(0), min_goal_cells=10)
 
 
 def test_shortest_path_is_shortest_and_connected():
@@ -83,7 +83,7 @@ def test_corner_cells_of_u_maze():
 )
 def test_generated_layouts_are_connected_with_reachable_start_and_goal(seed, n_rows, n_cols, wall_fraction):
     layout = generate_layout(
-        np.random.default_rng(seed), n_rows=n_rows, n_cols=n_cols, wall_fraction=wall_fraction, min_goal_distance=1
+        np.random.default_rng(seed), n_rows=n_rows, n_cols=n_cols, wall_fraction=wall_fraction, min_goal_cells=1
     )
     walls = layout.walls
     assert walls.shape == (n_rows + 2, n_cols + 2)
@@ -96,9 +96,9 @@ def test_generated_layouts_are_connected_with_reachable_start_and_goal(seed, n_r
 
 
 def test_generator_is_seeded_and_respects_goal_distance():
-    first = generate_layout(np.random.default_rng(7), min_goal_distance=5)
-    again = generate_layout(np.random.default_rng(7), min_goal_distance=5)
-    other = generate_layout(np.random.default_rng(8), min_goal_distance=5)
+    first = generate_layout(np.random.default_rng(7), min_goal_cells=5)
+    again = generate_layout(np.random.default_rng(7), min_goal_cells=5)
+    other = generate_layout(np.random.default_rng(8), min_goal_cells=5)
     np.testing.assert_array_equal(first.walls, again.walls)
     assert (first.start_cell, first.goal_cell) == (again.start_cell, again.goal_cell)
     assert not np.array_equal(first.walls, other.walls)
@@ -111,7 +111,7 @@ def test_generator_is_seeded_and_respects_goal_distance():
     [
         ({"n_rows": 0}, "at least 1x1"),
         ({"wall_fraction": 1.0}, r"wall_fraction must lie in \[0, 1\)"),
-        ({"n_rows": 2, "n_cols": 2, "min_goal_distance": 9}, "min_goal_distance=9"),
+        ({"n_rows": 2, "n_cols": 2, "min_goal_cells": 9}, "min_goal_cells=9"),
     ],
 )
 def test_generator_rejects_bad_arguments(kwargs, message):

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import POINT_GOALS_SEED_3, reset_goals
+from conftest import POINT_SUBGOALS_SEED_3, reset_subgoals
 
 from antmaze_hirl.envs import ReachEnv
 from antmaze_hirl.envs.layout_splits import wall_grid_split
@@ -32,7 +32,7 @@ def flip(env):
 
 
 def test_maze_resets_draw_random_layouts_of_the_given_sizes_with_goals_in_sight():
-    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, np.int64(4)], goal_radius=3.0)
+    env = ReachEnv("point", maze_probability=1.0, maze_sizes=[2, np.int64(4)], sample_radius_m=3.0)
     env.reset(seed=0)
     shapes, layouts = set(), set()
     for _ in range(30):
@@ -48,7 +48,7 @@ def test_maze_resets_draw_random_layouts_of_the_given_sizes_with_goals_in_sight(
     assert env.render() is None  # the renderer follows the new geometry (rgb_array below)
     image = ReachEnv("point", maze_probability=1.0, maze_sizes=[4], render_mode="rgb_array")
     image.reset(seed=0)
-    assert image.render().shape[:2] == image._renderer.rgb(image.walls, image.agent_xy, image.goal).shape[:2]
+    assert image.render().shape[:2] == image._renderer.rgb(image.walls, image.agent_xy, image.subgoal_xy).shape[:2]
 
 
 def test_maze_resets_are_seeded_and_mix_with_the_base_map():
@@ -76,9 +76,11 @@ def test_maze_split_draws_only_training_wall_grids_where_any_draw_would_not():
 
 
 def test_mazes_off_keep_the_random_stream():
-    np.testing.assert_allclose(reset_goals(ReachEnv("point", maze_probability=0.0)), POINT_GOALS_SEED_3, rtol=1e-6)
+    np.testing.assert_allclose(
+        reset_subgoals(ReachEnv("point", maze_probability=0.0)), POINT_SUBGOALS_SEED_3, rtol=1e-6
+    )
     # The check can fail: mazes on at a chance that never gives one still take a draw per reset.
-    assert not np.allclose(reset_goals(ReachEnv("point", maze_probability=1e-12)), POINT_GOALS_SEED_3)
+    assert not np.allclose(reset_subgoals(ReachEnv("point", maze_probability=1e-12)), POINT_SUBGOALS_SEED_3)
 
 
 def test_chained_and_placed_resets_keep_the_current_walls():

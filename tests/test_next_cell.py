@@ -119,12 +119,12 @@ def test_next_cell_subgoals_are_cell_centres_or_the_goal_within_reach():
     goal = policy.geometry.cell_to_xy((2, 3)) + np.array([0.1, -0.2])  # off-centre, one cell north
     batch = policy.encoder.encode([walls], [agent], [goal], [np.zeros(2)])
     north, east, north_east = (NEXT_CELL_MOVES.index(move) for move in ((0, 1), (1, 0), (1, 1)))
-    to_goal = policy.cell_offsets(batch, np.array([north]))[0] * policy.max_offset
+    to_goal = policy.cell_offsets(batch, np.array([north]))[0] * policy.subgoal_reach_m
     np.testing.assert_allclose(to_goal, goal - agent, atol=1e-6)  # the goal itself, not its cell's centre
-    to_east = policy.cell_offsets(batch, np.array([east]))[0] * policy.max_offset
+    to_east = policy.cell_offsets(batch, np.array([east]))[0] * policy.subgoal_reach_m
     np.testing.assert_allclose(to_east, [0.8, -0.1], atol=1e-6)
     diagonal = policy.cell_offsets(batch, np.array([north_east]))[0]
-    assert np.linalg.norm(diagonal) == pytest.approx(1.0)  # pulled back to max_offset, like the oracle
+    assert np.linalg.norm(diagonal) == pytest.approx(1.0)  # pulled back to subgoal_reach_m, like the oracle
 
 
 def test_symmetries_map_cell_steps_as_they_map_the_grid():
@@ -134,7 +134,7 @@ def test_symmetries_map_cell_steps_as_they_map_the_grid():
     goal = policy.geometry.cell_to_xy((2, 4))  # north-east
     batch = policy.encoder.encode([walls] * 64, [agent] * 64, [goal] * 64, [np.zeros(2)] * 64)
     steps = np.tile([[1.0, 1.0]], (64, 1)).astype(np.float32)
-    moved, labels = augment(batch, steps, np.random.default_rng(0), planar_dim=policy.planar_dim)
+    moved, labels = augment(batch, steps, np.random.default_rng(0), planar_feature_dim=policy.planar_feature_dim)
     for grid, label in zip(moved.grids, next_cell_classes(labels), strict=True):
         dx, dy = NEXT_CELL_MOVES[label]
         assert grid[1, CENTRE - dy, CENTRE + dx] == 1.0  # the label still points at the goal
@@ -157,16 +157,16 @@ def test_next_cell_policy_trains_saves_and_loads(tmp_path, planning_iterations, 
     policy = HighLevelPolicy.for_env(
         env, rng=rng, head="next_cell", planning_iterations=planning_iterations, block_walls=block_walls
     )
-    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), policy=policy, rng=rng, gradient_steps=10)
+    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, gradient_steps=10)
     trainer.run_episode()
-    assert trainer.policy.gradient_steps == 10
-    loaded = HighLevelPolicy.load(trainer.policy.save(tmp_path / "high.zip"))
-    assert loaded.config() == trainer.policy.config()
+    assert trainer.learner.gradient_steps == 10
+    loaded = HighLevelPolicy.load(trainer.learner.save(tmp_path / "high.zip"))
+    assert loaded.config() == trainer.learner.config()
     assert (loaded.config()["head"], loaded.config()["block_walls"]) == ("next_cell", block_walls)
     obs, _ = env.reset(seed=3)
-    np.testing.assert_array_equal(loaded.predict(obs), trainer.policy.predict(obs))
-    spawned = trainer.policy.spawn(np.random.default_rng(1))
-    assert spawned.config() == trainer.policy.config()
+    np.testing.assert_array_equal(loaded.predict(obs), trainer.learner.predict(obs))
+    spawned = trainer.learner.spawn(np.random.default_rng(1))
+    assert spawned.config() == trainer.learner.config()
 
 
 def test_each_body_defaults_to_its_ablations_next_cell_head():
@@ -184,19 +184,19 @@ def test_each_body_defaults_to_its_ablations_next_cell_head():
 def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller):
     env = gym.make("antmaze_hirl/AntMaze-v0", maze_size=3, low_level=still_controller, max_steps=300)
     rng = np.random.default_rng(0)
-    policy = HighLevelPolicy.for_env(env, rng=rng, max_offset=2.0)
+    policy = HighLevelPolicy.for_env(env, rng=rng, subgoal_reach_m=2.0)
     assert (policy.config()["head"], policy.config()["planning_iterations"], policy.config()["block_walls"]) == (
         "next_cell",
         0,
         False,
     )
     trainer = DAggerTrainer(
-        env=env, expert=PathOracle.for_env(env, max_distance=2.0), policy=policy, rng=rng, gradient_steps=5
+        env=env, expert=PathOracle.for_env(env, subgoal_reach_m=2.0), learner=policy, rng=rng, gradient_steps=5
     )
     trainer.run_episode()  # labels, then the update
-    assert trainer.policy.gradient_steps == 5 and len(trainer.dataset) > 0
+    assert trainer.learner.gradient_steps == 5 and len(trainer.dataset) > 0
     observation, _ = env.reset(seed=1)
-    subgoal = trainer.policy.predict(observation)
+    subgoal = trainer.learner.predict(observation)
     # within the oracle's reach
     assert np.linalg.norm(subgoal - STATE_LAYOUT.agent_xy(observation["state"])) <= 2.0 + 1e-6
 
@@ -205,7 +205,7 @@ def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
     # The ant's oracle gives 2 m subgoals in 4 m cells: one from near a cell's centre ends inside that cell.
     geometry = MazeGeometry(6, 6, 4.0)
     policy = SubgoalPolicy(
-        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), max_offset=2.0, head="next_cell"
+        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), subgoal_reach_m=2.0, head="next_cell"
     )
     centre = geometry.cell_to_xy((2, 2))
     agents = np.stack([centre] * 4 + [centre + np.array([0.5, 0.0])])
@@ -226,9 +226,9 @@ def test_the_experiment_gives_the_learner_its_oracles_reach():
     from antmaze_hirl.experiments.runner import make_trainer
 
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
-    oracle = PathOracle.for_env(env, max_distance=0.6)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=0.6)
     trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", expert_max_distance=0.6), env, oracle)
-    assert trainer.policy.max_offset == pytest.approx(0.6)
+    assert trainer.learner.subgoal_reach_m == pytest.approx(0.6)
     default = make_trainer("dagger", 0, ExperimentConfig(body="point"), env, PathOracle.for_env(env))
-    assert default.policy.max_offset == pytest.approx(env.unwrapped.geometry.scale)
+    assert default.learner.subgoal_reach_m == pytest.approx(env.unwrapped.geometry.scale)
     env.close()

@@ -28,9 +28,9 @@ def test_oracle_with_point_solves_random_mazes(low_level):
     assert all(info["total_low_level_steps"] <= 500 for info in results)
 
 
-def test_oracle_subgoals_stay_within_max_distance_and_free_space():
+def test_oracle_subgoals_stay_within_the_reach_and_free_space():
     env = gym.make("antmaze_hirl/PointMaze-v0")
-    oracle = PathOracle.for_env(env, max_distance=0.7)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=0.7)
     inner = env.unwrapped
     for seed in range(10):
         obs, _ = env.reset(seed=seed)
@@ -47,10 +47,10 @@ def test_plan_subgoal_turns_corners_along_the_shortest_path():
     walls = validate_maze_map("u")  # free: top row, right column, bottom row
     geometry = MazeGeometry(*walls.shape, scale=1.0)
     start, goal = geometry.cell_to_xy((1, 1)), geometry.cell_to_xy((3, 1))
-    subgoal = plan_subgoal(walls, geometry, start, goal, max_distance=10.0, clearance=0.2)
+    subgoal = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=10.0, clearance=0.2)
     # The goal is 2 m straight down but behind a wall; the plan heads right, to the corner cell (1, 3).
     np.testing.assert_allclose(subgoal, geometry.cell_to_xy((1, 3)))
-    short = plan_subgoal(walls, geometry, start, goal, max_distance=0.5, clearance=0.2)
+    short = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=0.5, clearance=0.2)
     np.testing.assert_allclose(short, start + np.array([0.5, 0.0]))
 
 
@@ -73,7 +73,7 @@ def test_oracle_reads_observations_not_env_state():
         oracle.geometry,
         state[STATE_AGENT_XY],
         state[STATE_GOAL_XY],
-        max_distance=oracle.max_distance,
+        subgoal_reach_m=oracle.subgoal_reach_m,
         clearance=oracle.clearance,
     )
     np.testing.assert_allclose(oracle.label(mixed), expected)
@@ -96,5 +96,5 @@ def test_oracle_rejects_bad_settings():
         PathOracle(geometry, noise_std=-1.0)
     with pytest.raises(ValueError, match="noise_std > 0 needs an explicit rng"):
         PathOracle(geometry, noise_std=0.1)
-    with pytest.raises(ValueError, match="max_distance must be > 0"):
-        PathOracle(geometry, max_distance=0.0)
+    with pytest.raises(ValueError, match="subgoal_reach_m must be > 0"):
+        PathOracle(geometry, subgoal_reach_m=0.0)

@@ -23,8 +23,8 @@ ROOT = Path(__file__).parents[1]
 
 def test_the_body_facts_are_the_values_of_before():
     assert BODY_SPECS == {
-        "ant": BodySpec(scale=4.0, distance_threshold=0.45, default_horizon=100, dt=0.05, default_action_scale=0.5),
-        "point": BodySpec(scale=1.0, distance_threshold=0.2, default_horizon=50, dt=0.01, default_action_scale=1.0),
+        "ant": BodySpec(scale=4.0, success_radius_m=0.45, default_horizon=100, dt=0.05, default_action_scale=0.5),
+        "point": BodySpec(scale=1.0, success_radius_m=0.2, default_horizon=50, dt=0.01, default_action_scale=1.0),
     }
     assert BODY_DEFAULTS == {
         "point": {"maze_size": 5, "expert_max_distance": None},

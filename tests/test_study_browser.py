@@ -166,7 +166,7 @@ def refused_points(state):
             xy = [maze["low"][0] + (col + 0.5) * scale, maze["high"][1] - (row + 0.5) * scale]
             if not (low[0] <= xy[0] <= high[0] and low[1] <= xy[1] <= high[1]):
                 continue
-            far = ((xy[0] - agent[0]) ** 2 + (xy[1] - agent[1]) ** 2) ** 0.5 > 1.2 * state["max_distance"]
+            far = ((xy[0] - agent[0]) ** 2 + (xy[1] - agent[1]) ** 2) ** 0.5 > 1.2 * state["subgoal_reach_m"]
             if is_wall and wall is None:
                 wall = xy
             elif far and not is_wall and too_far is None:

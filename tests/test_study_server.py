@@ -136,7 +136,7 @@ def test_a_click_on_a_wall_or_beyond_the_reach_circle_is_a_400_and_changes_nothi
     inside = [(xy, wall) for xy, wall in centres if np.all(low <= xy) and np.all(xy <= high)]
     wall = next(xy for xy, is_wall in inside if is_wall)
     far = max((xy for xy, is_wall in inside if not is_wall), key=lambda xy: np.hypot(*(xy - agent)))
-    assert np.hypot(*(far - agent)) > state["max_distance"] + 0.1
+    assert np.hypot(*(far - agent)) > state["subgoal_reach_m"] + 0.1
     before = snapshot(folder)
     query = state["query"]["id"]
     for xy, message in ((wall, "on a wall"), (far, "beyond the reach circle")):

@@ -80,7 +80,7 @@ def test_a_rerun_trial_replaces_its_curves(tmp_path):
     trainer = DAggerTrainer(
         env=env,
         expert=PathOracle.for_env(env),
-        policy=HighLevelPolicy.for_env(env, rng=rng),
+        learner=HighLevelPolicy.for_env(env, rng=rng),
         rng=rng,
         strategy=RewardBasedQuery(),
         episodes_per_update=2,

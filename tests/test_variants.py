@@ -76,14 +76,14 @@ def test_reward_per_step_updates_and_decays_beta_after_every_step(step_gradient_
     def recording_label(obs):
         # The beta and learner proposal of this step, seen before its update.
         labels.append(
-            (expert_label(obs), trainer.policy.predict(obs), STATE_LAYOUT.agent_xy(obs["state"]), trainer.beta)
+            (expert_label(obs), trainer.learner.predict(obs), STATE_LAYOUT.agent_xy(obs["state"]), trainer.beta)
         )
         return labels[-1][0]
 
     env.step, trainer.expert.label = recording_step, recording_label
     first = trainer.run_episode()
     assert first.beta == 1.0
-    assert trainer.updates == first.expert_cost and trainer.policy.gradient_steps == per_update * first.expert_cost
+    assert trainer.updates == first.expert_cost and trainer.learner.gradient_steps == per_update * first.expert_cost
     assert [beta for *_, beta in labels] == [0.5**k for k in range(first.expert_cost)]
     for action, (expert, learner, agent, beta) in zip(executed, labels, strict=True):
         mix = np.clip(beta * expert + (1 - beta) * learner, env.action_space.low, env.action_space.high)
@@ -100,7 +100,7 @@ def test_reward_per_step_updates_and_decays_beta_after_every_step(step_gradient_
 def test_per_episode_methods_keep_one_update_per_episode():
     trainer = make_point_trainer(make_strategy("reward"), gradient_steps=3)
     record = trainer.run_episode()
-    assert trainer.updates == 1 and trainer.policy.gradient_steps == 3 and record.expert_cost > 1
+    assert trainer.updates == 1 and trainer.learner.gradient_steps == 3 and record.expert_cost > 1
 
 
 # --- Alg. 2's noise buffer ---
@@ -142,7 +142,7 @@ def test_fresh_noise_reproduces_the_old_scores():
     # The scores before issue 12: one uniform draw of shape (candidates, noises, body).
     rng = np.random.default_rng(3)
     noisy = query.body_observation + rng.uniform(-1.0, 1.0, size=(4, 6, 2))
-    outputs = query.policy.offsets(query.encode(np.repeat(query.candidates, 6, axis=0), noisy.reshape(-1, 2)))
+    outputs = query.learner.offsets(query.encode(np.repeat(query.candidates, 6, axis=0), noisy.reshape(-1, 2)))
     expected = [spread(block) for block in outputs.reshape(4, 6, 2)]
     np.testing.assert_array_equal(scores, expected)
     assert len(set(scores)) == 4
@@ -201,7 +201,7 @@ def test_aggrevate_trains_towards_the_lowest_cost_heading():
 
 def test_aggrevate_takes_the_learners_bins_and_labels_once_per_state():
     trainer = make_point_trainer(make_strategy("aggrevate"), gradient_steps=1)
-    assert trainer.strategy.n_directions == trainer.policy.policy.n_directions
+    assert trainer.strategy.n_directions == trainer.learner.policy.n_directions
     record = trainer.run_episode()
     assert len(trainer.dataset) == record.expert_cost == trainer.total_expert_cost
     offsets = trainer.dataset.subgoals() - trainer.dataset.agent_xy()

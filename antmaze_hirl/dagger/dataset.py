@@ -20,21 +20,22 @@ class Demonstration:
         state: ``float32`` state vector (laid out as :data:`~antmaze_hirl.envs.state_layout.STATE_LAYOUT`).
         subgoal: Expert subgoal xy, metres.
         episode: Index of the training episode it came from.
-        step: High-level step within that episode.
+        high_level_step: High-level step within that episode, from 0 (not the label's index: a gating
+            strategy leaves steps unasked).
     """
 
     image: np.ndarray
     state: np.ndarray
     subgoal: np.ndarray
     episode: int
-    step: int
+    high_level_step: int
 
     def __post_init__(self) -> None:
         if self.image.ndim != 3 or self.image.dtype != np.uint8:
             raise ValueError(f"image must be uint8 (3, H, W), got {self.image.dtype} {self.image.shape}")
-        if self.state.ndim != 1 or self.state.shape[0] < STATE_LAYOUT.planar_dim:
+        if self.state.ndim != 1 or self.state.shape[0] < STATE_LAYOUT.positions_dim:
             raise ValueError(
-                f"state must be a vector of at least {STATE_LAYOUT.planar_dim} values, got shape {self.state.shape}"
+                f"state must be a vector of at least {STATE_LAYOUT.positions_dim} values, got shape {self.state.shape}"
             )
         if self.subgoal.shape != (2,) or not np.all(np.isfinite(self.subgoal)):
             raise ValueError(f"subgoal must be 2 finite values, got {self.subgoal!r}")
@@ -94,7 +95,7 @@ class DemonstrationDataset:
         self._states[row] = demonstration.state
         self._subgoals[row] = demonstration.subgoal
         self._episodes[row] = demonstration.episode
-        self._steps[row] = demonstration.step
+        self._steps[row] = demonstration.high_level_step
         self._kept[row] = True
         self._size += 1
         return len(self) - 1
@@ -139,7 +140,7 @@ class DemonstrationDataset:
         return self._read(self._episodes)
 
     @property
-    def steps(self) -> np.ndarray:
+    def high_level_steps(self) -> np.ndarray:
         """High-level step (within its episode) of each kept row."""
         return self._read(self._steps)
 
@@ -150,7 +151,7 @@ class DemonstrationDataset:
             Demonstration(
                 self._images[row], self._states[row], self._subgoals[row], int(self._episodes[row]), int(step)
             )
-            for row, step in zip(self.ids(), self.steps, strict=True)
+            for row, step in zip(self.ids(), self.high_level_steps, strict=True)
         ]
 
     def agent_xy(self, indices: np.ndarray | None = None) -> np.ndarray:

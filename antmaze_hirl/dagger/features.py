@@ -17,7 +17,7 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 GRID_CHANNELS = 2  # walls, goal
-PLANAR_DIM = 4  # goal offset (x, y) and agent offset within its cell (x, y), both in cells
+OFFSET_FEATURE_DIM = 4  # goal offset (x, y) and agent offset within its cell (x, y), both in cells
 BODY_CLIP = 10.0
 
 
@@ -113,11 +113,11 @@ def transform_grids(grids: np.ndarray, k: int, flip: bool) -> np.ndarray:
 
 
 def augment(
-    batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator, *, planar_dim: int = PLANAR_DIM
+    batch: EncodedBatch, labels: np.ndarray, rng: np.random.Generator, *, planar_feature_dim: int = OFFSET_FEATURE_DIM
 ) -> tuple[EncodedBatch, np.ndarray]:
-    """Applies one random symmetry per sample to grids, the first ``planar_dim`` features and labels.
+    """Applies one random symmetry per sample to grids, the first ``planar_feature_dim`` features and labels.
 
-    ``planar_dim`` counts the world-frame xy pairs at the start of the feature vector: the goal offset
+    ``planar_feature_dim`` counts the world-frame xy pairs at the start of the feature vector: the goal offset
     and in-cell offset, plus the body's velocity for the point mass (its whole body state). The ant's
     body state (torso orientation, joint state) has no planar form and stays as it is: an approximation
     that only matters in so far as the subgoal depends on which way the torso faces.
@@ -129,6 +129,6 @@ def augment(
         if not members.any() or (k == 0 and not flip):
             continue
         grids[members] = transform_grids(grids[members], k, flip)
-        vectors[members, :planar_dim] = transform_planar(vectors[members, :planar_dim], k, flip)
+        vectors[members, :planar_feature_dim] = transform_planar(vectors[members, :planar_feature_dim], k, flip)
         labels[members] = transform_planar(labels[members], k, flip)
     return EncodedBatch(grids, vectors), labels

@@ -20,7 +20,7 @@ from antmaze_hirl.dagger.features import EncodedBatch
 def disagreement(outputs: np.ndarray) -> np.ndarray:
     """How far ensemble members' normalised offsets ``(B, members, 2)`` lie from their mean, on average: ``(B,)``.
 
-    The offsets are in units of the learner's ``max_offset``, so 0.5 means the members' subgoals lie, on
+    The offsets are in units of the learner's ``subgoal_reach_m``, so 0.5 means the members' subgoals lie, on
     average, half a maximal subgoal step from their mean subgoal.
     """
     outputs = np.asarray(outputs, dtype=np.float64)

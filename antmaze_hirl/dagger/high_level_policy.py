@@ -59,7 +59,7 @@ class HighLevelPolicy:
         pixels_per_cell: The env's image resolution.
         body_dim: Length of the body observation in the env's ``state``.
         rng: Seeds the network initialisation, then draws minibatches and augmentations.
-        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
+        subgoal_reach_m: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
             the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m).
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`fit`.
@@ -79,7 +79,7 @@ class HighLevelPolicy:
         pixels_per_cell: int,
         body_dim: int,
         rng: np.random.Generator,
-        max_offset: float | None = None,
+        subgoal_reach_m: float | None = None,
         learning_rate: float = 1e-3,
         batch_size: int = 64,
         augment_symmetries: bool = True,
@@ -95,7 +95,7 @@ class HighLevelPolicy:
             pixels_per_cell=pixels_per_cell,
             body_dim=body_dim,
             rng=rng,
-            max_offset=max_offset,
+            subgoal_reach_m=subgoal_reach_m,
             n_directions=n_directions,
             planning_iterations=planning_iterations,
             channels=channels,
@@ -139,9 +139,9 @@ class HighLevelPolicy:
         return self.policy.encoder
 
     @property
-    def max_offset(self) -> float:
+    def subgoal_reach_m(self) -> float:
         """Farthest subgoal from the agent, metres."""
-        return self.policy.max_offset
+        return self.policy.subgoal_reach_m
 
     @property
     def gradient_steps(self) -> int:

@@ -97,14 +97,14 @@ class SubgoalLearner:
         }
 
     def targets(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
-        """Training targets: expert offsets in units of ``max_offset``, shortened to length 1 at most.
+        """Training targets: expert offsets in units of ``subgoal_reach_m``, shortened to length 1 at most.
 
         For a ``"next_cell"`` policy: the ``(dx, dy)`` cell steps to the labels' cells
         (:meth:`SubgoalPolicy.cell_steps`), which the square's symmetries map as they map xy offsets.
         """
         if self.policy.head == "next_cell":
             return self.policy.cell_steps(agent_xy, subgoals)
-        offsets = (subgoals - agent_xy) / self.policy.max_offset
+        offsets = (subgoals - agent_xy) / self.policy.subgoal_reach_m
         lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
         return (offsets / np.maximum(lengths, 1.0)).astype(np.float32)
 
@@ -124,7 +124,9 @@ class SubgoalLearner:
             minibatch = EncodedBatch(batch.grids[index], batch.vectors[index])
             labels = targets[index]
             if self.augment_symmetries:
-                minibatch, labels = augment(minibatch, labels, self.rng, planar_dim=self.policy.planar_dim)
+                minibatch, labels = augment(
+                    minibatch, labels, self.rng, planar_feature_dim=self.policy.planar_feature_dim
+                )
             outputs = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
             if self.policy.head == "next_cell":
                 loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))

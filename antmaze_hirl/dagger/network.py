@@ -47,7 +47,7 @@ class SubgoalNetwork(nn.Module):
     """CNN (and optionally a value iteration network) over the agent-centred grid, plus an MLP.
 
     Outputs ``n_directions`` logits over subgoal headings and a distance in ``[0, 1]`` (of the policy's
-    ``max_offset``). Classifying the heading, rather than regressing xy, keeps the policy decisive where
+    ``subgoal_reach_m``). Classifying the heading, rather than regressing xy, keeps the policy decisive where
     the expert's labels are multimodal (go round a wall left or right): a regressed mean would point
     into the wall with a tiny step, and every such step costs another expert label.
 

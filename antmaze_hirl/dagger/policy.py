@@ -18,7 +18,7 @@ import torch as th
 from torch import nn
 
 from antmaze_hirl.atomic_io import atomic_write_bytes
-from antmaze_hirl.dagger.features import PLANAR_DIM, EncodedBatch, ObservationEncoder
+from antmaze_hirl.dagger.features import OFFSET_FEATURE_DIM, EncodedBatch, ObservationEncoder
 from antmaze_hirl.dagger.network import (
     NEXT_CELL_MOVES,
     NextCellNetwork,
@@ -36,7 +36,7 @@ HEADS = ("heading", "next_cell")
 POLICY_SETTINGS = (
     "pixels_per_cell",
     "body_dim",
-    "max_offset",
+    "subgoal_reach_m",
     "n_directions",
     "planning_iterations",
     "channels",
@@ -46,20 +46,25 @@ POLICY_SETTINGS = (
 )
 """The :class:`SubgoalPolicy` constructor settings stored in a zip's ``config`` (besides ``geometry``)."""
 
+FILE_KEYS = {"subgoal_reach_m": "max_offset"}
+"""Settings a zip's ``config`` stores under another key: format 2 predates the 0.2.0 names, and the committed
+and shipped files keep reading only if the key in the file stays (:meth:`SubgoalPolicy.save`,
+:func:`read_policy_file` translate)."""
+
 AT_REACH = 0.9
-"""Share of ``max_offset`` from which a label counts as cut short at the reach (the oracle's are exactly at it;
+"""Share of ``subgoal_reach_m`` from which a label counts as cut short at the reach (the oracle's are exactly at it;
 a noisy or human click a little short of it still points past it)."""
 
 
 class SubgoalPolicy(nn.Module):
-    """Maps high-level observations to xy subgoals: ``agent_xy + max_offset * network(encoding)``.
+    """Maps high-level observations to xy subgoals: ``agent_xy + subgoal_reach_m * network(encoding)``.
 
     Args:
         geometry: Map placement of the env it acts in.
         pixels_per_cell: The env's image resolution.
         body_dim: Length of the body observation in the env's ``state``.
         rng: Seeds the network initialisation (one draw; torch's global RNG is left as it was).
-        max_offset: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
+        subgoal_reach_m: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
             the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m).
         n_directions: Heading bins of the network (a positive multiple of 4).
         planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
@@ -73,7 +78,7 @@ class SubgoalPolicy(nn.Module):
             heading among ``n_directions`` and regress a distance. ``"next_cell"``: classify which of the 3x3
             cells around the agent's cell comes next on the path (a label's class is the cell its subgoal lies
             in); the subgoal is that cell's centre, or the goal where the goal lies in it, pulled back to
-            ``max_offset``. With ``planning_iterations > 0`` its logits are a value iteration network's Q at the
+            ``subgoal_reach_m``. With ``planning_iterations > 0`` its logits are a value iteration network's Q at the
             agent's cell.
         block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
             between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
@@ -90,7 +95,7 @@ class SubgoalPolicy(nn.Module):
         pixels_per_cell: int,
         body_dim: int,
         rng: np.random.Generator,
-        max_offset: float | None = None,
+        subgoal_reach_m: float | None = None,
         n_directions: int = 16,
         planning_iterations: int = 0,
         channels: int = 16,
@@ -110,7 +115,7 @@ class SubgoalPolicy(nn.Module):
         self.geometry = geometry
         self.pixels_per_cell = pixels_per_cell
         self.body_dim = body_dim
-        self.max_offset = float(max_offset if max_offset is not None else geometry.scale)
+        self.subgoal_reach_m = float(subgoal_reach_m if subgoal_reach_m is not None else geometry.scale)
         self.n_directions = n_directions
         self.planning_iterations = int(planning_iterations)
         self.channels = channels
@@ -136,9 +141,13 @@ class SubgoalPolicy(nn.Module):
                 )
 
     @property
-    def planar_dim(self) -> int:
-        """Leading world-frame xy features: goal and in-cell offsets, and a 2-D body state (the point's velocity)."""
-        return PLANAR_DIM + (2 if self.body_dim == 2 else 0)
+    def planar_feature_dim(self) -> int:
+        """Leading encoded features that turn with the maze (xy pairs): goal and in-cell offsets, and a 2-D body state.
+
+        The point's velocity is such a body state; the ant's is not. :func:`~antmaze_hirl.dagger.features.augment`
+        and the symmetric views turn these features.
+        """
+        return OFFSET_FEATURE_DIM + (2 if self.body_dim == 2 else 0)
 
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> Any:
         """The network's outputs for an encoded batch.
@@ -170,24 +179,24 @@ class SubgoalPolicy(nn.Module):
         holds_goal = batch.grids[np.arange(len(batch)), 1, rows, cols] > 0.5
         offsets = np.where(holds_goal[:, None], to_goal, steps - in_cell) * self.geometry.scale
         lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
-        offsets = offsets * np.minimum(1.0, self.max_offset / np.maximum(lengths, 1e-12))  # the oracle's reach
-        return offsets / self.max_offset
+        offsets = offsets * np.minimum(1.0, self.subgoal_reach_m / np.maximum(lengths, 1e-12))  # the oracle's reach
+        return offsets / self.subgoal_reach_m
 
     def cell_steps(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
         """The ``(dx, dy)`` cell step from each agent's cell to its subgoal's, clipped to ``{-1, 0, 1}^2``.
 
         The agent's cell is clipped to the map as the encoder clips it (a body pressed into the border).
-        Where the reach (``max_offset``) is shorter than a cell, a subgoal at the reach (at least
+        Where the reach (``subgoal_reach_m``) is shorter than a cell, a subgoal at the reach (at least
         :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
         before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
         near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
         would teach "stay" (``benchmarks/next_cell_labels.py``).
         """
         agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
-        if self.max_offset < self.geometry.scale:
+        if self.subgoal_reach_m < self.geometry.scale:
             offsets = subgoals - agent_xy
             lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
-            at_reach = lengths >= AT_REACH * self.max_offset
+            at_reach = lengths >= AT_REACH * self.subgoal_reach_m
             carried = agent_xy + offsets * (self.geometry.scale / np.maximum(lengths, 1e-12))
             subgoals = np.where(at_reach, carried, subgoals)
         last = np.array([self.geometry.n_rows - 1, self.geometry.n_cols - 1])
@@ -199,7 +208,7 @@ class SubgoalPolicy(nn.Module):
     def predict_batch(self, observations: list[dict[str, np.ndarray]]) -> np.ndarray:
         """Subgoals (metres) for a list of observations."""
         agents = np.stack([np.asarray(STATE_LAYOUT.agent_xy(obs["state"]), dtype=np.float64) for obs in observations])
-        return agents + self.max_offset * self.offsets(self.encoder.encode_observations(observations))
+        return agents + self.subgoal_reach_m * self.offsets(self.encoder.encode_observations(observations))
 
     def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
         """The subgoal (metres) for one observation."""
@@ -211,7 +220,7 @@ class SubgoalPolicy(nn.Module):
             "geometry": [self.geometry.n_rows, self.geometry.n_cols, self.geometry.scale],
             "pixels_per_cell": self.pixels_per_cell,
             "body_dim": self.body_dim,
-            "max_offset": self.max_offset,
+            "subgoal_reach_m": self.subgoal_reach_m,
             "n_directions": self.n_directions,
             "planning_iterations": self.planning_iterations,
             "channels": self.channels,
@@ -227,7 +236,8 @@ class SubgoalPolicy(nn.Module):
             path: Destination file.
             learner_config: Training settings stored alongside (what :class:`HighLevelPolicy` reloads).
         """
-        config = {**self.config(), **(learner_config or {})}
+        settings = {**self.config(), **(learner_config or {})}
+        config = {FILE_KEYS.get(key, key): value for key, value in settings.items()}
         weights = io.BytesIO()
         th.save(self.network.state_dict(), weights)
         buffer = io.BytesIO()
@@ -267,7 +277,7 @@ class SubgoalPolicy(nn.Module):
 
 
 def read_policy_file(path: str | Path) -> tuple[dict[str, Any], bytes]:
-    """The ``config`` and weight bytes of a high-level policy zip.
+    """The ``config`` (keyed by constructor names, :data:`FILE_KEYS` translated) and weight bytes of a policy zip.
 
     Raises:
         FileNotFoundError: If ``path`` does not exist.
@@ -286,9 +296,11 @@ def read_policy_file(path: str | Path) -> tuple[dict[str, Any], bytes]:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise ValueError(f"{path} has format {found!r}, expected {FORMAT!r}")
     try:
-        return dict(meta["config"]), weights
+        stored = dict(meta["config"])
     except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"{path} holds settings this version cannot load: {error}") from error
+    names = {key: name for name, key in FILE_KEYS.items()}
+    return {names.get(key, key): value for key, value in stored.items()}, weights
 
 
 def __getattr__(name: str) -> Any:

@@ -21,7 +21,7 @@ from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.symmetric_views import (
     class_directions,
     class_permutations,
-    learner_planar_dim,
+    learner_planar_feature_dim,
     offsets_in_original_frame,
     probabilities_in_original_frame,
     symmetric_views,
@@ -40,19 +40,21 @@ class StartQuery:
         goal_xy: The episode's goal, metres.
         candidates: Candidate start positions, ``(n, 2)`` metres (free cell centres).
         body_observation: The body's observation at rest (the non-position part of the state).
-        policy: The current learner.
+        learner: The current learner.
     """
 
     walls: np.ndarray
     goal_xy: np.ndarray
     candidates: np.ndarray
     body_observation: np.ndarray
-    policy: OffsetLearner
+    learner: OffsetLearner
 
     def encode(self, agent_xy: np.ndarray, body_observations: np.ndarray) -> EncodedBatch:
         """Encodes the agent at each of ``agent_xy`` with the matching body observation."""
         n = len(agent_xy)
-        return self.policy.encoder.encode([self.walls] * n, list(agent_xy), [self.goal_xy] * n, list(body_observations))
+        return self.learner.encoder.encode(
+            [self.walls] * n, list(agent_xy), [self.goal_xy] * n, list(body_observations)
+        )
 
 
 class QueryStrategy:
@@ -245,7 +247,7 @@ class NoiseQuery(QueryStrategy):
         shared_noise: One noise buffer for all candidates (the paper's Alg. 2), else fresh noise per candidate.
         signal: ``"probabilities"`` or ``"offsets"`` (:data:`SIGNALS`).
         symmetries: Also perturb by the 8 symmetries of the square (needs a learner that states its
-            ``planar_dim`` and, for ``"probabilities"``, a next-cell or heading head).
+            ``planar_feature_dim`` and, for ``"probabilities"``, a next-cell or heading head).
         measure: ``"js"`` or ``"variance"`` (:data:`MEASURES`); ``None``: ``"js"`` for class
             distributions, ``"variance"`` for offsets.
 
@@ -296,7 +298,7 @@ class NoiseQuery(QueryStrategy):
             )
         agents = np.repeat(query.candidates, self.n_noises, axis=0)
         batch = query.encode(agents, noisy.reshape(-1, *body.shape))
-        outputs = self._outputs(query.policy, batch)  # (candidates * noises, views, d)
+        outputs = self._outputs(query.learner, batch)  # (candidates * noises, views, d)
         blocks = outputs.reshape(len(query.candidates), -1, outputs.shape[-1])
         measure = information_radius if self.measure == "js" else spread
         return np.array([measure(block) for block in blocks])
@@ -308,7 +310,7 @@ class NoiseQuery(QueryStrategy):
 
         if not self.symmetries:
             return read(batch)[:, None]
-        views = read(symmetric_views(batch, learner_planar_dim(policy)))
+        views = read(symmetric_views(batch, learner_planar_feature_dim(policy)))
         views = views.reshape(len(SYMMETRIES), len(batch), views.shape[-1])
         if self.signal == "probabilities":
             back = probabilities_in_original_frame(views, class_permutations(class_directions(policy)))
@@ -582,7 +584,7 @@ class GatedQuery(QueryStrategy):
 
     At each high-level step the learner proposes a subgoal; the gate opens, and the expert is asked, where
     a :class:`BaggedEnsemble`'s members disagree on the state (their mean distance from their mean
-    subgoal, in units of the learner's ``max_offset``: :func:`~antmaze_hirl.dagger.gating.disagreement`)
+    subgoal, in units of the learner's ``subgoal_reach_m``: :func:`~antmaze_hirl.dagger.gating.disagreement`)
     more than the threshold. An asked step's label is aggregated and the expert's subgoal is executed (the
     expert takes over for the step, as in ThriftyDAgger and HG-DAgger; the trainer's beta mix does not
     apply); an unasked step executes the learner's subgoal, adds nothing to D and costs nothing. The
@@ -657,7 +659,7 @@ class GatedQuery(QueryStrategy):
         self.label_failures = label_failures
         self.risk_model: RiskModel | None = None
         self.outcomes: list[tuple[np.ndarray, bool]] = []  # (risk features, failed) of every executed step
-        self.max_offset = 1.0
+        self.subgoal_reach_m = 1.0
         self._last: tuple[int, EncodedBatch] | None = None  # the encoding of the observation gated last
 
     @property
@@ -666,11 +668,11 @@ class GatedQuery(QueryStrategy):
         return "gated" if isinstance(self.inner, DAggerQuery) else f"gated+{self.inner.name}"
 
     def attach(self, learner: Learner) -> None:
-        """Attaches the inner strategy and the ensemble to the learner; reads its ``max_offset``."""
+        """Attaches the inner strategy and the ensemble to the learner; reads its ``subgoal_reach_m``."""
         self.inner.attach(learner)
         if self.ensemble is not self.inner:
             self.ensemble.attach(learner)
-        self.max_offset = float(getattr(learner, "max_offset", 1.0))
+        self.subgoal_reach_m = float(getattr(learner, "subgoal_reach_m", 1.0))
 
     def novelty(self, encoded: EncodedBatch) -> np.ndarray:
         """The ensemble's disagreement at each encoded state (``inf`` before the first update: ask)."""
@@ -734,7 +736,7 @@ class GatedQuery(QueryStrategy):
 
     def _offset(self, observation: dict[str, np.ndarray], subgoal: np.ndarray) -> np.ndarray:
         agent = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
-        return ((np.asarray(subgoal, dtype=np.float64) - agent) / self.max_offset)[None]
+        return ((np.asarray(subgoal, dtype=np.float64) - agent) / self.subgoal_reach_m)[None]
 
 
 STRATEGIES: dict[str, type[QueryStrategy]] = {

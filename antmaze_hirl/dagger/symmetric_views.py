@@ -6,7 +6,7 @@ the state's own frame; on states it has not seen they need not. :class:`~antmaze
 measures that disagreement (issue 32: the only perturbation measured to separate unseen from trained
 states, ``benchmarks/alg2_signal.py``).
 
-Everything here is array work; the learner is asked nothing but its ``planar_dim`` and class geometry.
+Everything here is array work; the learner is asked nothing but its ``planar_feature_dim`` and class geometry.
 """
 
 from __future__ import annotations
@@ -19,21 +19,21 @@ from antmaze_hirl.dagger.features import SYMMETRIES, EncodedBatch, transform_gri
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 
 
-def learner_planar_dim(learner: Any) -> int:
+def learner_planar_feature_dim(learner: Any) -> int:
     """How many leading vector features of ``learner``'s encoding are world-frame xy pairs.
 
-    Read from ``learner.planar_dim`` or ``learner.policy.planar_dim`` (a
+    Read from ``learner.planar_feature_dim`` or ``learner.policy.planar_feature_dim`` (a
     :class:`~antmaze_hirl.dagger.HighLevelPolicy`'s network).
 
     Raises:
         ValueError: For a learner that states neither (names its type).
     """
     for owner in (learner, getattr(learner, "policy", None)):
-        value = getattr(owner, "planar_dim", None)
+        value = getattr(owner, "planar_feature_dim", None)
         if isinstance(value, int):
             return value
     raise ValueError(
-        f"{type(learner).__name__} states no planar_dim (which features turn with the maze): "
+        f"{type(learner).__name__} states no planar_feature_dim (which features turn with the maze): "
         "symmetric views need it; use symmetries=False"
     )
 
@@ -75,17 +75,17 @@ def class_permutations(directions: np.ndarray) -> np.ndarray:
     return np.stack(permutations)
 
 
-def symmetric_views(batch: EncodedBatch, planar_dim: int) -> EncodedBatch:
+def symmetric_views(batch: EncodedBatch, planar_feature_dim: int) -> EncodedBatch:
     """The batch seen under each of the 8 symmetries, ``8 * B`` samples, symmetry-major (view ``s`` first).
 
     Each view transforms what :func:`~antmaze_hirl.dagger.features.augment` transforms: the grids and the
-    first ``planar_dim`` vector features (symmetry 0 is the identity).
+    first ``planar_feature_dim`` vector features (symmetry 0 is the identity).
     """
     grids, vectors = [], []
     for k, flip in SYMMETRIES:
         grids.append(transform_grids(batch.grids, k, flip))
         turned = batch.vectors.copy()
-        turned[:, :planar_dim] = transform_planar(turned[:, :planar_dim], k, flip)
+        turned[:, :planar_feature_dim] = transform_planar(turned[:, :planar_feature_dim], k, flip)
         vectors.append(turned)
     return EncodedBatch(np.concatenate(grids).astype(np.float32), np.concatenate(vectors).astype(np.float32))
 

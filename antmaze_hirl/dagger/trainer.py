@@ -60,7 +60,8 @@ class LabelRequest:
         observation: The high-level observation to label.
         learner_subgoal: What the learner proposes here (a page may show it).
         episode: Training episode index, from 0.
-        step: Label index within the episode, from 0.
+        label_index: Label index within the episode, from 0 (the expert cost so far; not the high-level
+            step, which a gating strategy may have walked unasked).
         beta: The expert's weight in the executed mix this episode.
         executes: Whether the label is executed; ``False`` for the labels a gating strategy asks for after
             a failed episode (of states the learner passed unasked), which only join D.
@@ -69,7 +70,7 @@ class LabelRequest:
     observation: dict[str, np.ndarray]
     learner_subgoal: np.ndarray
     episode: int
-    step: int
+    label_index: int
     beta: float
     executes: bool = True
 
@@ -195,7 +196,7 @@ class DAggerTrainer:
     Args:
         env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
         expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
-        policy: The learner (start-selecting strategies need an
+        learner: The high-level learner it trains (start-selecting strategies need an
             :class:`~antmaze_hirl.dagger.protocols.OffsetLearner`, such as ``HighLevelPolicy``).
         rng: Spawns the trainer's three independent streams (:attr:`streams`): tasks (maze, goal, the env's
             reset seed), the strategy's draws and ``"switch"`` mixing. Spawning draws nothing from ``rng``
@@ -225,7 +226,7 @@ class DAggerTrainer:
         *,
         env: Any,
         expert: Expert,
-        policy: Learner,
+        learner: Learner,
         rng: np.random.Generator,
         strategy: QueryStrategy | None = None,
         beta_schedule: BetaSchedule | None = None,
@@ -242,15 +243,15 @@ class DAggerTrainer:
             raise ValueError("gradient step counts must be >= 0")
         self.env = env
         self.expert = expert
-        self.policy = policy
+        self.learner = learner
         self.rng = rng
         self.streams = trainer_streams(rng)
         self.strategy = strategy if strategy is not None else DAggerQuery()
-        if self.strategy.reads_policy_outputs and not isinstance(policy, OffsetLearner):
+        if self.strategy.reads_policy_outputs and not isinstance(learner, OffsetLearner):
             raise ValueError(
-                f"strategy {self.strategy.name!r} reads a HighLevelPolicy's outputs; got {type(policy).__name__}"
+                f"strategy {self.strategy.name!r} reads a HighLevelPolicy's outputs; got {type(learner).__name__}"
             )
-        self.strategy.attach(policy)
+        self.strategy.attach(learner)
         self.beta_schedule = beta_schedule if beta_schedule is not None else InverseDecayBetaSchedule()
         self.mixing = mixing
         self.episodes_per_update = episodes_per_update
@@ -342,12 +343,12 @@ class DAggerTrainer:
         while not done:
             # The learner's proposal is computed before the label so a person can be shown it; it is
             # deterministic and draws no randomness, so the order leaves the numbers unchanged.
-            learner_subgoal = np.asarray(self.policy.predict(obs), dtype=np.float64)
+            learner_subgoal = np.asarray(self.learner.predict(obs), dtype=np.float64)
             if gating:
                 own = self._clip(learner_subgoal)
                 # The strategy is asked first, always: it keeps every state for its threshold.
                 asked = (
-                    self.strategy.wants_label(obs, own, self.policy)
+                    self.strategy.wants_label(obs, own, self.learner)
                     or len(self.dataset) == 0
                     or self.env.unwrapped.is_no_op_subgoal(own)
                 )
@@ -430,7 +431,7 @@ class DAggerTrainer:
         return chosen
 
     def _fit(self, steps: int) -> None:
-        self.last_loss = self.policy.fit_dataset(self.dataset, steps)
+        self.last_loss = self.learner.fit_dataset(self.dataset, steps)
 
     def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
         geometry = self.env.unwrapped.geometry
@@ -443,4 +444,4 @@ class DAggerTrainer:
         if not cells:
             cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]
         candidates = np.stack([geometry.cell_to_xy(cell) for cell in cells])
-        return StartQuery(walls, goal_xy, candidates, self._rest_body, self.policy)
+        return StartQuery(walls, goal_xy, candidates, self._rest_body, self.learner)

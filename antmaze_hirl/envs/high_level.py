@@ -134,19 +134,20 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             shipped for the body (:func:`antmaze_hirl.sb3_ext.shipped.make_maze_env`).
         horizon: Low-level steps per subgoal, H. Default per body (ant 100, point 50).
         max_steps: Low-level step budget per episode.
-        goal_threshold: Final-goal radius, metres. Default per body (ant 0.45, point 0.2).
+        success_radius_m: How near the final goal counts as reached, metres. Default per body (ant 0.45,
+            point 0.2). The low level's, for subgoals, is ``reach_kwargs["success_radius_m"]`` (same default).
         position_noise: Start and goal offsets, uniform in ``±position_noise`` cells.
         pixels_per_cell: Image resolution.
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
         min_subgoal_distance: Subgoals nearer the body than this, metres, are pushed out to it along
             the same heading, then clipped to the maze bounds (flagged in ``info``; near a border the
             clip can leave them nearer, which :class:`~antmaze_hirl.dagger.DAggerTrainer` catches).
-            A subgoal inside the low level's reach radius is "reached" in one step, so a learner (or a
+            A subgoal inside the low level's success radius is "reached" in one step, so a learner (or a
             beta-blend of opposite proposals) that keeps proposing one would burn an expert label per
-            low-level step. Default twice the low level's ``distance_threshold`` (ant 0.9 m, point
+            low-level step. Default twice the low level's ``success_radius_m`` (ant 0.9 m, point
             0.4 m); 0 turns it off.
         terminate_on_flip: Ant only: end the episode as a failure once the ant has flipped.
-        reach_kwargs: Extra :class:`ReachEnv` arguments (``distance_threshold`` for subgoals, ...).
+        reach_kwargs: Extra :class:`ReachEnv` arguments (``success_radius_m`` for subgoals, ...).
         render_mode: ``"rgb_array"`` for a picture of now, ``"rgb_array_list"`` for one frame at the reset and one
             after every low-level step (``render()`` returns those since its last call), e.g. for a video of the walk.
         render_view: What the pictures show (:mod:`antmaze_hirl.envs.rendering`): ``"schematic"`` (the default,
@@ -173,7 +174,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         low_level: Any = None,
         horizon: int | None = None,
         max_steps: int = DEFAULT_MAX_STEPS,
-        goal_threshold: float | None = None,
+        success_radius_m: float | None = None,
         position_noise: float = 0.25,
         pixels_per_cell: int = 8,
         clip_subgoals: bool = False,
@@ -199,7 +200,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             low_level=low_level,
             horizon=horizon,
             max_steps=max_steps,
-            goal_threshold=goal_threshold,
+            success_radius_m=success_radius_m,
             position_noise=position_noise,
             pixels_per_cell=pixels_per_cell,
             clip_subgoals=clip_subgoals,
@@ -218,7 +219,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.body = body
         self.render_mode = render_mode
         self.max_steps = int(max_steps)
-        self.goal_threshold = float(goal_threshold if goal_threshold is not None else spec.distance_threshold)
+        self.success_radius_m = float(success_radius_m if success_radius_m is not None else spec.success_radius_m)
         self.position_noise = float(position_noise)
         self.clip_subgoals = clip_subgoals
         self.min_goal_cells = int(min_goal_cells)
@@ -233,7 +234,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.layout = first_layout
         self.geometry: MazeGeometry = self.reach.sim.geometry
         self.min_subgoal_distance = float(
-            min_subgoal_distance if min_subgoal_distance is not None else 2 * self.reach.distance_threshold
+            min_subgoal_distance if min_subgoal_distance is not None else 2 * self.reach.success_radius_m
         )
         if not 0 <= self.min_subgoal_distance < self.geometry.scale:
             raise ValueError(
@@ -288,7 +289,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.layout = task.layout
         self.goal_xy = task.goal_xy
         self.reach.reset(
-            seed=int(self.np_random.integers(2**31)), options={"start_xy": task.start_xy, "goal_xy": self.goal_xy}
+            seed=int(self.np_random.integers(2**31)), options={"start_xy": task.start_xy, "subgoal_xy": self.goal_xy}
         )
         self.attempts = 0
         self.total_low_level_steps = 0
@@ -342,7 +343,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
     def start_walk(self, subgoal: np.ndarray, clipped: bool) -> SubgoalWalk:
         """Sets a subgoal that :meth:`check_subgoal` returned (pushed out if too near) and starts its walk."""
         subgoal, extended = self._push_out(subgoal)
-        low_obs = self.reach.set_goal(subgoal)
+        low_obs = self.reach.set_subgoal(subgoal)
         self.attempts += 1
         walk = SubgoalWalk(subgoal, clipped, extended, low_obs, [self.reach.agent_xy])
         walk.done = self.total_low_level_steps >= self.max_steps
@@ -415,9 +416,9 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
                 n_rows=n_rows,
                 n_cols=n_cols,
                 wall_fraction=self.wall_fraction,
-                min_goal_distance=self.min_goal_cells,
+                min_goal_cells=self.min_goal_cells,
             )
-        return layout_from_map(self._fixed_map, rng, min_goal_distance=self.min_goal_cells)
+        return layout_from_map(self._fixed_map, rng, min_goal_cells=self.min_goal_cells)
 
     def sample_task(
         self,
@@ -458,7 +459,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
 
     def _goal_reached(self) -> bool:
-        return bool(np.linalg.norm(self.reach.agent_xy - self.goal_xy) <= self.goal_threshold)
+        return bool(np.linalg.norm(self.reach.agent_xy - self.goal_xy) <= self.success_radius_m)
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         agent_xy = self.reach.agent_xy

@@ -281,9 +281,9 @@ def corner_cells(walls: np.ndarray) -> list[Cell]:
 
 
 def sample_start_and_goal(
-    walls: np.ndarray, rng: np.random.Generator, *, min_goal_distance: int = 0
+    walls: np.ndarray, rng: np.random.Generator, *, min_goal_cells: int = 0
 ) -> tuple[Cell, Cell] | None:
-    """Draws a start corner and a goal at least ``min_goal_distance`` path steps away.
+    """Draws a start corner and a goal at least ``min_goal_cells`` path steps away.
 
     Returns:
         ``(start_cell, goal_cell)`` or ``None`` if no corner has a far enough reachable cell.
@@ -293,24 +293,24 @@ def sample_start_and_goal(
     for start_index in rng.permutation(len(corners)):
         start = corners[start_index]
         distances = bfs_distances(walls, start)
-        candidates = np.argwhere(distances >= max(min_goal_distance, 1))
+        candidates = np.argwhere(distances >= max(min_goal_cells, 1))
         if len(candidates):
             goal = candidates[rng.integers(len(candidates))]
             return start, (int(goal[0]), int(goal[1]))
     return None
 
 
-def layout_from_map(maze_map: str | MazeMap, rng: np.random.Generator, *, min_goal_distance: int = 0) -> MazeLayout:
+def layout_from_map(maze_map: str | MazeMap, rng: np.random.Generator, *, min_goal_cells: int = 0) -> MazeLayout:
     """A layout on a fixed (user or standard) map with a random start corner and goal.
 
     Raises:
-        ValueError: If the map is invalid or no goal is ``min_goal_distance`` steps from a corner.
+        ValueError: If the map is invalid or no goal is ``min_goal_cells`` steps from a corner.
 
     """
     walls = validate_maze_map(maze_map)
-    drawn = sample_start_and_goal(walls, rng, min_goal_distance=min_goal_distance)
+    drawn = sample_start_and_goal(walls, rng, min_goal_cells=min_goal_cells)
     if drawn is None:
-        raise ValueError(f"no free cell is min_goal_distance={min_goal_distance} steps from a start corner")
+        raise ValueError(f"no free cell is min_goal_cells={min_goal_cells} steps from a start corner")
     return MazeLayout(walls, *drawn)
 
 
@@ -320,7 +320,7 @@ def generate_layout(
     n_rows: int = 5,
     n_cols: int = 5,
     wall_fraction: float = 0.3,
-    min_goal_distance: int = 4,
+    min_goal_cells: int = 4,
     max_tries: int = 100,
 ) -> MazeLayout:
     """Generates a random connected maze with a start corner and a far goal.
@@ -333,12 +333,12 @@ def generate_layout(
         n_rows: Free-space rows (the map adds a border wall on each side).
         n_cols: Free-space columns.
         wall_fraction: Target share of interior cells that are walls, in ``[0, 1)``.
-        min_goal_distance: Least number of grid steps on the shortest path from start to goal.
-        max_tries: Layouts drawn before giving up on ``min_goal_distance``.
+        min_goal_cells: Least number of grid steps on the shortest path from start to goal.
+        max_tries: Layouts drawn before giving up on ``min_goal_cells``.
 
     Raises:
         ValueError: On sizes below 1, a ``wall_fraction`` outside ``[0, 1)``, or when no draw has a
-            goal ``min_goal_distance`` steps away.
+            goal ``min_goal_cells`` steps away.
 
     """
     if n_rows < 1 or n_cols < 1:
@@ -362,12 +362,12 @@ def generate_layout(
                 placed += 1
             else:
                 walls[cell] = False
-        drawn = sample_start_and_goal(walls, rng, min_goal_distance=min_goal_distance)
+        drawn = sample_start_and_goal(walls, rng, min_goal_cells=min_goal_cells)
         if drawn is not None:
             return MazeLayout(walls, *drawn)
     raise ValueError(
         f"no {n_rows}x{n_cols} layout with wall_fraction={wall_fraction} had a goal "
-        f"min_goal_distance={min_goal_distance} steps from a corner in {max_tries} tries"
+        f"min_goal_cells={min_goal_cells} steps from a corner in {max_tries} tries"
     )
 
 

@@ -23,7 +23,8 @@ class BodySpec:
 
     Attributes:
         scale: Maze cell side in metres (``maze_size_scaling``, fixed by gymnasium-robotics).
-        distance_threshold: Default reach radius in metres for subgoals and the final goal.
+        success_radius_m: Default success radius, metres: how near a subgoal (``ReachEnv``) or the final goal
+            (``HighLevelMazeEnv``) counts as reached.
         default_horizon: Default low-level steps per subgoal (H).
         dt: Simulated seconds per env step.
         default_action_scale: Default multiplier on policy actions before the actuators.
@@ -31,7 +32,7 @@ class BodySpec:
     """
 
     scale: float
-    distance_threshold: float
+    success_radius_m: float
     default_horizon: int
     dt: float
     default_action_scale: float = 1.0
@@ -41,9 +42,9 @@ BODY_SPECS: dict[str, BodySpec] = {
     # 0.45 m is gymnasium-robotics' own success radius; H=100 (5 s) leaves a walking ant time for one cell.
     # Half of Ant-v5's gear-150 torque: at full torque TD3 learns to hop, and 30 of 32 failures of the
     # full-torque policy were flips (see README, "Low-level policies").
-    "ant": BodySpec(scale=4.0, distance_threshold=0.45, default_horizon=100, dt=0.05, default_action_scale=0.5),
+    "ant": BodySpec(scale=4.0, success_radius_m=0.45, default_horizon=100, dt=0.05, default_action_scale=0.5),
     # The point mass lives in 1 m cells, so the radius shrinks with it; it crosses a cell in ~20 steps.
-    "point": BodySpec(scale=1.0, distance_threshold=0.2, default_horizon=50, dt=0.01),
+    "point": BodySpec(scale=1.0, success_radius_m=0.2, default_horizon=50, dt=0.01),
 }
 """Each body's physics and low-level defaults."""
 
@@ -76,8 +77,8 @@ class BodyProfile:
 
     Attributes:
         body: ``"ant"`` or ``"point"``.
-        spec: The body's physics and low-level defaults (:data:`BODY_SPECS`): cell size, reach radius
-            (``distance_threshold``), H (``default_horizon``), ``dt``, action scale.
+        spec: The body's physics and low-level defaults (:data:`BODY_SPECS`): cell size, success radius
+            (``success_radius_m``), H (``default_horizon``), ``dt``, action scale.
         maze_size: Free cells per side of the experiment's random layouts.
         held_out_maze_size: Free cells per side under the held-out-layouts protocol (a family with many
             wall grids, so that whole layouts can be held out).

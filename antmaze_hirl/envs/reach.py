@@ -49,15 +49,23 @@ def as_free_point(value: Any, geometry: MazeGeometry, walls: np.ndarray, name: s
     return point
 
 
-def _goal_option(options: dict[str, Any]) -> Any:
-    """The ``"goal_xy"`` reset option; ``None`` if not given.
+RENAMED_OPTIONS = ("goal", "goal_xy")
+"""Earlier keys of :class:`ReachEnv`'s ``"subgoal_xy"`` reset option (``"goal_xy"`` is the final goal of
+:class:`HighLevelMazeEnv`): refused, since silently ignoring one would draw a random subgoal."""
+
+
+def _subgoal_option(options: dict[str, Any]) -> Any:
+    """The ``"subgoal_xy"`` reset option; ``None`` if not given.
 
     Raises:
-        ValueError: For the key ``"goal"``, removed in 0.2.0 (silently ignoring it would draw a random subgoal).
+        ValueError: For a key of :data:`RENAMED_OPTIONS`, naming it and its value.
     """
-    if "goal" in options:
-        raise ValueError(f"ReachEnv's reset option 'goal' is now 'goal_xy': got options['goal']={options['goal']!r}")
-    return options.get("goal_xy")
+    for key in RENAMED_OPTIONS:
+        if key in options:
+            raise ValueError(
+                f"ReachEnv's reset option {key!r} is now 'subgoal_xy' (0.2.0): got options[{key!r}]={options[key]!r}"
+            )
+    return options.get("subgoal_xy")
 
 
 INFO_PENALTIES = ("flip_penalty", "tilt_penalty")
@@ -91,7 +99,7 @@ class ReachEnv(GoalEnv, EzPickle):
     """Goal-conditioned locomotion in a maze: reach a subgoal sampled near the body.
 
     Each episode places the body in a random free cell of ``maze_map`` (or where ``options`` say) and
-    samples a subgoal uniformly (by area) in the ring ``min_goal_distance..goal_radius`` around it, in
+    samples a subgoal uniformly (by area) in the ring ``min_sample_radius_m..sample_radius_m`` around it, in
     free space and in line of sight (a straight walk can reach it). The episode is truncated after ``horizon`` steps.
 
     Observation ``Dict``:
@@ -103,9 +111,9 @@ class ReachEnv(GoalEnv, EzPickle):
     Action: the body's own ``Box(-1, 1)`` (ant: 8 joint torques, point: 2 forces), multiplied by
     ``action_scale`` before it reaches the actuators.
 
-    Reward: ``sparse`` gives 1.0 within ``distance_threshold`` of the subgoal, else 0.0 (the
+    Reward: ``sparse`` gives 1.0 within ``success_radius_m`` of the subgoal, else 0.0 (the
     gymnasium-robotics convention); ``dense`` gives ``exp(-distance)``. ``info["is_success"]`` says
-    whether the body is within the threshold now.
+    whether the body is within ``success_radius_m`` now.
 
     Args:
         body: ``"point"`` (PointMaze ball in 1 m cells; the default, as in :class:`HighLevelMazeEnv`:
@@ -113,9 +121,10 @@ class ReachEnv(GoalEnv, EzPickle):
             their body explicitly.
         maze_map: Layout, a list of rows or a standard map name. Default ``"open"`` (3x5 free cells).
         horizon: Steps per episode, H. Default per body: ant 100, point 50.
-        goal_radius: Largest subgoal distance, metres. Default: one maze cell (ant 4 m, point 1 m).
-        min_goal_distance: Smallest subgoal distance, metres. Default: the distance threshold.
-        distance_threshold: Reach radius, metres. Default per body: ant 0.45, point 0.2.
+        sample_radius_m: Largest subgoal distance, metres (not the oracle's reach). Default: one maze cell
+            (ant 4 m, point 1 m).
+        min_sample_radius_m: Smallest subgoal distance, metres. Default: ``success_radius_m``.
+        success_radius_m: How near the subgoal counts as reached, metres. Default per body: ant 0.45, point 0.2.
         reward_type: ``"sparse"`` or ``"dense"``.
         action_scale: Multiplier in ``(0, 1]`` on actions. Default per body: ant 0.5, point 1. The
             paper's rllab Ant used a (-30, 30) control range with gear 1; Gymnasium's Ant-v5, used here,
@@ -128,7 +137,7 @@ class ReachEnv(GoalEnv, EzPickle):
             Never after a flip. Default 0: every episode starts from rest.
         include_contact_forces: Ant only: keep contact forces in ``observation``.
         render_mode: ``"rgb_array"`` renders the bird's-eye view (no OpenGL needed).
-        maze_probability: Chance that a from-rest ``reset()`` without ``start_xy``/``goal`` options
+        maze_probability: Chance that a from-rest ``reset()`` without ``start_xy``/``subgoal_xy`` options
             rebuilds the walls from a random layout (:func:`~antmaze_hirl.envs.layouts.generate_layout`)
             instead of ``maze_map``: the high level walks the body between walls, the open map never
             shows any. Subgoals stay in line of sight, so they hug walls and corners. Default 0: always
@@ -169,9 +178,9 @@ class ReachEnv(GoalEnv, EzPickle):
         maze_map: str | MazeMap = "open",
         *,
         horizon: int | None = None,
-        goal_radius: float | None = None,
-        min_goal_distance: float | None = None,
-        distance_threshold: float | None = None,
+        sample_radius_m: float | None = None,
+        min_sample_radius_m: float | None = None,
+        success_radius_m: float | None = None,
         reward_type: str = "sparse",
         action_scale: float | None = None,
         terminate_on_flip: bool = False,
@@ -192,9 +201,9 @@ class ReachEnv(GoalEnv, EzPickle):
             body,
             maze_map,
             horizon=horizon,
-            goal_radius=goal_radius,
-            min_goal_distance=min_goal_distance,
-            distance_threshold=distance_threshold,
+            sample_radius_m=sample_radius_m,
+            min_sample_radius_m=min_sample_radius_m,
+            success_radius_m=success_radius_m,
             reward_type=reward_type,
             action_scale=action_scale,
             terminate_on_flip=terminate_on_flip,
@@ -213,22 +222,22 @@ class ReachEnv(GoalEnv, EzPickle):
         spec = body_spec(body)
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)
-        self.goal_radius = float(goal_radius if goal_radius is not None else spec.scale)
-        self.distance_threshold = float(
-            distance_threshold if distance_threshold is not None else spec.distance_threshold
+        self.sample_radius_m = float(sample_radius_m if sample_radius_m is not None else spec.scale)
+        self.success_radius_m = float(success_radius_m if success_radius_m is not None else spec.success_radius_m)
+        self.min_sample_radius_m = float(
+            min_sample_radius_m if min_sample_radius_m is not None else self.success_radius_m
         )
-        self.min_goal_distance = float(min_goal_distance if min_goal_distance is not None else self.distance_threshold)
         if self.horizon < 1:
             raise ValueError(f"horizon must be >= 1, got {horizon}")
-        if self.min_goal_distance < 0:
-            raise ValueError(f"min_goal_distance must be >= 0 metres, got {self.min_goal_distance}")
-        if not self.min_goal_distance < self.goal_radius:
+        if self.min_sample_radius_m < 0:
+            raise ValueError(f"min_sample_radius_m must be >= 0 metres, got {self.min_sample_radius_m}")
+        if not self.min_sample_radius_m < self.sample_radius_m:
             raise ValueError(
-                f"goal_radius {self.goal_radius} m leaves no room for subgoals: it must exceed "
-                f"min_goal_distance {self.min_goal_distance} m (default: the success threshold)"
+                f"sample_radius_m {self.sample_radius_m} m leaves no room for subgoals: it must exceed "
+                f"min_sample_radius_m {self.min_sample_radius_m} m (default: success_radius_m)"
             )
-        if self.distance_threshold <= 0:
-            raise ValueError(f"distance_threshold must be > 0, got {distance_threshold}")
+        if self.success_radius_m <= 0:
+            raise ValueError(f"success_radius_m must be > 0, got {success_radius_m}")
         if reward_type not in REWARD_TYPES:
             raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
         if action_scale is not None and not 0 < action_scale <= 1:
@@ -278,7 +287,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self._renderer = BirdseyeRenderer(self.sim.geometry)
         self._body_obs = np.zeros(self.sim.observation_dim)
         self._xy = np.zeros(2)
-        self._goal = np.zeros(2)
+        self._subgoal_xy = np.zeros(2)
         self._steps = 0
         self._started = False
 
@@ -303,9 +312,9 @@ class ReachEnv(GoalEnv, EzPickle):
         return self._body_obs.copy()
 
     @property
-    def goal(self) -> np.ndarray:
+    def subgoal_xy(self) -> np.ndarray:
         """Current subgoal xy, metres."""
-        return self._goal.copy()
+        return self._subgoal_xy.copy()
 
     def set_walls(self, walls: np.ndarray) -> None:
         """Swaps in another layout (a simulator of the new walls from the pool, else a rebuild of the MuJoCo model)."""
@@ -331,20 +340,19 @@ class ReachEnv(GoalEnv, EzPickle):
         Args:
             seed: Seeds ``self.np_random`` (the only source of randomness).
             options: Optional ``"start_xy"`` (exact body xy; default a random free cell centre with
-                ±0.25 cell of noise) and ``"goal_xy"`` (exact subgoal xy; default sampled near the body),
-                the keys :class:`HighLevelMazeEnv` reads too.
+                ±0.25 cell of noise) and ``"subgoal_xy"`` (exact subgoal xy; default sampled near the body).
 
         Raises:
-            ValueError: If a given start or goal is NaN, or outside the maze's free space, or the
-                option ``"goal"`` (``"goal_xy"`` since 0.2.0) is given.
+            ValueError: If a given start or subgoal is NaN, or outside the maze's free space, or the
+                option ``"goal"`` or ``"goal_xy"`` (``"subgoal_xy"`` since 0.2.0) is given.
 
         """
         super().reset(seed=seed)
         if self._chains(seed, options):
-            return self.set_goal(self.sample_goal()), {"is_success": self._is_success()}
+            return self.set_subgoal(self.sample_subgoal()), {"is_success": self._is_success()}
         self._smoother.reset()  # from rest: no previous torque to carry (a chained reset keeps it)
         options = options or {}
-        if all(options.get(key) is None for key in ("start_xy", "goal_xy", "goal")):
+        if all(options.get(key) is None for key in ("start_xy", "subgoal_xy", *RENAMED_OPTIONS)):
             self._draw_walls()  # only a free draw may move it to another maze: given positions are in this one
         self._started = True  # after the walls: a rebuild clears it
         geometry = self.sim.geometry
@@ -355,8 +363,9 @@ class ReachEnv(GoalEnv, EzPickle):
             cell = free[self.np_random.integers(len(free))]
             start = geometry.cell_to_xy(cell) + self.np_random.uniform(-0.25, 0.25, size=2) * geometry.scale
         self._body_obs, self._xy = self.sim.reset(start, seed=int(self.np_random.integers(2**31)))
-        goal = _goal_option(options)
-        self.set_goal(self.sample_goal() if goal is None else as_free_point(goal, geometry, self.walls, "goal_xy"))
+        subgoal = _subgoal_option(options)
+        given = None if subgoal is None else as_free_point(subgoal, geometry, self.walls, "subgoal_xy")
+        self.set_subgoal(self.sample_subgoal() if given is None else given)
         return self._get_obs(), {"is_success": self._is_success()}
 
     def _chains(self, seed: int | None, options: dict[str, Any] | None) -> bool:
@@ -372,7 +381,7 @@ class ReachEnv(GoalEnv, EzPickle):
         if self.np_random.random() < self.maze_probability:
             size = self.maze_sizes[self.np_random.integers(len(self.maze_sizes))]
             sample = functools.partial(
-                generate_layout, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_distance=0
+                generate_layout, n_rows=size, n_cols=size, wall_fraction=self.maze_wall_fraction, min_goal_cells=0
             )
             split = self.maze_split
             layout = sample(self.np_random) if split is None else sample_layout_in_split(sample, self.np_random, split)
@@ -380,30 +389,30 @@ class ReachEnv(GoalEnv, EzPickle):
         else:
             self._load_walls(self._base_walls)
 
-    def set_goal(self, goal: np.ndarray) -> dict[str, np.ndarray]:
+    def set_subgoal(self, subgoal_xy: np.ndarray) -> dict[str, np.ndarray]:
         """Gives the body a new subgoal and restarts the step count (one new sub-episode of H steps).
 
         Returns:
             The observation with the new ``desired_goal``.
 
         """
-        self._goal = as_finite_vector(goal, 2, "goal")
+        self._subgoal_xy = as_finite_vector(subgoal_xy, 2, "subgoal_xy")
         self._steps = 0
-        self.sim.show_target(self._goal)
+        self.sim.show_target(self._subgoal_xy)
         return self._get_obs()
 
-    def sample_goal(self) -> np.ndarray:
-        """A subgoal in free space and line of sight, ``min_goal_distance..goal_radius`` from the body.
+    def sample_subgoal(self) -> np.ndarray:
+        """A subgoal in free space and line of sight, ``min_sample_radius_m..sample_radius_m`` from the body.
 
         Falls back to the body's own cell centre if 1000 draws find none (a body squeezed into a corner).
         """
         geometry = self.sim.geometry
         for _ in range(1000):
-            radius = np.sqrt(self.np_random.uniform(self.min_goal_distance**2, self.goal_radius**2))
+            radius = np.sqrt(self.np_random.uniform(self.min_sample_radius_m**2, self.sample_radius_m**2))
             angle = self.np_random.uniform(0, 2 * np.pi)
-            goal = self._xy + radius * np.array([np.cos(angle), np.sin(angle)])
-            if geometry.segment_is_free(self.walls, self._xy, goal):
-                return goal
+            subgoal = self._xy + radius * np.array([np.cos(angle), np.sin(angle)])
+            if geometry.segment_is_free(self.walls, self._xy, subgoal):
+                return subgoal
         return geometry.cell_to_xy(geometry.xy_to_cell(self._xy))
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
@@ -418,7 +427,7 @@ class ReachEnv(GoalEnv, EzPickle):
         self._steps += 1
         obs = self._get_obs()
         info = {"is_success": self._is_success(), "flipped": self.sim.is_flipped, "uprightness": self.sim.uprightness}
-        reward = float(self.compute_reward(self._xy, self._goal, info))
+        reward = float(self.compute_reward(self._xy, self._subgoal_xy, info))
         terminated = self.terminate_on_flip and self.sim.is_flipped
         truncated = self._steps >= self.horizon
         return obs, reward, terminated, truncated, info
@@ -434,7 +443,7 @@ class ReachEnv(GoalEnv, EzPickle):
         if self.reward_type == "dense":
             reward = np.exp(-distance)
         else:
-            reward = (distance <= self.distance_threshold).astype(np.float64)
+            reward = (distance <= self.success_radius_m).astype(np.float64)
         if self.flip_penalty > 0:
             reward = reward - self.flip_penalty * flipped_flags(info, np.shape(distance))
         if self.tilt_penalty > 0:
@@ -446,18 +455,18 @@ class ReachEnv(GoalEnv, EzPickle):
         """Bird's-eye RGB image (rows, cols, 3) of walls, body and subgoal when ``render_mode="rgb_array"``."""
         if self.render_mode != "rgb_array":
             return None
-        return self._renderer.rgb(self.walls, self._xy, self._goal)
+        return self._renderer.rgb(self.walls, self._xy, self._subgoal_xy)
 
     def close(self) -> None:
         """Releases the simulator (closes it: a closed env's simulator never goes back to the pool)."""
         self.sim.close()
 
     def _is_success(self) -> bool:
-        return bool(np.linalg.norm(self._xy - self._goal) <= self.distance_threshold)
+        return bool(np.linalg.norm(self._xy - self._subgoal_xy) <= self.success_radius_m)
 
     def _get_obs(self) -> dict[str, np.ndarray]:
         return {
             "observation": self._body_obs.copy(),
             "achieved_goal": self._xy.copy(),
-            "desired_goal": self._goal.copy(),
+            "desired_goal": self._subgoal_xy.copy(),
         }

@@ -27,8 +27,8 @@ class HighLevelStateLayout:
     body_slice: ClassVar[slice] = slice(2 * _XY_DIM, None)
 
     @property
-    def planar_dim(self) -> int:
-        """Length of the leading agent and goal xy part."""
+    def positions_dim(self) -> int:
+        """Length of the leading agent and goal xy part, metres (not the learner's ``planar_feature_dim``)."""
         return 2 * _XY_DIM
 
     def agent_xy(self, state: np.ndarray) -> np.ndarray:
@@ -51,7 +51,7 @@ class HighLevelStateLayout:
         """
         if body_dim < 0:
             raise ValueError(f"body_dim must be >= 0, got {body_dim}")
-        return self.planar_dim + body_dim
+        return self.positions_dim + body_dim
 
     def body_dim(self, state_dim: int) -> int:
         """Length of the body observation in a state of ``state_dim`` values.
@@ -59,9 +59,9 @@ class HighLevelStateLayout:
         Raises:
             ValueError: If ``state_dim`` leaves no room for the agent and goal xy.
         """
-        if state_dim < self.planar_dim:
-            raise ValueError(f"a high-level state has at least {self.planar_dim} values, got {state_dim}")
-        return state_dim - self.planar_dim
+        if state_dim < self.positions_dim:
+            raise ValueError(f"a high-level state has at least {self.positions_dim} values, got {state_dim}")
+        return state_dim - self.positions_dim
 
     def compose(self, agent_xy: np.ndarray, goal_xy: np.ndarray, body: np.ndarray) -> np.ndarray:
         """The ``float32`` state of these parts (as the env builds it)."""

@@ -167,7 +167,7 @@ def draw_suite_tasks(name: str) -> list[SuiteTask]:
         n_rows=spec.maze_size,
         n_cols=spec.maze_size,
         wall_fraction=WALL_FRACTION,
-        min_goal_distance=DEFAULT_MIN_GOAL_CELLS,
+        min_goal_cells=DEFAULT_MIN_GOAL_CELLS,
     )
     tasks: list[SuiteTask] = []
     seen: set[str] = set()

@@ -221,7 +221,7 @@ def resolve_policy(spec: SuiteSpec, policy: str | os.PathLike[str], env: Any, *,
         from antmaze_hirl.experiments.config import BODY_DEFAULTS
         from antmaze_hirl.experts import PathOracle
 
-        return PathOracle.for_env(env, max_distance=BODY_DEFAULTS[spec.body]["expert_max_distance"]), "oracle"
+        return PathOracle.for_env(env, subgoal_reach_m=BODY_DEFAULTS[spec.body]["expert_max_distance"]), "oracle"
     if policy == "random":
         space = env.action_space
         return RandomSubgoalPolicy(space.low, space.high, seed), "random"

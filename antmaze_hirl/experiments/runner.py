@@ -181,7 +181,7 @@ def make_trainer(
     streams = trial_streams(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
     # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
-    reach = {} if config.expert_max_distance is None else {"max_offset": config.expert_max_distance}
+    reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
     learner = trial_learner(config)
     if learner is not None:
         policy_settings = {**learner_settings(learner, config.maze_size), **(policy_settings or {})}
@@ -191,7 +191,7 @@ def make_trainer(
     return DAggerTrainer(
         env=env,
         expert=expert,
-        policy=HighLevelPolicy.for_env(env, rng=streams.learner, **{**reach, **(policy_settings or {})}),
+        learner=HighLevelPolicy.for_env(env, rng=streams.learner, **{**reach, **(policy_settings or {})}),
         rng=streams.trainer,
         strategy=strategy,
         beta_schedule=InverseDecayBetaSchedule(config.decay),
@@ -238,15 +238,17 @@ def run_trial_with_evaluations(
     """
     envs = TrialEnvs(config, low_level)
     env = envs.train
-    trainer = make_trainer(method, seed, config, env, PathOracle.for_env(env, max_distance=config.expert_max_distance))
+    trainer = make_trainer(
+        method, seed, config, env, PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
+    )
     rows: list[dict[str, Any]] = []
     evaluations: list[dict[str, Any]] = []
     schedule = set(evaluation_schedule(config))
 
     def evaluate(episodes_done: int, final: bool) -> dict[str, Any]:
         if not config.evaluates_untrained:  # protocol 1, as it always ran
-            return envs.evaluate(trainer.policy, final=final)
-        outcomes = envs.evaluate_mazes(trainer.policy, final=final)
+            return envs.evaluate(trainer.learner, final=final)
+        outcomes = envs.evaluate_mazes(trainer.learner, final=final)
         trial = {"method": method, "seed": seed, "episode": episodes_done, "labels": trainer.total_expert_cost}
         evaluations.extend({**trial, **outcome} for outcome in outcomes)
         return summarise_mazes(outcomes)

@@ -18,14 +18,14 @@ def plan_subgoal(
     agent_xy: np.ndarray,
     goal_xy: np.ndarray,
     *,
-    max_distance: float,
+    subgoal_reach_m: float,
     clearance: float,
 ) -> np.ndarray:
     """The farthest point along the shortest path that a straight walk from the agent reaches.
 
     Waypoints are the centres of the path's cells, then the goal itself. The subgoal is the last
     waypoint before the first one hidden behind a wall (the segment to it must keep ``clearance``
-    metres from walls), pulled back to at most ``max_distance`` from the agent.
+    metres from walls), pulled back to at most ``subgoal_reach_m`` from the agent.
 
     Raises:
         ValueError: If the goal cannot be reached from the agent's cell.
@@ -42,8 +42,8 @@ def plan_subgoal(
         target = waypoint
     offset = target - agent_xy
     distance = float(np.linalg.norm(offset))
-    if distance > max_distance:
-        target = agent_xy + offset * (max_distance / distance)
+    if distance > subgoal_reach_m:
+        target = agent_xy + offset * (subgoal_reach_m / distance)
     return target
 
 
@@ -67,7 +67,7 @@ class PathOracle:
     Args:
         geometry: Map placement of the env it serves.
         pixels_per_cell: The env's image resolution.
-        max_distance: Farthest subgoal from the agent, metres ("towards the target but not too far").
+        subgoal_reach_m: Farthest subgoal from the agent, metres ("towards the target but not too far").
             Default one cell.
         clearance: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
         noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
@@ -80,7 +80,7 @@ class PathOracle:
         geometry: MazeGeometry,
         *,
         pixels_per_cell: int = 8,
-        max_distance: float | None = None,
+        subgoal_reach_m: float | None = None,
         clearance: float | None = None,
         noise_std: float = 0.0,
         rng: np.random.Generator | None = None,
@@ -91,9 +91,9 @@ class PathOracle:
             raise ValueError("noise_std > 0 needs an explicit rng (np.random.Generator) so labels are reproducible")
         self.geometry = geometry
         self.renderer = BirdseyeRenderer(geometry, pixels_per_cell)
-        self.max_distance = float(max_distance if max_distance is not None else geometry.scale)
-        if self.max_distance <= 0:
-            raise ValueError(f"max_distance must be > 0, got {max_distance}")
+        self.subgoal_reach_m = float(subgoal_reach_m if subgoal_reach_m is not None else geometry.scale)
+        if self.subgoal_reach_m <= 0:
+            raise ValueError(f"subgoal_reach_m must be > 0, got {subgoal_reach_m}")
         self.clearance = float(clearance if clearance is not None else 0.2 * geometry.scale)
         self.noise_std = float(noise_std)
         self.rng = rng
@@ -113,7 +113,7 @@ class PathOracle:
             self.geometry,
             STATE_LAYOUT.agent_xy(state),
             STATE_LAYOUT.goal_xy(state),
-            max_distance=self.max_distance,
+            subgoal_reach_m=self.subgoal_reach_m,
             clearance=self.clearance,
         )
         if self.noise_std > 0:

@@ -28,12 +28,12 @@ def evaluate_reach(
 ) -> dict[str, float | int]:
     """Runs ``episodes`` subgoal-reaching attempts, episode ``i`` reset with seed ``seed + i``.
 
-    An attempt succeeds when the body comes within the env's ``distance_threshold`` of the subgoal
+    An attempt succeeds when the body comes within the env's ``success_radius_m`` of the subgoal
     at any step of the horizon (the high-level env stops there too).
 
     Args:
         policy: SB3 model or callable goal observation -> action (acting deterministically).
-        env: The reach env; its ``goal_radius`` is the largest subgoal distance tested.
+        env: The reach env; its ``sample_radius_m`` is the largest subgoal distance tested.
         episodes: Number of attempts (>= 1).
         seed: Base seed; the same seed gives the same subgoals. Sets overlap by construction
             (``seed=1`` shares episodes 1..n-1 of ``seed=0``), so disjoint test sets need base seeds at

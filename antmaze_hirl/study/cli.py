@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.study.settings import StudySettings
 
 _DEFAULT_METHODS = "dagger,noise,multi_policy,reward"
@@ -67,11 +68,13 @@ def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> No
     parser.add_argument("--seed", type=int, default=0, help="seed of the orders, labels and mazes")
     parser.add_argument("--maze-size", type=int, default=None, help="free cells per maze side (default: per body)")
     parser.add_argument(
-        "--expert-max-distance",
+        "--subgoal-reach-m",
         type=float,
         default=None,
-        help="radius of the click circle, metres (default: per body, ant 2, point one cell)",
+        help="radius of the click circle, metres: the setting expert_max_distance "
+        "(default: per body, ant 2, point one cell)",
     )
+    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-every", type=int, default=_STUDY_DEFAULTS.eval_every, help="evaluate every M episodes")
     parser.add_argument("--eval-episodes", type=int, default=_STUDY_DEFAULTS.eval_episodes, help="mazes per evaluation")
     parser.add_argument(
@@ -97,8 +100,8 @@ def _run_init(args: argparse.Namespace) -> int:
     }
     if args.maze_size is not None:
         overrides["maze_size"] = args.maze_size
-    if args.expert_max_distance is not None:
-        overrides["expert_max_distance"] = args.expert_max_distance
+    if args.subgoal_reach_m is not None:
+        overrides["expert_max_distance"] = args.subgoal_reach_m
     settings = StudySettings.for_body(args.body, **overrides)
     save_plan(plan, args.dir)
     save_settings(settings, args.dir)

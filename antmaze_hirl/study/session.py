@@ -267,14 +267,14 @@ class ParticipantSession:
             return state
 
     def _labels_this_episode(self) -> int:
-        return 0 if self._run is None or self._run.request is None else self._run.request.step
+        return 0 if self._run is None or self._run.request is None else self._run.request.label_index
 
     def _scene(self, observation: dict[str, np.ndarray], request: Any) -> dict[str, Any]:
         inner = self._env.unwrapped
         geometry = inner.geometry
         return {
             "query": (
-                {"id": self._query_id, "step": request.step, "executes": request.executes}
+                {"id": self._query_id, "step": request.label_index, "executes": request.executes}
                 if request is not None
                 else None
             ),
@@ -290,8 +290,8 @@ class ParticipantSession:
             "agent": [float(v) for v in STATE_LAYOUT.agent_xy(observation["state"])],
             "goal": [float(v) for v in STATE_LAYOUT.goal_xy(observation["state"])],
             "trail": self._trail,
-            "max_distance": self.max_distance,
-            "goal_radius": float(inner.goal_threshold),
+            "subgoal_reach_m": self.subgoal_reach_m,
+            "success_radius_m": float(inner.success_radius_m),
             "learner_subgoal": (
                 [float(v) for v in request.learner_subgoal]
                 if self.settings.show_learner_subgoal and request is not None
@@ -300,7 +300,7 @@ class ParticipantSession:
         }
 
     @property
-    def max_distance(self) -> float:
+    def subgoal_reach_m(self) -> float:
         """The circle around the agent: the farthest subgoal the expert is asked to click, metres."""
         distance = self.settings.expert_max_distance
         return float(distance if distance is not None else self._env.unwrapped.geometry.scale)
@@ -363,7 +363,7 @@ class ParticipantSession:
                     "participant": self.participant.id,
                     "trial": self.trial.index,
                     "episode": request.episode,
-                    "step": request.step,
+                    "step": request.label_index,  # the log key of 0.1.0
                     "query": query_id,
                     "time": now,
                     "x": subgoal[0],
@@ -511,10 +511,10 @@ class ParticipantSession:
         distance = float(np.hypot(*(point - agent)))
         # The page counts 3 screen pixels past the circle as inside; in metres, at the smallest on-screen canvas.
         slack = CLICK_SLACK_PIXELS * float(np.max(geometry.high - geometry.low)) / MIN_CANVAS_SCREEN_PIXELS
-        if distance > self.max_distance + slack:
+        if distance > self.subgoal_reach_m + slack:
             raise BadInput(
                 f"click ({values[0]:.3f}, {values[1]:.3f}) is {distance:.3f} m from the agent, beyond the reach "
-                f"circle's {self.max_distance:.3f} m (+{slack:.3f} m slack)"
+                f"circle's {self.subgoal_reach_m:.3f} m (+{slack:.3f} m slack)"
             )
         return values[0], values[1]
 
@@ -624,7 +624,7 @@ class ParticipantSession:
         }
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:
-            row.update(self._envs.evaluate(state.trainer.policy, final=final))
+            row.update(self._envs.evaluate(state.trainer.learner, final=final))
         state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
         state.successes += int(record.success)
         state.demonstrations.success.append(bool(record.success))
@@ -642,7 +642,7 @@ class ParticipantSession:
     def _close_trial(self) -> None:
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
-        state.trainer.policy.save(self._trial_folder / "learner.zip")
+        state.trainer.learner.save(self._trial_folder / "learner.zip")
         self._last_trial = {
             "label": trial.label,
             "practice": trial.practice,

@@ -118,7 +118,7 @@ def check_family_splits(maze_size: int) -> None:
             n_rows=maze_size,
             n_cols=maze_size,
             wall_fraction=defaults["wall_fraction"].default,
-            min_goal_distance=defaults["min_goal_cells"].default,
+            min_goal_cells=defaults["min_goal_cells"].default,
         )
 
     for split in STUDY_SPLITS:

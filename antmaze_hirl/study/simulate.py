@@ -119,7 +119,7 @@ def oracle_click(state: dict[str, Any]) -> np.ndarray:
         geometry,
         np.asarray(state["agent"], dtype=np.float64),
         np.asarray(state["goal"], dtype=np.float64),
-        max_distance=state["max_distance"],
+        subgoal_reach_m=state["subgoal_reach_m"],
         clearance=0.2 * geometry.scale,  # the oracle's default, as in the experiments
     )
     inner_low = geometry.low + geometry.scale
@@ -143,7 +143,7 @@ def page_accepts(state: dict[str, Any], xy: np.ndarray) -> bool:
         np.all(low <= xy)
         and np.all(xy <= high)
         and geometry.is_free(np.asarray(maze["walls"], dtype=bool), np.asarray(xy))
-        and distance <= state["max_distance"]
+        and distance <= state["subgoal_reach_m"]
     )
 
 

@@ -137,7 +137,7 @@ function refusalOf(xy) {
   const distance = Math.hypot(xy[0] - state.agent[0], xy[1] - state.agent[1]);
   // A click on the dashed line counts as inside: 3 screen pixels of slack (the line is drawn 2 px wide).
   const slack = (3 * canvas.width) / (canvas.getBoundingClientRect().width * scaleOf(maze));
-  if (distance > state.max_distance + slack) { return "Too far: click inside the dashed circle."; }
+  if (distance > state.subgoal_reach_m + slack) { return "Too far: click inside the dashed circle."; }
   return null;
 }
 
@@ -161,7 +161,7 @@ function drawScene(trail, agent) {
     }
   }));
   // goal: its reach radius, at least a visible dot
-  drawDisc(maze, state.goal, state.goal_radius, "rgba(220,40,40,0.85)", 6);
+  drawDisc(maze, state.goal, state.success_radius_m, "rgba(220,40,40,0.85)", 6);
   // trail
   if (trail.length > 1) {
     ctx.beginPath();
@@ -177,7 +177,7 @@ function drawScene(trail, agent) {
   const [ax, ay] = toCanvas(maze, agent);
   ctx.beginPath();
   ctx.setLineDash([8, 6]);
-  ctx.arc(ax, ay, state.max_distance * s, 0, 2 * Math.PI);
+  ctx.arc(ax, ay, state.subgoal_reach_m * s, 0, 2 * Math.PI);
   ctx.strokeStyle = "#2850dc";
   ctx.lineWidth = 2;
   ctx.stroke();
