@@ -71,7 +71,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import binom
 
-from antmaze_hirl.experiments.results_folder import read_rows
+from antmaze_hirl.experiments.results_folder import read_rows, read_summary
 from antmaze_hirl.experiments.summary import TARGET_SUCCESS, median_range, trials_by_method
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
@@ -359,14 +359,10 @@ def episodes_to_target(rows: Sequence[dict[str, Any]], summary: dict[str, Any]) 
 def load_body(parser: argparse.ArgumentParser, folder: Path, body: str) -> Body:
     """A protocol-2 folder of ``body``; every bad input is a one-line parser error naming it."""
     path = folder / "summary.json"
-    if not path.is_file():
-        parser.error(f"no summary.json in {folder} (a paper-experiment results folder)")
     try:
-        summary = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        parser.error(f"{path} is not JSON: {error}")
-    if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
-        parser.error(f"{path} has no 'methods' object: not a paper-experiment summary")
+        summary = read_summary(folder)
+    except ValueError as error:
+        parser.error(str(error))
     config = summary.get("config", {})
     protocol = config.get("protocol", 1)  # summaries from before protocol 2 have no such key
     if protocol != 2:

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
+from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
@@ -242,14 +243,10 @@ def beside_table(summary: dict[str, Any], other: dict[str, Any], names: tuple[st
 
 def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: bool = True) -> dict[str, Any]:
     path = folder / "summary.json"
-    if not path.is_file():
-        parser.error(f"no summary.json in {folder} (a paper-experiment results folder)")
     try:
-        summary = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        parser.error(f"{path} is not JSON: {error}")
-    if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
-        parser.error(f"{path} has no 'methods' object: not a paper-experiment summary")
+        summary = read_summary(folder)
+    except ValueError as error:
+        parser.error(str(error))
     runs = [method for method in summary["methods"].values() if isinstance(method, dict) and method.get("seeds")]
     if any("final_success" not in method for method in runs):
         parser.error(f"{path} has a method with trials but no 'final_success': not a paper-experiment summary")

@@ -220,6 +220,24 @@ def rows_to_csv(rows: Sequence[dict[str, Any]], columns: Sequence[str] = COLUMNS
     return buffer.getvalue()
 
 
+def read_summary(folder: str | Path) -> dict[str, Any]:
+    """The ``summary.json`` of a paper-experiment results folder, checked to be one.
+
+    Raises:
+        ValueError: One line naming the file: no ``summary.json``, not JSON, or no ``methods`` object.
+    """
+    path = Path(folder) / "summary.json"
+    if not path.is_file():
+        raise ValueError(f"no summary.json in {folder} (a paper-experiment results folder)")
+    try:
+        summary = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise ValueError(f"{path} is not JSON: {error}") from None
+    if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
+        raise ValueError(f"{path} has no 'methods' object: not a paper-experiment summary")
+    return summary
+
+
 def read_rows(path: Path) -> list[dict[str, Any]]:
     """Rows of a trial CSV with numbers parsed back.
 
