@@ -117,9 +117,12 @@ def per_label_table(summary: dict[str, Any]) -> str:
     run = [method for _, method in _methods_run(summary)]
     horizon = next((m["normalised_auc"].get("label_horizon") for m in run if "normalised_auc" in m), None)
     auc = "normalised AUC" if horizon is None else f"normalised AUC over 0-{horizon:.0f} labels"
+    # Protocol 2 summaries also pair the question by seed (summary.py); older ones print as they did.
+    paired = any("labels_to_match_dagger_per_seed" in m for m in run)
     lines = [
-        f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |",
-        "|---|" + "---|" * (len(LABEL_BUDGETS) + 3),
+        f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |"
+        + (" ratio to DAgger paired by seed, median (seeds reaching) |" if paired else ""),
+        "|---|" + "---|" * (len(LABEL_BUDGETS) + 3 + paired),
     ]
     for name, method in _methods_run(summary):
         cells = [
@@ -131,7 +134,10 @@ def per_label_table(summary: dict[str, Any]) -> str:
         labels = "n/a" if match.get("median") is None else f"{match['median']:.0f}"
         reached = f" ({match['seeds_reached']} of {method['seeds']})" if match else ""
         ratio = "n/a" if match.get("ratio_vs_dagger") is None else f"{match['ratio_vs_dagger']:.2f}x"
-        lines.append(f"| {name} | {' | '.join(cells)} | {auc} | {labels}{reached} | {ratio} |")
+        row = f"| {name} | {' | '.join(cells)} | {auc} | {labels}{reached} | {ratio} |"
+        if paired:
+            row += f" {_paired_ratio(method.get('labels_to_match_dagger_per_seed'))} |"
+        lines.append(row)
     # Summaries from before same_set was recorded print no note.
     same = {m["labels_to_match_dagger"].get("same_set") for m in run if "labels_to_match_dagger" in m} - {None}
     if same:
@@ -149,6 +155,13 @@ def per_label_table(summary: dict[str, Any]) -> str:
         else:
             lines.append("Labels to match DAgger: same_set differs between methods.")
     return "\n".join(lines)
+
+
+def _paired_ratio(figure: dict[str, Any] | None) -> str:
+    if figure is None:  # DAgger, the baseline itself
+        return "1.00x"
+    median = "n/a" if figure["median_ratio"] is None else f"{figure['median_ratio']:.2f}x"
+    return f"{median} ({figure['seeds_reached']} of {figure['seeds']})"
 
 
 def effort_table(summary: dict[str, Any]) -> str:

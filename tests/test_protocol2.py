@@ -262,3 +262,29 @@ def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
     assert cost_to_reach(seed0, start=0.75) == 0.0 and cost_to_reach(seed0) == 40.0
     # Protocol 1 (no per-maze outcomes) reads the rows only: seed 0 costs 40 labels there.
     assert summarise(rows, ["dagger"])["dagger"]["cost_to_60_percent"] == {"median": 40.0, "seeds_reached": 2}
+
+
+def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_own_median():
+    rows, evaluations = [], []
+    # DAgger's three seeds end at 2/4, 3/4 and 4/4: its median final success (0.75) is first reached by only
+    # seeds 1 and 2, so the median-target figure's ratio is read on 2 of 3 seeds.
+    dagger = [{0: 0, 2: 1, 4: 2}, {0: 0, 2: 3, 4: 3}, {0: 0, 2: 2, 4: 4}]
+    # gated: half the labels per episode; reaches each seed's DAgger final by episode 2 on seeds 0 and 2 only.
+    gated = [{0: 0, 2: 2, 4: 2}, {0: 0, 2: 1, 4: 2}, {0: 0, 2: 4, 4: 4}]
+    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode)
+            rows += trial_rows
+            evaluations += outcomes
+    summary = summarise(rows, ["dagger", "gated"], evaluations=evaluations)
+    paired = summary["gated"]["labels_to_match_dagger_per_seed"]
+    assert [seed["target"] for seed in paired["per_seed"]] == [0.5, 0.75, 1.0]
+    # DAgger's own cost per seed: seed 0 reaches 2/4 at 40 labels (1/4 at 20), seed 1 3/4 at 20, seed 2 4/4 at 40.
+    assert [seed["baseline_labels"] for seed in paired["per_seed"]] == [40.0, 20.0, 40.0]
+    # gated reaches 2/4 at 10 labels (seed 0), never 3/4 (seed 1), 4/4 at 10 labels (seed 2).
+    assert [seed["labels"] for seed in paired["per_seed"]] == [10.0, None, 10.0]
+    assert [seed["ratio"] for seed in paired["per_seed"]] == [0.25, None, 0.25]
+    assert paired["median_ratio"] == 0.25 and paired["seeds_reached"] == 2 and paired["seeds"] == 3
+    assert "labels_to_match_dagger_per_seed" not in summary["dagger"]
+    # Protocol 1 (no per-maze outcomes) has no such figure: its final point is read on another set.
+    assert "labels_to_match_dagger_per_seed" not in summarise(rows, ["dagger", "gated"])["gated"]

@@ -21,6 +21,12 @@ For each method, over its seeds (median, min and max):
   counts as infinitely many labels in the median (``None`` if that is the median); 0 labels (a learner at
   the target untrained, protocol 2) is a count like any: ratio 0.0 against DAgger's 40, 1.0 when both are 0,
   ``None`` when DAgger needs 0 and the method more;
+* ``labels_to_match_<baseline>_per_seed`` (protocol 2 only): the same question paired by seed, which stays
+  defined where under half of DAgger's seeds reach DAgger's median: for each seed, the target is that seed's
+  DAgger final success (the seeds of one experiment share their evaluation mazes and initial weights), DAgger's
+  cost is the labels where its own curve first reaches it (always: at the latest its last point), and the
+  method's the labels where its curve first reaches it; the per-seed ratio of the two, and its median over seeds
+  (a seed whose method never reaches the target ranks above every ratio; ``None`` if that is the median);
 * secondary: mean expert cost and attempts per episode, and labels to first reach 60% success
   (``cost_to_60_percent``; in protocol 2 the untrained evaluation counts, at 0 labels).
 
@@ -225,7 +231,44 @@ def summarise(
                 # final set's and the curves' earlier points the periodic set's.
                 "same_set": bool(evaluations),
             }
+    if evaluations and grouped.get(baseline):
+        for method, trials in grouped.items():
+            if trials and method != baseline:
+                summary[method][f"labels_to_match_{baseline}_per_seed"] = _paired_labels_to_match(
+                    trials, grouped[baseline], starts[method], starts[baseline]
+                )
     return summary
+
+
+def _paired_labels_to_match(
+    trials: dict[int, Trial], baseline: dict[int, Trial], starts: dict[int, float], baseline_starts: dict[int, float]
+) -> dict[str, Any]:
+    """Per seed: labels to the baseline's final success on that seed, the method's over the baseline's."""
+    per_seed = []
+    for seed in sorted(set(trials) & set(baseline)):
+        target = float(baseline[seed][-1]["eval_success"])
+        if target <= 0:  # a baseline at 0% sets no success to match
+            continue
+        labels = labels_to_reach(trials[seed], target, starts[seed])
+        baseline_labels = labels_to_reach(baseline[seed], target, baseline_starts[seed])
+        per_seed.append(
+            {
+                "seed": seed,
+                "target": target,
+                "labels": labels,
+                "baseline_labels": baseline_labels,
+                "ratio": None if labels is None else _ratio(labels, baseline_labels),
+            }
+        )
+    # A seed that never reaches its target, or has no finite ratio, ranks above every ratio.
+    ranked = np.array([math.inf if seed["ratio"] is None else seed["ratio"] for seed in per_seed])
+    median = float(np.median(ranked)) if len(ranked) else math.inf
+    return {
+        "median_ratio": median if math.isfinite(median) else None,
+        "seeds": len(per_seed),
+        "seeds_reached": sum(seed["labels"] is not None for seed in per_seed),
+        "per_seed": per_seed,
+    }
 
 
 def _ratio(labels: float | None, baseline: float | None) -> float | None:
