@@ -39,6 +39,9 @@ Verdict rules (protocol 2). A "reading" is one method that stands for the claim 
   ratio of labels <= 0.3x DAgger's, and its labels beat DAgger's in the paired test at 0.01. It is
   contradicted when, for every active method, the 95% interval of the paired differences
   ``labels - 0.3 x DAgger's labels`` lies above 0.
+* **Labels (claims 2 and 6)** are read paired by seed where the summary has ``labels_to_match_dagger_per_seed``
+  (protocol-2 summaries written since it exists): each seed's target is its own DAgger final success, which
+  DAgger always reaches. Older summaries read DAgger's median final success as the target.
 * **A claim** holds when every body supports it. It does not hold when some body contradicts it.
   Otherwise it is inconclusive. With several readings, the claim holds when one reading holds, and does
   not hold when every reading does not hold.
@@ -449,8 +452,22 @@ def success_finding(body: Body, name: str, direction: int, alpha: float) -> Find
     return Finding(comparison.outcome, comparison.toward, text)
 
 
+PAIRED = "labels_to_match_dagger_per_seed"
+"""The summary figure that pairs the labels question by seed (``summary.py``; protocol-2 summaries written since)."""
+
+
 def label_differences(body: Body, name: str, scale: float = 1.0) -> list[float]:
-    """Per-seed ``labels - scale x DAgger's labels`` to DAgger's target, over the seeds both ran."""
+    """Per-seed ``labels - scale x DAgger's labels`` to DAgger's target, over the seeds both ran.
+
+    With :data:`PAIRED` in the summary the target is each seed's own DAgger final success, which DAgger always
+    reaches; otherwise DAgger's median final success, which about half of DAgger's seeds never reach.
+    """
+    paired = body.method(name).get(PAIRED)
+    if paired is not None:
+        return [
+            NEVER if seed["labels"] is None else seed["labels"] - scale * seed["baseline_labels"]
+            for seed in paired["per_seed"]
+        ]
     mine, theirs = labels_by_seed(body.method(name)), labels_by_seed(body.method(BASELINE))
     differences = []
     for seed in sorted(mine.keys() & theirs.keys()):
@@ -466,6 +483,10 @@ def label_differences(body: Body, name: str, scale: float = 1.0) -> list[float]:
 
 
 def _labels_to_match(method: dict[str, Any]) -> str:
+    paired = method.get(PAIRED)
+    if paired is not None:
+        ratio = "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x DAgger's"
+        return f"paired by seed: median {ratio} ({paired['seeds_reached']} of {paired['seeds']} seeds reach it)"
     match = method.get("labels_to_match_dagger", {})
     median = "never" if match.get("median") is None else f"{match['median']:.0f}"
     return f"{median} ({match.get('seeds_reached')} of {method['seeds']} reach it)"
@@ -603,6 +624,8 @@ def saving_finding(body: Body, name: str, alpha: float) -> Finding:
         return Finding(UNDECIDED, 0, f"`{name}` no labels to match DAgger")
     match, theirs = method["labels_to_match_dagger"], dagger["labels_to_match_dagger"]["median"]
     ratio = match.get("ratio_vs_dagger")
+    if PAIRED in method:  # paired by seed: DAgger reaches its own target on every seed, so a ratio is read
+        ratio, theirs = method[PAIRED]["median_ratio"], 1.0
     test = compare(label_differences(body, name), -1, LABEL_EFFECT * dagger["total_labels"]["median"], alpha)
     scaled = signed_rank_interval(label_differences(body, name, SAVING_RATIO))
     if ratio is not None and ratio <= SAVING_RATIO and test.outcome == SUPPORTS:

@@ -245,3 +245,32 @@ def test_the_claims_doc_quotes_the_table_printed_on_the_interim_folders(monkeypa
     doc = (ROOT / "docs" / "paper-claims.md").read_text()
     quoted = doc.split("<!-- interim claims table: begin -->\n")[1].split("\n<!-- interim claims table: end -->")[0]
     assert quoted == capsys.readouterr().out.rstrip("\n"), "rerun the command and paste its table"
+
+
+def test_claim_6_reads_the_labels_paired_by_seed_where_dagger_misses_its_own_median():
+    # DAgger's median-target figure is "never" (under half its seeds reach its median), so no ratio is read;
+    # paired by seed, gated needs 0.25x DAgger's labels on every seed and the claim holds on 10 seeds.
+    bodies = []
+    for name in ("point", "ant"):
+        one = body(name, labels={"dagger": [None] * 10})
+        one.summary["methods"]["dagger"]["labels_to_match_dagger"]["median"] = None
+        for method in pc.ACTIVE:
+            mine = 0.25 if method == "gated" else 1.0
+            one.summary["methods"][method][pc.PAIRED] = {
+                "median_ratio": mine,
+                "seeds": 10,
+                "seeds_reached": 10,
+                "per_seed": [
+                    {"seed": s, "target": 0.8, "labels": mine * (400 + 10 * s), "baseline_labels": 400.0 + 10 * s}
+                    for s in range(10)
+                ],
+            }
+        bodies.append(one)
+    saving = pc.claim_saving(bodies)
+    assert saving.verdict == pc.HOLDS
+    assert "paired by seed: median 0.25x DAgger's (10 of 10 seeds reach it)" in saving.measurement
+    # Without the paired figure the same bodies cannot decide: DAgger's own median is never reached.
+    for one in bodies:
+        for method in pc.ACTIVE:
+            del one.summary["methods"][method][pc.PAIRED]
+    assert pc.claim_saving(bodies).verdict != pc.HOLDS
