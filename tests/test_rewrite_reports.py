@@ -1,0 +1,57 @@
+"""scripts/rewrite_reports.py: a folder's reports rewritten from its trials by this code, the source untouched."""
+
+import gzip
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = importlib.util.spec_from_file_location("rewrite_reports", ROOT / "scripts" / "rewrite_reports.py")
+rewrite_reports = importlib.util.module_from_spec(SPEC)
+sys.modules[SPEC.name] = rewrite_reports
+SPEC.loader.exec_module(rewrite_reports)
+
+
+def test_rewritten_reports_equal_the_runs_own_and_record_this_code(finished_protocol2, tmp_path, capsys):
+    source, files = finished_protocol2
+    out = tmp_path / "rewritten"
+    assert rewrite_reports.main([str(source), str(out), "--gzip"]) == 0
+    assert "seeds per method {'dagger': 2}" in capsys.readouterr().out
+    before = {path.name: path.read_bytes() for path in source.rglob("*") if path.is_file() and "tb" not in path.parts}
+    assert before == files  # the source folder is read, never written
+    old, new = json.loads(files["summary.json"]), json.loads((out / "summary.json").read_text())
+    assert new["methods"] == old["methods"] and new["config"] == old["config"]
+    assert set(new["reports_provenance"]) == {"git_commit", "git_dirty", "source_sha256"}
+    assert gzip.decompress((out / "evaluations.csv.gz").read_bytes()) == files["evaluations.csv"]
+    assert (out / "episodes.csv").read_bytes() == files["episodes.csv"]
+
+
+def settings_without_trials(tmp):
+    folder = tmp / "empty"
+    folder.mkdir()
+    (folder / "config.json").write_text("{}")
+    return folder
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [(lambda tmp: tmp / "absent", "no config.json in"), (settings_without_trials, "no finished trial in")],
+)
+def test_a_folder_without_settings_or_trials_is_one_line_naming_it(tmp_path, capsys, make, message):
+    folder = make(tmp_path)
+    with pytest.raises(SystemExit):
+        rewrite_reports.main([str(folder), str(tmp_path / "out")])
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert message in error and str(folder) in error
+
+
+def test_a_non_empty_output_folder_is_refused(finished_protocol2, tmp_path, capsys):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "keep.txt").write_text("mine")
+    with pytest.raises(SystemExit):
+        rewrite_reports.main([str(finished_protocol2[0]), str(tmp_path / "out")])
+    assert "is not empty: pass a new folder" in capsys.readouterr().err
+    assert (tmp_path / "out" / "keep.txt").read_text() == "mine"
