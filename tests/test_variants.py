@@ -178,10 +178,9 @@ def test_cost_to_go_is_the_grid_shortest_path():
     assert cost_to_go(cut_off, GEOMETRY, GOAL, centre((3, 1))) == math.inf
 
 
-def aggrevate_env():
-    return SimpleNamespace(
-        unwrapped=SimpleNamespace(layout=SimpleNamespace(walls=WALLS), geometry=GEOMETRY, goal_xy=GOAL)
-    )
+def aggrevate_maze():
+    """What AggreVaTe's label_target reads of the trainer's maze env: the layout, geometry and goal."""
+    return SimpleNamespace(layout=SimpleNamespace(walls=WALLS), geometry=GEOMETRY, goal_xy=GOAL)
 
 
 def test_aggrevate_trains_towards_the_lowest_cost_heading():
@@ -192,7 +191,7 @@ def test_aggrevate_trains_towards_the_lowest_cost_heading():
     assert costs[0] == 5.0 and costs[8] == 7.0 and costs[4] == math.inf and int(np.argmin(costs)) == 0
     # The expert's subgoal points left (a bad label here): D stores the right-hand heading instead.
     state = STATE_LAYOUT.compose(agent, GOAL, np.zeros(2))
-    target = strategy.label_target(aggrevate_env(), {"state": state}, agent + np.array([-1.0, 0.0]))
+    target = strategy.label_target(aggrevate_maze(), {"state": state}, agent + np.array([-1.0, 0.0]))
     np.testing.assert_allclose(target, candidates[0])
     assert direction_bins((target - agent)[None], 16)[0] == 0
     with pytest.raises(ValueError, match="n_directions must be >= 4, got 2"):

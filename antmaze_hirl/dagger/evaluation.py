@@ -21,6 +21,7 @@ from antmaze_hirl.envs.controllers import as_batch_controller, inference_threads
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv, SubgoalWalk
 from antmaze_hirl.envs.layouts import MazeLayout
 from antmaze_hirl.envs.profiles import SEEDS
+from antmaze_hirl.envs.protocol import maze_env
 from antmaze_hirl.envs.vector import check_num_envs, copies_of, walk_in_lockstep
 from antmaze_hirl.rollout import play_episode
 
@@ -91,10 +92,10 @@ def evaluation_outcomes(
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     num_envs = check_num_envs(num_envs)
     if num_envs == 1:
-        played = []
+        played, maze = [], maze_env(env)
         for episode in range(episodes):
             info = play_episode(env, policy, seed=seed + episode).info
-            played.append((env.unwrapped.layout, info))  # drawn at this episode's reset
+            played.append((maze.layout, info))  # drawn at this episode's reset
         return played
     return _lockstep_episodes(policy, env, episodes=episodes, seed=seed, num_envs=min(num_envs, episodes))
 

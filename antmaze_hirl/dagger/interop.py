@@ -16,6 +16,7 @@ from imitation.util import logger as imitation_logger
 from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
+from antmaze_hirl.envs.protocol import maze_env
 
 
 def to_transitions(dataset: DemonstrationDataset) -> types.Transitions:
@@ -63,16 +64,16 @@ class BCLearner:
     """
 
     def __init__(self, env: Any, *, rng: np.random.Generator, batch_size: int = 32, net_arch: list[int] | None = None):
-        inner = env.unwrapped
+        maze = maze_env(env)
         self.rng = rng
         with th.random.fork_rng(devices=[]):
             th.manual_seed(int(rng.integers(2**31)))
             policy = MultiInputActorCriticPolicy(
-                inner.observation_space, inner.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
+                maze.observation_space, maze.action_space, lr_schedule=lambda _: 1e-3, net_arch=net_arch or [64, 64]
             )
         self.bc = bc.BC(
-            observation_space=inner.observation_space,
-            action_space=inner.action_space,
+            observation_space=maze.observation_space,
+            action_space=maze.action_space,
             rng=rng,
             policy=policy,
             batch_size=batch_size,

@@ -28,6 +28,7 @@ from antmaze_hirl.dagger.symmetric_views import (
 )
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import bfs_distances
+from antmaze_hirl.envs.protocol import MazeEnvProtocol
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
@@ -111,11 +112,14 @@ class QueryStrategy:
     def on_step(self, observation: dict[str, np.ndarray], subgoal: np.ndarray, info: dict[str, Any]) -> None:
         """Called after each executed step with the observation it started from, the subgoal sent and the env's info."""
 
-    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+    def label_target(
+        self, maze: MazeEnvProtocol, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray
+    ) -> np.ndarray:
         """The subgoal stored in D for ``observation``; here the expert's own (what every method but AggreVaTe keeps).
 
         Args:
-            env: The trainer's env (``env.unwrapped`` holds the episode's layout, goal and geometry).
+            maze: The trainer's maze env (:attr:`~antmaze_hirl.dagger.trainer.DAggerTrainer.maze`): the
+                episode's layout, goal and geometry.
             observation: The labelled observation.
             expert_subgoal: The expert's answer, which the executed mix still uses.
         """
@@ -566,14 +570,15 @@ class AggreVaTeQuery(QueryStrategy):
         ]
         return candidates, np.array(costs)
 
-    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+    def label_target(
+        self, maze: MazeEnvProtocol, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray
+    ) -> np.ndarray:
         """The lowest-Q heading candidate at the expert's step length (the expert's subgoal if none is finite)."""
-        inner = env.unwrapped
         agent_xy = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
         distance = float(np.linalg.norm(expert_subgoal - agent_xy))
         if distance == 0:
             return expert_subgoal
-        candidates, costs = self.candidate_costs(inner.layout.walls, inner.geometry, inner.goal_xy, agent_xy, distance)
+        candidates, costs = self.candidate_costs(maze.layout.walls, maze.geometry, maze.goal_xy, agent_xy, distance)
         if not np.isfinite(costs).any():
             return expert_subgoal
         return candidates[int(np.argmin(costs))]
@@ -723,9 +728,11 @@ class GatedQuery(QueryStrategy):
         """The inner strategy's pruning (of the episode's asked labels)."""
         return self.inner.on_episode_end(dataset, episode, success, rng)
 
-    def label_target(self, env: Any, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray) -> np.ndarray:
+    def label_target(
+        self, maze: MazeEnvProtocol, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray
+    ) -> np.ndarray:
         """The inner strategy's stored label."""
-        return self.inner.label_target(env, observation, expert_subgoal)
+        return self.inner.label_target(maze, observation, expert_subgoal)
 
     def _encode(self, observation: dict[str, np.ndarray], learner: Learner) -> EncodedBatch:
         if not isinstance(learner, OffsetLearner):

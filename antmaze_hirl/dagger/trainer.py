@@ -15,6 +15,7 @@ from antmaze_hirl.dagger.schedules import BetaSchedule, InverseDecayBetaSchedule
 from antmaze_hirl.dagger.strategies import DAggerQuery, QueryStrategy, StartQuery
 from antmaze_hirl.dagger.streams import trainer_streams
 from antmaze_hirl.envs.layouts import bfs_distances
+from antmaze_hirl.envs.protocol import MazeEnvProtocol, maze_env
 from antmaze_hirl.envs.reach import as_finite_vector
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experts.base import Expert
@@ -194,7 +195,8 @@ class DAggerTrainer:
     "reached" without moving, so every low-level step would cost a label and add the same sample to D.
 
     Args:
-        env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped.
+        env: High-level env (``antmaze_hirl/...Maze-v0``), possibly wrapped: the trainer resets and steps it,
+            and reads the rest through :attr:`maze`.
         expert: Labels observations (:class:`~antmaze_hirl.experts.base.Expert`); each label costs one.
         learner: The high-level learner it trains (start-selecting strategies need an
             :class:`~antmaze_hirl.dagger.protocols.OffsetLearner`, such as ``HighLevelPolicy``).
@@ -215,6 +217,10 @@ class DAggerTrainer:
             them. Alg. 4 as written (updates and beta decay after every step) is the strategy's
             :attr:`~antmaze_hirl.dagger.strategies.QueryStrategy.updates_every_step` (method
             ``reward_per_step``).
+
+    Raises:
+        TypeError: If ``env`` is no high-level maze env (:func:`~antmaze_hirl.envs.protocol.maze_env`).
+        ValueError: If ``mixing``, a count or the strategy does not fit (names the value).
     """
 
     # What the learner's fit_dataset returned at the last update (None before any): read by loggers such as
@@ -241,6 +247,7 @@ class DAggerTrainer:
             raise ValueError(f"episodes_per_update must be >= 1, got {episodes_per_update}")
         if gradient_steps < 0 or per_step_gradient_steps < 0:
             raise ValueError("gradient step counts must be >= 0")
+        maze_env(env)  # a wrong env fails here, not at the first episode
         self.env = env
         self.expert = expert
         self.learner = learner
@@ -263,6 +270,15 @@ class DAggerTrainer:
         self.total_expert_cost = 0
         self._rest_body: np.ndarray | None = None
         self._update_due = False
+
+    @property
+    def maze(self) -> MazeEnvProtocol:
+        """The maze env under :attr:`env`'s wrappers: the episode's maze, task draws and subgoal checks.
+
+        Looked up on every call rather than kept, since a study checkpoint detaches :attr:`env` and attaches
+        a rebuilt one.
+        """
+        return maze_env(self.env)
 
     @property
     def beta(self) -> float:
@@ -326,7 +342,7 @@ class DAggerTrainer:
         # One episode as a coroutine: it yields where it needs a label and receives the expert's subgoal.
         # The task stream draws layout, goal and reset seed; the start is the strategy's, else the env's reset
         # places it. The strategy draws from its own stream, so it never shifts the next episode's task.
-        task = self.env.unwrapped.sample_task(self.streams.tasks, draw_start=False)
+        task = self.maze.sample_task(self.streams.tasks, draw_start=False)
         reset_seed = int(self.streams.tasks.integers(2**31))
         if self._rest_body is not None:
             query = self._start_query(task.layout.walls, task.goal_xy)
@@ -350,7 +366,7 @@ class DAggerTrainer:
                 asked = (
                     self.strategy.wants_label(obs, own, self.learner)
                     or len(self.dataset) == 0
-                    or self.env.unwrapped.is_no_op_subgoal(own)
+                    or self.maze.is_no_op_subgoal(own)
                 )
             else:
                 asked = True
@@ -413,11 +429,11 @@ class DAggerTrainer:
         self, observation: dict[str, np.ndarray], expert_subgoal: np.ndarray, episode: int, step: int
     ) -> None:
         # D gets the strategy's target for the label (the expert's own but for AggreVaTe).
-        label = self.strategy.label_target(self.env, observation, expert_subgoal)
+        label = self.strategy.label_target(self.maze, observation, expert_subgoal)
         self.dataset.add(Demonstration(observation["image"], observation["state"], label, episode, step))
 
     def _clip(self, subgoal: np.ndarray) -> np.ndarray:
-        space = self.env.unwrapped.action_space
+        space = self.maze.action_space
         return np.clip(subgoal, space.low, space.high)
 
     def _mix(self, expert_subgoal: np.ndarray, learner_subgoal: np.ndarray, beta: float) -> np.ndarray:
@@ -426,7 +442,7 @@ class DAggerTrainer:
         else:
             chosen = beta * expert_subgoal + (1 - beta) * learner_subgoal
         chosen = self._clip(chosen)
-        if self.env.unwrapped.is_no_op_subgoal(chosen):
+        if self.maze.is_no_op_subgoal(chosen):
             return self._clip(expert_subgoal)
         return chosen
 
@@ -434,12 +450,13 @@ class DAggerTrainer:
         self.last_loss = self.learner.fit_dataset(self.dataset, steps)
 
     def _start_query(self, walls: np.ndarray, goal_xy: np.ndarray) -> StartQuery:
-        geometry = self.env.unwrapped.geometry
+        maze = self.maze
+        geometry = maze.geometry
         goal_cell = geometry.xy_to_cell(goal_xy)
         # A chosen start obeys the env's min_goal_cells as its corner start does (else a start one step
         # from the goal makes a cheap episode); the corner meets it, so some cell always does.
         steps = bfs_distances(walls, goal_cell)
-        least = max(1, int(getattr(self.env.unwrapped, "min_goal_cells", 1)))
+        least = max(1, int(maze.min_goal_cells))
         cells = [tuple(cell) for cell in np.argwhere(steps >= least)]
         if not cells:
             cells = [tuple(cell) for cell in np.argwhere(~walls) if tuple(cell) != goal_cell]

@@ -21,6 +21,7 @@ _EXPORTS = {
     "BirdseyeRenderer": "antmaze_hirl.envs.birdseye",
     "HighLevelMazeEnv": "antmaze_hirl.envs.high_level",
     "LowLevelController": "antmaze_hirl.envs.controllers",
+    "MazeEnvProtocol": "antmaze_hirl.envs.protocol",
     "MazeGeometry": "antmaze_hirl.envs.geometry",
     "MazeLayout": "antmaze_hirl.envs.layouts",
     "PointGoToController": "antmaze_hirl.envs.controllers",
@@ -33,6 +34,7 @@ _EXPORTS = {
     "as_controller": "antmaze_hirl.envs.controllers",
     "generate_layout": "antmaze_hirl.envs.layouts",
     "layout_from_map": "antmaze_hirl.envs.layouts",
+    "maze_env": "antmaze_hirl.envs.protocol",
     "shortest_path": "antmaze_hirl.envs.layouts",
     "validate_maze_map": "antmaze_hirl.envs.layouts",
 }

@@ -265,6 +265,11 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         """Current body xy, metres."""
         return self.reach.agent_xy
 
+    @property
+    def pixels_per_cell(self) -> int:
+        """Image pixels per maze cell side (the ``pixels_per_cell`` argument)."""
+        return self.renderer.pixels_per_cell
+
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
         """Starts an episode.
 

@@ -17,9 +17,10 @@ class SplitMazeEnv(HighLevelMazeEnv):
 
     Overriding :meth:`sample_layout` covers every way a layout is drawn, since :meth:`sample_task`
     draws through it: :meth:`reset` without a ``layout`` option (evaluation) and
-    :class:`~antmaze_hirl.dagger.DAggerTrainer`, which calls ``env.unwrapped.sample_task``; a
-    ``gym.Wrapper`` could intercept neither, since both reach the unwrapped env. Everything else is
-    the parent's.
+    :class:`~antmaze_hirl.dagger.DAggerTrainer`, which calls ``sample_task`` on the env under the
+    wrappers (:func:`~antmaze_hirl.envs.protocol.maze_env`); a ``gym.Wrapper`` could intercept neither,
+    since both reach the unwrapped env. ``gym.make`` of a maze id with ``split=`` makes one
+    (:func:`~antmaze_hirl.sb3_ext.shipped.make_maze_env`). Everything else is the parent's.
 
     Args:
         split: The part of :mod:`antmaze_hirl.envs.layout_splits` to draw from.

@@ -24,7 +24,7 @@ from antmaze_hirl.dagger.streams import trial_streams
 from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.profiles import maze_env_id
-from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.envs.protocol import maze_env
 from antmaze_hirl.experiments.backends import Backend, import_ray, run_tasks
 from antmaze_hirl.experiments.config import (
     ExperimentConfig,
@@ -50,7 +50,7 @@ from antmaze_hirl.experiments.tensorboard import DAggerTensorBoard, trial_log_di
 from antmaze_hirl.experts.base import Expert
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
-from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController, load_shipped_policy
+from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
 __all__ = [
     "ExperimentConfig",
@@ -88,14 +88,11 @@ def make_env(config: ExperimentConfig, low_level: Any = None, *, split: LayoutSp
     """The high-level env of the experiment, drawing its mazes from the part ``split`` if given.
 
     ``split`` is ignored unless ``config.held_out_layouts``: the original protocol draws every maze
-    from the whole family.
+    from the whole family. Both are ``gym.make`` of the body's maze id (its factory,
+    :func:`~antmaze_hirl.sb3_ext.shipped.make_maze_env`, plugs in the shipped policy for ``low_level=None``).
     """
-    settings = {"maze_size": config.maze_size, "low_level": low_level}
-    if config.held_out_layouts and split is not None:
-        if low_level is None:  # what the registered ids plug in by default
-            settings["low_level"] = ShippedPolicyController(config.body)
-        return SplitMazeEnv(config.body, split=split, **settings)
-    return gym.make(maze_env_id(config.body), **settings)
+    split = split if config.held_out_layouts else None
+    return gym.make(maze_env_id(config.body), maze_size=config.maze_size, low_level=low_level, split=split)
 
 
 class TrialEnvs:
@@ -154,7 +151,7 @@ def evaluation_layouts(config: ExperimentConfig, low_level: Any = None) -> list[
         env = make_env(config, low_level, split=split)
         for seed in range(first_seed, first_seed + mazes):
             env.reset(seed=seed)
-            rows.append({"set": name, "seed": seed, "layout": canonical_layout(env.unwrapped.layout)})
+            rows.append({"set": name, "seed": seed, "layout": canonical_layout(maze_env(env).layout)})
         env.close()
     return rows
 
@@ -265,7 +262,7 @@ def run_trial_with_evaluations(
                 **record.to_dict(),
                 "cumulative_expert_cost": trainer.total_expert_cost,
                 # The trainer drew this episode's maze and reset the env with it.
-                "layout": canonical_layout(env.unwrapped.layout),
+                "layout": canonical_layout(trainer.maze.layout),
             }
             final = episode == config.episodes - 1
             if episode + 1 in schedule:

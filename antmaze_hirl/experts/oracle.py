@@ -9,6 +9,7 @@ import numpy as np
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import shortest_path
+from antmaze_hirl.envs.protocol import maze_env
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 
@@ -100,9 +101,13 @@ class PathOracle:
 
     @classmethod
     def for_env(cls, env: Any, **kwargs: Any) -> PathOracle:
-        """An oracle matching the geometry and image resolution of a (wrapped) high-level env."""
-        inner = env.unwrapped
-        return cls(inner.geometry, pixels_per_cell=inner.renderer.pixels_per_cell, **kwargs)
+        """An oracle matching the geometry and image resolution of a (wrapped) high-level env.
+
+        Raises:
+            TypeError: If ``env`` is no high-level maze env (:func:`~antmaze_hirl.envs.protocol.maze_env`).
+        """
+        maze = maze_env(env)
+        return cls(maze.geometry, pixels_per_cell=maze.pixels_per_cell, **kwargs)
 
     def label(self, observation: dict[str, np.ndarray]) -> np.ndarray:
         """The expert subgoal ``pi*(s)`` for a high-level observation, metres."""

@@ -14,9 +14,11 @@ from typing import TYPE_CHECKING, Any
 
 from antmaze_hirl.envs.controllers import PredictController
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
+from antmaze_hirl.envs.layout_splits import LayoutSplit
 from antmaze_hirl.envs.layouts import MazeMap
 from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.envs.simulator import Body, body_spec
+from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.vector import HighLevelVectorEnv, check_num_envs
 
 if TYPE_CHECKING:
@@ -59,9 +61,14 @@ class ShippedPolicyController(PredictController):
 
 
 def make_maze_env(
-    body: Body = "point", maze_map: str | MazeMap | None = None, *, low_level: Any = None, **kwargs: Any
+    body: Body = "point",
+    maze_map: str | MazeMap | None = None,
+    *,
+    low_level: Any = None,
+    split: LayoutSplit | None = None,
+    **kwargs: Any,
 ) -> HighLevelMazeEnv:
-    """Entry point of ``antmaze_hirl/AntMaze-v0`` and ``antmaze_hirl/PointMaze-v0``.
+    """Entry point of ``antmaze_hirl/AntMaze-v0`` and ``antmaze_hirl/PointMaze-v0``: the one factory of maze envs.
 
     Args:
         body: ``"point"`` or ``"ant"``.
@@ -69,10 +76,13 @@ def make_maze_env(
             :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv`).
         low_level: SB3 model or callable ``goal observation -> action``. Default: the policy shipped for
             ``body`` (:func:`load_shipped_policy`).
+        split: ``None`` to draw layouts from the whole family, else the part of the layout partition to
+            draw from (``"train"``, ``"selection"``, ``"eval"``: a
+            :class:`~antmaze_hirl.envs.split_env.SplitMazeEnv`), e.g. ``gym.make(id, split="eval")``.
         **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
 
     Raises:
-        ValueError: If ``low_level`` is left out and no policy ships for ``body``.
+        ValueError: If ``low_level`` is left out and no policy ships for ``body``, or ``split`` is unknown.
     """
     if low_level is None:
         if not shipped_policy_path(body).exists():
@@ -82,7 +92,16 @@ def make_maze_env(
                 f"e.g. gym.make('{name}', low_level=model)"
             )
         low_level = ShippedPolicyController(body)
-    return HighLevelMazeEnv(body, maze_map, low_level=low_level, **kwargs)
+    return _maze_env(body, maze_map, low_level, split, kwargs)
+
+
+def _maze_env(
+    body: Body, maze_map: str | MazeMap | None, low_level: Any, split: LayoutSplit | None, kwargs: dict[str, Any]
+) -> HighLevelMazeEnv:
+    # One place that picks the class, so the single and the vector factory draw their layouts alike.
+    if split is None:
+        return HighLevelMazeEnv(body, maze_map, low_level=low_level, **kwargs)
+    return SplitMazeEnv(body, maze_map, split=split, low_level=low_level, **kwargs)
 
 
 def make_maze_vector_env(
@@ -91,6 +110,7 @@ def make_maze_vector_env(
     maze_map: str | MazeMap | None = None,
     *,
     low_level: Any = None,
+    split: LayoutSplit | None = None,
     autoreset_mode: str = "NextStep",
     **kwargs: Any,
 ) -> HighLevelVectorEnv:
@@ -105,6 +125,7 @@ def make_maze_vector_env(
         body: ``"point"`` or ``"ant"``.
         maze_map: As :func:`make_maze_env`.
         low_level: As :func:`make_maze_env`; one object shared by every sub-env.
+        split: As :func:`make_maze_env`.
         autoreset_mode: Gymnasium autoreset mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``.
         **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
 
@@ -112,11 +133,11 @@ def make_maze_vector_env(
         ValueError: If ``num_envs`` is not an integer >= 1 (before anything loads), or as :func:`make_maze_env`.
     """
     num_envs = check_num_envs(num_envs)
-    first = make_maze_env(body, maze_map, low_level=low_level, **kwargs)
+    first = make_maze_env(body, maze_map, low_level=low_level, split=split, **kwargs)
     shared = first.controller  # one controller for all, so that it is batched once
 
     def another() -> HighLevelMazeEnv:
-        return HighLevelMazeEnv(body, maze_map, low_level=shared, **kwargs)
+        return _maze_env(body, maze_map, shared, split, kwargs)
 
     envs = [first, *(another() for _ in range(num_envs - 1))]
     return HighLevelVectorEnv(envs, autoreset_mode=autoreset_mode)

@@ -18,6 +18,10 @@ SETTINGS_FILE = "settings.json"
 class StudySettings:
     """Settings shared by every trial of a study (the method and seed come from the plan).
 
+    The fields it shares with :class:`~antmaze_hirl.experiments.config.ExperimentConfig` (:data:`EXPERIMENT_FIELDS`)
+    take their defaults from it, so that a default changed there changes here; their names are the keys of a
+    study's ``settings.json``, so they stay as they are.
+
     Attributes:
         body: ``"point"`` or ``"ant"``.
         maze_size: Free cells per side of the random mazes.
@@ -30,21 +34,21 @@ class StudySettings:
         decay: ``d`` in ``beta <- beta / d``.
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
         held_out_layouts: Training and evaluation mazes from disjoint wall grids
-            (:attr:`~antmaze_hirl.experiments.config.ExperimentConfig.held_out_layouts`). ``False`` here,
-            so that a study folder written before the setting existed reads as what it ran; ``study init``
-            (:meth:`for_body`) sets it.
+            (:attr:`~antmaze_hirl.experiments.config.ExperimentConfig.held_out_layouts`). ``False`` by
+            default, as there, so that a study folder written before the setting existed reads as what it ran;
+            ``study init`` (:meth:`for_body`) sets it.
     """
 
-    body: str = "point"
-    maze_size: int = 5
-    expert_max_distance: float | None = None
-    eval_every: int = 10
-    eval_episodes: int = 20
-    final_eval_episodes: int = 100
-    gradient_steps: int = 200
-    decay: float = 2.0
+    body: str = ExperimentConfig.body
+    maze_size: int = ExperimentConfig.maze_size
+    expert_max_distance: float | None = ExperimentConfig.expert_max_distance
+    eval_every: int = ExperimentConfig.eval_every
+    eval_episodes: int = ExperimentConfig.eval_episodes
+    final_eval_episodes: int = ExperimentConfig.final_eval_episodes
+    gradient_steps: int = ExperimentConfig.gradient_steps
+    decay: float = ExperimentConfig.decay
     show_learner_subgoal: bool = True
-    held_out_layouts: bool = False
+    held_out_layouts: bool = ExperimentConfig.held_out_layouts
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
@@ -75,18 +79,14 @@ class StudySettings:
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
-        return ExperimentConfig(
-            body=self.body,
-            episodes=episodes,
-            eval_every=self.eval_every,
-            eval_episodes=self.eval_episodes,
-            final_eval_episodes=self.final_eval_episodes,
-            maze_size=self.maze_size,
-            gradient_steps=self.gradient_steps,
-            decay=self.decay,
-            expert_max_distance=self.expert_max_distance,
-            held_out_layouts=self.held_out_layouts,
-        )
+        return ExperimentConfig(episodes=episodes, **{name: getattr(self, name) for name in EXPERIMENT_FIELDS})
+
+
+EXPERIMENT_FIELDS: tuple[str, ...] = tuple(
+    field.name for field in fields(StudySettings) if field.name in {shared.name for shared in fields(ExperimentConfig)}
+)
+"""The :class:`StudySettings` fields that are :class:`~antmaze_hirl.experiments.config.ExperimentConfig`'s too:
+their defaults are the experiment's, and :meth:`StudySettings.experiment_config` passes them on."""
 
 
 STUDY_SPLITS = ("train", "selection", "eval")

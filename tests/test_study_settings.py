@@ -1,0 +1,98 @@
+"""A study's settings share the experiment's fields and defaults, and its settings.json keeps its keys."""
+
+import ast
+import json
+from dataclasses import MISSING, asdict, fields
+from pathlib import Path
+
+import pytest
+
+from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.study import settings as settings_module
+from antmaze_hirl.study.settings import (
+    EXPERIMENT_FIELDS,
+    SETTINGS_FILE,
+    StudySettings,
+    load_settings,
+    save_settings,
+)
+
+SETTINGS_KEYS = [
+    "body",
+    "maze_size",
+    "expert_max_distance",
+    "eval_every",
+    "eval_episodes",
+    "final_eval_episodes",
+    "gradient_steps",
+    "decay",
+    "show_learner_subgoal",
+    "held_out_layouts",
+]
+"""The keys of a study folder's settings.json, in the order written since held-out layouts came in."""
+
+
+def experiment_field(name):
+    return next(field for field in fields(ExperimentConfig) if field.name == name)
+
+
+def test_the_shared_fields_are_every_study_setting_but_the_page_one():
+    assert list(EXPERIMENT_FIELDS) == [key for key in SETTINGS_KEYS if key != "show_learner_subgoal"]
+
+
+@pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
+def test_a_shared_fields_default_and_type_are_the_experiments(name):
+    study = next(field for field in fields(StudySettings) if field.name == name)
+    experiment = experiment_field(name)
+    assert experiment.default is not MISSING
+    assert study.default == experiment.default and type(study.default) is type(experiment.default)
+    assert study.type == experiment.type
+
+
+def test_a_shared_default_is_read_from_the_experiment_not_typed_again():
+    # Equal values would pass the test above even if typed twice: the source must name ExperimentConfig's.
+    source = Path(settings_module.__file__).read_text()
+    study_class = next(
+        node for node in ast.parse(source).body if isinstance(node, ast.ClassDef) and node.name == "StudySettings"
+    )
+    defaults = {
+        node.target.id: ast.unparse(node.value)
+        for node in study_class.body
+        if isinstance(node, ast.AnnAssign) and node.value is not None
+    }
+    assert {name: defaults[name] for name in EXPERIMENT_FIELDS} == {
+        name: f"ExperimentConfig.{name}" for name in EXPERIMENT_FIELDS
+    }
+
+
+def test_the_trials_experiment_config_carries_every_shared_setting():
+    settings = StudySettings.for_body("ant", eval_every=3, gradient_steps=7, decay=1.5)
+    config = settings.experiment_config(11)
+    assert config.episodes == 11
+    assert {name: getattr(config, name) for name in EXPERIMENT_FIELDS} == {
+        name: getattr(settings, name) for name in EXPERIMENT_FIELDS
+    }
+    # What the study does not set is the experiment's default.
+    others = [field for field in fields(ExperimentConfig) if field.name not in (*EXPERIMENT_FIELDS, "episodes")]
+    assert all(getattr(config, field.name) == field.default for field in others)
+
+
+def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
+    save_settings(StudySettings.for_body("point"), tmp_path)
+    assert list(json.loads((tmp_path / SETTINGS_FILE).read_text())) == SETTINGS_KEYS
+    # A settings.json written before held-out layouts existed: no held_out_layouts key.
+    old = {
+        "body": "ant",
+        "maze_size": 3,
+        "expert_max_distance": 2.0,
+        "eval_every": 10,
+        "eval_episodes": 20,
+        "final_eval_episodes": 100,
+        "gradient_steps": 200,
+        "decay": 2.0,
+        "show_learner_subgoal": False,
+    }
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps(old, indent=2))
+    loaded = load_settings(tmp_path)
+    assert asdict(loaded) == {**old, "held_out_layouts": False}
+    assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, expert_max_distance=2.0)
