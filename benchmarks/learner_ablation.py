@@ -95,8 +95,8 @@ AGREEMENT_STATES = 1000
 
 def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, labels: np.ndarray) -> float:
     """Fraction of states whose predicted subgoal lies in the same cell (relative to the agent's) as the label."""
-    inner = policy.policy
-    return float(np.mean(np.all(inner.cell_steps(agent_xy, predicted) == inner.cell_steps(agent_xy, labels), axis=1)))
+    steps = policy.cell_steps
+    return float(np.mean(np.all(steps(agent_xy, predicted) == steps(agent_xy, labels), axis=1)))
 
 
 def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> float:

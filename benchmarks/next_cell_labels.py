@@ -1,6 +1,6 @@
 """What the next-cell head learns from the ant's oracle labels: each label's class, by the old and the new rule.
 
-The next-cell head classifies a label by the cell its subgoal lies in (``SubgoalPolicy.cell_steps``). The
+The next-cell head classifies a label by the cell its subgoal lies in (``HighLevelPolicy.cell_steps``). The
 ant's oracle gives 2 m subgoals in 4 m cells, so from near a cell's centre most land in the agent's own
 cell. The old rule read that as "stay"; the new one carries a label at the reach (at least
 ``AT_REACH`` of it) one cell side along its direction first. This script samples oracle-labelled states
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.dagger.policy import AT_REACH, SubgoalPolicy
+from antmaze_hirl.dagger.high_level_policy import AT_REACH, HighLevelPolicy, LearnerSettings
 from antmaze_hirl.envs.bodies import body_spec
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import generate_layout, shortest_path
@@ -96,13 +96,12 @@ def main() -> None:
     steps = {}
     for rule, subgoal_reach_m in (("old", geometry.scale), ("new", reach)):
         # At a whole cell's reach cell_steps reads the cell each label lies in (the old rule); at 2 m it carries.
-        policy = SubgoalPolicy(
+        policy = HighLevelPolicy(
             geometry,
             pixels_per_cell=8,
             body_dim=0,
             rng=np.random.default_rng(0),
-            subgoal_reach_m=subgoal_reach_m,
-            head="next_cell",
+            settings=LearnerSettings(subgoal_reach_m=subgoal_reach_m, head="next_cell"),
         )
         steps[rule] = policy.cell_steps(labels["agents"], labels["subgoals"])
     rules = {rule: class_figures(classes, steps["old"], labels) for rule, classes in steps.items()}

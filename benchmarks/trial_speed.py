@@ -5,7 +5,7 @@ The speed-ups (issue 32's "affordable rerun"):
 * the simulator pool (:mod:`antmaze_hirl.envs.simulator_pool`): an env coming back to a maze reuses its
   compiled MuJoCo simulator, so the 100 evaluation mazes compile once per process instead of once per
   evaluation;
-* Adam's ``foreach`` update in :class:`~antmaze_hirl.dagger.learner.SubgoalLearner`.
+* Adam's ``foreach`` update in :class:`~antmaze_hirl.dagger.high_level_policy.HighLevelPolicy`.
 
 ``baseline`` turns both off (pool capacity 0, ``foreach=False``); ``fast`` is the code as it is. Both arms
 run the same reduced trial (fewer episodes and evaluation mazes, the same per-episode work) in their own

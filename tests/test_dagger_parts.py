@@ -1,5 +1,8 @@
 """The dagger package's parts and contracts: dataset, policy, learner, state layout, task sampler, names."""
 
+import dataclasses
+import importlib
+import inspect
 import json
 import pickle
 import zipfile
@@ -18,15 +21,17 @@ from antmaze_hirl.dagger import (
     DemonstrationDataset,
     HighLevelPolicy,
     InverseDecayBetaSchedule,
+    LearnerSettings,
     OffsetLearner,
     QueryStrategy,
-    SubgoalLearner,
-    SubgoalPolicy,
 )
+from antmaze_hirl.dagger.high_level_policy import ENV_SHAPE_KEYS, FILE_KEYS
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
+from antmaze_hirl.envs.profiles import BODY_PROFILES
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.task import Task
+from antmaze_hirl.experiments.config import LEARNERS
 
 V2_ZIP = Path(__file__).parent / "data" / "high_level_policy_v2.zip"
 
@@ -71,7 +76,7 @@ def test_learner_encodings_stay_right_after_removal():
         dataset.add(Demonstration(obs["image"], obs["state"], np.zeros(2), 0, step))
     policy.fit_dataset(dataset, 1)  # fills the encoding cache
     dataset.remove([0, 2])
-    cached = policy.learner.cache.encoded(policy.policy, dataset, None)
+    cached = policy.cache.encoded(policy.encoder, dataset, None)
     fresh = policy.encoder.encode_observations([observations[1], observations[3]])
     np.testing.assert_array_equal(cached.grids, fresh.grids)
     np.testing.assert_array_equal(cached.vectors, fresh.vectors)
@@ -87,8 +92,8 @@ def test_learner_and_policy_leave_torchs_global_rng_alone():
     th.manual_seed(123)
     expected = th.rand(3)
     th.manual_seed(123)
-    learner_policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))  # seeds its initialisation
-    SubgoalLearner(learner_policy.policy, rng=np.random.default_rng(1)).fit_dataset(dataset, 3)
+    learner = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))  # seeds its initialisation
+    learner.fit_dataset(dataset, 3)
     th.testing.assert_close(th.rand(3), expected)
 
 
@@ -115,11 +120,9 @@ def test_policy_is_a_module_and_loads_the_v2_zip_format(tmp_path):
     obs = {"image": image, "state": np.array([0.1, -0.2, 0.9, 0.8, 0.3, -0.1], np.float32)}
     recorded = [0.5323548391461372, -0.3630983680486679]
     loaded = HighLevelPolicy.load(V2_ZIP)
-    assert loaded.config()["learning_rate"] == 5e-4 and loaded.learner.batch_size == 16
+    assert loaded.config()["learning_rate"] == 5e-4 and loaded.settings.batch_size == 16
     np.testing.assert_array_equal(loaded.predict(obs), recorded)
-    policy = SubgoalPolicy.load(V2_ZIP)
-    assert isinstance(policy, th.nn.Module) and isinstance(loaded, OffsetLearner)
-    np.testing.assert_array_equal(policy.predict(obs), recorded)
+    assert isinstance(loaded.network, th.nn.Module) and isinstance(loaded, OffsetLearner)
     resaved = HighLevelPolicy.load(loaded.save(tmp_path / "again.zip"))
     assert resaved.config() == loaded.config()
     np.testing.assert_array_equal(resaved.predict(obs), recorded)
@@ -218,12 +221,54 @@ def test_query_strategy_is_the_base_and_dagger_query_plain_dagger():
     assert DAggerQuery().name == "dagger"
 
 
-def test_learner_settings_are_checked():
-    policy_rng = np.random.default_rng(0)
-    policy = SubgoalPolicy(MazeGeometry(3, 3, 1.0), pixels_per_cell=4, body_dim=2, rng=policy_rng)
-    with pytest.raises(ValueError, match="batch_size must be >= 1, got 0"):
-        SubgoalLearner(policy, rng=np.random.default_rng(0), batch_size=0)
-    with pytest.raises(ValueError, match="n_directions must be a positive multiple of 4, got 6"):
-        SubgoalPolicy(
-            MazeGeometry(3, 3, 1.0), pixels_per_cell=4, body_dim=2, rng=np.random.default_rng(0), n_directions=6
-        )
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        ({"batch_size": 0}, "batch_size must be >= 1, got 0"),
+        ({"n_directions": 6}, "n_directions must be a positive multiple of 4, got 6"),
+        ({"learning_rate": 0.0}, "learning_rate must be > 0, got 0.0"),
+        ({"subgoal_reach_m": -2.0}, "subgoal_reach_m must be > 0 or None, got -2.0"),
+        ({"hidden": 0}, "hidden must be >= 1, got 0"),
+        ({"channels": -1}, "channels must be >= 1, got -1"),
+        ({"head": "cells"}, r"head must be one of \['heading', 'next_cell'\], got 'cells'"),
+        ({"planning_iterations": -1}, "planning_iterations must be >= 0, got -1"),
+        ({"block_walls": True}, "block_walls needs head='next_cell' and planning_iterations > 0"),
+    ],
+)
+def test_learner_settings_are_checked(bad, message):
+    with pytest.raises(ValueError, match=f"^{message}$"):
+        LearnerSettings(**bad)
+    with pytest.raises(ValueError, match=message):  # a file's settings are checked as a caller's are
+        LearnerSettings().replace(**bad)
+
+
+def test_unknown_settings_and_bodies_are_named():
+    with pytest.raises(ValueError, match=r"unknown learner settings \['hiden'\]; choose from \['subgoal_reach_m', "):
+        LearnerSettings().replace(hiden=64)
+    with pytest.raises(ValueError, match=r"unknown learner settings \['max_offset'\]"):  # the file's key is no keyword
+        HighLevelPolicy.for_env(point_env(), rng=np.random.default_rng(0), max_offset=1.0)
+    with pytest.raises(ValueError, match=r"unknown body 'cat'; choose from \['ant', 'point'\]"):
+        LearnerSettings.for_body("cat", MazeGeometry(3, 3, 1.0))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        LearnerSettings().hidden = 3  # type: ignore[misc]
+
+
+def test_the_settings_are_the_one_list_of_the_constructor_the_file_and_the_body_defaults(tmp_path):
+    names = [field.name for field in dataclasses.fields(LearnerSettings)]
+    assert list(LearnerSettings.names()) == names
+    assert list(inspect.signature(HighLevelPolicy).parameters) == [*ENV_SHAPE_KEYS, "rng", "settings"]
+    learner = HighLevelPolicy(MazeGeometry(3, 3, 1.0), pixels_per_cell=4, body_dim=2, rng=np.random.default_rng(0))
+    assert learner.settings == LearnerSettings(subgoal_reach_m=1.0)  # None resolved to one cell
+    assert list(learner.config()) == [*ENV_SHAPE_KEYS, *names]
+    with zipfile.ZipFile(learner.save(tmp_path / "l.zip")) as archive:
+        stored = json.loads(archive.read("meta.json"))["config"]
+    assert list(stored) == [*ENV_SHAPE_KEYS, *(FILE_KEYS.get(name, name) for name in names)]
+    for named in LEARNERS.values():
+        assert set(named) <= set(names)
+    assert LearnerSettings.for_body("ant", MazeGeometry(6, 6, 4.0)).head == BODY_PROFILES["ant"].learner_head
+    # One learner class: the parts it was split into before 0.2.0 are gone, with no alias.
+    for removed in ("SubgoalPolicy", "SubgoalLearner"):
+        assert not hasattr(dagger, removed)
+    for module in ("antmaze_hirl.dagger.policy", "antmaze_hirl.dagger.learner"):
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(module)

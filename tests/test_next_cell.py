@@ -5,9 +5,8 @@ import numpy as np
 import pytest
 import torch as th
 
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, SubgoalPolicy
+from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, LearnerSettings
 from antmaze_hirl.dagger.features import EncodedBatch, augment
-from antmaze_hirl.dagger.high_level_policy import body_policy_defaults
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration, blocked_moves, next_cell_classes
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -90,7 +89,8 @@ def test_blocking_walls_keeps_a_learnt_planner_off_a_cheap_wall():
 
 def point_policy(**kwargs):
     geometry = MazeGeometry(7, 7, 1.0)
-    return SubgoalPolicy(geometry, pixels_per_cell=4, body_dim=2, rng=np.random.default_rng(0), **kwargs)
+    settings = LearnerSettings(**kwargs)
+    return HighLevelPolicy(geometry, pixels_per_cell=4, body_dim=2, rng=np.random.default_rng(0), settings=settings)
 
 
 def test_labels_become_the_cell_step_to_the_subgoals_cell():
@@ -178,7 +178,7 @@ def test_each_body_defaults_to_its_ablations_next_cell_head():
         env, rng=np.random.default_rng(0), head="heading", planning_iterations=0, block_walls=False
     )
     assert (previous.config()["head"], previous.config()["planning_iterations"]) == ("heading", 0)
-    assert body_policy_defaults("ant", MazeGeometry(6, 6, 4.0)) == {"head": "next_cell"}
+    assert LearnerSettings.for_body("ant", MazeGeometry(6, 6, 4.0)) == LearnerSettings(head="next_cell")
 
 
 def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller):
@@ -204,9 +204,8 @@ def test_an_ant_policy_takes_the_cnn_next_cell_head_and_trains(still_controller)
 def test_labels_at_a_reach_shorter_than_a_cell_point_on_into_the_next_cell():
     # The ant's oracle gives 2 m subgoals in 4 m cells: one from near a cell's centre ends inside that cell.
     geometry = MazeGeometry(6, 6, 4.0)
-    policy = SubgoalPolicy(
-        geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), subgoal_reach_m=2.0, head="next_cell"
-    )
+    settings = LearnerSettings(subgoal_reach_m=2.0, head="next_cell")
+    policy = HighLevelPolicy(geometry, pixels_per_cell=8, body_dim=27, rng=np.random.default_rng(0), settings=settings)
     centre = geometry.cell_to_xy((2, 2))
     agents = np.stack([centre] * 4 + [centre + np.array([0.5, 0.0])])
     subgoals = np.stack(

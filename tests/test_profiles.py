@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
-from antmaze_hirl.dagger.high_level_policy import body_policy_defaults
+from antmaze_hirl.dagger.high_level_policy import LearnerSettings
 from antmaze_hirl.envs import profiles
 from antmaze_hirl.envs.bodies import BODY_SPECS, BodySpec
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -35,13 +35,11 @@ def test_the_body_facts_are_the_values_of_before():
     for body, profile in profiles.BODY_PROFILES.items():
         assert profile.body == body and profile.spec is BODY_SPECS[body]
     point_map, ant_map = MazeGeometry(7, 7, 1.0), MazeGeometry(6, 6, 4.0)
-    assert body_policy_defaults("point", point_map) == {
-        "head": "next_cell",
-        "planning_iterations": 16,
-        "block_walls": True,
-    }
-    assert body_policy_defaults("ant", ant_map) == {"head": "next_cell"}
-    assert body_policy_defaults("", point_map) == {}
+    assert LearnerSettings.for_body("point", point_map) == LearnerSettings(
+        head="next_cell", planning_iterations=16, block_walls=True
+    )
+    assert LearnerSettings.for_body("ant", ant_map) == LearnerSettings(head="next_cell")
+    assert LearnerSettings.for_body(None, point_map) == LearnerSettings()
 
 
 def test_the_seed_table_is_the_values_of_before():

@@ -192,7 +192,7 @@ def test_protocol_2_trains_the_generic_learner_and_protocol_1_the_body_default()
         env = make_env(config, split="train")
         trainer = make_trainer("dagger", 0, config, env, PathOracle.for_env(env))
         env.close()
-        return trainer.learner.policy.config()
+        return trainer.learner.config()
 
     generic = policy_config(TINY2)
     assert PROTOCOL_LEARNER == "next_cell_cnn" and generic["head"] == "next_cell"

@@ -33,7 +33,7 @@ def tasks_and_weights(strategy, episodes=4, seed=0):
         trainer.run_episode()
         unwrapped = trainer.env.unwrapped
         tasks.append((unwrapped.layout.walls.copy(), unwrapped.goal_xy.copy()))
-    weights = [p.detach().clone() for p in trainer.learner.policy.network.parameters()]
+    weights = [p.detach().clone() for p in trainer.learner.network.parameters()]
     return tasks, weights
 
 
@@ -70,7 +70,7 @@ def test_make_trainer_gives_every_method_the_same_untrained_learner_and_first_ta
     for method in ("dagger", "multi_policy"):
         env = point_maze()
         trainer = make_trainer(method, 5, config, env, PathOracle.for_env(env))
-        weights = [p.detach().clone() for p in trainer.learner.policy.network.parameters()]
+        weights = [p.detach().clone() for p in trainer.learner.network.parameters()]
         run = trainer.start_episode()
         first[method] = (weights, env.unwrapped.layout.walls.copy(), env.unwrapped.goal_xy.copy())
         assert run.request is not None

@@ -200,7 +200,7 @@ def test_aggrevate_trains_towards_the_lowest_cost_heading():
 
 def test_aggrevate_takes_the_learners_bins_and_labels_once_per_state():
     trainer = make_point_trainer(make_strategy("aggrevate"), gradient_steps=1)
-    assert trainer.strategy.n_directions == trainer.learner.policy.n_directions
+    assert trainer.strategy.n_directions == trainer.learner.settings.n_directions
     record = trainer.run_episode()
     assert len(trainer.dataset) == record.expert_cost == trainer.total_expert_cost
     offsets = trainer.dataset.subgoals() - trainer.dataset.agent_xy()

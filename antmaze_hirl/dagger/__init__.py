@@ -1,10 +1,8 @@
-"""DAgger for the high level: trainer, beta schedules, active-learning strategies, data, policy, learner."""
+"""DAgger for the high level: trainer, beta schedules, active-learning strategies, data, the learner."""
 
 from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluate_high_level
-from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
-from antmaze_hirl.dagger.learner import SubgoalLearner
-from antmaze_hirl.dagger.policy import SubgoalPolicy
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, LearnerSettings
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
 from antmaze_hirl.dagger.schedules import (
     BetaSchedule,
@@ -39,6 +37,7 @@ __all__ = [
     "HighLevelPolicy",
     "InverseDecayBetaSchedule",
     "Learner",
+    "LearnerSettings",
     "LinearBetaSchedule",
     "MultiPolicyQuery",
     "NoiseQuery",
@@ -46,8 +45,6 @@ __all__ = [
     "QueryStrategy",
     "RewardBasedQuery",
     "RewardPerStepQuery",
-    "SubgoalLearner",
-    "SubgoalPolicy",
     "evaluate_high_level",
     "make_strategy",
 ]

@@ -1,19 +1,58 @@
-""":class:`HighLevelPolicy`: a :class:`SubgoalPolicy` with its :class:`SubgoalLearner`, the DAgger learner."""
+"""The high-level learner: its settings (:class:`LearnerSettings`) and :class:`HighLevelPolicy`, the DAgger learner.
+
+:class:`HighLevelPolicy` holds a torch network of :mod:`antmaze_hirl.dagger.network` (which subgoal to
+hand the low level), fits it to expert subgoals, and saves it to and loads it from a zip. Every setting it
+has is a field of :class:`LearnerSettings`, the one list of them: the constructor takes one, a body's
+defaults are one (:meth:`LearnerSettings.for_body`), and a saved file's ``config`` holds its fields.
+"""
 
 from __future__ import annotations
 
+import dataclasses
+import io
+import json
+import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch as th
+from torch import nn
 
+from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.dagger.dataset import DemonstrationDataset
-from antmaze_hirl.dagger.features import EncodedBatch, ObservationEncoder
-from antmaze_hirl.dagger.learner import LEARNER_SETTINGS, SubgoalLearner
-from antmaze_hirl.dagger.policy import POLICY_SETTINGS, SubgoalPolicy, read_policy_file
+from antmaze_hirl.dagger.features import OFFSET_FEATURE_DIM, EncodedBatch, ObservationEncoder, augment
+from antmaze_hirl.dagger.network import (
+    NEXT_CELL_MOVES,
+    NextCellNetwork,
+    SubgoalNetwork,
+    direction_bins,
+    next_cell_classes,
+    offsets_from_outputs,
+)
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.profiles import BODY_PROFILES
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+
+FORMAT = "antmaze_hirl.high_level_policy/2"
+"""The format a saved learner's ``meta.json`` names (the files of every 0.x version)."""
+
+HEADS = ("heading", "next_cell")
+"""What the network outputs: a free heading and distance, or the next cell of the path (3x3 around the agent)."""
+
+ENV_SHAPE_KEYS = ("geometry", "pixels_per_cell", "body_dim")
+"""What a saved file's ``config`` holds beside the :class:`LearnerSettings` fields: the shape of the env it acts
+in (map placement as ``[rows, cols, scale]``, image resolution, body observation length)."""
+
+FILE_KEYS = {"subgoal_reach_m": "max_offset"}
+"""Settings a zip's ``config`` stores under another key: format 2 predates the 0.2.0 names, and the committed
+and shipped files keep reading only if the key in the file stays (:meth:`HighLevelPolicy.save`,
+:func:`read_policy_file` translate)."""
+
+AT_REACH = 0.9
+"""Share of ``subgoal_reach_m`` from which a label counts as cut short at the reach (the oracle's are exactly at it;
+a noisy or human click a little short of it still points past it)."""
 
 
 def planning_rounds(n_rows: int, n_cols: int) -> int:
@@ -24,52 +63,177 @@ def planning_rounds(n_rows: int, n_cols: int) -> int:
     return n_rows + n_cols + 2
 
 
-def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
-    """The settings :meth:`HighLevelPolicy.for_env` gives a body's policy unless told otherwise.
+@dataclass(frozen=True)
+class LearnerSettings:
+    """Every setting of a :class:`HighLevelPolicy`: its network's shape and how it is trained.
 
-    Both bodies get the next-cell head, each the winner of ``benchmarks/learner_ablation.py`` on its
-    held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the walls
-    block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest shortest
-    path is 15 moves; ``benchmarks/results/learner_ablation.json``). The ant's is the CNN's: on its 4x4
-    mazes it tied value iteration on the selection mazes' median and costs 28% less time, and ruling out
-    wall moves lost there, since its 2 m labels cut corners the cell grid calls walls
-    (``benchmarks/results/learner_ablation_ant.json``). The ant's heading head, its default before,
-    scored 52% against 77%.
+    The fields are in the order a saved file's ``config`` lists them (after :data:`ENV_SHAPE_KEYS`).
+
+    Attributes:
+        subgoal_reach_m: Farthest subgoal from the agent, metres; ``None``: one cell (the oracle's default
+            reach; the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m). The learner
+            resolves ``None`` to its map's cell side.
+        n_directions: Heading bins of the ``"heading"`` network (a positive multiple of 4, so the square's
+            symmetries map bins to bins).
+        planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
+            value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN within
+            30 episodes: 70% vs 70% learner-only success on 20 mazes); with the next-cell head, the planner
+            whose Q gives the logits, which needs at least the longest path's moves (:func:`planning_rounds`).
+        channels: Convolution channels.
+        hidden: Width of the fully connected layers.
+        head: ``"heading"`` (the default; :meth:`for_body` picks per body): classify a heading among
+            ``n_directions`` and regress a distance. ``"next_cell"``: classify which of the 3x3 cells around
+            the agent's cell comes next on the path (a label's class is the cell its subgoal lies in); the
+            subgoal is that cell's centre, or the goal where the goal lies in it, pulled back to
+            ``subgoal_reach_m``. With ``planning_iterations > 0`` its logits are a value iteration network's Q
+            at the agent's cell.
+        block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
+            between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
+        learning_rate: Adam step size.
+        batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
+        augment_symmetries: Train on random rotations/mirrors of each sample.
+
+    Raises:
+        ValueError: Naming the first bad value: ``subgoal_reach_m`` not positive, ``n_directions`` not a
+            positive multiple of 4, ``planning_iterations`` negative, ``channels`` or ``hidden`` below 1,
+            ``head`` unknown, ``block_walls`` without the planning next-cell head, ``learning_rate`` not
+            positive or ``batch_size`` below 1.
     """
-    profile = BODY_PROFILES.get(body)
-    if profile is None:
-        return {}
-    if profile.learner_plans:
-        return {
-            "head": profile.learner_head,
-            "planning_iterations": planning_rounds(geometry.n_rows, geometry.n_cols),
-            "block_walls": True,
-        }
-    return {"head": profile.learner_head}
+
+    subgoal_reach_m: float | None = None
+    n_directions: int = 16
+    planning_iterations: int = 0
+    channels: int = 16
+    hidden: int = 128
+    head: str = "heading"
+    block_walls: bool = False
+    learning_rate: float = 1e-3
+    batch_size: int = 64
+    augment_symmetries: bool = True
+
+    def __post_init__(self) -> None:
+        if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
+            raise ValueError(f"subgoal_reach_m must be > 0 or None, got {self.subgoal_reach_m}")
+        if self.n_directions < 4 or self.n_directions % 4:
+            raise ValueError(f"n_directions must be a positive multiple of 4, got {self.n_directions}")
+        if self.head not in HEADS:
+            raise ValueError(f"head must be one of {list(HEADS)}, got {self.head!r}")
+        if self.planning_iterations < 0:
+            raise ValueError(f"planning_iterations must be >= 0, got {self.planning_iterations}")
+        if self.block_walls and (self.head != "next_cell" or self.planning_iterations == 0):
+            raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
+        for name in ("channels", "hidden", "batch_size"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
+        if not self.learning_rate > 0:
+            raise ValueError(f"learning_rate must be > 0, got {self.learning_rate}")
+        # The types the network and a saved file's JSON get (a numpy integer from a caller, say): frozen, so set here.
+        if self.subgoal_reach_m is not None:
+            object.__setattr__(self, "subgoal_reach_m", float(self.subgoal_reach_m))
+        object.__setattr__(self, "planning_iterations", int(self.planning_iterations))
+        object.__setattr__(self, "block_walls", bool(self.block_walls))
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        """The settings' names, in file order."""
+        return tuple(field.name for field in dataclasses.fields(cls))
+
+    @classmethod
+    def for_body(cls, body: str | None, geometry: MazeGeometry) -> LearnerSettings:
+        """The settings :meth:`HighLevelPolicy.for_env` gives a body's learner unless told otherwise.
+
+        Read from the body's profile (``learner_head``, ``learner_plans`` in
+        :data:`~antmaze_hirl.envs.profiles.BODY_PROFILES`); ``None`` (an env that names no body): the defaults.
+        Both bodies get the next-cell head, each the winner of ``benchmarks/learner_ablation.py`` on its
+        held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the
+        walls block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest
+        shortest path is 15 moves; ``benchmarks/results/learner_ablation.json``). The ant's is the CNN's: on
+        its 4x4 mazes it tied value iteration on the selection mazes' median and costs 28% less time, and
+        ruling out wall moves lost there, since its 2 m labels cut corners the cell grid calls walls
+        (``benchmarks/results/learner_ablation_ant.json``). The ant's heading head, its default before,
+        scored 52% against 77%.
+
+        Raises:
+            ValueError: For a body without a profile (names it and the known ones).
+        """
+        if body is None:
+            return cls()
+        if body not in BODY_PROFILES:
+            raise ValueError(f"unknown body {body!r}; choose from {sorted(BODY_PROFILES)}")
+        profile = BODY_PROFILES[body]
+        if profile.learner_plans:
+            rounds = planning_rounds(geometry.n_rows, geometry.n_cols)
+            return cls(head=profile.learner_head, planning_iterations=rounds, block_walls=True)
+        return cls(head=profile.learner_head)
+
+    def replace(self, **changes: Any) -> LearnerSettings:
+        """These settings with ``changes`` (field names) applied, checked together.
+
+        Raises:
+            ValueError: For a name that is not a setting (names it and the settings), or as the constructor.
+        """
+        unknown = sorted(set(changes) - set(self.names()))
+        if unknown:
+            raise ValueError(f"unknown learner settings {unknown}; choose from {list(self.names())}")
+        return dataclasses.replace(self, **changes)
+
+
+class EncodingCache:
+    """The network inputs of a dataset's rows, encoded once per row.
+
+    Keyed by the dataset's stable row ids, which removal never reuses, so entries stay right after
+    labels are removed; a different dataset starts the cache afresh.
+    """
+
+    def __init__(self) -> None:
+        self._dataset_key: str | None = None
+        self._rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def encoded(
+        self, encoder: ObservationEncoder, dataset: DemonstrationDataset, indices: np.ndarray | None
+    ) -> EncodedBatch:
+        """Encodings of the dataset's rows (or of the positions ``indices``, repeats allowed).
+
+        Raises:
+            ValueError: If the dataset is empty.
+        """
+        if len(dataset) == 0:
+            raise ValueError("the dataset is empty")
+        if self._dataset_key != dataset.key:
+            self._dataset_key, self._rows = dataset.key, {}
+        ids = dataset.ids(indices)
+        missing = [int(row) for row in dict.fromkeys(ids.tolist()) if row not in self._rows]
+        if missing:
+            new = encoder.encode_observations(dataset.observations_by_id(missing))
+            self._rows.update(zip(missing, zip(new.grids, new.vectors, strict=True), strict=True))
+        return EncodedBatch(
+            np.stack([self._rows[int(row)][0] for row in ids]), np.stack([self._rows[int(row)][1] for row in ids])
+        )
 
 
 class HighLevelPolicy:
-    """The high-level learner of :class:`~antmaze_hirl.dagger.DAggerTrainer`: a policy and how it is trained.
+    """The high-level learner of :class:`~antmaze_hirl.dagger.DAggerTrainer`: subgoals from a network it fits.
 
-    :attr:`policy` (an ``nn.Module``) maps observations to subgoals; :attr:`learner` fits it. This
-    object keeps the one-object interface the trainer, the strategies and saved files use.
+    It maps observations to xy subgoals, ``agent_xy + subgoal_reach_m * network(encoding)``, and trains
+    :attr:`network` with Adam on the expert's subgoals: heading cross-entropy plus squared distance error
+    (``"heading"``), or cross-entropy over the cell each label's subgoal lies in (``"next_cell"``), with random
+    symmetries of the square as augmentation.
 
     Args:
         geometry: Map placement of the env it acts in.
         pixels_per_cell: The env's image resolution.
         body_dim: Length of the body observation in the env's ``state``.
-        rng: Seeds the network initialisation, then draws minibatches and augmentations.
-        subgoal_reach_m: Farthest subgoal from the agent, metres. Default one cell (the oracle's default reach;
-            the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m).
-        learning_rate: Adam step size.
-        batch_size: Minibatch size of :meth:`fit`.
-        augment_symmetries: Train on random rotations/mirrors of each sample.
-        n_directions: Heading bins of the network.
-        planning_iterations: Value-iteration rounds of an added planning module (0: CNN only).
-        channels: Convolution channels.
-        hidden: Width of the fully connected layers.
-        head: ``"heading"`` or ``"next_cell"`` (:class:`~antmaze_hirl.dagger.policy.SubgoalPolicy`).
-        block_walls: The next-cell planner rules out moves the walls block (``SubgoalPolicy``).
+        rng: Seeds the network initialisation (one draw), then draws minibatches and augmentations; torch's
+            global RNG is left as it was.
+        settings: The network's shape and training (:class:`LearnerSettings`; ``None``: the defaults).
+            A ``subgoal_reach_m`` of ``None`` becomes one cell of ``geometry``.
+
+    Attributes:
+        settings: The settings, ``subgoal_reach_m`` resolved to metres.
+        network: The torch module: a :class:`~antmaze_hirl.dagger.network.SubgoalNetwork` (``"heading"``) or a
+            :class:`~antmaze_hirl.dagger.network.NextCellNetwork` (``"next_cell"``).
+        encoder: Turns observations into the network's inputs.
+        gradient_steps: Gradient steps taken so far.
     """
 
     def __init__(
@@ -79,132 +243,277 @@ class HighLevelPolicy:
         pixels_per_cell: int,
         body_dim: int,
         rng: np.random.Generator,
-        subgoal_reach_m: float | None = None,
-        learning_rate: float = 1e-3,
-        batch_size: int = 64,
-        augment_symmetries: bool = True,
-        n_directions: int = 16,
-        planning_iterations: int = 0,
-        channels: int = 16,
-        hidden: int = 128,
-        head: str = "heading",
-        block_walls: bool = False,
+        settings: LearnerSettings | None = None,
     ) -> None:
-        self.policy = SubgoalPolicy(
-            geometry,
-            pixels_per_cell=pixels_per_cell,
-            body_dim=body_dim,
-            rng=rng,
-            subgoal_reach_m=subgoal_reach_m,
-            n_directions=n_directions,
-            planning_iterations=planning_iterations,
-            channels=channels,
-            hidden=hidden,
-            head=head,
-            block_walls=block_walls,
-        )
-        self.learner = SubgoalLearner(
-            self.policy,
-            rng=rng,
-            learning_rate=learning_rate,
-            batch_size=batch_size,
-            augment_symmetries=augment_symmetries,
-        )
+        settings = settings if settings is not None else LearnerSettings()
+        if settings.subgoal_reach_m is None:
+            settings = settings.replace(subgoal_reach_m=geometry.scale)
+        self.geometry = geometry
+        self.pixels_per_cell = pixels_per_cell
+        self.body_dim = body_dim
+        self.settings = settings
+        self.rng = rng
+        self.encoder = ObservationEncoder(geometry, pixels_per_cell)
+        vector_dim = STATE_LAYOUT.state_dim(body_dim)
+        with th.random.fork_rng(devices=[]):  # seed the initialisation without touching torch's global RNG
+            th.manual_seed(int(rng.integers(2**31)))
+            if settings.head == "next_cell":
+                self.network: nn.Module = NextCellNetwork(
+                    self.encoder.grid_size,
+                    vector_dim,
+                    settings.channels,
+                    settings.hidden,
+                    settings.planning_iterations,
+                    block_walls=settings.block_walls,
+                )
+            else:
+                self.network = SubgoalNetwork(
+                    self.encoder.grid_size,
+                    vector_dim,
+                    settings.n_directions,
+                    settings.channels,
+                    settings.hidden,
+                    settings.planning_iterations,
+                )
+        # foreach: one kernel per update op over all tensors instead of a loop of small ones; the same
+        # elementwise math, so the same weights bit for bit (benchmarks/trial_speed.py checks a trial's outcomes).
+        self.optimizer = th.optim.Adam(self.network.parameters(), lr=settings.learning_rate, foreach=True)
+        self.gradient_steps = 0
+        self.cache = EncodingCache()
 
     @classmethod
-    def for_env(cls, env: Any, *, rng: np.random.Generator, **kwargs: Any) -> HighLevelPolicy:
-        """A policy shaped for a (wrapped) high-level env, with its body's defaults (:func:`body_policy_defaults`).
+    def for_env(cls, env: Any, *, rng: np.random.Generator, **overrides: Any) -> HighLevelPolicy:
+        """A learner shaped for a (wrapped) high-level env, with its body's settings (:meth:`LearnerSettings.for_body`).
 
-        ``kwargs`` override those defaults (``head="heading", planning_iterations=0, block_walls=False``
-        for the point's previous default).
+        ``overrides`` (:class:`LearnerSettings` fields) replace those (``head="heading", planning_iterations=0,
+        block_walls=False`` for the point's previous default).
+
+        Raises:
+            ValueError: For an unknown setting or a bad value (:meth:`LearnerSettings.replace`).
         """
         inner = env.unwrapped
-        settings = {**body_policy_defaults(getattr(inner, "body", ""), inner.geometry), **kwargs}
+        settings = LearnerSettings.for_body(getattr(inner, "body", None), inner.geometry).replace(**overrides)
         return cls(
             inner.geometry,
             pixels_per_cell=inner.renderer.pixels_per_cell,
             body_dim=STATE_LAYOUT.body_dim(inner.observation_space["state"].shape[0]),
             rng=rng,
-            **settings,
+            settings=settings,
         )
 
     @property
-    def geometry(self) -> MazeGeometry:
-        """Map placement of the env it acts in."""
-        return self.policy.geometry
-
-    @property
-    def encoder(self) -> ObservationEncoder:
-        """The policy's observation encoder."""
-        return self.policy.encoder
-
-    @property
     def subgoal_reach_m(self) -> float:
-        """Farthest subgoal from the agent, metres."""
-        return self.policy.subgoal_reach_m
+        """Farthest subgoal from the agent, metres (``settings.subgoal_reach_m``, resolved)."""
+        reach = self.settings.subgoal_reach_m
+        assert reach is not None  # resolved in __init__
+        return reach
 
     @property
-    def gradient_steps(self) -> int:
-        """Gradient steps taken so far."""
-        return self.learner.gradient_steps
+    def planar_feature_dim(self) -> int:
+        """Leading encoded features that turn with the maze (xy pairs): goal and in-cell offsets, and a 2-D body state.
+
+        The point's velocity is such a body state; the ant's is not. :func:`~antmaze_hirl.dagger.features.augment`
+        and the symmetric views turn these features.
+        """
+        return OFFSET_FEATURE_DIM + (2 if self.body_dim == 2 else 0)
 
     def offsets(self, batch: EncodedBatch) -> np.ndarray:
         """Normalised offsets (``[-1, 1]^2``) for an encoded batch."""
-        return self.policy.offsets(batch)
+        self.network.eval()
+        with th.no_grad():
+            outputs = self.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors))
+        if self.settings.head == "next_cell":
+            return self.cell_offsets(batch, outputs.argmax(dim=1).numpy())
+        return offsets_from_outputs(*outputs).numpy().astype(np.float64)
+
+    def cell_offsets(self, batch: EncodedBatch, classes: np.ndarray) -> np.ndarray:
+        """Normalised offsets to the chosen next cells: each cell's centre, or the goal where it lies there.
+
+        Everything comes from the encoding: the in-cell and goal offsets from the vector, the goal's
+        cell from the grid's goal channel (the agent's cell is the grid's centre).
+        """
+        steps = np.asarray(NEXT_CELL_MOVES, dtype=np.float64)[classes]
+        in_cell, to_goal = batch.vectors[:, 2:4].astype(np.float64), batch.vectors[:, 0:2].astype(np.float64)
+        centre = batch.grids.shape[-1] // 2
+        rows, cols = centre - steps[:, 1].astype(int), centre + steps[:, 0].astype(int)
+        holds_goal = batch.grids[np.arange(len(batch)), 1, rows, cols] > 0.5
+        offsets = np.where(holds_goal[:, None], to_goal, steps - in_cell) * self.geometry.scale
+        lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
+        offsets = offsets * np.minimum(1.0, self.subgoal_reach_m / np.maximum(lengths, 1e-12))  # the oracle's reach
+        return offsets / self.subgoal_reach_m
+
+    def cell_steps(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
+        """The ``(dx, dy)`` cell step from each agent's cell to its subgoal's, clipped to ``{-1, 0, 1}^2``.
+
+        The agent's cell is clipped to the map as the encoder clips it (a body pressed into the border).
+        Where the reach (``subgoal_reach_m``) is shorter than a cell, a subgoal at the reach (at least
+        :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
+        before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
+        near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
+        would teach "stay" (``benchmarks/next_cell_labels.py``).
+        """
+        agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
+        if self.subgoal_reach_m < self.geometry.scale:
+            offsets = subgoals - agent_xy
+            lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
+            at_reach = lengths >= AT_REACH * self.subgoal_reach_m
+            carried = agent_xy + offsets * (self.geometry.scale / np.maximum(lengths, 1e-12))
+            subgoals = np.where(at_reach, carried, subgoals)
+        last = np.array([self.geometry.n_rows - 1, self.geometry.n_cols - 1])
+        agent = np.clip([self.geometry.xy_to_cell(xy) for xy in agent_xy], 0, last)
+        target = np.clip([self.geometry.xy_to_cell(xy) for xy in subgoals], 0, last)
+        rows, cols = (target - agent).T
+        return np.clip(np.stack([cols, -rows], axis=1), -1, 1).astype(np.float32)
 
     def predict_batch(self, observations: list[dict[str, np.ndarray]]) -> np.ndarray:
         """Subgoals (metres) for a list of observations."""
-        return self.policy.predict_batch(observations)
+        agents = np.stack([np.asarray(STATE_LAYOUT.agent_xy(obs["state"]), dtype=np.float64) for obs in observations])
+        return agents + self.subgoal_reach_m * self.offsets(self.encoder.encode_observations(observations))
 
     def predict(self, observation: dict[str, np.ndarray]) -> np.ndarray:
         """The subgoal (metres) for one observation."""
-        return self.policy.predict(observation)
+        return self.predict_batch([observation])[0]
 
     def __call__(self, observation: dict[str, np.ndarray]) -> np.ndarray:
-        """Same as :meth:`predict`, so the policy serves as an expert-like callable."""
+        """Same as :meth:`predict`, so the learner serves as an expert-like callable."""
         return self.predict(observation)
 
+    def targets(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
+        """Training targets: expert offsets in units of ``subgoal_reach_m``, shortened to length 1 at most.
+
+        With the ``"next_cell"`` head: the ``(dx, dy)`` cell steps to the labels' cells (:meth:`cell_steps`),
+        which the square's symmetries map as they map xy offsets.
+        """
+        if self.settings.head == "next_cell":
+            return self.cell_steps(agent_xy, subgoals)
+        offsets = (subgoals - agent_xy) / self.subgoal_reach_m
+        lengths = np.linalg.norm(offsets, axis=1, keepdims=True)
+        return (offsets / np.maximum(lengths, 1.0)).astype(np.float32)
+
     def fit(self, batch: EncodedBatch, targets: np.ndarray, steps: int) -> float:
-        """:meth:`SubgoalLearner.fit`: ``steps`` Adam steps; the mean loss of the last 10."""
-        return self.learner.fit(batch, targets, steps)
+        """Runs ``steps`` Adam steps on minibatches of ``batch`` and its :meth:`targets`.
+
+        Returns:
+            The mean loss of the last 10 steps (``nan`` if ``steps`` is 0 or the batch is empty).
+        """
+        if steps <= 0 or len(batch) == 0:
+            return float("nan")
+        settings, network = self.settings, self.network
+        network.train()
+        losses = []
+        for _ in range(steps):
+            index = self.rng.integers(len(batch), size=min(settings.batch_size, len(batch)))
+            minibatch = EncodedBatch(batch.grids[index], batch.vectors[index])
+            labels = targets[index]
+            if settings.augment_symmetries:
+                minibatch, labels = augment(minibatch, labels, self.rng, planar_feature_dim=self.planar_feature_dim)
+            outputs = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
+            if settings.head == "next_cell":
+                loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))
+            else:
+                logits, distance = outputs
+                bins = th.from_numpy(direction_bins(labels, settings.n_directions))
+                lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
+                loss = nn.functional.cross_entropy(logits, bins) + th.mean((distance - lengths) ** 2)
+            self.optimizer.zero_grad()
+            loss.backward()
+            self.optimizer.step()
+            losses.append(loss.item())
+        self.gradient_steps += steps
+        return float(np.mean(losses[-10:]))
 
     def fit_dataset(self, dataset: DemonstrationDataset, steps: int, indices: np.ndarray | None = None) -> float:
-        """Trains ``steps`` minibatch steps on the dataset's labels (or the positions ``indices``)."""
-        return self.learner.fit_dataset(dataset, steps, indices)
+        """Runs :meth:`fit` on the dataset's labels (or the positions ``indices``, repeats allowed).
+
+        Raises:
+            ValueError: If the dataset is empty.
+        """
+        targets = self.targets(dataset.agent_xy(indices), dataset.subgoals(indices))
+        return self.fit(self.cache.encoded(self.encoder, dataset, indices), targets, steps)
 
     def spawn(self, rng: np.random.Generator) -> HighLevelPolicy:
         """A fresh, untrained learner of the same settings, initialised from ``rng`` (an ensemble member)."""
-        settings = self.config()
-        del settings["geometry"]  # the object itself, not its [rows, cols, scale] form
-        return HighLevelPolicy(self.geometry, rng=rng, **settings)
+        return HighLevelPolicy(
+            self.geometry, pixels_per_cell=self.pixels_per_cell, body_dim=self.body_dim, rng=rng, settings=self.settings
+        )
 
     def config(self) -> dict[str, Any]:
-        """Constructor settings, stored with saved weights."""
-        return {**self.policy.config(), **self.learner.config()}
+        """What a saved file's ``config`` holds, by Python name.
+
+        The env's shape (:data:`ENV_SHAPE_KEYS`, ``geometry`` as ``[rows, cols, scale]``), then the
+        :class:`LearnerSettings` fields.
+        """
+        shape = [self.geometry.n_rows, self.geometry.n_cols, self.geometry.scale]
+        return {
+            "geometry": shape,
+            "pixels_per_cell": self.pixels_per_cell,
+            "body_dim": self.body_dim,
+            **dataclasses.asdict(self.settings),
+        }
 
     def save(self, path: str | Path) -> Path:
-        """Saves settings and weights to a zip (format ``antmaze_hirl.high_level_policy/2``), atomically."""
-        return self.policy.save(path, learner_config=self.learner.config())
+        """Saves :meth:`config` and the weights to a zip (format :data:`FORMAT`), atomically (temp file + rename)."""
+        config = {FILE_KEYS.get(key, key): value for key, value in self.config().items()}
+        weights = io.BytesIO()
+        th.save(self.network.state_dict(), weights)
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(buffer, "w") as archive:
+            archive.writestr("meta.json", json.dumps({"format": FORMAT, "config": config}))
+            archive.writestr("weights.pt", weights.getvalue())
+        return atomic_write_bytes(path, buffer.getvalue())
 
     @classmethod
     def load(cls, path: str | Path, *, rng: np.random.Generator | None = None) -> HighLevelPolicy:
-        """Loads a policy and its training settings written by :meth:`save`.
+        """Loads a learner written by :meth:`save` (by any 0.x version); ``rng`` (default seed 0) trains it on.
+
+        Settings a file lacks (older files) take the :class:`LearnerSettings` defaults.
 
         Raises:
-            FileNotFoundError: As :meth:`SubgoalPolicy.load`.
-            ValueError: As :meth:`SubgoalPolicy.load`, or for a setting this version does not know.
+            FileNotFoundError: If ``path`` does not exist.
+            ValueError: If the file is not a high-level policy of this format, or holds settings or weights
+                this version cannot load (names what is wrong).
         """
         config, weights = read_policy_file(path)
-        unknown = sorted(set(config) - {"geometry", *POLICY_SETTINGS, *LEARNER_SETTINGS})
+        unknown = sorted(set(config) - {*ENV_SHAPE_KEYS, *LearnerSettings.names()})
         if unknown:
             raise ValueError(f"{path} holds settings this version cannot load: unknown {unknown}")
-        rng = rng if rng is not None else np.random.default_rng(0)
-        loaded = cls.__new__(cls)
-        loaded.policy = SubgoalPolicy.from_file_contents(path, config, weights, rng)
         try:
-            loaded.learner = SubgoalLearner(
-                loaded.policy, rng=rng, **{key: config[key] for key in LEARNER_SETTINGS if key in config}
+            settings = LearnerSettings(**{key: config[key] for key in LearnerSettings.names() if key in config})
+            learner = cls(
+                MazeGeometry(*config["geometry"]),
+                pixels_per_cell=config["pixels_per_cell"],
+                body_dim=config["body_dim"],
+                rng=rng if rng is not None else np.random.default_rng(0),
+                settings=settings,
             )
-        except TypeError as error:
-            raise ValueError(f"{path} holds settings this version cannot load: {error}") from error
-        return loaded
+            learner.network.load_state_dict(th.load(io.BytesIO(weights), weights_only=True))
+        except (KeyError, TypeError, ValueError, RuntimeError) as error:
+            raise ValueError(f"{path} holds settings or weights this version cannot load: {error}") from error
+        return learner
+
+
+def read_policy_file(path: str | Path) -> tuple[dict[str, Any], bytes]:
+    """The ``config`` (keyed by Python names, :data:`FILE_KEYS` translated) and weight bytes of a policy zip.
+
+    Raises:
+        FileNotFoundError: If ``path`` does not exist.
+        ValueError: If the file is not a high-level policy of format :data:`FORMAT`.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no high-level policy at {path}")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            meta = json.loads(archive.read("meta.json"))
+            weights = archive.read("weights.pt")
+    except (zipfile.BadZipFile, KeyError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path} is not a high-level policy file: {error}") from error
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        found = meta.get("format") if isinstance(meta, dict) else None
+        raise ValueError(f"{path} has format {found!r}, expected {FORMAT!r}")
+    try:
+        stored = dict(meta["config"])
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{path} holds settings this version cannot load: {error}") from error
+    names = {key: name for name, key in FILE_KEYS.items()}
+    return {names.get(key, key): value for key, value in stored.items()}, weights

@@ -181,9 +181,9 @@ def check_signal(signal: str) -> str:
 def class_probabilities(learner: Any, batch: EncodedBatch) -> np.ndarray:
     """The learner's softmax distribution over its classes for an encoded batch, ``(B, classes)`` float64.
 
-    Read from the learner's own ``class_probabilities(batch)`` if it has one, else from the torch network
-    of its :class:`~antmaze_hirl.dagger.policy.SubgoalPolicy` (``learner.policy.network``): the next-cell
-    logits, or the heading logits of a heading head (its distance output is left out).
+    Read from the learner's own ``class_probabilities(batch)`` if it has one, else from its torch network
+    (``learner.network``, a :class:`~antmaze_hirl.dagger.HighLevelPolicy`'s): the next-cell logits, or the
+    heading logits of a heading head (its distance output is left out).
 
     Raises:
         ValueError: For a learner with neither (name its type; ``signal="offsets"`` needs only ``offsets``).
@@ -191,12 +191,12 @@ def class_probabilities(learner: Any, batch: EncodedBatch) -> np.ndarray:
     own = getattr(learner, "class_probabilities", None)
     if callable(own):
         return np.asarray(own(batch), dtype=np.float64)
-    network = getattr(getattr(learner, "policy", learner), "network", None)
+    network = getattr(learner, "network", None)
     import torch  # here: this module is imported where torch is not needed (the method names)
 
     if not isinstance(network, torch.nn.Module):
         raise ValueError(
-            f"{type(learner).__name__} has no class distribution (no class_probabilities, no policy.network): "
+            f"{type(learner).__name__} has no class distribution (no class_probabilities, no network): "
             "use signal='offsets'"
         )
     network.eval()
@@ -553,7 +553,7 @@ class AggreVaTeQuery(QueryStrategy):
     def attach(self, learner: Learner) -> None:
         """Takes the learner's heading bins, so each candidate is exactly one of its classes."""
         if self.n_directions is None:
-            self.n_directions = int(getattr(getattr(learner, "policy", None), "n_directions", 16))
+            self.n_directions = int(getattr(getattr(learner, "settings", None), "n_directions", 16))
 
     def candidate_costs(
         self, walls: np.ndarray, geometry: MazeGeometry, goal_xy: np.ndarray, agent_xy: np.ndarray, distance: float

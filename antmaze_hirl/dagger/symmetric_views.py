@@ -22,16 +22,14 @@ from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 def learner_planar_feature_dim(learner: Any) -> int:
     """How many leading vector features of ``learner``'s encoding are world-frame xy pairs.
 
-    Read from ``learner.planar_feature_dim`` or ``learner.policy.planar_feature_dim`` (a
-    :class:`~antmaze_hirl.dagger.HighLevelPolicy`'s network).
+    Read from ``learner.planar_feature_dim`` (a :class:`~antmaze_hirl.dagger.HighLevelPolicy` states it).
 
     Raises:
-        ValueError: For a learner that states neither (names its type).
+        ValueError: For a learner that does not state it (names its type).
     """
-    for owner in (learner, getattr(learner, "policy", None)):
-        value = getattr(owner, "planar_feature_dim", None)
-        if isinstance(value, int):
-            return value
+    value = getattr(learner, "planar_feature_dim", None)
+    if isinstance(value, int):
+        return value
     raise ValueError(
         f"{type(learner).__name__} states no planar_feature_dim (which features turn with the maze): "
         "symmetric views need it; use symmetries=False"
@@ -41,15 +39,18 @@ def learner_planar_feature_dim(learner: Any) -> int:
 def class_directions(learner: Any) -> np.ndarray:
     """The xy direction of each of ``learner``'s classes, ``(classes, 2)``: its next-cell moves or heading bins.
 
+    Read from ``learner.settings`` (a :class:`~antmaze_hirl.dagger.LearnerSettings`: ``head``, ``n_directions``),
+    or from the learner itself where it has no settings.
+
     Raises:
         ValueError: For a learner whose classes have no known directions (names its type).
     """
-    policy = getattr(learner, "policy", learner)
-    head = getattr(policy, "head", None)
+    settings = getattr(learner, "settings", learner)
+    head = getattr(settings, "head", None)
     if head == "next_cell":
         return np.asarray(NEXT_CELL_MOVES, dtype=np.float64)
     if head == "heading":
-        angles = np.arange(policy.n_directions) * (2 * np.pi / policy.n_directions)
+        angles = np.arange(settings.n_directions) * (2 * np.pi / settings.n_directions)
         return np.stack([np.cos(angles), np.sin(angles)], axis=1)
     raise ValueError(
         f"{type(learner).__name__} has classes of unknown directions (head {head!r}): "

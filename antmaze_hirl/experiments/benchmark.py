@@ -244,7 +244,7 @@ def resolve_policy(spec: SuiteSpec, policy: str | os.PathLike[str], env: Any, *,
 
 
 def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
-    from antmaze_hirl.dagger.policy import SubgoalPolicy, read_policy_file
+    from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, read_policy_file
     from antmaze_hirl.envs.bodies import BODY_SPECS
     from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
@@ -268,7 +268,7 @@ def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
             f"policy {path} is a learner for {rows}x{cols} maps; suite {spec.name!r} has "
             f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps"
         )
-    return SubgoalPolicy.load(path)
+    return HighLevelPolicy.load(path)
 
 
 def _sb3_algorithm(path: Path) -> Any:

@@ -177,7 +177,7 @@ def make_trainer(
     """
     streams = trial_streams(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
-    # head reads its labels and pulls its subgoals back by it (SubgoalPolicy.cell_steps).
+    # head reads its labels and pulls its subgoals back by it (HighLevelPolicy.cell_steps).
     reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
     learner = trial_learner(config)
     if learner is not None:
