@@ -23,10 +23,6 @@ from antmaze_hirl.sb3_ext.shipped import make_maze_vector_env
 
 DAGGER = Path(__file__).resolve().parents[1] / "antmaze_hirl" / "dagger"
 
-UNWRAPPED_PENDING = {"high_level_policy.py"}
-"""dagger/ modules that still read ``.unwrapped``: ``HighLevelPolicy.for_env``, left to the learner rewrite under
-way at the same time (it should read ``maze_env(env)``); the test below fails once the exemption is stale."""
-
 
 def low_level(body):
     return PointGoToController() if body == "point" else StillController()
@@ -106,7 +102,5 @@ def unwrapped_reads(path):
 
 def test_the_dagger_layer_reads_the_env_through_the_protocol_only():
     reads = {path.name: unwrapped_reads(path) for path in sorted(DAGGER.glob("*.py"))}
-    offending = {name: lines for name, lines in reads.items() if lines and name not in UNWRAPPED_PENDING}
+    offending = {name: lines for name, lines in reads.items() if lines}
     assert not offending, f"read maze_env(env) instead of env.unwrapped: {offending}"
-    stale = {name for name in UNWRAPPED_PENDING if not reads.get(name)}
-    assert not stale, f"{stale} no longer read .unwrapped: drop them from UNWRAPPED_PENDING"

@@ -33,6 +33,7 @@ from antmaze_hirl.dagger.network import (
 )
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.profiles import BODY_PROFILES
+from antmaze_hirl.envs.protocol import maze_env
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 FORMAT = "antmaze_hirl.high_level_policy/2"
@@ -290,13 +291,14 @@ class HighLevelPolicy:
 
         Raises:
             ValueError: For an unknown setting or a bad value (:meth:`LearnerSettings.replace`).
+            TypeError: If ``env`` is not a high-level maze env (:func:`~antmaze_hirl.envs.protocol.maze_env`).
         """
-        inner = env.unwrapped
-        settings = LearnerSettings.for_body(getattr(inner, "body", None), inner.geometry).replace(**overrides)
+        maze = maze_env(env)
+        settings = LearnerSettings.for_body(maze.body, maze.geometry).replace(**overrides)
         return cls(
-            inner.geometry,
-            pixels_per_cell=inner.renderer.pixels_per_cell,
-            body_dim=STATE_LAYOUT.body_dim(inner.observation_space["state"].shape[0]),
+            maze.geometry,
+            pixels_per_cell=maze.pixels_per_cell,
+            body_dim=STATE_LAYOUT.body_dim(maze.observation_space["state"].shape[0]),
             rng=rng,
             settings=settings,
         )
