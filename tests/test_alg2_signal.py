@@ -1,11 +1,9 @@
 """Issue 32: the start scores of Alg. 2 and 3 carry a continuous signal, and starts keep min_goal_cells."""
 
-import sys
-from pathlib import Path
-
 import gymnasium as gym
 import numpy as np
 import pytest
+from script_helpers import load_script
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
@@ -22,8 +20,7 @@ from antmaze_hirl.dagger.symmetric_views import class_directions, class_permutat
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.layouts import bfs_distances, generate_layout
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import alg2_signal
+alg2_signal = load_script("scripts/alg2_signal.py")
 
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
 

@@ -174,14 +174,12 @@ def test_a_report_of_another_format_is_refused(tmp_path):
 
 
 def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
-    import sys
-    from pathlib import Path
+    from script_helpers import load_script
 
-    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-    import leaderboard
+    leaderboard = load_script("scripts/leaderboard.py")
 
     page = leaderboard.PAGE.read_text()
-    assert leaderboard.page_text(page) == page, "run python benchmarks/leaderboard.py"
+    assert leaderboard.page_text(page) == page, "run python scripts/leaderboard.py"
     reports = sorted(leaderboard.RESULTS.glob("*.json"))
     assert reports
     for path in reports:

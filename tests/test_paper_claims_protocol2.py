@@ -1,17 +1,16 @@
-"""The protocol-2 claims table of ``benchmarks/paper_claims.py``: its verdicts on crafted summaries."""
+"""The protocol-2 claims table of ``scripts/paper_claims.py``: its verdicts on crafted summaries."""
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from script_helpers import load_script
 
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import paper_claims as pc
+pc = load_script("scripts/paper_claims.py")
 
 ROOT = Path(__file__).resolve().parents[1]
 INTERIM = ROOT / "benchmarks" / "results" / "protocol2_interim"

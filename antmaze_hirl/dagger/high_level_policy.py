@@ -27,7 +27,7 @@ def planning_rounds(n_rows: int, n_cols: int) -> int:
 def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     """The settings :meth:`HighLevelPolicy.for_env` gives a body's policy unless told otherwise.
 
-    Both bodies get the next-cell head, each the winner of ``benchmarks/learner_ablation.py`` on its
+    Both bodies get the next-cell head, each the winner of ``scripts/learner_ablation.py`` on its
     held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the walls
     block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest shortest
     path is 15 moves; ``benchmarks/results/learner_ablation.json``). The ant's is the CNN's: on its 4x4

@@ -190,7 +190,7 @@ class SubgoalPolicy(nn.Module):
         :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
         before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
         near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
-        would teach "stay" (``benchmarks/next_cell_labels.py``).
+        would teach "stay" (``scripts/next_cell_labels.py``).
         """
         agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
         if self.subgoal_reach_m < self.geometry.scale:

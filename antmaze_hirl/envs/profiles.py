@@ -154,8 +154,8 @@ class SeedTable:
 
     Attributes:
         held_out: Held-out mazes: the experiment's final evaluation (``evaluate_high_level``'s default) and
-            ``benchmarks/in_maze.py``.
-        low_level_selection_mazes: The mazes ``benchmarks/select_low_level.py`` picked the shipped ant on.
+            ``scripts/in_maze.py``.
+        low_level_selection_mazes: The mazes ``scripts/select_low_level.py`` picked the shipped ant on.
         selection: The periodic evaluations' mazes under ``held_out_layouts`` (the ``"selection"`` part).
         low_level_curve: Subgoal seeds of ``train-low``'s held-out success curve (:class:`SuccessRateCallback`).
         low_level_selection_subgoals: First subgoal seed of ``select_low_level.py``'s ``eval-low``.
@@ -215,4 +215,4 @@ MAZE_FAMILIES: dict[str, MazeFamily] = {
     "select4": MazeFamily("ant", "random", 4, "selection", DEFAULT_MAX_STEPS),
     "select6": MazeFamily("ant", "random", 6, "selection", None),
 }
-"""The maze families of ``benchmarks/in_maze.py`` and ``benchmarks/select_low_level.py``, by name."""
+"""The maze families of ``scripts/in_maze.py`` and ``scripts/select_low_level.py``, by name."""

@@ -65,7 +65,7 @@ def body_settings(
 SELECTION_SEED = SEEDS.selection
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
 range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
-the 2,000,000 on of ``benchmarks/select_low_level.py``'s mazes, which chose the shipped ant low level."""
+the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,7 @@ LEARNERS: dict[str, dict[str, Any]] = {
     "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
-body's default sets given explicitly (the variants of ``benchmarks/learner_ablation.py``). CNN learners see
+body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
 only the bird's-eye encoding; ``next_cell_vin`` reads the next cell out of value iteration; ``_walls`` also
 rules out the moves the walls block, which solves most mazes before any label."""
 
@@ -223,7 +223,7 @@ PROTOCOLS = (1, 2)
 """The protocols of :attr:`ExperimentConfig.protocol`."""
 
 CURRENT_PROTOCOL = 2
-"""The protocol ``benchmarks/paper_experiment.py`` runs unless told otherwise."""
+"""The protocol ``scripts/paper_experiment.py`` runs unless told otherwise."""
 
 
 def evaluation_schedule(config: ExperimentConfig) -> list[int]:

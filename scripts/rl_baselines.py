@@ -21,7 +21,7 @@ gives the steps reached (``training.steps_reached``), never the steps asked for.
 untrained model (where each curve starts; ``point5_<algo>_rl_untrained.json``). ``--score-only`` scores a
 saved model again (with its training record) without training.
 
-Usage: python benchmarks/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
+Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
        [--num-envs 8] [--seed 0] [--score-num-envs 8]
 Writes the model and its training record under --out, and benchmarks/results/benchmark/point5_<algo>_rl.json.
 """
@@ -51,7 +51,7 @@ from antmaze_hirl.envs.vector import HighLevelVectorEnv, copies_of
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv
 
-RESULTS = Path(__file__).resolve().parent / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
 SUITE = "point5"
 FLAT_STEPS = SUITE_SPECS[SUITE].max_low_level_steps
 SETTINGS: dict[str, dict[str, Any]] = {
@@ -174,7 +174,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "training_split": "train",
         "training_seconds": round(seconds, 1),
         "seed": args.seed,
-        "command": shlex.join(["python", "benchmarks/rl_baselines.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]]),
     }
     atomic_write_json(record_path, record)
     return record

@@ -7,7 +7,7 @@ default hyperparameters apart from what is printed in the report (``training``):
 steps (subgoals), then it is saved and scored exactly as ``antmaze-hirl benchmark point5 --policy
 model.zip`` would (:func:`~antmaze_hirl.experiments.benchmark.score_policy`).
 
-Usage: python benchmarks/benchmark_sb3_high.py [--algo ppo|sac] [--steps 3000] [--seed 0]
+Usage: python scripts/benchmark_sb3_high.py [--algo ppo|sac] [--steps 3000] [--seed 0]
 Writes benchmarks/results/benchmark/point5_<algo>_<steps>.json and the model under --out.
 """
 
@@ -29,7 +29,7 @@ from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import score_policy
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 
-RESULTS = Path(__file__).resolve().parent / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
 SETTINGS = {
     # Small rollouts and batches: a few thousand steps must still give several updates.
     "ppo": (PPO, {"n_steps": 256, "batch_size": 64, "n_epochs": 4}),
@@ -68,7 +68,7 @@ def main() -> int:
         "high_level_steps": args.steps,
         "training_split": "train",
         "training_seconds": round(training_seconds, 1),
-        "command": shlex.join(["python", "benchmarks/benchmark_sb3_high.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/benchmark_sb3_high.py", *sys.argv[1:]]),
     }
     out = RESULTS / f"point5_{args.algo}_{args.steps}.json"
     atomic_write_json(out, report)

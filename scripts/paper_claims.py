@@ -1,6 +1,6 @@
 """The paper's claims, one by one, against the committed results folders (issue 32).
 
-**Protocol 1** (the default, ``python benchmarks/paper_claims.py [--folders A,B]``): the figures that the
+**Protocol 1** (the default, ``python scripts/paper_claims.py [--folders A,B]``): the figures that the
 hand-written table of ``docs/paper-claims.md`` quotes, per body and method, from the old folders
 (``benchmarks/results/paper_experiment_{point,ant}``, with the flaws of issue 32's audit). It prints final
 success (median, min-max over seeds, the paired Wilcoxon p against DAgger), labels per trial, labels to
@@ -53,8 +53,8 @@ Verdict rules (protocol 2). A "reading" is one method that stands for the claim 
   when it points the other way on some body of every reading, else "inconclusive".
 
 Usage:
-  python benchmarks/paper_claims.py                       # protocol 1, the committed folders
-  python benchmarks/paper_claims.py --protocol2 benchmarks/results/protocol2_interim/point \\
+  python scripts/paper_claims.py                       # protocol 1, the committed folders
+  python scripts/paper_claims.py --protocol2 benchmarks/results/protocol2_interim/point \\
       benchmarks/results/protocol2_interim/ant --json claims.json
 """
 
@@ -75,7 +75,7 @@ from antmaze_hirl.experiments.results_folder import read_rows, read_summary
 from antmaze_hirl.experiments.summary import TARGET_SUCCESS, median_range, trials_by_method
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 FOLDERS = [RESULTS / "paper_experiment_point", RESULTS / "paper_experiment_ant"]
 BODIES = ("point", "ant")
 
@@ -680,7 +680,7 @@ def _folder_line(body: Body) -> str:
 
 
 FOOTNOTE = (
-    "Verdict rules (the docstring of `benchmarks/paper_claims.py`). Each method is paired by seed against "
+    "Verdict rules (the docstring of `scripts/paper_claims.py`). Each method is paired by seed against "
     f"DAgger: two-sided Wilcoxon signed-rank test at p < {ALPHA}, split over the methods a claim tries "
     "(two reward-based: 0.025; five active: 0.01). CI is the 95% Hodges-Lehmann interval of the paired "
     "differences, unbounded with 5 pairs or fewer. With n pairs, p cannot go below 2/2^n (the floor). A body "

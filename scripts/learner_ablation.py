@@ -15,7 +15,7 @@ Variants:
   with ``rows + cols + 2`` rounds (16 on the point's 7x7 map, 14 on the ant's 6x6).
 * ``next_cell_vin_walls``: the same, with moves into walls (or diagonally between two) ruled out.
 
-Usage: python benchmarks/learner_ablation.py [--body point|ant] [--variants heading_cnn,next_cell_vin]
+Usage: python scripts/learner_ablation.py [--body point|ant] [--variants heading_cnn,next_cell_vin]
            [--seeds 0,1] [--episodes 100] [--trials-dir /tmp/ablation] [--out FILE]
            [--untrained] [--selection-only] [--evaluation-envs 25]
 
@@ -73,7 +73,7 @@ from antmaze_hirl.experiments.uncertainty import pooled_rate, rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.experts.oracle import plan_subgoal
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 
 VARIANTS: dict[str, dict[str, Any]] = LEARNERS
 """HighLevelPolicy settings of each variant: the named learners of ``ExperimentConfig.learner``
@@ -314,7 +314,7 @@ def main() -> None:
     trials = [json.loads(path.read_text()) for path in sorted(args.trials_dir.glob(f"*_e{args.episodes}_seed*.json"))]
     trials = [t for t in trials if t.get("body", "point") == args.body and t["variant"] in VARIANTS]
     # The summary covers every trial in the folder, which earlier invocations may have run: say which ran.
-    command = shlex.join(["python", "benchmarks/learner_ablation.py", *sys.argv[1:]])
+    command = shlex.join(["python", "scripts/learner_ablation.py", *sys.argv[1:]])
     previous = json.loads(args.out.read_text()) if args.out.exists() else {}
     earlier = previous.get("commands") or ([previous["command"]] if "command" in previous else [])
     summary = summarise(trials, config)

@@ -3,13 +3,13 @@
 The curve of a method starts at its untrained learner's success. A learner that solves the held-out
 mazes untrained (the point's planning next-cell head, which reads the next cell out of value iteration
 that rules out wall moves) measures no learning: its label-efficiency figures measure recovery from
-training damage. This runs each candidate of ``benchmarks/learner_ablation.py``'s :data:`VARIANTS`,
+training damage. This runs each candidate of ``scripts/learner_ablation.py``'s :data:`LEARNERS`,
 freshly initialised (``--seeds`` initialisations), on the ``"selection"`` part's mazes (what a choice
 may read; from ``SELECTION_SEED``) and on protocol 2's evaluation set (the ``"eval"`` part, from
 ``HELD_OUT_SEED``), and prints and writes each success with its 95% Wilson interval. The protocol's
 rule: the default learner scores <= 20% untrained on the selection mazes.
 
-Usage: python benchmarks/untrained_learners.py [--body point|ant] [--variants a,b] [--seeds 0,1,2]
+Usage: python scripts/untrained_learners.py [--body point|ant] [--variants a,b] [--seeds 0,1,2]
            [--mazes 50] [--out FILE]
 """
 
@@ -27,14 +27,11 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import HighLevelPolicy, evaluate_high_level
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
-from antmaze_hirl.experiments.config import SELECTION_SEED, ExperimentConfig, body_settings
+from antmaze_hirl.experiments.config import LEARNERS, SELECTION_SEED, ExperimentConfig, body_settings, learner_settings
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 
-sys.path.insert(0, str(Path(__file__).parent))
-from learner_ablation import VARIANTS, variant_settings  # a sibling script, beside this one
-
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 UNTRAINED_LIMIT = 0.2
 """The most untrained success a main-protocol learner may have on the selection mazes."""
 
@@ -44,7 +41,7 @@ def untrained_success(config: ExperimentConfig, variant: str, seed: int, split: 
     env = make_env(config, split=split)
     reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
     policy = HighLevelPolicy.for_env(
-        env, rng=np.random.default_rng(seed), **{**reach, **variant_settings(variant, config)}
+        env, rng=np.random.default_rng(seed), **{**reach, **learner_settings(variant, config.maze_size)}
     )
     start = time.perf_counter()
     result = evaluate_high_level(policy, env, episodes=mazes, seed=first)
@@ -60,15 +57,15 @@ def untrained_success(config: ExperimentConfig, variant: str, seed: int, split: 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--body", choices=["point", "ant"], default="point")
-    parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--variants", default=",".join(LEARNERS))
     parser.add_argument("--seeds", default="0,1,2", help="learner initialisations")
     parser.add_argument("--mazes", type=int, default=50, help="mazes per part")
     parser.add_argument("--out", type=Path, default=None, help="default: results/untrained_learners_BODY.json")
     args = parser.parse_args()
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
-    unknown = sorted(set(variants) - set(VARIANTS))
+    unknown = sorted(set(variants) - set(LEARNERS))
     if unknown:
-        parser.error(f"unknown variants {unknown}; choose from {sorted(VARIANTS)}")
+        parser.error(f"unknown variants {unknown}; choose from {sorted(LEARNERS)}")
     seeds = [int(s) for s in args.seeds.split(",")]
     torch.set_num_threads(1)
     config = ExperimentConfig(
@@ -91,7 +88,7 @@ def main() -> None:
             "meets_limit": max(selection) <= UNTRAINED_LIMIT,
         }
     result = {
-        "command": shlex.join(["python", "benchmarks/untrained_learners.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/untrained_learners.py", *sys.argv[1:]]),
         "body": args.body,
         "maze_size": config.maze_size,
         "untrained_limit": UNTRAINED_LIMIT,

@@ -13,7 +13,7 @@
    stage 5 averages snapshots of stages 3-4's runs and has no curve of its own)
    as a PNG, beside the curves of the runs that chose its settings.
 
-Usage: python benchmarks/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
+Usage: python scripts/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
 Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
 
 **Algorithms side by side** (issue 16), a separate mode: ``--algorithms td3=FILE,sac=FILE`` trains one ant low
@@ -25,10 +25,10 @@ one pass: eval-low (``--episodes`` free-space subgoals from seed 0, up to 4 m) a
 (``in_maze.py``'s families, ``--maze-episodes`` each), with 95% Wilson intervals, plus each algorithm's
 training steps/s (median over its chunks) and its ratio to the first algorithm's.
 
-Usage: python benchmarks/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
+Usage: python scripts/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
            [--runs-dir runs/algorithms] [--maze-episodes 100] [--families ant4,u,medium,large]
            [--out benchmarks/results/low_level_algorithms.json]
-(for instance td3=benchmarks/configs/ant_maze.yml,sac=benchmarks/configs/ant_maze_sac.yml: the maze setting).
+(for instance td3=scripts/configs/ant_maze.yml,sac=scripts/configs/ant_maze_sac.yml: the maze setting).
 """
 
 from __future__ import annotations
@@ -46,13 +46,13 @@ from pathlib import Path
 from typing import Any
 
 import torch
-from in_maze import parse_families
-from in_maze import run as in_maze_run
 
 import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.in_maze import parse_families
+from antmaze_hirl.experiments.in_maze import run as in_maze_run
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.plotting import plot_learning_curves
@@ -61,7 +61,7 @@ from antmaze_hirl.sb3_ext.checkpoint import POINTER, CheckpointError, latest_che
 from antmaze_hirl.sb3_ext.config import ALGOS
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 
 
 def ours_seconds(steps: int, seed: int) -> tuple[float, float]:
@@ -292,7 +292,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     with contextlib.suppress(ValueError):  # repo-relative where it lies in the repo: the JSON is committed
         png = Path(png).resolve().relative_to(RESULTS.resolve().parent.parent)
     return {
-        "command": shlex.join(["python", "benchmarks/low_level.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/low_level.py", *sys.argv[1:]]),
         "version": antmaze_hirl.__version__,
         "hyperparams": {algo: str(file) for algo, file in algorithms.items()},
         "budget_steps": args.budget,

@@ -15,7 +15,7 @@ free cell's centre (in that cell), the goal in another cell, off its centre by u
 * ``goal_within_reach_moved``: the label is the goal itself and the class is not the goal's cell;
 * ``own_centre_moved``: the label is the agent's own cell centre and the class is not "stay".
 
-Usage: python benchmarks/next_cell_labels.py [--mazes 300] [--states 20] [--seed 0]
+Usage: python scripts/next_cell_labels.py [--mazes 300] [--states 20] [--seed 0]
 Writes benchmarks/results/next_cell_labels.json.
 """
 
@@ -36,7 +36,7 @@ from antmaze_hirl.envs.layouts import generate_layout, shortest_path
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE
 from antmaze_hirl.experts.oracle import plan_subgoal
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 
 
 def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generator) -> dict[str, np.ndarray]:
@@ -107,7 +107,7 @@ def main() -> None:
         steps[rule] = policy.cell_steps(labels["agents"], labels["subgoals"])
     rules = {rule: class_figures(classes, steps["old"], labels) for rule, classes in steps.items()}
     result = {
-        "command": shlex.join(["python", "benchmarks/next_cell_labels.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/next_cell_labels.py", *sys.argv[1:]]),
         "maze_size": HELD_OUT_MAZE_SIZE["ant"],
         "reach_m": reach,
         "cell_m": geometry.scale,

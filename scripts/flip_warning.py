@@ -15,9 +15,9 @@ what is tuned here does not peek at the held-out sets.
   Wilson intervals, beside the low level without a reflex.
 
 The dense reward term that the lead motivates is ``ReachEnv(tilt_penalty=...)``
-(``benchmarks/configs/ant_maze_tilt.yml``).
+(``scripts/configs/ant_maze_tilt.yml``).
 
-Usage: python benchmarks/flip_warning.py [--mazes 100] [--low-level ZIP] [--thresholds 0.8,0.7,0.6,0.5]
+Usage: python scripts/flip_warning.py [--mazes 100] [--low-level ZIP] [--thresholds 0.8,0.7,0.6,0.5]
            [--reflexes 0@0.8,0.3@0.8] [--jobs 1]
 Writes benchmarks/results/flip_warning.json (or ``--out``), with the command that made it, and prints both tables.
 """
@@ -32,16 +32,15 @@ from typing import Any
 
 import numpy as np
 import torch
-from in_maze import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
-from paper_experiment import RESULTS
-from select_low_level import SELECTION_MAZE_SEED
 from tqdm import tqdm
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.controllers import GoalObservation, as_controller, reset_controller
+from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.simulator import uprightness
 from antmaze_hirl.experiments import wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
+from antmaze_hirl.experiments.in_maze import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
@@ -49,6 +48,10 @@ from antmaze_hirl.rollout import play_episode
 FAMILY = "select6"
 QUATERNION = slice(1, 5)
 """Where the torso quaternion ``(qw, qx, qy, qz)`` sits in the ant's ``observation`` (after the torso height)."""
+
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
+"""``select_low_level.py``'s maze seed of episode 0."""
 
 
 class TiltReflex:
@@ -217,7 +220,7 @@ def main() -> None:
     atomic_write_json(
         args.out,
         {
-            "command": shlex.join(["python", "benchmarks/flip_warning.py", *sys.argv[1:]]),
+            "command": shlex.join(["python", "scripts/flip_warning.py", *sys.argv[1:]]),
             "low_level_id": done[0]["low_level_id"],  # every chunk plays the same low level
             "family": FAMILY,
             "maze_seed": SELECTION_MAZE_SEED,

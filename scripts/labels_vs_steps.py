@@ -10,88 +10,18 @@ horizontal lines. The x axis is logarithmic (``symlog``: linear below 1, so the 
 One expert label and one high-level environment step are both one subgoal chosen in one maze state, which
 is why they share the axis; a body step is a 50th of a subgoal's walk or less.
 
-Usage: python benchmarks/labels_vs_steps.py   (writes docs/images/point5_labels_vs_steps.png)
+Usage: python scripts/labels_vs_steps.py   (writes docs/images/point5_labels_vs_steps.png)
 """
 
 from __future__ import annotations
 
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
-from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_hirl.experiments.labels_vs_steps import FIGURE, Point, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "benchmark"
-FIGURE = ROOT / "docs" / "images" / "point5_labels_vs_steps.png"
-SUITE = "point5"
-
-
-@dataclass(frozen=True)
-class Point:
-    """One plotted report.
-
-    Attributes:
-        series: The legend entry.
-        x: Labels or training steps.
-        x_kind: ``"labels"``, ``"high-level steps"`` or ``"body steps"``.
-        successes: Successful episodes.
-        episodes: Episodes scored.
-        low: Wilson interval's lower end.
-        high: Its upper end.
-        file: The report's file name.
-    """
-
-    series: str
-    x: int
-    x_kind: str
-    successes: int
-    episodes: int
-    low: float
-    high: float
-    file: str
-
-
-def figure_points() -> tuple[list[Point], dict[str, float]]:
-    """The points of the figure, and the reference lines (``{"random": rate, "oracle": rate}``) of ``point5``."""
-    points, lines = [], {}
-    for path in sorted(RESULTS.glob(f"{SUITE}_*.json")):
-        report = load_report(path)
-        if report["suite"] != SUITE or report["episodes"] < 100:
-            continue
-        if report["policy"] in ("oracle", "random"):
-            lines[report["policy"]] = report["success_rate"]
-            continue
-        training = report.get("training", {})
-        if "labels" in training:
-            seed = report["policy"].split("seed ")[1].split(",")[0]
-            series, x, kind = f"DAgger (plain), seed {seed}", training["labels"], "labels"
-        elif "algorithm" in training:
-            x = training.get("steps_reached", training.get("high_level_steps"))
-            if training["algorithm"] == "flat-sac-her":
-                series, kind = "flat SAC+HER, no hierarchy", "body steps"
-            else:
-                mazes = training.get("num_envs", 1)  # the older PPO row trained on one maze at a time
-                series = f"SB3 {training['algorithm'].upper()} on the high level, {mazes} maze{'s' * (mazes > 1)}"
-                kind = "high-level steps"
-        else:
-            continue
-        low, high = report["wilson_95"]
-        points.append(Point(series, int(x), kind, report["successes"], report["episodes"], low, high, path.name))
-    points.sort(key=lambda point: (point.x_kind != "labels", point.series, point.x))
-    return points, lines
-
-
-def points_table(points: list[Point]) -> str:
-    """The plotted points as a Markdown table (the leaderboard page prints it under the figure)."""
-    lines = ["| series | x | success [95% Wilson] | file |", "|---|---|---|---|"]
-    for point in points:
-        rate = point.successes / point.episodes
-        lines.append(
-            f"| {point.series} | {point.x:,} {point.x_kind} | {point.successes}/{point.episodes} = {100 * rate:.1f}% "
-            f"[{100 * point.low:.1f}%, {100 * point.high:.1f}%] | `{point.file}` |"
-        )
-    return "\n".join(lines)
 
 
 def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
@@ -139,10 +69,10 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
 
 
 def main() -> int:
-    points, lines = figure_points()
-    draw(points, lines, FIGURE)
+    points, lines = figure_points(RESULTS)
+    draw(points, lines, ROOT / FIGURE)
     print(points_table(points))
-    print(f"wrote {FIGURE}")
+    print(f"wrote {ROOT / FIGURE}")
     return 0
 
 

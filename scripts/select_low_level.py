@@ -6,7 +6,7 @@ Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, a
 
 * ``eval_low``: free-space reaching as ``antmaze-hirl eval-low`` measures it, but on subgoal seeds
   ``--seed`` .. ``--seed + episodes - 1`` (default from 100,000), disjoint from the reported ones
-  (seeds 0-199: the README and ``benchmarks/low_level.py``) and from train-low's held-out curve (10,000-);
+  (seeds 0-199: the README and ``scripts/low_level.py``) and from train-low's held-out curve (10,000-);
 * the scripted oracle (2 m subgoals) driving the snapshot through ``--mazes`` random mazes per family, from maze
   seed 2,000,000 (every reported maze figure starts at 1,000,000, the paper experiment's periodic evaluation at
   3,000,000), played by ``in_maze.py``'s machinery:
@@ -25,10 +25,10 @@ keeps the row listed first (policy files come before run snapshots, in the order
 row in the JSON, so a rerun while training goes on scores only new snapshots.
 
 A policy trained under action smoothing (``ReachEnv(action_smoothing=...)``, e.g.
-``benchmarks/configs/ant_maze_smoothed.yml``) is scored at its weight: every figure of a row runs with the same
+``scripts/configs/ant_maze_smoothed.yml``) is scored at its weight: every figure of a row runs with the same
 smoothing (the saved zip does not record it).
 
-Usage: python benchmarks/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
+Usage: python scripts/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
            [--held-out-layouts [--large-mazes]] [--action-smoothing 0[,A...]] [--jobs N]
 Writes benchmarks/results/low_level_selection.json (``low_level_selection_held_out.json`` with
 ``--held-out-layouts``, ``low_level_selection_held_out_large.json`` with ``--large-mazes`` too), with the command
@@ -45,17 +45,17 @@ from pathlib import Path
 from typing import Any
 
 import torch
-from in_maze import map_tasks, parse_smoothing, row_name, row_names
-from in_maze import run as play_families
-from paper_experiment import RESULTS
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments.in_maze import map_tasks, parse_smoothing, row_name, row_names
+from antmaze_hirl.experiments.in_maze import run as play_families
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
 # Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.
 RESERVED_SUBGOAL_SEEDS = (
@@ -164,7 +164,7 @@ def main() -> None:
     if missing:
         parser.error(f"neither a policy file nor a run with a snapshots/ folder: {missing}")
     torch.set_num_threads(1)
-    command = shlex.join(["python", "benchmarks/select_low_level.py", *sys.argv[1:]])
+    command = shlex.join(["python", "scripts/select_low_level.py", *sys.argv[1:]])
     settings = {"body": "ant", "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes, "families": families}
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}
     scores = cached.get("scores", {}) if cached.get("settings") == settings else {}

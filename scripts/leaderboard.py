@@ -3,11 +3,11 @@
 Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
 ``benchmarks/results/benchmark/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
-figure and lists its points (``benchmarks/labels_vs_steps.py``, which draws the PNG from the same reports).
+figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
 Nothing is typed in by hand: rerun this after adding a report. ``--check`` compares instead of writing
 (exit 1 on a difference).
 
-Usage: python benchmarks/leaderboard.py [--check]
+Usage: python scripts/leaderboard.py [--check]
 """
 
 from __future__ import annotations
@@ -16,11 +16,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import labels_vs_steps
-
 from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "benchmark"
@@ -38,7 +37,7 @@ NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
         "DAgger (plain), generic learner, seeds 2 and up",
-        "`python benchmarks/benchmark_dagger.py --seed 2` (and 3, ...): seeds 0 and 1 ran, two seeds are not a spread",
+        "`python scripts/benchmark_dagger.py --seed 2` (and 3, ...): seeds 0 and 1 ran, two seeds are not a spread",
     ),
     (
         "point5",
@@ -48,7 +47,7 @@ NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
         "SB3 PPO and SAC on the high level at 200k high-level steps",
-        "`python benchmarks/rl_baselines.py --algo ppo --max-minutes 1000` (and `--algo sac`): the 20-minute runs "
+        "`python scripts/rl_baselines.py --algo ppo --max-minutes 1000` (and `--algo sac`): the 20-minute runs "
         "above reached far fewer steps on the shared machine",
     ),
     (
@@ -59,7 +58,7 @@ NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
         "flat SAC+HER (no hierarchy) beyond 20 minutes",
-        "`python benchmarks/rl_baselines.py --algo flat-sac-her --max-minutes 1000`",
+        "`python scripts/rl_baselines.py --algo flat-sac-her --max-minutes 1000`",
     ),
 ]
 """Baselines not measured yet: (suite, what, the command that would fill the row)."""
@@ -144,11 +143,11 @@ def results_table() -> str:
 
 
 def figure_section() -> str:
-    """The figure (drawn by ``benchmarks/labels_vs_steps.py``) and the table of its points."""
-    points, _ = labels_vs_steps.figure_points()
-    image = labels_vs_steps.FIGURE.relative_to(PAGE.parent).as_posix()
+    """The figure (drawn by ``scripts/labels_vs_steps.py``) and the table of its points."""
+    points, _ = figure_points(RESULTS)
+    image = (ROOT / FIGURE).relative_to(PAGE.parent).as_posix()
     alt = "point5: success against expert labels (DAgger) and against environment steps (RL baselines)"
-    return f"![{alt}]({image})\n\n{labels_vs_steps.points_table(points)}"
+    return f"![{alt}]({image})\n\n{points_table(points)}"
 
 
 def page_text(current: str) -> str:
@@ -169,7 +168,7 @@ def main() -> int:
     current = PAGE.read_text()
     text = page_text(current)
     if args.check:
-        print(f"{PAGE}: {'up to date' if text == current else 'OUT OF DATE: run benchmarks/leaderboard.py'}")
+        print(f"{PAGE}: {'up to date' if text == current else 'OUT OF DATE: run scripts/leaderboard.py'}")
         return 0 if text == current else 1
     atomic_write_bytes(PAGE, text.encode())
     print(results_table())

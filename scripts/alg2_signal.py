@@ -28,8 +28,8 @@ sees a candidate. ``untrained`` rows take the same scores from a fresh learner o
 
 ``--fitted`` measures instead the unit test's setting (:func:`fitted_aucs`) over ``--seeds`` seeds.
 
-Usage: python benchmarks/alg2_signal.py [--body point] [--seeds 8] [--episodes 5] [--methods LIST] [--out FILE]
-       python benchmarks/alg2_signal.py --fitted --seeds 10
+Usage: python scripts/alg2_signal.py [--body point] [--seeds 8] [--episodes 5] [--methods LIST] [--out FILE]
+       python scripts/alg2_signal.py --fitted --seeds 10
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experts.oracle import PathOracle
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
 VIEWS = ("at_state", "as_candidate")
 METHODS = ("dagger", "noise_old", "noise", "multi_policy")
@@ -185,7 +185,7 @@ def fitted_margin(seeds: int, out: Path) -> None:
     env.close()
     windows = [rows[i : i + 2] for i in range(len(rows) - 1)]
     result = {
-        "command": shlex.join(["python", "benchmarks/alg2_signal.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/alg2_signal.py", *sys.argv[1:]]),
         "what": "fitted_aucs: NoiseQuery() AUC unseen above trained, fitted and untrained (the unit test setting)",
         "rows": rows,
         "fitted_auc_min": min(r["fitted_auc"] for r in rows),
@@ -281,7 +281,7 @@ def main() -> None:
             env.close()
             held_out.close()
     result = {
-        "command": shlex.join(["python", "benchmarks/alg2_signal.py", *sys.argv[1:]]),
+        "command": shlex.join(["python", "scripts/alg2_signal.py", *sys.argv[1:]]),
         "body": args.body,
         "learner": GENERIC,
         "episodes": args.episodes,

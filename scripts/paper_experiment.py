@@ -28,12 +28,12 @@ runs 3x3 mazes with 2 m oracle subgoals, and 4x4 mazes with ``--held-out-layouts
 family has only 48 wall grids). At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps
 (25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
 
-Usage: python benchmarks/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
+Usage: python scripts/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
            [--address RAY_ADDRESS] [--cpus-per-trial 1] [--evaluation-envs 25] [--seeds 5] [--episodes 100]
            [--maze-size N]
            [--subgoal-reach-m METRES] [--methods dagger,noise,multi_policy,reward]
            [--protocol 1|2] [--held-out-layouts --eval-episodes 50] [--allow-code-change]
-       python benchmarks/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
+       python scripts/paper_experiment.py --body ant --oracle-only [--maze-size 3] [--low-level candidate.zip]
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 PROTOCOL_2_EVALUATION_ENVS = 25
 """Protocol 2's mazes evaluated at once: its 100-maze set in four lockstep chunks (no committed folder to
 replay, so the faster path is the protocol's; config.json records it)."""
@@ -199,7 +199,7 @@ def main() -> None:
         parser.error("--low-level only goes with --oracle-only: trials always use the shipped policy")
     if args.oracle_only:
         oracle = {
-            "command": shlex.join(["python", "benchmarks/paper_experiment.py", *sys.argv[1:]]),
+            "command": shlex.join(["python", "scripts/paper_experiment.py", *sys.argv[1:]]),
             **oracle_success(config, args.low_level),
         }
         atomic_write_json(RESULTS / f"oracle_success_{args.body}_{config.maze_size}.json", oracle)

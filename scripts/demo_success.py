@@ -11,7 +11,7 @@ the demo's picture; the same mazes and seeds, though batched float rounding can 
 then (``docs/guides/vector-envs.md``). ``--num-envs 1`` runs the demo itself seed after seed, as the results
 committed before lockstep were made.
 
-Usage: python benchmarks/demo_success.py [--bodies ant,point] [--seeds 20] [--num-envs 20]
+Usage: python scripts/demo_success.py [--bodies ant,point] [--seeds 20] [--num-envs 20]
 Updates benchmarks/results/demo_success.json (one entry per body run; other bodies' entries are kept).
 """
 
@@ -20,55 +20,23 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import tempfile
 import time
 from pathlib import Path
 
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.dagger.evaluation import play_in_lockstep
-from antmaze_hirl.demo import demo_setup, run_demo
-from antmaze_hirl.envs.vector import copies_of
+from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.runner import low_level_identity
-from antmaze_hirl.rollout import episode_outcome
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
 OUT = RESULTS / "demo_success.json"
 
 
 def oracle_success(body: str) -> float | None:
     path = RESULTS / f"oracle_success_{body}_{BODY_DEFAULTS[body]['maze_size']}.json"
     return json.loads(path.read_text())["success_rate"] if path.exists() else None
-
-
-def serial_outcomes(body: str, seeds: int) -> list[str]:
-    """Each seed's outcome from the demo itself (``run_demo``, picture and all), one seed after another."""
-    outcomes = []
-    with tempfile.TemporaryDirectory() as pictures:
-        for seed in range(seeds):
-            result = run_demo(body=body, seed=seed, out_dir=pictures)
-            outcomes.append(result.outcome)
-            print(f"{body} seed {seed}: {result.outcome}, {result.subgoals} subgoals, {result.low_level_steps} steps")
-    return outcomes
-
-
-def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
-    """Each seed's outcome on the demo's env and oracle, ``num_envs`` mazes at once in lockstep (no picture)."""
-    env, oracle = demo_setup(body)
-    copies = copies_of(env, min(num_envs, seeds))
-    try:
-        played = play_in_lockstep(oracle, copies, range(seeds))
-    finally:
-        for copy in copies:
-            copy.close()
-        env.close()
-    outcomes = [episode_outcome(episode.info, truncated=episode.truncated) for episode in played]
-    for episode, outcome in zip(played, outcomes, strict=True):
-        steps, subgoals = episode.info["total_low_level_steps"], episode.info["attempts"]
-        print(f"{body} seed {episode.seed}: {outcome}, {subgoals} subgoals, {steps} steps")
-    return outcomes
 
 
 def measure(body: str, seeds: int, num_envs: int = 1) -> dict:

@@ -4,7 +4,7 @@ The tasks are drawn by :func:`antmaze_hirl.envs.suites.draw_suite_tasks` (seeded
 they must match live in :data:`antmaze_hirl.envs.suite_specs.SUITE_SPECS`. ``--check`` only compares
 (exit 1 on a difference), so CI or a reviewer can confirm the committed file is what the code draws.
 
-Usage: python benchmarks/make_suites.py [--check]
+Usage: python scripts/make_suites.py [--check]
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ first: a curve starts at its measured score, not at 0.
 wall-blocking planner (``head="heading", planning_iterations=0, block_walls=False``). ``--learner default``
 is the point's default next-cell planner (a strong prior: it solves most mazes untrained).
 
-Usage: python benchmarks/benchmark_dagger.py [--labels 100,300,1000] [--seed 0] [--learner generic|default]
+Usage: python scripts/benchmark_dagger.py [--labels 100,300,1000] [--seed 0] [--learner generic|default]
 Writes benchmarks/results/benchmark/point5_dagger_<learner>_s<seed>_<labels>.json and the learners under --out.
 """
 
@@ -32,7 +32,7 @@ from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experts import PathOracle
 
-RESULTS = Path(__file__).resolve().parent / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
 LEARNERS = {
     "generic": {"head": "heading", "planning_iterations": 0, "block_walls": False},
     "default": {},
@@ -57,7 +57,7 @@ def main() -> int:
     env = make_env(config, split="train")
     expert = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
     trainer = make_trainer("dagger", args.seed, config, env, expert, policy_settings=LEARNERS[args.learner])
-    command = shlex.join(["python", "benchmarks/benchmark_dagger.py", *sys.argv[1:]])
+    command = shlex.join(["python", "scripts/benchmark_dagger.py", *sys.argv[1:]])
     training_seconds = 0.0
     for target in [0, *targets]:
         started = time.perf_counter()
