@@ -43,7 +43,7 @@ from antmaze_hirl.sb3_ext.evaluation import reach_outcomes
 from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
-RESULTS = Path(__file__).parent / "results" / "lockstep_paths.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "lockstep_paths" / "lockstep_paths.json"
 
 
 def timed(play: Callable[[], list[Any]]) -> tuple[list[Any], float]:

@@ -52,7 +52,7 @@ from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experts.oracle import PathOracle
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "alg2_signal"
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
 VIEWS = ("at_state", "as_candidate")
 METHODS = ("dagger", "noise_old", "noise", "multi_policy")

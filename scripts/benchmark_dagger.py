@@ -13,7 +13,7 @@ wall-blocking planner (``head="heading", planning_iterations=0, block_walls=Fals
 is the point's default next-cell planner (a strong prior: it solves most mazes untrained).
 
 Usage: python scripts/benchmark_dagger.py [--labels 100,300,1000] [--seed 0] [--learner generic|default]
-Writes benchmarks/results/benchmark/point5_dagger_<learner>_s<seed>_<labels>.json and the learners under --out.
+Writes results/leaderboard/point5_dagger_<learner>_s<seed>_<labels>.json and the learners under --out.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experts import PathOracle
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
 LEARNERS = {
     "generic": {"head": "heading", "planning_iterations": 0, "block_walls": False},
     "default": {},

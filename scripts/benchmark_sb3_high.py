@@ -8,7 +8,7 @@ steps (subgoals), then it is saved and scored exactly as ``antmaze-hirl benchmar
 model.zip`` would (:func:`~antmaze_hirl.experiments.benchmark.score_policy`).
 
 Usage: python scripts/benchmark_sb3_high.py [--algo ppo|sac] [--steps 3000] [--seed 0]
-Writes benchmarks/results/benchmark/point5_<algo>_<steps>.json and the model under --out.
+Writes results/leaderboard/point5_<algo>_<steps>.json and the model under --out.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import score_policy
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
 SETTINGS = {
     # Small rollouts and batches: a few thousand steps must still give several updates.
     "ppo": (PPO, {"n_steps": 256, "batch_size": 64, "n_epochs": 4}),

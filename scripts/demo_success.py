@@ -2,7 +2,7 @@
 
 Runs the demo (the scripted oracle driving the shipped low level, per-body default maze size and subgoal
 distance) for seeds 0..N-1 and records each episode's outcome: success, flip or timeout. Goal: the ant
-succeeds at least as often as the oracle on the demo's maze family (``oracle_success_ant_3.json``, from
+succeeds at least as often as the oracle on the demo's maze family (``paper_experiment/oracle_success_ant_3.json``, from
 ``paper_experiment.py --body ant --oracle-only``: 100 held-out 3x3 mazes), and on seed 0 (the demo's default).
 
 The seeds play ``--num-envs`` at a time in lockstep (default 20: all of them at once), the oracle labelling every
@@ -12,7 +12,7 @@ then (``docs/guides/vector-envs.md``). ``--num-envs 1`` runs the demo itself see
 committed before lockstep were made.
 
 Usage: python scripts/demo_success.py [--bodies ant,point] [--seeds 20] [--num-envs 20]
-Updates benchmarks/results/demo_success.json (one entry per body run; other bodies' entries are kept).
+Updates results/demo_success/demo_success.json (one entry per body run; other bodies' entries are kept).
 """
 
 from __future__ import annotations
@@ -30,12 +30,12 @@ from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.runner import low_level_identity
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
-OUT = RESULTS / "demo_success.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results"
+OUT = RESULTS / "demo_success" / "demo_success.json"
 
 
 def oracle_success(body: str) -> float | None:
-    path = RESULTS / f"oracle_success_{body}_{BODY_DEFAULTS[body]['maze_size']}.json"
+    path = RESULTS / "paper_experiment" / f"oracle_success_{body}_{BODY_DEFAULTS[body]['maze_size']}.json"
     return json.loads(path.read_text())["success_rate"] if path.exists() else None
 
 

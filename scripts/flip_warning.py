@@ -19,7 +19,7 @@ The dense reward term that the lead motivates is ``ReachEnv(tilt_penalty=...)``
 
 Usage: python scripts/flip_warning.py [--mazes 100] [--low-level ZIP] [--thresholds 0.8,0.7,0.6,0.5]
            [--reflexes 0@0.8,0.3@0.8] [--jobs 1]
-Writes benchmarks/results/flip_warning.json (or ``--out``), with the command that made it, and prints both tables.
+Writes results/flip_warning/flip_warning.json (or ``--out``), with the command that made it, and prints both tables.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ FAMILY = "select6"
 QUATERNION = slice(1, 5)
 """Where the torso quaternion ``(qw, qx, qy, qz)`` sits in the ant's ``observation`` (after the torso height)."""
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "flip_warning"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
 """``select_low_level.py``'s maze seed of episode 0."""
 

@@ -15,8 +15,9 @@ the reported ones above.
 
 The oracle's subgoals are at most 2 m away (the ant experiment's ``expert_max_distance``). Episode ``i`` of every
 family resets with seed ``HELD_OUT_SEED + i`` (1,000,000 + i, as every held-out figure): for ``ant3`` these are the
-mazes of ``oracle_success_ant_3.json``. Note the 3x3 family has only 48 distinct wall grids, so a training run that
-sees random 3x3 layouts (``ReachEnv(maze_probability=...)``) has seen these grids; only the seeds are held out.
+mazes of ``paper_experiment/oracle_success_ant_3.json``. Note the 3x3 family has only 48 distinct wall grids, so a
+training run that sees random 3x3 layouts (``ReachEnv(maze_probability=...)``) has seen these grids; only the
+seeds are held out.
 
 Each episode ends in exactly one outcome: ``success``, ``flip`` (the ant turned over: the env ends the episode),
 ``frozen`` (truncated, and over its last :data:`FROZEN_SUBGOALS` subgoals the body never got
@@ -33,12 +34,12 @@ so the figures do not depend on N (``seconds`` then sums the workers' time).
 oracle labels every maze that needs a subgoal, the low level acts in one batch for every maze still walking.
 The same mazes and seeds; a batched forward pass may round the last bits differently, which MuJoCo can turn
 into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often). ``--num-envs 1`` plays
-them one after another, the path every ``in_maze*.json`` committed before lockstep was made with: use it to
+them one after another, the path every ``in_maze/in_maze*.json`` committed before lockstep was made with: use it to
 replay one exactly.
 
 Usage: python scripts/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
            [--action-smoothing 0[,A...]] [--subgoal-reach-m 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
-Writes benchmarks/results/in_maze.json (or ``--out``), with the command that made it, and prints a table.
+Writes results/in_maze/in_maze.json (or ``--out``), with the command that made it, and prints a table.
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ from antmaze_hirl.experiments.in_maze import (
     run,
 )
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "in_maze"
 
 
 def table(results: dict[str, Any]) -> str:

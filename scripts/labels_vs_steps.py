@@ -1,6 +1,6 @@
 """The leaderboard's figure: success on ``point5`` against expert labels (imitation) and environment steps (reward).
 
-Every point is one committed ``antmaze-hirl benchmark --json`` report in ``benchmarks/results/benchmark/``
+Every point is one committed ``antmaze-hirl benchmark --json`` report in ``results/leaderboard/``
 (nothing typed in): the DAgger rows at their labels (``training.labels``; 0 is the untrained learner), the
 RL rows at their training steps (``training.steps_reached``, or ``training.high_level_steps`` for the older
 PPO row): high-level steps (subgoals) for PPO and SAC on the high level, body steps for the flat SAC+HER.
@@ -21,7 +21,7 @@ from pathlib import Path
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, Point, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "results" / "benchmark"
+RESULTS = ROOT / "results" / "leaderboard"
 
 
 def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:

@@ -1,7 +1,7 @@
 """Writes the suites table and the results table of ``docs/leaderboard.md`` from the committed results.
 
 Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
-``benchmarks/results/benchmark/`` (its figures, budget, wall time and file), or a "not run yet" row from
+``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
 figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
 Nothing is typed in by hand: rerun this after adding a report. ``--check`` compares instead of writing
@@ -22,7 +22,7 @@ from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "results" / "benchmark"
+RESULTS = ROOT / "results" / "leaderboard"
 PAGE = ROOT / "docs" / "leaderboard.md"
 MARKERS = {
     "suites": ("<!-- suites:start -->", "<!-- suites:end -->"),
@@ -117,7 +117,7 @@ def results_table() -> str:
     )
     lines = [
         "| suite | policy | budget | success [95% Wilson] | oracle goal (>= 95%) | mean subgoals | "
-        "mean low-level steps | flips | wall time | file (in `benchmarks/results/benchmark/`) |",
+        "mean low-level steps | flips | wall time | file (in `results/leaderboard/`) |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for path, report in reports:

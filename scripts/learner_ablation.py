@@ -25,7 +25,7 @@ out the final (``"eval"`` part) evaluation, which a choice between variants must
 ``--evaluation-envs N`` plays the evaluation mazes ``N`` at a time in lockstep (faster; the mazes are the
 same, but batched products round differently, so the trial files record it and a summary names it).
 
-``--out`` defaults to ``benchmarks/results/learner_ablation.json`` for the point and
+``--out`` defaults to ``results/learner_ablation/learner_ablation.json`` for the point and
 ``learner_ablation_ant.json`` beside it for the ant.
 
 Each trial also measures the learner's agreement with the oracle, the fraction of states where its
@@ -73,7 +73,7 @@ from antmaze_hirl.experiments.uncertainty import pooled_rate, rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.experts.oracle import plan_subgoal
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "learner_ablation"
 
 VARIANTS: dict[str, dict[str, Any]] = LEARNERS
 """HighLevelPolicy settings of each variant: the named learners of ``ExperimentConfig.learner``

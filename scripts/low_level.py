@@ -9,12 +9,12 @@
    the default 50k steps between checkpoints.
 2. ``eval-low`` figures (200 seeded subgoals up to one cell away) for both shipped policies: the reported set
    (seed 0) and, pooled, ``--sets`` disjoint sets of 200 (seeds 0, 200, 400, ...).
-3. The learning curves of the ant's four training stages (``benchmarks/results/ant_learning_curve*.csv``; the shipped
+3. The learning curves of the ant's four training stages (``results/low_level/ant_learning_curve*.csv``; the shipped
    stage 5 averages snapshots of stages 3-4's runs and has no curve of its own)
    as a PNG, beside the curves of the runs that chose its settings.
 
 Usage: python scripts/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
-Writes benchmarks/results/low_level.json and benchmarks/results/ant_learning_curve.png.
+Writes results/low_level/low_level.json and results/low_level/ant_learning_curve.png.
 
 **Algorithms side by side** (issue 16), a separate mode: ``--algorithms td3=FILE,sac=FILE`` trains one ant low
 level per algorithm from scratch, each with its hyperparameter file (``train-low --hyperparams``), the same
@@ -27,7 +27,7 @@ training steps/s (median over its chunks) and its ratio to the first algorithm's
 
 Usage: python scripts/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
            [--runs-dir runs/algorithms] [--maze-episodes 100] [--families ant4,u,medium,large]
-           [--out benchmarks/results/low_level_algorithms.json]
+           [--out results/low_level/low_level_algorithms.json]
 (for instance td3=scripts/configs/ant_maze.yml,sac=scripts/configs/ant_maze_sac.yml: the maze setting).
 """
 
@@ -61,7 +61,8 @@ from antmaze_hirl.sb3_ext.checkpoint import POINTER, CheckpointError, latest_che
 from antmaze_hirl.sb3_ext.config import ALGOS
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results" / "low_level"
 
 
 def ours_seconds(steps: int, seed: int) -> tuple[float, float]:
@@ -140,7 +141,7 @@ def shipped_figures(episodes: int, sets: int) -> dict[str, dict]:
 # The shipped ant's four stages first (stage 2 warm-starts from stage 1's 500k policy, stage 3 from stage 2's
 # 500k and stage 4 from stage 3's 700k, so their steps are plotted after 500k, 1M and 1.7M), then the runs
 # that chose the settings (README, "Shipped low-level policies").
-# label -> (CSV in benchmarks/results, steps before the run started)
+# label -> (CSV in results/low_level, steps before the run started)
 ANT_CURVES = {
     "stage 1: scale 0.5, gamma 0.98, action_l2 1": ("ant_learning_curve.csv", 0),
     "stage 2: chained subgoals 0.75 (ant_chain.yml)": ("ant_learning_curve_chain.csv", 500_000),
@@ -171,7 +172,7 @@ def learning_curve_png() -> str:
     }
     title = "Ant TD3 + HER, held-out subgoals up to 4 m"
     path = plot_learning_curves(curves, RESULTS / "ant_learning_curve.png", title=title)
-    return str(Path(path).resolve().relative_to(RESULTS.resolve().parent.parent))  # repo-relative: JSON is committed
+    return str(Path(path).resolve().relative_to(ROOT))  # repo-relative: JSON is committed
 
 
 def parse_algorithms(text: str) -> dict[str, Path]:
@@ -290,7 +291,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     curves = {algo: read_curve(args.runs_dir / algo / "learning_curve.csv") for algo in algorithms}
     png = plot_learning_curves(curves, args.out.with_suffix(".png"), title="Ant low level by algorithm, same budget")
     with contextlib.suppress(ValueError):  # repo-relative where it lies in the repo: the JSON is committed
-        png = Path(png).resolve().relative_to(RESULTS.resolve().parent.parent)
+        png = Path(png).resolve().relative_to(ROOT)
     return {
         "command": shlex.join(["python", "scripts/low_level.py", *sys.argv[1:]]),
         "version": antmaze_hirl.__version__,

@@ -7,7 +7,7 @@ and per part of the layout partition (:mod:`antmaze_hirl.envs.layout_splits`). A
 >= 1,000 distinct wall grids for the ant's held-out evaluation (issue 12).
 
 Usage: python scripts/maze_families.py [--draws 20000] [--seed 0]
-Writes benchmarks/results/maze_families.json.
+Writes results/maze_families/maze_families.json.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from antmaze_hirl.envs.layout_splits import SPLITS, wall_grid_split
 from antmaze_hirl.envs.layouts import wall_grid_string
 
 FAMILIES = {"ant_3x3": ("ant", 3), "ant_4x4": ("ant", 4), "ant_5x5": ("ant", 5), "point_5x5": ("point", 5)}
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "maze_families"
 
 
 def family_figures(body: str, maze_size: int, draws: int, seed: int) -> dict:

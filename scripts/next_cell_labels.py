@@ -16,7 +16,7 @@ free cell's centre (in that cell), the goal in another cell, off its centre by u
 * ``own_centre_moved``: the label is the agent's own cell centre and the class is not "stay".
 
 Usage: python scripts/next_cell_labels.py [--mazes 300] [--states 20] [--seed 0]
-Writes benchmarks/results/next_cell_labels.json.
+Writes results/next_cell_labels/next_cell_labels.json.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from antmaze_hirl.envs.layouts import generate_layout, shortest_path
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE
 from antmaze_hirl.experts.oracle import plan_subgoal
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "next_cell_labels"
 
 
 def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generator) -> dict[str, np.ndarray]:

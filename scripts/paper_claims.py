@@ -2,7 +2,7 @@
 
 **Protocol 1** (the default, ``python scripts/paper_claims.py [--folders A,B]``): the figures that the
 hand-written table of ``docs/paper-claims.md`` quotes, per body and method, from the old folders
-(``benchmarks/results/paper_experiment_{point,ant}``, with the flaws of issue 32's audit). It prints final
+(``results/paper_experiment/{point,ant}``, with the flaws of issue 32's audit). It prints final
 success (median, min-max over seeds, the paired Wilcoxon p against DAgger), labels per trial, labels to
 DAgger's median final success and that ratio, the training episodes and labels at which each trial's
 learner first scored >= 60% on a periodic evaluation, and the share of labels that reward-based pruning
@@ -54,8 +54,8 @@ Verdict rules (protocol 2). A "reading" is one method that stands for the claim 
 
 Usage:
   python scripts/paper_claims.py                       # protocol 1, the committed folders
-  python scripts/paper_claims.py --protocol2 benchmarks/results/protocol2_interim/point \\
-      benchmarks/results/protocol2_interim/ant --json claims.json
+  python scripts/paper_claims.py --protocol2 results/protocol2/interim/point \\
+      results/protocol2/interim/ant --json claims.json
 """
 
 from __future__ import annotations
@@ -75,8 +75,8 @@ from antmaze_hirl.experiments.results_folder import read_rows, read_summary
 from antmaze_hirl.experiments.summary import TARGET_SUCCESS, median_range, trials_by_method
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
-FOLDERS = [RESULTS / "paper_experiment_point", RESULTS / "paper_experiment_ant"]
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
+FOLDERS = [RESULTS / "point", RESULTS / "ant"]
 BODIES = ("point", "ant")
 
 ALPHA = 0.05

@@ -1,7 +1,7 @@
 """The paper's protocol: 100 training episodes x 5 seeds x every method, scripted oracle as the expert.
 
 Runs ``antmaze-hirl experiment`` for the point body and/or the ant (with its shipped low-level policy)
-into ``benchmarks/results/paper_experiment_<body>/`` (or ``--out``) (summary.json, episodes.csv, panels.png, and one
+into ``results/paper_experiment/<body>/`` (or ``--out``) (summary.json, episodes.csv, panels.png, and one
 CSV per finished trial, so an interrupted run resumes), then prints the figures against the goals:
 
 * ant, best method: final learner-only success >= 0.80 on 100 held-out mazes (the paper: > 0.60);
@@ -18,7 +18,7 @@ up to the square's symmetries and reads every curve on one fixed set of ``--fina
 (default 100) held-out mazes, scored before the first episode (the untrained learner), every
 ``eval_every`` episodes and after the last, with per-maze outcomes in ``evaluations.csv`` and pooled
 rates with a cluster bootstrap over seeds and mazes. ``--protocol 1`` reads as the committed results folders do
-(``benchmarks/results/paper_experiment_{point,ant}``): with ``--held-out-layouts`` the protocol of issue 12
+(``results/paper_experiment/{point,ant}``): with ``--held-out-layouts`` the protocol of issue 12
 (periodic and final evaluation on different sets), without it mazes held out by seed only. Re-running
 those folders exactly needs the commit their provenance.json names: the strategies' scores, the start rule
 and the layout split have changed since.
@@ -62,7 +62,7 @@ from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
 PROTOCOL_2_EVALUATION_ENVS = 25
 """Protocol 2's mazes evaluated at once: its 100-maze set in four lockstep chunks (no committed folder to
 replay, so the faster path is the protocol's; config.json records it)."""
@@ -130,7 +130,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS), help="also gated, gated+reward, ...")
     add_backend_arguments(parser)  # --backend, --jobs (2 on 2 cores), --address, --cpus-per-trial
-    parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment_BODY")
+    parser.add_argument("--out", type=Path, default=None, help="default: results/paper_experiment/BODY")
     parser.add_argument(
         "--maze-size",
         type=int,
@@ -205,7 +205,7 @@ def main() -> None:
         atomic_write_json(RESULTS / f"oracle_success_{args.body}_{config.maze_size}.json", oracle)
         print("oracle success:", oracle)
         return
-    out = args.out if args.out is not None else RESULTS / f"paper_experiment_{args.body}"
+    out = args.out if args.out is not None else RESULTS / args.body
     methods = [method.strip() for method in args.methods.split(",") if method.strip()]
     summary = run_experiment(
         methods, args.seeds, config, out, allow_code_change=args.allow_code_change, **backend_settings(args)

@@ -10,8 +10,8 @@ the seeds both runs hold. The two runs must share the final mazes (body, maze si
 episodes); a note names every other setting they differ in.
 
 Usage:
-  python scripts/paper_tables.py benchmarks/results/paper_experiment_point [--tables cost,per-label,effort]
-  cd benchmarks/results && python ../paper_tables.py paper_experiment_ant --beside paper_experiment_ant_stage5
+  python scripts/paper_tables.py results/paper_experiment/point [--tables cost,per-label,effort]
+  cd results/paper_experiment && python ../../scripts/paper_tables.py ant --beside ant_stage5
 """
 
 from __future__ import annotations

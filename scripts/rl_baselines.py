@@ -23,7 +23,7 @@ saved model again (with its training record) without training.
 
 Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
        [--num-envs 8] [--seed 0] [--score-num-envs 8]
-Writes the model and its training record under --out, and benchmarks/results/benchmark/point5_<algo>_rl.json.
+Writes the model and its training record under --out, and results/leaderboard/point5_<algo>_rl.json.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ from antmaze_hirl.envs.vector import HighLevelVectorEnv, copies_of
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "benchmark"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
 SUITE = "point5"
 FLAT_STEPS = SUITE_SPECS[SUITE].max_low_level_steps
 SETTINGS: dict[str, dict[str, Any]] = {

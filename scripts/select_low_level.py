@@ -30,7 +30,7 @@ smoothing (the saved zip does not record it).
 
 Usage: python scripts/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
            [--held-out-layouts [--large-mazes]] [--action-smoothing 0[,A...]] [--jobs N]
-Writes benchmarks/results/low_level_selection.json (``low_level_selection_held_out.json`` with
+Writes results/select_low_level/low_level_selection.json (``low_level_selection_held_out.json`` beside it with
 ``--held-out-layouts``, ``low_level_selection_held_out_large.json`` with ``--large-mazes`` too), with the command
 that made it.
 """
@@ -55,7 +55,7 @@ from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "select_low_level"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
 # Subgoal seeds the selection may not use: eval-low's reported set and train-low's held-out curve.
 RESERVED_SUBGOAL_SEEDS = (

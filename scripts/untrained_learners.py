@@ -31,7 +31,7 @@ from antmaze_hirl.experiments.config import LEARNERS, SELECTION_SEED, Experiment
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "untrained_learners"
 UNTRAINED_LIMIT = 0.2
 """The most untrained success a main-protocol learner may have on the selection mazes."""
 

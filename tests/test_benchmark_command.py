@@ -43,7 +43,7 @@ def test_the_oracle_scores_above_a_random_policy_with_intervals_attempts_and_ste
     oracle = score_policy("point5", "oracle", task_ids=TASKS)
     random = score_policy("point5", "random", task_ids=TASKS)
     assert oracle["success_rate"] > random["success_rate"]  # the score discriminates
-    assert oracle["successes"] == len(TASKS)  # the oracle solves all 100 point tasks (benchmarks/results)
+    assert oracle["successes"] == len(TASKS)  # the oracle solves all 100 point tasks (results)
     for report in (oracle, random):
         low, high = report["wilson_95"]
         assert low <= report["success_rate"] <= high

@@ -30,10 +30,10 @@ def body_policy_defaults(body: str, geometry: MazeGeometry) -> dict[str, Any]:
     Both bodies get the next-cell head, each the winner of ``scripts/learner_ablation.py`` on its
     held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the walls
     block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest shortest
-    path is 15 moves; ``benchmarks/results/learner_ablation.json``). The ant's is the CNN's: on its 4x4
+    path is 15 moves; ``results/learner_ablation/learner_ablation.json``). The ant's is the CNN's: on its 4x4
     mazes it tied value iteration on the selection mazes' median and costs 28% less time, and ruling out
     wall moves lost there, since its 2 m labels cut corners the cell grid calls walls
-    (``benchmarks/results/learner_ablation_ant.json``). The ant's heading head, its default before,
+    (``results/learner_ablation/learner_ablation_ant.json``). The ant's heading head, its default before,
     scored 52% against 77%.
     """
     profile = BODY_PROFILES.get(body)

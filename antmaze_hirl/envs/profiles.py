@@ -109,7 +109,7 @@ class BodyProfile:
 
 BODY_PROFILES: dict[str, BodyProfile] = {
     # The point walks one-cell (1 m) oracle subgoals through 5x5 mazes. Its learner reads the next cell out
-    # of value iteration that rules out wall moves (benchmarks/results/learner_ablation.json).
+    # of value iteration that rules out wall moves (results/learner_ablation/learner_ablation.json).
     "point": BodyProfile(
         "point",
         BODY_SPECS["point"],
@@ -123,7 +123,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
     # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (README, the ant experiment). Holding
     # layouts out needs its 4x4 family (1,968 wall grids; the 3x3 family has 48). Its learner is the CNN's
     # next-cell head: its 2 m labels cut corners the cell grid calls walls
-    # (benchmarks/results/learner_ablation_ant.json).
+    # (results/learner_ablation/learner_ablation_ant.json).
     "ant": BodyProfile(
         "ant",
         BODY_SPECS["ant"],

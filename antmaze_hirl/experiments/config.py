@@ -37,7 +37,7 @@ HELD_OUT_MAZE_SIZE: dict[str, int] = {body: profile.held_out_maze_size for body,
 """Maze size of the held-out-layouts protocol per body. Holding layouts out needs a family with many wall
 grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968, on which the oracle driving the
 shipped ant (stage 6) succeeds on 97% of 100 held-out mazes, 95% Wilson interval 91.5-99.0%, in 500 steps
-(``benchmarks/results/maze_families.json``, ``benchmarks/results/oracle_success_ant_4.json``)."""
+(``results/maze_families/maze_families.json``, ``results/paper_experiment/oracle_success_ant_4.json``)."""
 
 
 def body_settings(
@@ -189,7 +189,7 @@ named ablation, reported beside its untrained success, not the main protocol's l
 PROTOCOL_LEARNER = "next_cell_cnn"
 """Protocol 2's learner for both bodies when ``ExperimentConfig.learner`` is not set: the generic CNN
 next-cell head, chosen on the selection mazes under the <= 20% untrained-success rule
-(``benchmarks/results/untrained_learners_{point,ant}.json``)."""
+(``results/untrained_learners/untrained_learners_{point,ant}.json``)."""
 
 
 def learner_settings(name: str, maze_size: int) -> dict[str, Any]:

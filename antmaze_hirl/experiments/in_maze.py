@@ -16,7 +16,7 @@ The episode and protocol code of ``scripts/in_maze.py`` (its command line), shar
   worker processes may play (:func:`run_chunk`, :func:`map_tasks`) and that add up (:func:`merge_raw`) to what
   one process gives, since every episode resets with its own seed. ``num_envs`` > 1 plays a chunk's mazes in
   lockstep (one batched low-level forward pass per step); ``1`` plays them one after another, the path of every
-  ``in_maze*.json`` committed before lockstep.
+  ``in_maze/in_maze*.json`` committed before lockstep.
 """
 
 from __future__ import annotations
