@@ -4,6 +4,7 @@ import ast
 from pathlib import Path
 
 import pytest
+from script_helpers import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = sorted((ROOT / "scripts").glob("*.py")) + sorted((ROOT / "benchmarks").glob("*.py"))
@@ -40,3 +41,36 @@ def test_no_test_puts_a_folder_on_sys_path():
         and ("sys.path.insert" in path.read_text() or "sys.path.append" in path.read_text())
     ]
     assert editing == []
+
+
+def test_the_results_index_matches_the_results_tree():
+    results_index = load_script("scripts/results_index.py")
+    index = results_index.load_index()
+    assert results_index.problems(results_index.RESULTS, index) == []
+
+
+def test_the_results_index_check_names_an_unindexed_entry_and_a_removed_one_still_there(tmp_path):
+    results_index = load_script("scripts/results_index.py")
+    (tmp_path / "in_maze").mkdir()
+    (tmp_path / "in_maze" / "in_maze.json").write_text("{}")
+    (tmp_path / "in_maze" / "stray.json").write_text("{}")
+    entry = {"supersedes": ["gone.json"]}
+    index = {
+        "experiments": {"in_maze": {"entries": {"in_maze.json": entry}}},
+        "removed": [{"path": "scripts/results_index.py", "commit": "", "superseded_by": "x"}],
+    }
+    assert results_index.problems(tmp_path, index) == [
+        "in_maze/stray.json: on disk, not in results/index.json",
+        "scripts/results_index.py: listed as removed, still on disk",
+        "scripts/results_index.py: a removed entry needs its commit and what supersedes it",
+        "in_maze/in_maze.json supersedes gone.json, which is not an entry of in_maze/",
+    ]
+
+
+def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
+    results_index = load_script("scripts/results_index.py")
+    assert results_index.expand_braces("a_{x,y}.json") == ["a_x.json", "a_y.json"]
+    assert results_index.matches("in_maze/in_maze_*.json", "in_maze/in_maze_stage3.json")
+    assert results_index.matches("paper_experiment/ant/summary.json", "paper_experiment/ant")
+    assert not results_index.matches("paper_experiment/ant_stage5", "paper_experiment/ant")
+    assert results_index.matches("leaderboard", "leaderboard/*.json")
