@@ -74,3 +74,9 @@ def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
     assert results_index.matches("paper_experiment/ant/summary.json", "paper_experiment/ant")
     assert not results_index.matches("paper_experiment/ant_stage5", "paper_experiment/ant")
     assert results_index.matches("leaderboard", "leaderboard/*.json")
+
+
+def test_benchmarks_holds_only_benchmark_scripts():
+    # Results go to results/<experiment>/, configs and research scripts to scripts/ (docs/architecture.md).
+    others = sorted(p.name for p in (ROOT / "benchmarks").iterdir() if p.suffix != ".py" and p.name != "__pycache__")
+    assert others == [], f"benchmarks/ holds {others}: results belong in results/<experiment>/, the rest in scripts/"
