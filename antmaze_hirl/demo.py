@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -9,10 +10,11 @@ from typing import Any
 import gymnasium as gym
 
 from antmaze_hirl.envs.profiles import maze_env_id
+from antmaze_hirl.envs.vector import copies_of
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.plotting import plot_played_episode
-from antmaze_hirl.rollout import play_episode
+from antmaze_hirl.rollout import episode_outcome, play_episode
 
 
 @dataclass(frozen=True)
@@ -86,3 +88,42 @@ def run_demo(
         title=f"{body}, seed {seed}: {episode.outcome}, {len(episode.subgoals)} subgoals, {steps} steps",
     )
     return DemoResult(episode.success, episode.outcome, len(episode.subgoals), steps, picture)
+
+
+def serial_outcomes(body: str, seeds: int) -> list[str]:
+    """Each of seeds ``0 .. seeds - 1``'s outcome from the demo itself (:func:`run_demo`, picture and all), in turn.
+
+    Prints one line per seed (outcome, subgoals, low-level steps): a long run shows its progress.
+    """
+    outcomes = []
+    with tempfile.TemporaryDirectory() as pictures:
+        for seed in range(seeds):
+            result = run_demo(body=body, seed=seed, out_dir=pictures)
+            outcomes.append(result.outcome)
+            print(f"{body} seed {seed}: {result.outcome}, {result.subgoals} subgoals, {result.low_level_steps} steps")
+    return outcomes
+
+
+def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
+    """:func:`serial_outcomes` on the demo's env and oracle, ``num_envs`` mazes at once in lockstep (no picture).
+
+    The same seeds; a batched low-level forward pass may round the last bits differently from a batch of one,
+    which MuJoCo can turn into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often).
+    Prints one line per seed, as :func:`serial_outcomes`.
+    """
+    # The dagger package loads torch: imported here, so that importing the demo stays light.
+    from antmaze_hirl.dagger.evaluation import play_in_lockstep
+
+    env, oracle = demo_setup(body)
+    copies = copies_of(env, min(num_envs, seeds))
+    try:
+        played = play_in_lockstep(oracle, copies, range(seeds))
+    finally:
+        for copy in copies:
+            copy.close()
+        env.close()
+    outcomes = [episode_outcome(episode.info, truncated=episode.truncated) for episode in played]
+    for episode, outcome in zip(played, outcomes, strict=True):
+        steps, subgoals = episode.info["total_low_level_steps"], episode.info["attempts"]
+        print(f"{body} seed {episode.seed}: {outcome}, {subgoals} subgoals, {steps} steps")
+    return outcomes

@@ -33,7 +33,7 @@ class HighLevelEpisode:
     def outcome(self) -> str:
         """Why the episode ended: ``"success"``, ``"flip"`` (the ant on its back), ``"timeout"`` or ``"ended"``.
 
-        The spellings of ``benchmarks/in_maze.py``, which splits a ``"frozen"`` timeout off the rest; ``"ended"``
+        The spellings of ``scripts/in_maze.py``, which splits a ``"frozen"`` timeout off the rest; ``"ended"``
         is any other end (a step limit of a wrapper, say).
         """
         return episode_outcome(self.info, truncated=self.truncated)

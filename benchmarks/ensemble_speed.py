@@ -15,7 +15,7 @@ Observations come from seeded random-action rollouts of the env. It prints the m
 both layouts give the same action up to float rounding. Goal: batched ``predict`` at least 1.5x faster.
 
 Usage: python benchmarks/ensemble_speed.py [--policy ENSEMBLE.zip] [--rounds 7] [--calls 300] [--seed 0] [--out FILE]
-Writes benchmarks/results/ensemble_speed.json by default.
+Writes results/ensemble_speed/ensemble_speed.json by default.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from antmaze_hirl.sb3_ext.ensemble import build_ensemble
 from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
-RESULTS = Path(__file__).resolve().parents[1] / "benchmarks" / "results" / "ensemble_speed.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "ensemble_speed" / "ensemble_speed.json"
 GOAL = 1.5
 
 

@@ -6,7 +6,7 @@
    scripted low-level controller, and its success rate on 200 random mazes (goal: >= 99%).
 
 Usage: python benchmarks/env_throughput.py [--steps 4000] [--blocks 5] [--mazes 200]
-Writes benchmarks/results/env_throughput.json.
+Writes results/env_throughput/env_throughput.json.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experts import PathOracle
 
-RESULTS = Path(__file__).parent / "results" / "env_throughput.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "env_throughput" / "env_throughput.json"
 
 
 def steps_per_second(env: gym.Env, steps: int, seed: int) -> float:

@@ -41,7 +41,7 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs import controllers
 from antmaze_hirl.experts.oracle import PathOracle
 
-RESULTS = Path(__file__).parent / "results" / "hierarchy_throughput.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "hierarchy_throughput" / "hierarchy_throughput.json"
 RAW_IDS = {"ant": "AntMaze_UMaze-v5", "point": "PointMaze_UMaze-v3"}
 MAZE_SIZES = {"ant": 4, "point": 5}  # the ant's 4x4 mazes, as issue 31 measured; the point's default
 

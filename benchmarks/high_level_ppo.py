@@ -28,7 +28,7 @@ import antmaze_hirl  # noqa: F401  (registers the ids)
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.sb3_ext.vec_env import make_sb3_vec_env
 
-RESULTS = Path(__file__).parent / "results" / "high_level_ppo.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "high_level_ppo" / "high_level_ppo.json"
 ENV_ID = "antmaze_hirl/PointMaze-v0"
 
 

@@ -6,7 +6,7 @@ The two imports alternate, ``--repeats`` times each, and the medians are compare
 Importing ``antmaze_hirl`` registers the env ids; nothing heavier loads until it is used.
 
 Usage: python benchmarks/import_time.py [--repeats 5]
-Writes benchmarks/results/import_time.json.
+Writes results/import_time/import_time.json.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pathlib import Path
 from antmaze_hirl.atomic_io import atomic_write_json
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "results" / "import_time.json"
+RESULTS = ROOT / "results" / "import_time" / "import_time.json"
 MODULES = ("antmaze_hirl", "gymnasium_robotics")
 GOAL = 1.5
 

@@ -33,7 +33,7 @@ from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluation_episodes
 from antmaze_hirl.experiments.config import body_settings
 from antmaze_hirl.experts.oracle import PathOracle
 
-RESULTS = Path(__file__).parent / "results" / "lockstep_agreement.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "lockstep_agreement" / "lockstep_agreement.json"
 
 
 def trained_learner(env: gym.Env, oracle: PathOracle, episodes: int, seed: int) -> HighLevelPolicy:

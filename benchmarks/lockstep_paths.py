@@ -31,19 +31,19 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import demo_success
-import in_maze
 import numpy as np
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
+from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experiments import in_maze
 from antmaze_hirl.sb3_ext.evaluation import reach_outcomes
 from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
-RESULTS = Path(__file__).parent / "results" / "lockstep_paths.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "lockstep_paths" / "lockstep_paths.json"
 
 
 def timed(play: Callable[[], list[Any]]) -> tuple[list[Any], float]:
@@ -99,8 +99,8 @@ def demo_rows(seeds: int) -> list[dict]:
         compare(
             "demo_success",
             body,
-            lambda body=body: demo_success.serial_outcomes(body, seeds),
-            lambda body=body: demo_success.lockstep_outcomes(body, seeds, seeds),
+            lambda body=body: serial_outcomes(body, seeds),
+            lambda body=body: lockstep_outcomes(body, seeds, seeds),
         )
         for body in ("ant", "point")
     ]

@@ -77,7 +77,11 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--bodies", default="point,ant")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "study_latency.json")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path(__file__).resolve().parents[1] / "results" / "study_latency" / "study_latency.json",
+    )
     args = parser.parse_args()
     torch.set_num_threads(1)
     results = {"cpu": platform.processor() or platform.machine(), "torch_threads": 1, "bodies": {}}

@@ -12,7 +12,7 @@ MuJoCo), and ``ray_end_to_end_seconds`` is the two together, what ``--backend ra
 The figures depend on the machine's load, which is recorded (``os.getloadavg`` before and after).
 
 Usage: python benchmarks/sweep_scaling.py [--seeds 2] [--episodes 6] [--methods dagger,reward]
-Writes benchmarks/results/sweep_scaling.json.
+Writes results/sweep_scaling/sweep_scaling.json.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.provenance import code_provenance
 
-RESULTS = Path(__file__).resolve().parent / "results" / "sweep_scaling.json"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "sweep_scaling" / "sweep_scaling.json"
 WORKERS = 2
 
 

@@ -13,7 +13,7 @@ process, at the same time, so that a shared machine's load falls on both alike, 
 ratio. The script also checks that both arms give the same rows and per-maze outcomes, bit for bit.
 
 Usage: python benchmarks/trial_speed.py [--body point] [--method dagger] [--episodes 10] [--eval-every 5]
-           [--mazes 40] [--repeats 1] [--out benchmarks/results/trial_speed_point.json]
+           [--mazes 40] [--repeats 1] [--out results/trial_speed/trial_speed_point.json]
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ import sys
 import time
 from pathlib import Path
 
-RESULTS = Path(__file__).parent / "results"
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "trial_speed"
 ARMS = ("baseline", "fast")
 
 

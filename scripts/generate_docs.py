@@ -2,7 +2,7 @@
 
 A generated block is the output of one command, pasted between two markers in a Markdown page::
 
-    <!-- generated: python benchmarks/paper_tables.py benchmarks/results/paper_experiment_point --tables -->
+    <!-- generated: python scripts/paper_tables.py results/paper_experiment/point --tables -->
     | method | ... |
     <!-- end generated -->
 

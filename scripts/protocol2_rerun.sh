@@ -18,7 +18,7 @@ SEEDS=10
 MAIN="$(cd "$(dirname "$0")/.." && pwd)"
 WORK="${PROTOCOL2_WORK:-/work/p2runs}"
 CLONE="${PROTOCOL2_CLONE:-/work/frozen-p2}"
-CHECKPOINTS="${PROTOCOL2_CHECKPOINTS:-$MAIN/benchmarks/results/protocol2_runs}"
+CHECKPOINTS="${PROTOCOL2_CHECKPOINTS:-$MAIN/results/protocol2/runs}"
 
 folder() { echo "$WORK/${1}_p2_${COMMIT:0:7}"; }
 

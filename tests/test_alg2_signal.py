@@ -1,11 +1,9 @@
 """Issue 32: the start scores of Alg. 2 and 3 carry a continuous signal, and starts keep min_goal_cells."""
 
-import sys
-from pathlib import Path
-
 import gymnasium as gym
 import numpy as np
 import pytest
+from script_helpers import load_script
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
@@ -22,8 +20,7 @@ from antmaze_hirl.dagger.symmetric_views import class_directions, class_permutat
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.layouts import bfs_distances, generate_layout
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import alg2_signal
+alg2_signal = load_script("scripts/alg2_signal.py")
 
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
 
@@ -183,7 +180,7 @@ def test_bad_symmetric_settings_are_clear_errors():
 def test_the_noise_score_ranks_states_the_learner_has_not_seen_above_those_it_was_trained_on():
     # alg2_signal.fitted_aucs: a learner fitted to the oracle on two mazes, and an untrained one, both
     # scored at those states and at the oracle's states on four other mazes. Over seeds 0-9
-    # (benchmarks/results/alg2_signal_fitted.json) the fitted AUC is 0.60-0.98, the mean of any two
+    # (results/alg2_signal/alg2_signal_fitted.json) the fitted AUC is 0.60-0.98, the mean of any two
     # consecutive seeds >= 0.62; fitted - untrained is 0.20-0.41 on every seed (two-seed means >= 0.23).
     # The bars sit well below both, so they hold where another CPU's rounding trains other weights.
     # The paired difference is the robust figure: the state sets differ by the luck of the mazes, which

@@ -43,7 +43,7 @@ def test_the_oracle_scores_above_a_random_policy_with_intervals_attempts_and_ste
     oracle = score_policy("point5", "oracle", task_ids=TASKS)
     random = score_policy("point5", "random", task_ids=TASKS)
     assert oracle["success_rate"] > random["success_rate"]  # the score discriminates
-    assert oracle["successes"] == len(TASKS)  # the oracle solves all 100 point tasks (benchmarks/results)
+    assert oracle["successes"] == len(TASKS)  # the oracle solves all 100 point tasks (results)
     for report in (oracle, random):
         low, high = report["wilson_95"]
         assert low <= report["success_rate"] <= high
@@ -174,14 +174,12 @@ def test_a_report_of_another_format_is_refused(tmp_path):
 
 
 def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
-    import sys
-    from pathlib import Path
+    from script_helpers import load_script
 
-    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-    import leaderboard
+    leaderboard = load_script("scripts/leaderboard.py")
 
     page = leaderboard.PAGE.read_text()
-    assert leaderboard.page_text(page) == page, "run python benchmarks/leaderboard.py"
+    assert leaderboard.page_text(page) == page, "run python scripts/leaderboard.py"
     reports = sorted(leaderboard.RESULTS.glob("*.json"))
     assert reports
     for path in reports:

@@ -1,19 +1,18 @@
-"""benchmarks/demo_success.py: the lockstep path plays the demo's own episodes."""
-
-import sys
-from pathlib import Path
+"""scripts/demo_success.py: the lockstep path plays the demo's own episodes."""
 
 import pytest
+from script_helpers import load_script
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import demo_success
+from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
+
+demo_success = load_script("scripts/demo_success.py")
 
 
 def test_lockstep_gives_the_demos_outcomes_on_the_point(capsys):
     # The demo itself (fresh env, picture) seed after seed against both mazes at once on copies of its env.
-    serial = demo_success.serial_outcomes("point", 2)
+    serial = serial_outcomes("point", 2)
     serial_lines = capsys.readouterr().out.splitlines()
-    lockstep = demo_success.lockstep_outcomes("point", 2, num_envs=2)
+    lockstep = lockstep_outcomes("point", 2, num_envs=2)
     assert lockstep == serial and set(serial) <= {"success", "flip", "timeout", "ended"}
     assert capsys.readouterr().out.splitlines() == serial_lines  # same subgoals and steps, seed by seed
 
@@ -22,4 +21,4 @@ def test_measure_records_the_mode():
     figures = demo_success.measure("point", 1, num_envs=2)
     assert figures["num_envs"] == 2 and figures["episodes"] == 1
     with pytest.raises(ValueError, match="unknown body 'cat'"):
-        demo_success.lockstep_outcomes("cat", 2, num_envs=2)
+        lockstep_outcomes("cat", 2, num_envs=2)

@@ -8,7 +8,7 @@ import pytest
 from antmaze_hirl.experiments.uncertainty import wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
-RESULTS = ROOT / "benchmarks" / "results"
+RESULTS = ROOT / "results"
 PAGES = [ROOT / "README.md", ROOT / "docs" / "results" / "index.md"]
 
 
@@ -26,7 +26,7 @@ def interval(successes, trials):
 
 
 def headline_figures():
-    low_level = load("low_level.json")["eval_low"]
+    low_level = load("low_level/low_level.json")["eval_low"]
     figures = []
     for body in ("point", "ant"):
         pooled = low_level[body]
@@ -35,18 +35,18 @@ def headline_figures():
         figures.append(
             f"{successes} of {pooled['pooled_episodes']}: {rate}% {interval(successes, pooled['pooled_episodes'])}"
         )
-    families = load("in_maze.json")["results"]["shipped"]["families"]
+    families = load("in_maze/in_maze.json")["results"]["shipped"]["families"]
     for family in ("ant4", "large"):
         row = families[family]
         figures.append(f"{100 * row['success_rate']:g}% {interval(row['successes'], row['episodes'])}")
-    methods = load("paper_experiment_ant/summary.json")["methods"]
+    methods = load("paper_experiment/ant/summary.json")["methods"]
     for method in ("dagger", "gated"):
         final = methods[method]["final_success"]
         figures.append(f"{final['median']:.0%} ({final['min']:.0%}-{final['max']:.0%})")
         figures.append(f"{methods[method]['total_labels']['median']:.0f} labels")
     ratio = methods["gated"]["total_labels"]["median"] / methods["dagger"]["total_labels"]["median"]
     figures.append(f"({ratio:.2f}x DAgger's)")
-    figures.append(f"{load('study_latency.json')['bodies']['ant']['all']['server']['p95_ms']} ms")
+    figures.append(f"{load('study_latency/study_latency.json')['bodies']['ant']['all']['server']['p95_ms']} ms")
     return figures
 
 

@@ -1,13 +1,10 @@
-"""benchmarks/flip_warning.py: the tilt reflex, the flip lead and the reflex specs."""
-
-import sys
-from pathlib import Path
+"""scripts/flip_warning.py: the tilt reflex, the flip lead and the reflex specs."""
 
 import numpy as np
 import pytest
+from script_helpers import load_script
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import flip_warning
+flip_warning = load_script("scripts/flip_warning.py")
 
 
 def ant_observation(roll_degrees):

@@ -1,6 +1,5 @@
-"""benchmarks/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
+"""scripts/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
 
-import importlib
 import sys
 from pathlib import Path
 
@@ -8,11 +7,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from conftest import StillController
-
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import in_maze
+from script_helpers import load_script
 
 from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.experiments import in_maze
 from antmaze_hirl.experts import PathOracle
 
 
@@ -180,7 +178,7 @@ def test_lockstep_plays_the_serial_episodes(monkeypatch):
     [("in_maze", ["--subgoal-distance", "2"]), ("paper_experiment", ["--body", "ant", "--expert-max-distance", "2"])],
 )
 def test_a_benchmark_option_renamed_in_0_2_0_stops_in_one_line_naming_the_new_one(script, argv, monkeypatch, capsys):
-    module = importlib.import_module(script)
+    module = load_script(f"scripts/{script}.py")
     monkeypatch.setattr(sys, "argv", [f"{script}.py", *argv])
     with pytest.raises(SystemExit) as exit_info:
         module.main()

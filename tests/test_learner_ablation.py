@@ -1,13 +1,13 @@
-"""``benchmarks/learner_ablation.py``: variant settings per map, machine records and which trials a summary reads."""
+"""``scripts/learner_ablation.py``: variant settings per map, machine records and which trials a summary reads."""
 
 import json
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import learner_ablation
+from script_helpers import load_script
 
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+
+learner_ablation = load_script("scripts/learner_ablation.py")
 
 
 def test_planning_variants_get_rows_plus_cols_plus_two_rounds_on_each_bodys_map():

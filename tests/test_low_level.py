@@ -505,7 +505,7 @@ def test_hyperparams_file_overrides_only_the_keys_it_sets(tmp_path):
 def test_the_committed_training_configs_load(name):
     from pathlib import Path
 
-    config = load_config("ant", Path(__file__).parents[1] / "benchmarks" / "configs" / name)
+    config = load_config("ant", Path(__file__).parents[1] / "scripts" / "configs" / name)
     assert config.env_kwargs["chain_probability"] in (0.5, 0.75)
     ReachEnv("ant", **config.env_kwargs).close()
 

@@ -1,4 +1,4 @@
-"""``benchmarks/low_level.py --algorithms``: two algorithms trained side by side, resumed, and scored in one run."""
+"""``scripts/low_level.py --algorithms``: two algorithms trained side by side, resumed, and scored in one run."""
 
 import json
 import subprocess
@@ -6,14 +6,14 @@ import sys
 from pathlib import Path
 
 import pytest
+from script_helpers import load_script
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import low_level
+low_level = load_script("scripts/low_level.py")
 
 # End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
 pytestmark = pytest.mark.integration
 
-SCRIPT = Path(__file__).parents[1] / "benchmarks" / "low_level.py"
+SCRIPT = Path(__file__).parents[1] / "scripts" / "low_level.py"
 
 
 def test_bad_algorithm_lists_get_one_line_errors(tmp_path):

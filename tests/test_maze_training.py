@@ -12,7 +12,7 @@ from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.envs.reach import flipped_flags
 from antmaze_hirl.sb3_ext import load_config, make_model
 
-ANT_MAZE_YML = Path(__file__).parents[1] / "benchmarks" / "configs" / "ant_maze.yml"
+ANT_MAZE_YML = Path(__file__).parents[1] / "scripts" / "configs" / "ant_maze.yml"
 
 
 def walls_after_resets(env, resets):

@@ -1,11 +1,11 @@
-"""``benchmarks/next_cell_labels.py``: the carried rule turns the ant's "stay" labels into moves along the path."""
+"""``scripts/next_cell_labels.py``: the carried rule turns the ant's "stay" labels into moves along the path."""
 
 import json
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import next_cell_labels
+from script_helpers import load_script
+
+next_cell_labels = load_script("scripts/next_cell_labels.py")
 
 
 def test_carrying_labels_at_the_reach_cuts_stay_and_follows_the_path(tmp_path, monkeypatch):

@@ -1,20 +1,19 @@
-"""The protocol-2 claims table of ``benchmarks/paper_claims.py``: its verdicts on crafted summaries."""
+"""The protocol-2 claims table of ``scripts/paper_claims.py``: its verdicts on crafted summaries."""
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from script_helpers import load_script
 
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import paper_claims as pc
+pc = load_script("scripts/paper_claims.py")
 
 ROOT = Path(__file__).resolve().parents[1]
-INTERIM = ROOT / "benchmarks" / "results" / "protocol2_interim"
+INTERIM = ROOT / "results" / "protocol2" / "interim"
 JITTER = [0.0, 0.01, -0.01, 0.02, -0.02, 0.0, 0.01, -0.01, 0.02, -0.02]
 
 
@@ -182,7 +181,7 @@ def test_bad_folders_are_one_line_errors(tmp_path, capsys):
         pc.main(["--protocol2", str(INTERIM / "ant"), str(INTERIM / "point")])
     assert "is of body 'ant', but it was passed as the point folder" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        pc.main(["--protocol2", str(ROOT / "benchmarks" / "results" / "paper_experiment_point"), str(INTERIM / "ant")])
+        pc.main(["--protocol2", str(ROOT / "results" / "paper_experiment" / "point"), str(INTERIM / "ant")])
     assert "has config.protocol 1, not 2: read it without --protocol2" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         pc.main(["--protocol2", str(tmp_path), str(INTERIM / "ant")])
@@ -190,7 +189,7 @@ def test_bad_folders_are_one_line_errors(tmp_path, capsys):
 
 
 def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
-    figures = pc.claims(ROOT / "benchmarks" / "results" / "paper_experiment_ant")["methods"]["reward"]
+    figures = pc.claims(ROOT / "results" / "paper_experiment" / "ant")["methods"]["reward"]
     # docs/paper-claims.md: "Pruning removed 137 of `reward`'s 4,903 labels (2.8%)".
     assert (figures["labels_removed_by_pruning"], figures["labels_spent"]) == (137, 4903)
     assert figures["episodes_to_60_percent"]["median"] == 30.0
@@ -241,7 +240,7 @@ def test_episodes_to_sixty_percent_are_read_from_the_episode_rows():
 
 def test_the_claims_doc_quotes_the_table_printed_on_the_interim_folders(monkeypatch, capsys):
     monkeypatch.chdir(ROOT)
-    pc.main(["--protocol2", "benchmarks/results/protocol2_interim/point", "benchmarks/results/protocol2_interim/ant"])
+    pc.main(["--protocol2", "results/protocol2/interim/point", "results/protocol2/interim/ant"])
     doc = (ROOT / "docs" / "paper-claims.md").read_text()
     quoted = doc.split("<!-- interim claims table: begin -->\n")[1].split("\n<!-- interim claims table: end -->")[0]
     assert quoted == capsys.readouterr().out.rstrip("\n"), "rerun the command and paste its table"

@@ -1,17 +1,16 @@
-"""The README's experiment tables come from ``benchmarks/paper_tables.py``: checked on crafted curves."""
+"""The README's experiment tables come from ``scripts/paper_tables.py``: checked on crafted curves."""
 
 import copy
 import json
 import sys
-from pathlib import Path
 
 import pytest
+from script_helpers import load_script
+from test_experiments import crafted_rows
 
 from antmaze_hirl.experiments import summarise
 
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import paper_tables
-from test_experiments import crafted_rows
+paper_tables = load_script("scripts/paper_tables.py")
 
 
 def test_tables_print_the_summary_figures():

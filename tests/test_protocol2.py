@@ -18,7 +18,7 @@ from antmaze_hirl.experiments.results_folder import read_rows
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
 
-RESULTS = Path(__file__).parents[1] / "benchmarks" / "results"
+RESULTS = Path(__file__).parents[1] / "results" / "paper_experiment"
 TINY2 = TINY_PROTOCOL2
 
 
@@ -174,7 +174,7 @@ def test_evaluation_envs_is_checked():
 
 @pytest.mark.parametrize("body", ["point", "ant"])
 def test_committed_protocol_1_folders_still_summarise_as_committed(body):
-    folder = RESULTS / f"paper_experiment_{body}"
+    folder = RESULTS / body
     committed = json.loads((folder / "summary.json").read_text())["methods"]
     summary = summarise(read_rows(folder / "episodes.csv"), list(committed))
     for method, figures in committed.items():

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-INTERIM = ROOT / "benchmarks" / "results" / "protocol2_interim"
+INTERIM = ROOT / "results" / "protocol2" / "interim"
 GUIDE = ROOT / "docs" / "guides" / "protocol.md"
 
 

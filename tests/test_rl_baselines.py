@@ -1,17 +1,15 @@
-"""benchmarks/rl_baselines.py: the flat goal env, the final-goal scoring policy, and the wall-time cap's record."""
+"""scripts/rl_baselines.py: the flat goal env, the final-goal scoring policy, and the wall-time cap's record."""
 
 import argparse
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 from gymnasium.utils.env_checker import check_env
-
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import rl_baselines
+from script_helpers import load_script
 
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+
+rl_baselines = load_script("scripts/rl_baselines.py")
 
 
 def test_the_flat_env_is_a_goal_env_whose_goal_is_the_final_goal():

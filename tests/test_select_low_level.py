@@ -1,4 +1,4 @@
-"""benchmarks/select_low_level.py: its mazes are selection sets, apart from every reported family."""
+"""scripts/select_low_level.py: its mazes are selection sets, apart from every reported family."""
 
 import json
 import sys
@@ -6,13 +6,13 @@ from pathlib import Path
 
 import pytest
 from conftest import StillController
-
-sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-import in_maze
-import select_low_level
+from script_helpers import load_script
 
 from antmaze_hirl.envs.layout_splits import layout_split
 from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.experiments import in_maze
+
+select_low_level = load_script("scripts/select_low_level.py")
 
 SHIPPED = Path(__file__).parents[1] / "antmaze_hirl" / "policies" / "ant_td3.zip"
 

@@ -145,13 +145,13 @@ class LearnerSettings:
 
         Read from the body's profile (``learner_head``, ``learner_plans`` in
         :data:`~antmaze_hirl.envs.profiles.BODY_PROFILES`); ``None`` (an env that names no body): the defaults.
-        Both bodies get the next-cell head, each the winner of ``benchmarks/learner_ablation.py`` on its
+        Both bodies get the next-cell head, each the winner of ``scripts/learner_ablation.py`` on its
         held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the
         walls block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest
-        shortest path is 15 moves; ``benchmarks/results/learner_ablation.json``). The ant's is the CNN's: on
+        shortest path is 15 moves; ``results/learner_ablation/learner_ablation.json``). The ant's is the CNN's: on
         its 4x4 mazes it tied value iteration on the selection mazes' median and costs 28% less time, and
         ruling out wall moves lost there, since its 2 m labels cut corners the cell grid calls walls
-        (``benchmarks/results/learner_ablation_ant.json``). The ant's heading head, its default before,
+        (``results/learner_ablation/learner_ablation_ant.json``). The ant's heading head, its default before,
         scored 52% against 77%.
 
         Raises:
@@ -352,7 +352,7 @@ class HighLevelPolicy:
         :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
         before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
         near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
-        would teach "stay" (``benchmarks/next_cell_labels.py``).
+        would teach "stay" (``scripts/next_cell_labels.py``).
         """
         agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
         if self.subgoal_reach_m < self.geometry.scale:

@@ -240,7 +240,7 @@ class NoiseQuery(QueryStrategy):
     frame (:mod:`~antmaze_hirl.dagger.symmetric_views`): the spread is over all ``8 * n_noises`` views.
     The learner has learnt to answer a trained state's images alike, not an unseen state's, so this
     spread ranks unseen states above trained ones; body noise alone does not (AUC near 0.5,
-    ``benchmarks/alg2_signal.py``). The spread is ``measure`` (:data:`MEASURES`): by default the
+    ``scripts/alg2_signal.py``). The spread is ``measure`` (:data:`MEASURES`): by default the
     Jensen-Shannon divergence of the views' class distributions (:func:`information_radius`), which
     ranked better than their variance. Protocol 1's score is ``signal="offsets", symmetries=False``;
     protocol 2's before issue 32, ``symmetries=False, measure="variance"``.

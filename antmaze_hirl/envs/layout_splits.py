@@ -13,8 +13,9 @@ its start and goal. The partition is a pure function of the grid, the same on ev
 
 The first partition (protocol 1, :func:`wall_grid_split_v1`) hashed the raw grid: a 4x4 evaluation grid
 then almost always had a rotated copy in the training part. Every results folder made with
-``held_out_layouts`` before this change (``benchmarks/results/paper_experiment_{point,ant}``,
-``low_level_selection_held_out*.json``, ``oracle_success_ant_4.json``, ``maze_families.json``) used it.
+``held_out_layouts`` before this change (``results/paper_experiment/{point,ant}``,
+``select_low_level/low_level_selection_held_out*.json``, ``paper_experiment/oracle_success_ant_4.json``,
+``maze_families/maze_families.json``) used it.
 """
 
 from __future__ import annotations

@@ -109,7 +109,7 @@ class BodyProfile:
 
 BODY_PROFILES: dict[str, BodyProfile] = {
     # The point walks one-cell (1 m) oracle subgoals through 5x5 mazes. Its learner reads the next cell out
-    # of value iteration that rules out wall moves (benchmarks/results/learner_ablation.json).
+    # of value iteration that rules out wall moves (results/learner_ablation/learner_ablation.json).
     "point": BodyProfile(
         "point",
         BODY_SPECS["point"],
@@ -123,7 +123,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
     # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (README, the ant experiment). Holding
     # layouts out needs its 4x4 family (1,968 wall grids; the 3x3 family has 48). Its learner is the CNN's
     # next-cell head: its 2 m labels cut corners the cell grid calls walls
-    # (benchmarks/results/learner_ablation_ant.json).
+    # (results/learner_ablation/learner_ablation_ant.json).
     "ant": BodyProfile(
         "ant",
         BODY_SPECS["ant"],
@@ -154,8 +154,8 @@ class SeedTable:
 
     Attributes:
         held_out: Held-out mazes: the experiment's final evaluation (``evaluate_high_level``'s default) and
-            ``benchmarks/in_maze.py``.
-        low_level_selection_mazes: The mazes ``benchmarks/select_low_level.py`` picked the shipped ant on.
+            ``scripts/in_maze.py``.
+        low_level_selection_mazes: The mazes ``scripts/select_low_level.py`` picked the shipped ant on.
         selection: The periodic evaluations' mazes under ``held_out_layouts`` (the ``"selection"`` part).
         low_level_curve: Subgoal seeds of ``train-low``'s held-out success curve (:class:`SuccessRateCallback`).
         low_level_selection_subgoals: First subgoal seed of ``select_low_level.py``'s ``eval-low``.
@@ -215,4 +215,4 @@ MAZE_FAMILIES: dict[str, MazeFamily] = {
     "select4": MazeFamily("ant", "random", 4, "selection", DEFAULT_MAX_STEPS),
     "select6": MazeFamily("ant", "random", 6, "selection", None),
 }
-"""The maze families of ``benchmarks/in_maze.py`` and ``benchmarks/select_low_level.py``, by name."""
+"""The maze families of ``scripts/in_maze.py`` and ``scripts/select_low_level.py``, by name."""

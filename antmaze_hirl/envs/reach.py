@@ -162,7 +162,7 @@ class ReachEnv(GoalEnv, EzPickle):
             uprightness (``info["uprightness"]``, the world z of its up axis: 1 upright, 0 on its side)
             is below ``upright_threshold``. A dense warning before a flip, which ``flip_penalty`` marks
             only at the terminal step: in mazes the shipped ant flips 2-25 steps (median 5) after its last
-            step at or above 0.6 uprightness (``benchmarks/flip_warning.py``). HER relabelling needs the
+            step at or above 0.6 uprightness (``scripts/flip_warning.py``). HER relabelling needs the
             infos kept (SB3's ``copy_info_dict=True``). Default 0.
         upright_threshold: Uprightness in ``(-1, 1]`` below which ``tilt_penalty`` applies. Default 0.8
             (a tilt of about 37 degrees): the shipped ant spends 0.9% of its steps in mazes below it when it

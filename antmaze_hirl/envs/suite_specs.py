@@ -126,7 +126,7 @@ SUITE_SPECS: dict[str, SuiteSpec] = {
     )
 }
 """Every suite, by name. Checksums and step limits are those of ``benchmark_suites.json``
-(``benchmarks/make_suites.py`` regenerates it byte for byte)."""
+(``scripts/make_suites.py`` regenerates it byte for byte)."""
 
 SUITE_ENTRY_POINT = "antmaze_hirl.sb3_ext.suite_envs:make_suite_env"
 """Entry point of every suite id: the suite env with the body's shipped low level unless one is given."""

@@ -7,7 +7,7 @@ goal cell, each at the cell's centre plus uniform noise of +-0.25 cell (the expe
 ant +-1 m, OGBench's noise), drawn from the reset seed: the task is fixed, its episodes vary with the seed
 (without the noise every episode of a task would be the same, the env being deterministic).
 
-How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``benchmarks/make_suites.py``):
+How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``scripts/make_suites.py``):
 
 * random families (``point5``, ``ant4``): mazes of the family the experiments use (``maze_size`` free
   cells per side, 30% walls, goal >= 3 grid steps from a start corner) drawn by rejection from the
@@ -24,7 +24,7 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``benchmarks/make_s
   walls where that family places 3; both checked in the tests), whatever part the partition's hash gives
   the grid, and the start/goal pairs are fixed. A learner trained on the map itself is on OGBench's
   protocol (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
-  Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))`` (``benchmarks/in_maze.py``'s
+  Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))`` (``scripts/in_maze.py``'s
   rule, a 0.5 m/s average).
 """
 
@@ -187,7 +187,7 @@ def tasks_checksum(tasks: list[SuiteTask]) -> str:
 
 
 def suites_file_text() -> str:
-    """The suites file's exact text, drawn afresh (what ``benchmarks/make_suites.py`` writes)."""
+    """The suites file's exact text, drawn afresh (what ``scripts/make_suites.py`` writes)."""
     suites = {}
     for name, spec in SUITE_SPECS.items():
         tasks = draw_suite_tasks(name)
@@ -221,7 +221,7 @@ def suite_tasks(name: str) -> tuple[SuiteTask, ...]:
     spec = check_suite_name(name)
     stored = _stored_suites().get(name)
     if stored is None:
-        raise ValueError(f"{SUITES_FILE} has no suite {name!r}; regenerate it with benchmarks/make_suites.py")
+        raise ValueError(f"{SUITES_FILE} has no suite {name!r}; regenerate it with scripts/make_suites.py")
     tasks = tuple(SuiteTask.from_json(entry) for entry in stored["tasks"])
     checksum = tasks_checksum(list(tasks))
     if checksum != spec.checksum or len(tasks) != spec.n_tasks:

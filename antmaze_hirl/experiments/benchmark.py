@@ -19,7 +19,7 @@ low-level step for every maze still walking, one batched subgoal prediction wher
 ``predict_batch``). Both play the same ``(task_id, seed)`` episodes with the same step limits. On the point
 suites the outcomes are identical (``tests/test_benchmark_lockstep.py``); a batched forward may round the last
 bits differently, which MuJoCo can turn into another ant episode now and then
-(``benchmarks/results/lockstep_agreement.json``). The random policy draws its subgoals from one generator in
+(``results/lockstep_agreement/lockstep_agreement.json``). The random policy draws its subgoals from one generator in
 the order it is asked, which the lockstep runner interleaves: same distribution, other draws than serial.
 """
 
@@ -44,7 +44,7 @@ from antmaze_hirl.envs.suite_specs import SUITE_SPECS, SuiteSpec, check_suite_na
 POLICY_KEYWORDS = ("oracle", "random")
 DEFAULT_NUM_ENVS = 8
 """Lockstep mazes of :func:`score_policy` and ``antmaze-hirl benchmark``: 1.1-4.8x faster than serial in
-``benchmarks/results/lockstep_agreement.json`` (oracle and learner, both bodies), and a whole number of rounds
+``results/lockstep_agreement/lockstep_agreement.json`` (oracle and learner, both bodies), and a whole number of rounds
 on 100-episode protocols is not needed (a finished maze starts the next episode at once)."""
 BOOTSTRAP_RESAMPLES = 2000
 RESULTS_FORMAT = "antmaze_hirl.benchmark_result/1"

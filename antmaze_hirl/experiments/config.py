@@ -37,7 +37,7 @@ HELD_OUT_MAZE_SIZE: dict[str, int] = {body: profile.held_out_maze_size for body,
 """Maze size of the held-out-layouts protocol per body. Holding layouts out needs a family with many wall
 grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968, on which the oracle driving the
 shipped ant (stage 6) succeeds on 97% of 100 held-out mazes, 95% Wilson interval 91.5-99.0%, in 500 steps
-(``benchmarks/results/maze_families.json``, ``benchmarks/results/oracle_success_ant_4.json``)."""
+(``results/maze_families/maze_families.json``, ``results/paper_experiment/oracle_success_ant_4.json``)."""
 
 
 def body_settings(
@@ -65,7 +65,7 @@ def body_settings(
 SELECTION_SEED = SEEDS.selection
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
 range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
-the 2,000,000 on of ``benchmarks/select_low_level.py``'s mazes, which chose the shipped ant low level."""
+the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
 
 
 @dataclass(frozen=True)
@@ -178,7 +178,7 @@ LEARNERS: dict[str, dict[str, Any]] = {
     "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
-body's default sets given explicitly (the variants of ``benchmarks/learner_ablation.py``). CNN learners see
+body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
 only the bird's-eye encoding; ``next_cell_vin`` reads the next cell out of value iteration; ``_walls`` also
 rules out the moves the walls block, which solves most mazes before any label."""
 
@@ -189,7 +189,7 @@ named ablation, reported beside its untrained success, not the main protocol's l
 PROTOCOL_LEARNER = "next_cell_cnn"
 """Protocol 2's learner for both bodies when ``ExperimentConfig.learner`` is not set: the generic CNN
 next-cell head, chosen on the selection mazes under the <= 20% untrained-success rule
-(``benchmarks/results/untrained_learners_{point,ant}.json``)."""
+(``results/untrained_learners/untrained_learners_{point,ant}.json``)."""
 
 
 def learner_settings(name: str, maze_size: int) -> dict[str, Any]:
@@ -223,7 +223,7 @@ PROTOCOLS = (1, 2)
 """The protocols of :attr:`ExperimentConfig.protocol`."""
 
 CURRENT_PROTOCOL = 2
-"""The protocol ``benchmarks/paper_experiment.py`` runs unless told otherwise."""
+"""The protocol ``scripts/paper_experiment.py`` runs unless told otherwise."""
 
 
 def evaluation_schedule(config: ExperimentConfig) -> list[int]:

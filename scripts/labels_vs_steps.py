@@ -1,0 +1,80 @@
+"""The leaderboard's figure: success on ``point5`` against expert labels (imitation) and environment steps (reward).
+
+Every point is one committed ``antmaze-hirl benchmark --json`` report in ``results/leaderboard/``
+(nothing typed in): the DAgger rows at their labels (``training.labels``; 0 is the untrained learner), the
+RL rows at their training steps (``training.steps_reached``, or ``training.high_level_steps`` for the older
+PPO row): high-level steps (subgoals) for PPO and SAC on the high level, body steps for the flat SAC+HER.
+Each point carries its 95% Wilson interval over the 100 tasks. The random policy and the oracle are
+horizontal lines. The x axis is logarithmic (``symlog``: linear below 1, so the 0-label learners show).
+
+One expert label and one high-level environment step are both one subgoal chosen in one maze state, which
+is why they share the axis; a body step is a 50th of a subgoal's walk or less.
+
+Usage: python scripts/labels_vs_steps.py   (writes docs/images/point5_labels_vs_steps.png)
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from antmaze_hirl.experiments.labels_vs_steps import FIGURE, Point, figure_points, points_table
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results" / "leaderboard"
+
+
+def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
+    """Plots ``points`` (success with Wilson bars against a symlog x) and the reference lines into ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(8, 4.8))
+    markers = {"labels": "o", "high-level steps": "s", "body steps": "^"}
+    for series in dict.fromkeys(point.series for point in points):
+        mine = [point for point in points if point.series == series]
+        xs = [point.x for point in mine]
+        ys = [point.successes / point.episodes for point in mine]
+        # Clipped at 0: the Wilson ends of 0/n and n/n can differ from the rate in the last bit.
+        errors = [[max(y - point.low, 0.0) for y, point in zip(ys, mine, strict=True)]]
+        errors.append([max(point.high - y, 0.0) for y, point in zip(ys, mine, strict=True)])
+        kind = mine[0].x_kind
+        # The untrained point (x = 0) sits in symlog's linear part: joined by a dotted line, not the curve's.
+        bars = axes.errorbar(
+            xs, ys, yerr=errors, marker=markers[kind], capsize=3, linestyle="none", label=f"{series} (x: {kind})"
+        )
+        colour = bars.lines[0].get_color()
+        trained = [(x, y) for x, y in zip(xs, ys, strict=True) if x > 0]
+        if trained:
+            axes.plot(*zip(*trained, strict=True), color=colour)
+        if xs[0] == 0 and trained:
+            axes.plot([0, trained[0][0]], [ys[0], trained[0][1]], color=colour, linestyle=":", linewidth=1)
+    for name, rate in sorted(lines.items()):
+        axes.axhline(rate, linestyle="--" if name == "oracle" else ":", color="grey", linewidth=1)
+        axes.annotate(f"{name} {100 * rate:.0f}%", (1, rate), xytext=(2, 3), textcoords="offset points", fontsize=8)
+    axes.set_xscale("symlog", linthresh=1)
+    axes.set_xlim(0, 3 * max(point.x for point in points))
+    axes.set_ylim(-0.02, 1.05)
+    axes.set_xlabel("expert labels (imitation) / training environment steps (reward), log scale")
+    axes.set_ylabel("success on point5 (100 held-out tasks)")
+    axes.set_title("point5: success against expert labels and against environment steps (95% Wilson)")
+    axes.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, 0.93))
+    axes.grid(True, which="major", alpha=0.3)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=100, metadata={"Software": None})
+    plt.close(figure)
+
+
+def main() -> int:
+    points, lines = figure_points(RESULTS)
+    draw(points, lines, ROOT / FIGURE)
+    print(points_table(points))
+    print(f"wrote {ROOT / FIGURE}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

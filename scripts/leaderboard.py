@@ -1,0 +1,180 @@
+"""Writes the suites table and the results table of ``docs/leaderboard.md`` from the committed results.
+
+Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
+``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
+:data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
+figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
+Nothing is typed in by hand: rerun this after adding a report. ``--check`` compares instead of writing
+(exit 1 on a difference).
+
+Usage: python scripts/leaderboard.py [--check]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from antmaze_hirl.atomic_io import atomic_write_bytes
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
+from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results" / "leaderboard"
+PAGE = ROOT / "docs" / "leaderboard.md"
+MARKERS = {
+    "suites": ("<!-- suites:start -->", "<!-- suites:end -->"),
+    "results": ("<!-- results:start -->", "<!-- results:end -->"),
+    "figure": ("<!-- figure:start -->", "<!-- figure:end -->"),
+}
+
+GOAL = 0.95
+"""The issue's goal for the oracle hierarchy on every suite."""
+
+NOT_RUN: list[tuple[str, str, str]] = [
+    (
+        "point5",
+        "DAgger (plain), generic learner, seeds 2 and up",
+        "`python scripts/benchmark_dagger.py --seed 2` (and 3, ...): seeds 0 and 1 ran, two seeds are not a spread",
+    ),
+    (
+        "point5",
+        "best active method (issue 32's protocol), 100 / 300 / 1,000 labels",
+        "as DAgger, with the method's strategy; then `antmaze-hirl benchmark point5 --policy learner.zip`",
+    ),
+    (
+        "point5",
+        "SB3 PPO and SAC on the high level at 200k high-level steps",
+        "`python scripts/rl_baselines.py --algo ppo --max-minutes 1000` (and `--algo sac`): the 20-minute runs "
+        "above reached far fewer steps on the shared machine",
+    ),
+    (
+        "ant suites",
+        "DAgger, active methods, PPO/SAC on the ant",
+        "as the point rows, with the ant's training env; not run: the ant's background budget went to the oracle rows",
+    ),
+    (
+        "point5",
+        "flat SAC+HER (no hierarchy) beyond 20 minutes",
+        "`python scripts/rl_baselines.py --algo flat-sac-her --max-minutes 1000`",
+    ),
+]
+"""Baselines not measured yet: (suite, what, the command that would fill the row)."""
+
+
+def suites_table() -> str:
+    """One row per suite: id, tasks, protocol episodes, step limits, checksum."""
+    lines = [
+        "| suite | id | body | tasks | protocol episodes (K per task) | low-level step limit | "
+        "`max_episode_steps` (subgoals) | task-list SHA-256 |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for spec in SUITE_SPECS.values():
+        source = f"random {spec.maze_size}x{spec.maze_size}, eval part" if spec.source == "random" else spec.source
+        limit = "500" if spec.source == "random" else f"scaled to the path, up to {spec.max_low_level_steps}"
+        lines.append(
+            f"| `{spec.name}` | `{spec.env_id}` | {spec.body} | {spec.n_tasks} ({source}) | "
+            f"{spec.n_tasks * spec.episodes_per_task} ({spec.episodes_per_task}) | {limit} | "
+            f"{spec.max_episode_steps} | `{spec.checksum[:16]}` |"
+        )
+    return "\n".join(lines)
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.1f}%"
+
+
+def goal_verdict(report: dict) -> str:
+    """The oracle's goal (>= 95% success) on this row: met, met by the rate only, or missed; blank for others."""
+    if report["policy"] != "oracle":
+        return ""
+    if report["success_rate"] < GOAL:
+        return "**missed**"
+    return "met" if report["wilson_95"][0] >= GOAL else "met by the rate; interval reaches below 95%"
+
+
+def training_budget(report: dict) -> int:
+    """A row's training budget for sorting: its expert labels, or its training steps (0 when untrained)."""
+    training = report.get("training", {})
+    return int(training.get("labels", training.get("steps_reached", training.get("high_level_steps", 0))))
+
+
+def results_table() -> str:
+    """One row per committed report (suite order, then policy), then the rows not run yet."""
+    reports = [(path, load_report(path)) for path in sorted(RESULTS.glob("*.json"))]
+    order = list(SUITE_SPECS)
+    named = ("oracle", "random")
+    reports.sort(
+        key=lambda item: (
+            order.index(item[1]["suite"]),
+            item[1]["policy"] not in named,
+            item[1]["policy"].split(",")[0],
+            training_budget(item[1]),
+            -item[1]["episodes"],
+        )
+    )
+    lines = [
+        "| suite | policy | budget | success [95% Wilson] | oracle goal (>= 95%) | mean subgoals | "
+        "mean low-level steps | flips | wall time | file (in `results/leaderboard/`) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for path, report in reports:
+        spec = SUITE_SPECS[report["suite"]]
+        low, high = report["wilson_95"]
+        tasks = spec.n_tasks if report["task_ids"] == "all" else len(report["task_ids"])
+        budget = f"{tasks} tasks x {report['episodes_per_task']} = {report['episodes']} episodes"
+        if report["episodes"] < spec.n_tasks * spec.episodes_per_task:
+            budget += " (below the protocol's)"
+        success = f"{report['successes']}/{report['episodes']} = {_percent(report['success_rate'])} "
+        success += f"[{_percent(low)}, {_percent(high)}]"
+        wall = f"{report['seconds']:.0f} s"
+        if "training" in report:
+            wall = f"{wall} scoring + {report['training']['training_seconds']:.0f} s training"
+        lines.append(
+            f"| `{report['suite']}` | {report['policy']} | {budget} | {success} | {goal_verdict(report)} | "
+            f"{report['mean_attempts']:.1f} | {report['mean_low_level_steps']:.0f} | {report['flips']} | {wall} | "
+            f"`{path.name}` |"
+        )
+    for suite, what, command in NOT_RUN:
+        lines.append(f"| `{suite}` | {what} | not run yet | not run yet | | | | | | {command} |")
+    return "\n".join(lines)
+
+
+def figure_section() -> str:
+    """The figure (drawn by ``scripts/labels_vs_steps.py``) and the table of its points."""
+    points, _ = figure_points(RESULTS)
+    image = (ROOT / FIGURE).relative_to(PAGE.parent).as_posix()
+    alt = "point5: success against expert labels (DAgger) and against environment steps (RL baselines)"
+    return f"![{alt}]({image})\n\n{points_table(points)}"
+
+
+def page_text(current: str) -> str:
+    """``current`` with the text between each pair of markers replaced by its table."""
+    sections = (("suites", suites_table()), ("results", results_table()), ("figure", figure_section()))
+    for name, table in sections:
+        start, end = MARKERS[name]
+        head, rest = current.split(start, 1)
+        _, tail = rest.split(end, 1)
+        current = f"{head}{start}\n{table}\n{end}{tail}"
+    return current
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--check", action="store_true", help="compare with docs/leaderboard.md; write nothing")
+    args = parser.parse_args()
+    current = PAGE.read_text()
+    text = page_text(current)
+    if args.check:
+        print(f"{PAGE}: {'up to date' if text == current else 'OUT OF DATE: run scripts/leaderboard.py'}")
+        return 0 if text == current else 1
+    atomic_write_bytes(PAGE, text.encode())
+    print(results_table())
+    print(f"wrote {PAGE}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,201 @@
+"""The index of the committed results: per entry of ``results/<experiment>/``, where it came from and who quotes it.
+
+``results/index.json`` holds, for every entry (a file, or a results folder such as ``paper_experiment/ant``; the
+leaderboard's reports count as one entry), what a reader needs to trust or replay it: the command that made it
+(as recorded in the file, with the paths of its day), the commit it was committed in, the commit it was made at
+where the file records one, the low level (policy hashes, as ``low_level_id`` records them), the machine, the
+entries it supersedes and a note. Entries it lists as ``removed`` are gone from the tree and named with the commit where
+git still has them. Which pages quote an entry is not stored but read from README.md and docs/**/*.md, so the
+table cannot claim a page that no longer quotes the file.
+
+``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, or a removed
+entry still present); ``--table`` prints the Markdown tables of ``docs/results/files.md`` (a generated block).
+``--removable`` lists the superseded entries that no page quotes.
+
+Usage: python scripts/results_index.py [--check | --table | --removable]
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import json
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results"
+INDEX = RESULTS / "index.json"
+FORMAT = "antmaze_hirl.results_index/1"
+PAGES_OWN = Path("docs") / "results" / "files.md"
+"""The page the table is generated into: it names every entry, so it is left out of "quoted by"."""
+COMMAND_CHARS = 100
+"""Longer recorded commands are cut in the table (the whole command is in the file and in the index)."""
+TICKED = re.compile(r"`+([^`\s]+)`+")
+
+
+def load_index(path: Path = INDEX) -> dict[str, Any]:
+    """The index, checked for its format.
+
+    Raises:
+        ValueError: If the file's ``format`` is not :data:`FORMAT`.
+    """
+    index = json.loads(path.read_text())
+    if index.get("format") != FORMAT:
+        raise ValueError(f"{path} has format {index.get('format')!r}, expected {FORMAT!r}")
+    return index
+
+
+def entry_paths(index: dict[str, Any]) -> list[str]:
+    """Every indexed entry as ``experiment/name`` (the leaderboard's ``*.json`` stands for its reports)."""
+    return [f"{experiment}/{name}" for experiment, spec in index["experiments"].items() for name in spec["entries"]]
+
+
+def tree_entries(results: Path, index: dict[str, Any]) -> list[str]:
+    """The entries on disk: each child of ``results/<experiment>/``, or ``*.json`` for a folder indexed as one."""
+    found = []
+    for folder in sorted(path for path in results.iterdir() if path.is_dir()):
+        spec = index["experiments"].get(folder.name, {"entries": {}})
+        if list(spec["entries"]) == ["*.json"]:
+            found.append(f"{folder.name}/*.json")
+            continue
+        found += [f"{folder.name}/{child.name}" for child in sorted(folder.iterdir())]
+    return found
+
+
+def problems(results: Path, index: dict[str, Any]) -> list[str]:
+    """What does not match between the index and the tree, one line each (empty: they match)."""
+    indexed, on_disk = set(entry_paths(index)), set(tree_entries(results, index))
+    lines = [f"{entry}: on disk, not in results/index.json" for entry in sorted(on_disk - indexed)]
+    lines += [f"{entry}: in results/index.json, not on disk" for entry in sorted(indexed - on_disk)]
+    for removed in index["removed"]:
+        if (ROOT / removed["path"]).exists():
+            lines.append(f"{removed['path']}: listed as removed, still on disk")
+        if not removed.get("commit") or not removed.get("superseded_by"):
+            lines.append(f"{removed['path']}: a removed entry needs its commit and what supersedes it")
+    for experiment, spec in index["experiments"].items():
+        for name, entry in spec["entries"].items():
+            for old in entry["supersedes"]:
+                if f"{experiment}/{old}" not in indexed:
+                    lines.append(f"{experiment}/{name} supersedes {old}, which is not an entry of {experiment}/")
+    return lines
+
+
+def expand_braces(token: str) -> list[str]:
+    """``a_{x,y}.json`` -> ``["a_x.json", "a_y.json"]`` (one level, as the pages write them)."""
+    match = re.search(r"\{([^{}]*)\}", token)
+    if match is None:
+        return [token]
+    return [token[: match.start()] + part + token[match.end() :] for part in match.group(1).split(",")]
+
+
+def quoting_pages(root: Path, entries: list[str]) -> dict[str, list[str]]:
+    """For each entry, the pages (README.md, docs/**/*.md but the index's own) that name it in backticks.
+
+    A page names an entry with its path under ``results/`` (``in_maze/in_maze.json``, or a pattern such as
+    ``in_maze/in_maze_*.json``), with or without the leading ``results/``, or a file inside a folder entry.
+    """
+    pages = [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    quoted: dict[str, list[str]] = {entry: [] for entry in entries}
+    for page in pages:
+        relative = page.relative_to(root)
+        if relative == PAGES_OWN:
+            continue
+        tokens = {
+            name.removeprefix("results/").rstrip("/")
+            for token in TICKED.findall(page.read_text())
+            for name in expand_braces(token)
+        }
+        for entry in entries:
+            if any(matches(token, entry) for token in tokens):
+                quoted[entry].append(relative.as_posix())
+    return quoted
+
+
+def matches(token: str, entry: str) -> bool:
+    """Whether a page's ``token`` names ``entry`` (itself, a pattern over it, or a file inside it)."""
+    if entry.endswith("/*.json"):  # a folder indexed as one: the folder or any of its reports
+        folder = entry.removesuffix("/*.json")
+        return token == folder or (token.startswith(folder + "/") and token.endswith(".json"))
+    return fnmatch.fnmatchcase(entry, token) or token.startswith(entry + "/")
+
+
+def superseded_by(index: dict[str, Any]) -> dict[str, str]:
+    """Each superseded entry (``experiment/name``) and the entry that supersedes it."""
+    return {
+        f"{experiment}/{old}": f"{experiment}/{name}"
+        for experiment, spec in index["experiments"].items()
+        for name, entry in spec["entries"].items()
+        for old in entry["supersedes"]
+    }
+
+
+def cell(text: str | None) -> str:
+    """A table cell: ``not recorded`` for a missing fact, pipes escaped."""
+    return "not recorded" if not text else text.replace("|", "\\|")
+
+
+def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
+    """The Markdown tables of ``docs/results/files.md``: one per experiment, then the removed entries."""
+    later = superseded_by(index)
+    lines = []
+    for experiment, spec in index["experiments"].items():
+        lines += [f"### `results/{experiment}/`", "", f"Made by `{spec['made_by']}`.", ""]
+        lines += [
+            "| entry | command (as recorded) | committed in | made at | low level | machine "
+            "| supersedes, superseded by, note | quoted by |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for name, entry in spec["entries"].items():
+            path = f"{experiment}/{name}"
+            command = entry["command"]
+            if command and len(command) > COMMAND_CHARS:
+                command = command[: COMMAND_CHARS - 3] + "..."
+            relations = [f"supersedes `{old}`" for old in entry["supersedes"]]
+            if path in later:
+                kept = "kept: quoted" if quoted[path] else "no page quotes it: removable"
+                relations.append(f"superseded by `{later[path].split('/', 1)[1]}`, {kept}")
+            if entry["note"]:
+                relations.append(cell(entry["note"]))
+            pages = ", ".join(f"`{page}`" for page in quoted[path]) or "no page"
+            lines.append(
+                f"| `{name}` | {f'`{cell(command)}`' if command else cell(None)} | {entry['committed_in']} "
+                f"| {cell(entry['made_at'])} | {cell(entry['low_level'])} | {cell(entry['machine'])} "
+                f"| {'; '.join(relations)} | {pages} |"
+            )
+        lines.append("")
+    lines += ["### Removed", ""]
+    if index["removed"]:
+        lines += ["| entry | superseded by | in git at |", "|---|---|---|"]
+        lines += [f"| `{r['path']}` | `{r['superseded_by']}` | {r['commit']} |" for r in index["removed"]]
+    else:
+        lines.append("None yet.")
+    return "\n".join(lines).rstrip()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    mode = parser.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--check", action="store_true", help="compare results/index.json with the tree")
+    mode.add_argument("--table", action="store_true", help="print the tables of docs/results/files.md")
+    mode.add_argument("--removable", action="store_true", help="list superseded entries no page quotes")
+    args = parser.parse_args(argv)
+    index = load_index()
+    if args.check:
+        found = problems(RESULTS, index)
+        print("\n".join(found) if found else f"{INDEX.relative_to(ROOT)}: matches results/")
+        return 1 if found else 0
+    quoted = quoting_pages(ROOT, entry_paths(index))
+    if args.table:
+        print(table(index, quoted))
+        return 0
+    for entry, newer in superseded_by(index).items():
+        if not quoted[entry]:
+            print(f"{entry}: superseded by {newer}, quoted by no page")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,238 @@
+"""Leaderboard rows for reward alone on ``point5``: SB3 on the high level, and a flat SAC+HER without hierarchy.
+
+Three baselines, each trained on the held-out protocol's training mazes (random 5x5 point mazes of the
+layout partition's ``train`` part only, sparse reward 1 at the final goal) and scored on ``point5``
+exactly as ``antmaze-hirl benchmark point5`` scores any policy:
+
+* ``ppo`` and ``sac``: SB3's ``MultiInputPolicy`` picks subgoals on the lockstep high-level vector env
+  (:class:`~antmaze_hirl.envs.vector.HighLevelVectorEnv`, ``--num-envs`` mazes, ``"SameStep"`` autoreset),
+  the shipped point low level walking to each subgoal; ``clip_subgoals=True`` (Gaussian actions leave the
+  maze). The episode ends at the goal or after 500 low-level steps (the suite's budget).
+* ``flat-sac-her``: SB3 SAC with a ``HerReplayBuffer`` drives the point directly, every low-level step,
+  with the episode's final goal as its goal (:class:`FlatMazeEnv`): no subgoals, no map in the observation
+  (the body's velocities, its xy and the goal xy, as the low level sees). Scored on ``point5`` as the low
+  level of a high-level policy that always proposes the final goal (:class:`FinalGoalPolicy`): the
+  hierarchy then only re-issues the goal every 50 low-level steps, so the body's actions are the flat
+  policy's (a goal nearer than 0.4 m at such a re-issue is pushed out along the same line, which the
+  walk crosses on its way; ``mean subgoals`` of that row counts re-issues).
+
+Training stops at ``--steps`` or after ``--max-minutes`` of wall time, whichever comes first; the report
+gives the steps reached (``training.steps_reached``), never the steps asked for. ``--steps 0`` scores the
+untrained model (where each curve starts; ``point5_<algo>_rl_untrained.json``). ``--score-only`` scores a
+saved model again (with its training record) without training.
+
+Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
+       [--num-envs 8] [--seed 0] [--score-num-envs 8]
+Writes the model and its training record under --out, and results/leaderboard/point5_<algo>_rl.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+from stable_baselines3 import PPO, SAC, HerReplayBuffer
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import DummyVecEnv
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.envs.split_env import SplitMazeEnv
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
+from antmaze_hirl.envs.vector import HighLevelVectorEnv, copies_of
+from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
+from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv
+
+RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
+SUITE = "point5"
+FLAT_STEPS = SUITE_SPECS[SUITE].max_low_level_steps
+SETTINGS: dict[str, dict[str, Any]] = {
+    # Rollouts of 256 high-level steps per maze, so every update sees whole episodes of 8 mazes.
+    "ppo": {"n_steps": 256, "batch_size": 64, "n_epochs": 4},
+    # One gradient step per transition (SAC's usual ratio), over the vector env's N transitions per step.
+    "sac": {"buffer_size": 50_000, "learning_starts": 200, "batch_size": 64, "gradient_steps": -1},
+    # HER as SB3's docs set it up; learning starts after two whole (500-step) episodes.
+    "flat-sac-her": {
+        "buffer_size": 300_000,
+        "learning_starts": 2 * FLAT_STEPS,
+        "batch_size": 256,
+        "replay_buffer_class": "HerReplayBuffer",
+        "replay_buffer_kwargs": {"n_sampled_goal": 4, "goal_selection_strategy": "future"},
+    },
+}
+
+
+class WallClockCap(BaseCallback):
+    """Stops ``learn`` once ``seconds`` of wall time have passed (checked after every env step)."""
+
+    def __init__(self, seconds: float) -> None:
+        super().__init__()
+        self.seconds = seconds
+        self.started = time.perf_counter()
+        self.capped = False
+
+    def _on_step(self) -> bool:
+        self.capped = time.perf_counter() - self.started >= self.seconds
+        return not self.capped
+
+
+def _no_low_level(observation: dict[str, np.ndarray]) -> np.ndarray:
+    raise RuntimeError("FlatMazeEnv drives the body itself; its high-level env never walks")
+
+
+class FlatMazeEnv(gym.Env):
+    """The point in a random ``train``-part 5x5 maze, goal-conditioned on the episode's final goal (a GoalEnv).
+
+    Each reset draws a task as the high-level training env does (start corner, goal >= 3 grid steps away,
+    +-0.25 cell of noise) and the body then acts every step for up to 500 steps; the episode ends at the goal
+    (within the point's 0.2 m) or is truncated. Observation and reward are :class:`~antmaze_hirl.envs.reach.ReachEnv`'s.
+    """
+
+    def __init__(self) -> None:
+        self.high = SplitMazeEnv("point", split="train", low_level=_no_low_level, horizon=FLAT_STEPS)
+        self.reach = self.high.reach
+        self.observation_space = self.reach.observation_space
+        self.action_space = self.reach.action_space
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[dict, dict]:
+        """A new task, drawn with ``np_random``."""
+        super().reset(seed=seed)
+        self.high.reset(seed=int(self.np_random.integers(2**31)))
+        return self.reach._get_obs(), {"is_success": False}
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        """One point step; terminated at the goal, truncated after 500 steps."""
+        obs, reward, _, truncated, info = self.reach.step(action)
+        return obs, reward, bool(info["is_success"]), truncated, info
+
+    def compute_reward(self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any) -> np.ndarray:
+        """The reach env's sparse reward (HER relabels with it)."""
+        return self.reach.compute_reward(achieved_goal, desired_goal, info)
+
+    def close(self) -> None:
+        """Frees the simulator."""
+        self.high.close()
+
+
+class FinalGoalPolicy:
+    """A high-level policy whose subgoal is always the final goal (the flat baseline's scoring policy)."""
+
+    __name__ = "final goal as the only subgoal"
+
+    def __call__(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        """The goal xy of the high-level state."""
+        return STATE_LAYOUT.goal_xy(np.asarray(observation["state"]))
+
+
+def high_level_vec_env(num_envs: int) -> GymnasiumVecEnv:
+    """``num_envs`` ``train``-part point mazes in lockstep behind one shipped low level, as an SB3 VecEnv."""
+    first = SplitMazeEnv("point", split="train", low_level=ShippedPolicyController("point"), clip_subgoals=True)
+    envs = [first, *copies_of(first, num_envs - 1)] if num_envs > 1 else [first]
+    return GymnasiumVecEnv(HighLevelVectorEnv(envs, autoreset_mode="SameStep"))
+
+
+def make_model(algo: str, num_envs: int, seed: int) -> Any:
+    """The untrained SB3 model of ``algo`` on its training env."""
+    settings = dict(SETTINGS[algo])
+    if algo == "flat-sac-her":
+        settings["replay_buffer_class"] = HerReplayBuffer
+        venv = DummyVecEnv([FlatMazeEnv])
+        return SAC("MultiInputPolicy", venv, seed=seed, device="cpu", **settings)
+    algorithm = PPO if algo == "ppo" else SAC
+    return algorithm("MultiInputPolicy", high_level_vec_env(num_envs), seed=seed, device="cpu", **settings)
+
+
+def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict[str, Any]:
+    """Trains, saves the model, and writes (and returns) the training record."""
+    model = make_model(args.algo, args.num_envs, args.seed)
+    cap = WallClockCap(60 * args.max_minutes)
+    started = time.perf_counter()
+    if args.steps > 0:  # --steps 0: the untrained model, where a learning curve starts
+        model.learn(total_timesteps=args.steps, callback=cap, progress_bar=False)
+    seconds = time.perf_counter() - started
+    model_path.parent.mkdir(parents=True, exist_ok=True)
+    model.save(model_path)
+    model.get_env().close()
+    step_kind = "low-level steps (body actions)" if args.algo == "flat-sac-her" else "high-level steps (subgoals)"
+    record = {
+        "algorithm": args.algo,
+        "settings": SETTINGS[args.algo],
+        "steps_asked": args.steps,
+        "steps_reached": int(model.num_timesteps),
+        "step_kind": step_kind,
+        "stopped_by": "wall-time cap" if cap.capped else "step budget" if args.steps else "untrained (--steps 0)",
+        "max_minutes": args.max_minutes,
+        "num_envs": 1 if args.algo == "flat-sac-her" else args.num_envs,
+        "training_split": "train",
+        "training_seconds": round(seconds, 1),
+        "seed": args.seed,
+        "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]]),
+    }
+    atomic_write_json(record_path, record)
+    return record
+
+
+def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) -> dict[str, Any]:
+    """Scores the saved model on ``point5`` and writes the leaderboard's results file."""
+    # Imported here, after training: the scorer is read as it stands when scoring starts.
+    from antmaze_hirl.experiments.benchmark import score_policy
+
+    scoring: dict[str, Any] = {"num_envs": args.score_num_envs}
+    if args.algo == "flat-sac-her":
+        low_level = SAC.load(
+            model_path,
+            device="cpu",
+            custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1},
+        )
+        report = score_policy(SUITE, FinalGoalPolicy(), low_level=low_level, **scoring)
+        what = f"flat SAC+HER (no hierarchy), {record['steps_reached']:,} body steps"
+    else:
+        report = score_policy(SUITE, str(model_path), **scoring)
+        what = f"SB3 {args.algo.upper()} on the high level, {record['steps_reached']:,} high-level steps"
+    report["policy"] = f"{what}, seed {args.seed}"
+    report["training"] = record
+    untrained = "_untrained" if record["steps_reached"] == 0 else ""
+    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl{untrained}.json"
+    atomic_write_json(out, report)
+    low, high = report["wilson_95"]
+    print(f"{report['policy']}: {report['successes']}/{report['episodes']} [{low:.1%}, {high:.1%}] -> {out}")
+    return report
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--algo", choices=sorted(SETTINGS), required=True)
+    parser.add_argument(
+        "--steps", type=int, default=200_000, help="step budget (high-level steps, or body steps); 0: untrained"
+    )
+    parser.add_argument("--max-minutes", type=float, default=20.0, help="wall-time cap on training")
+    parser.add_argument("--num-envs", type=int, default=8, help="lockstep mazes for ppo/sac training")
+    parser.add_argument("--score-num-envs", type=int, default=8, help="lockstep mazes for scoring")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=Path("runs/rl_baselines"), help="folder for models")
+    parser.add_argument("--score-only", action="store_true", help="score the saved model again; no training")
+    args = parser.parse_args(argv)
+    if args.steps < 0 or args.num_envs < 1 or args.score_num_envs < 1 or not args.max_minutes > 0:
+        parser.error(f"--steps must be >= 0, --num-envs and --score-num-envs >= 1 and --max-minutes > 0, got {args}")
+    torch.set_num_threads(1)
+    model_path = args.out / f"{SUITE}_{args.algo}_seed{args.seed}{'_untrained' if args.steps == 0 else ''}.zip"
+    record_path = model_path.with_suffix(".training.json")
+    if args.score_only:
+        record = json.loads(record_path.read_text())
+    else:
+        record = train(args, model_path, record_path)
+        print(f"trained {record['steps_reached']} steps in {record['training_seconds']} s ({record['stopped_by']})")
+    score(args, model_path, record)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

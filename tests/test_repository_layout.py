@@ -1,0 +1,82 @@
+"""The repository's layout: scripts and benchmarks import only the package, and no test edits ``sys.path``."""
+
+import ast
+from pathlib import Path
+
+import pytest
+from script_helpers import load_script
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTS = sorted((ROOT / "scripts").glob("*.py")) + sorted((ROOT / "benchmarks").glob("*.py"))
+SCRIPT_NAMES = {path.stem for path in SCRIPTS}
+
+
+def imported_top_names(path: Path) -> list[tuple[int, str]]:
+    """The first part of every module ``path`` imports, at any depth, with its line."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            found += [(node.lineno, alias.name.split(".")[0]) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            found.append((node.lineno, "<relative import>" if node.level else node.module.split(".")[0]))
+    return found
+
+
+@pytest.mark.parametrize("path", SCRIPTS, ids=lambda path: str(path.relative_to(ROOT)))
+def test_a_script_imports_no_other_script(path):
+    # What two scripts share lives in the package (antmaze_hirl.experiments.in_maze, ...), not in a script.
+    for line, name in imported_top_names(path):
+        assert name not in SCRIPT_NAMES and name != "<relative import>", (
+            f"{path.relative_to(ROOT)}:{line} imports {name}: move what it needs into antmaze_hirl"
+        )
+    assert "sys.path" not in path.read_text(), f"{path.relative_to(ROOT)} edits sys.path"
+
+
+def test_no_test_puts_a_folder_on_sys_path():
+    # A test that needs a script's functions loads it by path (script_helpers.load_script) or runs it.
+    editing = [
+        path.name
+        for path in sorted((ROOT / "tests").glob("*.py"))
+        if path.name != Path(__file__).name
+        and ("sys.path.insert" in path.read_text() or "sys.path.append" in path.read_text())
+    ]
+    assert editing == []
+
+
+def test_the_results_index_matches_the_results_tree():
+    results_index = load_script("scripts/results_index.py")
+    index = results_index.load_index()
+    assert results_index.problems(results_index.RESULTS, index) == []
+
+
+def test_the_results_index_check_names_an_unindexed_entry_and_a_removed_one_still_there(tmp_path):
+    results_index = load_script("scripts/results_index.py")
+    (tmp_path / "in_maze").mkdir()
+    (tmp_path / "in_maze" / "in_maze.json").write_text("{}")
+    (tmp_path / "in_maze" / "stray.json").write_text("{}")
+    entry = {"supersedes": ["gone.json"]}
+    index = {
+        "experiments": {"in_maze": {"entries": {"in_maze.json": entry}}},
+        "removed": [{"path": "scripts/results_index.py", "commit": "", "superseded_by": "x"}],
+    }
+    assert results_index.problems(tmp_path, index) == [
+        "in_maze/stray.json: on disk, not in results/index.json",
+        "scripts/results_index.py: listed as removed, still on disk",
+        "scripts/results_index.py: a removed entry needs its commit and what supersedes it",
+        "in_maze/in_maze.json supersedes gone.json, which is not an entry of in_maze/",
+    ]
+
+
+def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
+    results_index = load_script("scripts/results_index.py")
+    assert results_index.expand_braces("a_{x,y}.json") == ["a_x.json", "a_y.json"]
+    assert results_index.matches("in_maze/in_maze_*.json", "in_maze/in_maze_stage3.json")
+    assert results_index.matches("paper_experiment/ant/summary.json", "paper_experiment/ant")
+    assert not results_index.matches("paper_experiment/ant_stage5", "paper_experiment/ant")
+    assert results_index.matches("leaderboard", "leaderboard/*.json")
+
+
+def test_benchmarks_holds_only_benchmark_scripts():
+    # Results go to results/<experiment>/, configs and research scripts to scripts/ (docs/architecture.md).
+    others = sorted(p.name for p in (ROOT / "benchmarks").iterdir() if p.suffix != ".py" and p.name != "__pycache__")
+    assert others == [], f"benchmarks/ holds {others}: results belong in results/<experiment>/, the rest in scripts/"
