@@ -471,14 +471,16 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--num-envs",
         type=int,
         default=DEFAULT_NUM_ENVS,
-        help=f"mazes played at once in lockstep, one batched low-level forward per step (default {DEFAULT_NUM_ENVS}; "
-        "1: one after another, as the committed results were made)",
+        help="mazes played at once in lockstep, one batched low-level forward per step "
+        "(1: one after another, as the committed results were made)",
     )
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
     parser.add_argument(
         "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
     )
-    parser.add_argument("--per-task", action="store_true", help="print one line per task")
+    parser.add_argument(
+        "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(handler=run_benchmark_command)
 
