@@ -1,7 +1,8 @@
 """antmaze_hirl: active hierarchical imitation and reinforcement learning on the MuJoCo Ant maze.
 
 Importing the package registers its Gymnasium ids (antmaze_hirl/AntReach-v0, antmaze_hirl/PointReach-v0,
-antmaze_hirl/AntMaze-v0, antmaze_hirl/PointMaze-v0) and nothing more: the exports below are imported on
+antmaze_hirl/AntMaze-v0, antmaze_hirl/PointMaze-v0, and the benchmark suites' ids of
+:mod:`antmaze_hirl.envs.suite_specs`) and nothing more: the exports below are imported on
 first use (PEP 562), so that registration, ``gym.make`` of a reach id and ``antmaze-hirl --help`` load
 neither torch nor Stable-Baselines3.
 """

@@ -23,7 +23,8 @@ ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
     **{reach_env_id(body): ("antmaze_hirl.envs.reach:ReachEnv", {"body": body}) for body in ("ant", "point")},
     **{maze_env_id(body): ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": body}) for body in ("ant", "point")},
 }
-"""Registered ids: entry point and default keyword arguments."""
+"""The four base ids (reach and maze, per body): entry point and default keyword arguments. The benchmark
+suites' ids (:data:`~antmaze_hirl.envs.suite_specs.SUITE_SPECS`) are registered too, by :func:`register_envs`."""
 
 
 def register_envs() -> None:

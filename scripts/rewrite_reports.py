@@ -45,23 +45,32 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
     """Copies ``folder``'s settings and trials into ``out`` and writes the reports there; returns the summary.
 
     Raises:
-        ValueError: One line naming the folder: no ``config.json``, no finished trial, or ``out`` not empty.
+        ValueError: One line naming the folder: no ``config.json`` or one that is not JSON, no finished trial, a
+            method in ``methods`` without finished trials, or ``out`` not empty.
     """
     if not (folder / "config.json").is_file():
         raise ValueError(f"no config.json in {folder}: not an experiment results folder")
+    try:
+        recorded = json.loads((folder / "config.json").read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{folder / 'config.json'} is not JSON: {error}") from None
     found = trials_on_disk(folder)
     if not found:
         raise ValueError(f"no finished trial in {folder / 'trials'}")
+    on_disk = list(dict.fromkeys(method for method, _ in found))
+    # A method without trials would only write empty reports for it: a misspelling, most likely.
+    missing = [method for method in methods or () if method not in on_disk]
+    if missing:
+        raise ValueError(f"no finished trial of {missing} in {folder / 'trials'}; on disk: {on_disk}")
     if out.exists() and any(out.iterdir()):
         raise ValueError(f"{out} is not empty: pass a new folder")
-    methods = methods or list(dict.fromkeys(method for method, _ in found))
+    methods = methods or on_disk
     seeds = seeds or 1 + max(seed for _, seed in found)
     out.mkdir(parents=True, exist_ok=True)
     for name in ("config.json", "provenance.json", "eval_layouts.csv"):
         if (folder / name).is_file():
             shutil.copy2(folder / name, out / name)
     shutil.copytree(folder / "trials", out / "trials")
-    recorded = json.loads((folder / "config.json").read_text())
     known = {field.name for field in fields(ExperimentConfig)}
     config = ExperimentConfig(**{key: value for key, value in recorded.items() if key in known})
     summary = write_reports(out, methods, seeds, config)

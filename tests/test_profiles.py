@@ -93,3 +93,10 @@ def test_profiles_imports_only_the_standard_library():
     imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     imported |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
     assert imported == {"__future__", "dataclasses", "typing"}
+
+
+def test_the_profiles_reach_has_the_one_name_of_the_oracles_reach():
+    # subgoal_reach_m everywhere in the API (PathOracle, the learner, --subgoal-reach-m); no fourth spelling.
+    ant, point = profiles.BODY_PROFILES["ant"], profiles.BODY_PROFILES["point"]
+    assert ant.subgoal_reach_m == 2.0 and point.subgoal_reach_m is None
+    assert not hasattr(ant, "oracle_reach_m")

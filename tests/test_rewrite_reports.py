@@ -55,3 +55,25 @@ def test_a_non_empty_output_folder_is_refused(finished_protocol2, tmp_path, caps
         rewrite_reports.main([str(finished_protocol2[0]), str(tmp_path / "out")])
     assert "is not empty: pass a new folder" in capsys.readouterr().err
     assert (tmp_path / "out" / "keep.txt").read_text() == "mine"
+
+
+def test_a_method_without_trials_is_one_line_naming_it_and_writes_nothing(finished_protocol2, tmp_path, capsys):
+    # A misspelt --methods once wrote a folder of empty reports ("seeds per method {'dager': 0}").
+    out = tmp_path / "out"
+    with pytest.raises(SystemExit):
+        rewrite_reports.main([str(finished_protocol2[0]), str(out), "--methods", "dagger,dager"])
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "no finished trial of ['dager']" in error and "on disk: ['dagger']" in error
+    assert not out.exists()
+
+
+def test_a_config_that_is_not_json_is_one_line_naming_the_file(tmp_path, capsys):
+    folder = tmp_path / "broken"
+    (folder / "trials").mkdir(parents=True)
+    (folder / "config.json").write_text("{")
+    (folder / "trials" / "dagger_seed0.json").write_text("{}")
+    with pytest.raises(SystemExit):
+        rewrite_reports.main([str(folder), str(tmp_path / "out")])
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert str(folder / "config.json") in error and "not JSON" in error
+    assert not (tmp_path / "out").exists()

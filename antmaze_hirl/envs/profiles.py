@@ -82,7 +82,7 @@ class BodyProfile:
         maze_size: Free cells per side of the experiment's random layouts.
         held_out_maze_size: Free cells per side under the held-out-layouts protocol (a family with many
             wall grids, so that whole layouts can be held out).
-        oracle_reach_m: The oracle's farthest subgoal, metres; ``None``: one cell.
+        subgoal_reach_m: The oracle's farthest subgoal, metres; ``None``: one cell.
         learner_head: The high-level learner's head by default.
         learner_plans: Whether the default learner adds value iteration (``rows + cols + 2`` rounds) that
             rules out moves the walls block.
@@ -92,7 +92,7 @@ class BodyProfile:
     spec: BodySpec
     maze_size: int
     held_out_maze_size: int
-    oracle_reach_m: float | None
+    subgoal_reach_m: float | None
     learner_head: str
     learner_plans: bool
 
@@ -115,7 +115,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
         BODY_SPECS["point"],
         maze_size=5,
         held_out_maze_size=5,
-        oracle_reach_m=None,
+        subgoal_reach_m=None,
         learner_head="next_cell",
         learner_plans=True,
     ),
@@ -129,7 +129,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
         BODY_SPECS["ant"],
         maze_size=3,
         held_out_maze_size=4,
-        oracle_reach_m=2.0,
+        subgoal_reach_m=2.0,
         learner_head="next_cell",
         learner_plans=False,
     ),

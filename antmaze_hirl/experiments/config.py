@@ -27,7 +27,7 @@ class BodyDefaults(TypedDict):
 
 
 BODY_DEFAULTS: dict[str, BodyDefaults] = {
-    body: {"maze_size": profile.maze_size, "expert_max_distance": profile.oracle_reach_m}
+    body: {"maze_size": profile.maze_size, "expert_max_distance": profile.subgoal_reach_m}
     for body, profile in BODY_PROFILES.items()
 }
 """Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's
