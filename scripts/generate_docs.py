@@ -80,16 +80,25 @@ def run_command(block: Block) -> str:
     """The standard output of ``block``'s command, stripped.
 
     Raises:
-        BlockError: If the command does not start with ``python``, or exits non-zero (with its last error line).
+        BlockError: If the command does not start with ``python``, exits non-zero (with its last error line), or runs
+            past :data:`COMMAND_TIMEOUT_S`.
     """
     argv = shlex.split(block.command)
     if not argv or argv[0] != "python":
         raise BlockError(
             f"{block.page}:{block.line}: a generated block's command must start with 'python', got {block.command!r}"
         )
-    result = subprocess.run(
-        [sys.executable, *argv[1:]], cwd=ROOT, capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S, check=False
-    )
+    try:
+        result = subprocess.run(
+            [sys.executable, *argv[1:]],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=COMMAND_TIMEOUT_S,
+            check=False,
+        )
+    except subprocess.TimeoutExpired:
+        raise BlockError(f"{block.page}:{block.line}: {block.command!r} ran past {COMMAND_TIMEOUT_S} s") from None
     if result.returncode != 0:
         last = (result.stderr.strip().splitlines() or ["(no error output)"])[-1]
         raise BlockError(f"{block.page}:{block.line}: {block.command!r} exited {result.returncode}: {last}")

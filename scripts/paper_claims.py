@@ -499,7 +499,7 @@ def labels_finding(body: Body, name: str, alpha: float) -> Finding:
         return Finding(UNDECIDED, 0, f"{body.name} `{name}`: no labels to match DAgger")
     effect = LABEL_EFFECT * dagger["total_labels"]["median"]
     comparison = compare(label_differences(body, name), -1, effect, alpha)
-    target = _pct(method["labels_to_match_dagger"]["target"])
+    target = "each seed's DAgger final" if PAIRED in method else _pct(method["labels_to_match_dagger"]["target"])
     text = (
         f"{body.name} `{name}`: labels to DAgger's {target} {_labels_to_match(method)} vs DAgger "
         f"{_labels_to_match(dagger)}; " + _test_text(comparison, _labels)

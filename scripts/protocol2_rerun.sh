@@ -49,6 +49,11 @@ case "${1:-}" in
     check_body "${2:-}"
     body=$2
     out="$(folder "$body")"
+    # One writer per folder: a second start (another session, say) would run the same trials beside it.
+    if [ -f "$WORK/$body.pid" ] && kill -0 "$(cat "$WORK/$body.pid")" 2>/dev/null; then
+      echo "the $body rerun is already running (pid $(cat "$WORK/$body.pid")): not starting another" >&2
+      exit 1
+    fi
     if [ ! -d "$CLONE/.git" ]; then
       git clone -q "$MAIN" "$CLONE"
     fi
@@ -57,7 +62,7 @@ case "${1:-}" in
     # PYTHONPATH first: the venv's editable install points at main, the trials must run the clone's code.
     (cd "$CLONE" && PYTHONPATH="$CLONE" nohup "$MAIN/.venv/bin/python" benchmarks/paper_experiment.py \
       --body "$body" --seeds "$SEEDS" --methods "$METHODS" --out "$out" --backend serial --cpus-per-trial 1 \
-      >> "$WORK/$body.log" 2>&1 &)
+      >> "$WORK/$body.log" 2>&1 & echo $! > "$WORK/$body.pid")
     echo "started $body: log $WORK/$body.log, folder $out"
     ;;
   checkpoint)

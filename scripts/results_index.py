@@ -40,11 +40,16 @@ def load_index(path: Path = INDEX) -> dict[str, Any]:
     """The index, checked for its format.
 
     Raises:
-        ValueError: If the file's ``format`` is not :data:`FORMAT`.
+        ValueError: If the file is not JSON, or its ``format`` is not :data:`FORMAT`.
     """
-    index = json.loads(path.read_text())
-    if index.get("format") != FORMAT:
-        raise ValueError(f"{path} has format {index.get('format')!r}, expected {FORMAT!r}")
+    try:
+        index = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path} is not JSON: {error}") from None
+    if not isinstance(index, dict) or index.get("format") != FORMAT:
+        raise ValueError(
+            f"{path} has format {index.get('format') if isinstance(index, dict) else index!r}, expected {FORMAT!r}"
+        )
     return index
 
 
@@ -182,7 +187,10 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument("--table", action="store_true", help="print the tables of docs/results/files.md")
     mode.add_argument("--removable", action="store_true", help="list superseded entries no page quotes")
     args = parser.parse_args(argv)
-    index = load_index()
+    try:
+        index = load_index()
+    except ValueError as error:
+        parser.error(str(error))
     if args.check:
         found = problems(RESULTS, index)
         print("\n".join(found) if found else f"{INDEX.relative_to(ROOT)}: matches results/")

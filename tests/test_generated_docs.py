@@ -1,14 +1,10 @@
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from script_helpers import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = importlib.util.spec_from_file_location("generate_docs", ROOT / "scripts" / "generate_docs.py")
-generate_docs = importlib.util.module_from_spec(SPEC)
-sys.modules[SPEC.name] = generate_docs  # dataclasses look their module up there
-SPEC.loader.exec_module(generate_docs)
+generate_docs = load_script("scripts/generate_docs.py")
 
 ECHO = "python -c \"print('| a |\\n|---|\\n| 1 |')\""
 

@@ -270,7 +270,8 @@ def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_ow
     # seeds 1 and 2, so the median-target figure's ratio is read on 2 of 3 seeds.
     dagger = [{0: 0, 2: 1, 4: 2}, {0: 0, 2: 3, 4: 3}, {0: 0, 2: 2, 4: 4}]
     # gated: half the labels per episode; reaches each seed's DAgger final by episode 2 on seeds 0 and 2 only.
-    gated = [{0: 0, 2: 2, 4: 2}, {0: 0, 2: 1, 4: 2}, {0: 0, 2: 4, 4: 4}]
+    # Its seed 3 has no DAgger trial to pair with: skipped, and named.
+    gated = [{0: 0, 2: 2, 4: 2}, {0: 0, 2: 1, 4: 2}, {0: 0, 2: 4, 4: 4}, {0: 0, 2: 4, 4: 4}]
     for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
         for seed, curve in enumerate(curves):
             trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode)
@@ -285,6 +286,7 @@ def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_ow
     assert [seed["labels"] for seed in paired["per_seed"]] == [10.0, None, 10.0]
     assert [seed["ratio"] for seed in paired["per_seed"]] == [0.25, None, 0.25]
     assert paired["median_ratio"] == 0.25 and paired["seeds_reached"] == 2 and paired["seeds"] == 3
+    assert paired["skipped_seeds"] == [3]
     assert "labels_to_match_dagger_per_seed" not in summary["dagger"]
     # Protocol 1 (no per-maze outcomes) has no such figure: its final point is read on another set.
     assert "labels_to_match_dagger_per_seed" not in summarise(rows, ["dagger", "gated"])["gated"]

@@ -60,3 +60,15 @@ def test_checkpoint_without_trials_fails_naming_the_folder(tmp_path):
     result = run(tmp_path, "checkpoint", "ant")
     assert result.returncode == 1
     assert "no trials in" in result.stderr and "ant_p2_36dafd8" in result.stderr
+
+
+def test_start_refuses_while_the_bodys_rerun_is_running(tmp_path):
+    (tmp_path / "work").mkdir()
+    alive = subprocess.Popen(["sleep", "30"])
+    try:
+        (tmp_path / "work" / "point.pid").write_text(str(alive.pid))
+        result = run(tmp_path, "start", "point")
+        assert result.returncode == 1
+        assert f"the point rerun is already running (pid {alive.pid})" in result.stderr
+    finally:
+        alive.kill()

@@ -1,18 +1,14 @@
 """scripts/rewrite_reports.py: a folder's reports rewritten from its trials by this code, the source untouched."""
 
 import gzip
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from script_helpers import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = importlib.util.spec_from_file_location("rewrite_reports", ROOT / "scripts" / "rewrite_reports.py")
-rewrite_reports = importlib.util.module_from_spec(SPEC)
-sys.modules[SPEC.name] = rewrite_reports
-SPEC.loader.exec_module(rewrite_reports)
+rewrite_reports = load_script("scripts/rewrite_reports.py")
 
 
 def test_rewritten_reports_equal_the_runs_own_and_record_this_code(finished_protocol2, tmp_path, capsys):

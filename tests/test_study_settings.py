@@ -41,11 +41,12 @@ def test_the_shared_fields_are_every_study_setting_but_the_page_one():
 
 
 @pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
-def test_a_shared_fields_default_and_type_are_the_experiments(name):
+def test_a_shared_fields_type_is_the_experiments(name):
+    # The default's value is ExperimentConfig's by construction (the source test below checks it is read from
+    # there); what can still drift apart is the declared type.
     study = next(field for field in fields(StudySettings) if field.name == name)
     experiment = experiment_field(name)
     assert experiment.default is not MISSING
-    assert study.default == experiment.default and type(study.default) is type(experiment.default)
     assert study.type == experiment.type
 
 

@@ -27,6 +27,7 @@ For each method, over its seeds (median, min and max):
   cost is the labels where its own curve first reaches it (always: at the latest its last point), and the
   method's the labels where its curve first reaches it; the per-seed ratio of the two, and its median over seeds
   (a seed whose method never reaches the target ranks above every ratio; ``None`` if that is the median);
+  ``skipped_seeds`` names the seeds left out: run by only one of the two, or with DAgger ending at 0%;
 * secondary: mean expert cost and attempts per episode, and labels to first reach 60% success
   (``cost_to_60_percent``; in protocol 2 the untrained evaluation counts, at 0 labels).
 
@@ -244,10 +245,11 @@ def _paired_labels_to_match(
     trials: dict[int, Trial], baseline: dict[int, Trial], starts: dict[int, float], baseline_starts: dict[int, float]
 ) -> dict[str, Any]:
     """Per seed: labels to the baseline's final success on that seed, the method's over the baseline's."""
-    per_seed = []
+    per_seed, skipped = [], sorted(set(trials) ^ set(baseline))  # a seed only one of the two ran
     for seed in sorted(set(trials) & set(baseline)):
         target = float(baseline[seed][-1]["eval_success"])
         if target <= 0:  # a baseline at 0% sets no success to match
+            skipped.append(seed)
             continue
         labels = labels_to_reach(trials[seed], target, starts[seed])
         baseline_labels = labels_to_reach(baseline[seed], target, baseline_starts[seed])
@@ -268,6 +270,7 @@ def _paired_labels_to_match(
         "seeds": len(per_seed),
         "seeds_reached": sum(seed["labels"] is not None for seed in per_seed),
         "per_seed": per_seed,
+        "skipped_seeds": sorted(skipped),
     }
 
 
