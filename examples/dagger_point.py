@@ -31,8 +31,9 @@ torch.set_num_threads(1)
 env = gym.make("antmaze_hirl/PointMaze-v0")
 rng = np.random.default_rng(args.seed)
 
-# 2. Learner, expert, and the trainer with an active-learning strategy.
-policy = HighLevelPolicy.for_env(env, rng=rng)
+# 2. Learner, expert, and the trainer with an active-learning strategy. The learner is protocol 2's CNN
+#    next-cell head: the point's default reads its head out of value iteration, which solves most mazes untrained.
+policy = HighLevelPolicy.for_env(env, rng=rng, planning_iterations=0, block_walls=False)
 trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=policy, rng=rng, strategy=NoiseQuery())
 records = trainer.train(args.episodes, progress_bar=True)
 print(f"expert labels: {trainer.total_expert_cost} over {len(records)} episodes")

@@ -145,14 +145,11 @@ class LearnerSettings:
 
         Read from the body's profile (``learner_head``, ``learner_plans`` in
         :data:`~antmaze_hirl.envs.profiles.BODY_PROFILES`); ``None`` (an env that names no body): the defaults.
-        Both bodies get the next-cell head, each the winner of ``scripts/learner_ablation.py`` on its
-        held-out mazes' selection part. The point's reads it out of value iteration that rules out moves the
-        walls block, with ``rows + cols + 2`` rounds (16 on the 7x7 map of its 5x5 mazes, whose longest
-        shortest path is 15 moves; ``results/learner_ablation/learner_ablation.json``). The ant's is the CNN's: on
-        its 4x4 mazes it tied value iteration on the selection mazes' median and costs 28% less time, and
-        ruling out wall moves lost there, since its 2 m labels cut corners the cell grid calls walls
-        (``results/learner_ablation/learner_ablation_ant.json``). The ant's heading head, its default before,
-        scored 52% against 77%.
+        Both bodies get the next-cell head. The point's reads it out of value iteration that rules out moves
+        the walls block, with ``rows + cols + 2`` rounds: a strong prior, which solves most mazes before any
+        label (protocol 2 trains ``experiments.config.PROTOCOL_LEARNER``, the CNN head, instead; pass
+        ``planning_iterations=0, block_walls=False`` for it). The ant's is the CNN's. How each was chosen, with
+        its figures: ``docs/results/learner-ablation.md``.
 
         Raises:
             ValueError: For a body without a profile (names it and the known ones).
