@@ -41,6 +41,11 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
+        "DAgger (plain), protocol learner, seeds 1 and up",
+        "`python scripts/benchmark_dagger.py --learner protocol --seed 1`: only seed 0 ran (issue 35's session)",
+    ),
+    (
+        "point5",
         "best active method (issue 32's protocol), 100 / 300 / 1,000 labels",
         "as DAgger, with the method's strategy; then `antmaze-hirl benchmark point5 --policy learner.zip`",
     ),
@@ -51,9 +56,15 @@ NOT_RUN: list[tuple[str, str, str]] = [
         "above reached far fewer steps on the shared machine",
     ),
     (
+        "ant4",
+        "DAgger (plain), protocol learner, seeds 2 and up; the generic (heading) learner on the ant",
+        "`python scripts/benchmark_dagger.py --body ant --learner protocol --seed 2` (or `--learner generic`)",
+    ),
+    (
         "ant suites",
-        "DAgger, active methods, PPO/SAC on the ant",
-        "as the point rows, with the ant's training env; not run: the ant's background budget went to the oracle rows",
+        "active methods, PPO/SAC on the ant; any learner on `u`, `medium`, `large`, `giant`",
+        "not run: `benchmark_dagger.py` trains only on a random family's `train` part (`ant4`'s); the fixed "
+        "maps need their own training protocol",
     ),
     (
         "point5",
@@ -111,6 +122,7 @@ def results_table() -> str:
             order.index(item[1]["suite"]),
             item[1]["policy"] not in named,
             item[1]["policy"].split(",")[0],
+            item[1].get("training", {}).get("learner", ""),  # one learner's rows together, then the next's
             training_budget(item[1]),
             -item[1]["episodes"],
         )

@@ -63,7 +63,9 @@ def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
         training = report.get("training", {})
         if "labels" in training:
             seed = report["policy"].split("seed ")[1].split(",")[0]
-            series, x, kind = f"DAgger (plain), seed {seed}", training["labels"], "labels"
+            # One series per learner and seed: the learners differ in prior (issue 35's protocol rows).
+            learner = training.get("learner", "generic")
+            series, x, kind = f"DAgger (plain), {learner} learner, seed {seed}", training["labels"], "labels"
         elif "algorithm" in training:
             x = training.get("steps_reached", training.get("high_level_steps"))
             if training["algorithm"] == "flat-sac-her":
