@@ -7,6 +7,11 @@ from typing import Any
 
 import numpy as np
 
+OUTCOMES: tuple[str, ...] = ("success", "flip", "frozen", "timeout", "ended")
+"""Every way a high-level episode can end, one spelling each: the goal reached, the ant on its back, the body
+stuck in place until the step limit (``frozen``, which only the in-maze protocol tells apart from a
+``timeout``, :func:`antmaze_hirl.experiments.in_maze.outcome`), the step limit, or any other end."""
+
 
 @dataclass(frozen=True)
 class HighLevelEpisode:
@@ -33,8 +38,7 @@ class HighLevelEpisode:
     def outcome(self) -> str:
         """Why the episode ended: ``"success"``, ``"flip"`` (the ant on its back), ``"timeout"`` or ``"ended"``.
 
-        The spellings of ``scripts/in_maze.py``, which splits a ``"frozen"`` timeout off the rest; ``"ended"``
-        is any other end (a step limit of a wrapper, say).
+        Spelt as in :data:`OUTCOMES`; ``"ended"`` is any other end (a step limit of a wrapper, say).
         """
         return episode_outcome(self.info, truncated=self.truncated)
 

@@ -9,6 +9,7 @@ import pytest
 from conftest import StillController
 from script_helpers import load_script
 
+from antmaze_hirl import rollout
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experiments import in_maze
 from antmaze_hirl.experts import PathOracle
@@ -36,6 +37,9 @@ def test_outcomes_are_exclusive_success_first_then_flip():
     assert in_maze.outcome({"is_success": False, "flipped": True}, still) == "flip"
     assert in_maze.outcome({"is_success": False, "flipped": False}, still) == "frozen"
     assert in_maze.outcome({"is_success": False, "flipped": False}, moving) == "timeout"
+    # One vocabulary: the in-maze outcomes are the episode outcomes (rollout.OUTCOMES) but "ended".
+    assert in_maze.OUTCOMES == ("success", "flip", "frozen", "timeout")
+    assert set(in_maze.OUTCOMES) == set(rollout.OUTCOMES) - {"ended"}
 
 
 def test_a_still_ant_on_the_u_map_runs_out_of_its_scaled_budget_frozen():

@@ -43,7 +43,8 @@ from antmaze_hirl.experiments.config import BODY_DEFAULTS, ExperimentConfig, bod
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import wilson_interval
 from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.rollout import play_episode
+from antmaze_hirl.rollout import OUTCOMES as EPISODE_OUTCOMES
+from antmaze_hirl.rollout import episode_outcome, play_episode
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 FAMILIES = tuple(name for name, family in profiles.MAZE_FAMILIES.items() if family.split != "selection")
@@ -60,7 +61,9 @@ MIN_STEPS = profiles.MIN_STEPS
 FROZEN_SUBGOALS = 5
 FROZEN_RADIUS = 1.0
 """Metres: a walking ant covers this in ~1 s (20 steps); 5 subgoals give it up to 500 steps."""
-OUTCOMES = ("success", "flip", "frozen", "timeout")
+OUTCOMES = tuple(name for name in EPISODE_OUTCOMES if name != "ended")
+"""The in-maze outcomes counted per row (the keys of its results files' ``counts``): the episode outcomes but
+``"ended"``, which an in-maze episode never has."""
 TURN_BINS_DEG = (0, 45, 90, 135, 180)
 """Bins of the turn a subgoal asks for (direction of travel to subgoal direction), for :func:`flip_diagnostics`."""
 TRAVEL_STEPS = 10
@@ -181,12 +184,14 @@ def is_frozen(paths: list[np.ndarray], subgoals: int = FROZEN_SUBGOALS, radius: 
 
 
 def outcome(info: dict[str, Any], paths: list[np.ndarray]) -> str:
-    """The episode's outcome from its last ``info`` and subgoal paths: one of :data:`OUTCOMES`."""
-    if info["is_success"]:
-        return "success"
-    if info["flipped"]:
-        return "flip"
-    return "frozen" if is_frozen(paths) else "timeout"
+    """The episode's outcome from its last ``info`` and subgoal paths: one of :data:`OUTCOMES`.
+
+    :func:`~antmaze_hirl.rollout.episode_outcome`'s, with a timeout whose body stood still split off as
+    ``"frozen"``.
+    """
+    # An in-maze episode ends by success, a flip or its step limit: never "ended".
+    base = episode_outcome(info, truncated=True)
+    return "frozen" if base == "timeout" and is_frozen(paths) else base
 
 
 def episode_figures(info: dict[str, Any], recorder: MazeEpisodeRecorder) -> dict[str, Any]:
