@@ -259,19 +259,27 @@ def _paired_labels_to_match(
                 "target": target,
                 "labels": labels,
                 "baseline_labels": baseline_labels,
-                "ratio": None if labels is None else _ratio(labels, baseline_labels),
+                "ratio": _ratio(labels, baseline_labels),
             }
         )
-    # A seed that never reaches its target, or has no finite ratio, ranks above every ratio.
-    ranked = np.array([math.inf if seed["ratio"] is None else seed["ratio"] for seed in per_seed])
-    median = float(np.median(ranked)) if len(ranked) else math.inf
     return {
-        "median_ratio": median if math.isfinite(median) else None,
+        # A seed that never reaches its target, or has no finite ratio, ranks above every ratio.
+        "median_ratio": _median_never_last([seed["ratio"] for seed in per_seed]),
         "seeds": len(per_seed),
         "seeds_reached": sum(seed["labels"] is not None for seed in per_seed),
         "per_seed": per_seed,
         "skipped_seeds": sorted(skipped),
     }
+
+
+def _median_never_last(values: Sequence[float | None]) -> float | None:
+    """The median of ``values``, each ``None`` (never reached) ranked above every number.
+
+    ``None`` if that is the median, or there are no values.
+    """
+    ranked = np.array([math.inf if value is None else value for value in values])
+    median = float(np.median(ranked)) if len(ranked) else math.inf
+    return median if math.isfinite(median) else None
 
 
 def _ratio(labels: float | None, baseline: float | None) -> float | None:
@@ -295,12 +303,10 @@ def _untrained(evaluations: Sequence[dict[str, Any]], seed: int) -> float:
 
 def _labels_to_match(trials: dict[int, Trial], target: float, starts: dict[int, float]) -> dict[str, Any]:
     per_seed = [labels_to_reach(trial, target, starts[seed]) for seed, trial in trials.items()]
-    # A seed that never reaches the target has spent more labels than any that did: it sorts last.
-    ranked = np.array([math.inf if labels is None else labels for labels in per_seed])
-    median = float(np.median(ranked))
     return {
         "target": target,
-        "median": median if math.isfinite(median) else None,
+        # A seed that never reaches the target has spent more labels than any that did: it sorts last.
+        "median": _median_never_last(per_seed),
         "per_seed": per_seed,
         "seeds_reached": sum(labels is not None for labels in per_seed),
     }
