@@ -28,7 +28,8 @@ from antmaze_hirl.experiments import ExperimentConfig
 from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.results_folder import write_reports
 
-REPORTS = ("episodes.csv", "evaluations.csv", "summary.json", "panels.png")
+COPIED = ("config.json", "provenance.json", "eval_layouts.csv")
+"""The settings files copied from the source folder as they are (the trials are copied too)."""
 
 
 def trials_on_disk(folder: Path) -> list[tuple[str, int]]:
@@ -67,7 +68,7 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
     methods = methods or on_disk
     seeds = seeds or 1 + max(seed for _, seed in found)
     out.mkdir(parents=True, exist_ok=True)
-    for name in ("config.json", "provenance.json", "eval_layouts.csv"):
+    for name in COPIED:
         if (folder / name).is_file():
             shutil.copy2(folder / name, out / name)
     shutil.copytree(folder / "trials", out / "trials")
@@ -103,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
         atomic_write_bytes(evaluations.with_suffix(".csv.gz"), gzip.compress(evaluations.read_bytes(), mtime=0))
         evaluations.unlink()
     done = {method: figures.get("seeds", 0) for method, figures in summary["methods"].items()}
-    print(f"rewrote {', '.join(name for name in REPORTS)} in {args.out}: seeds per method {done}")
+    written = sorted(path.name for path in args.out.iterdir() if path.is_file() and path.name not in COPIED)
+    print(f"rewrote {', '.join(written)} in {args.out}: seeds per method {done}")
     return 0
 
 
