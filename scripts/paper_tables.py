@@ -24,7 +24,7 @@ from typing import Any
 
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
-from antmaze_hirl.experiments.summary import median_range
+from antmaze_hirl.experiments.summary import SMOOTHED_TARGET_EVALUATIONS, median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
 TABLES = ("cost", "per-label", "effort", "beside")
@@ -119,10 +119,14 @@ def per_label_table(summary: dict[str, Any]) -> str:
     auc = "normalised AUC" if horizon is None else f"normalised AUC over 0-{horizon:.0f} labels"
     # Protocol 2 summaries also pair the question by seed (summary.py); older ones print as they did.
     paired = any("labels_to_match_dagger_per_seed" in m for m in run)
+    smoothed = any("labels_to_match_dagger_per_seed_smoothed" in m for m in run)
     lines = [
         f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |"
-        + (" ratio to DAgger paired by seed, median (seeds reaching) |" if paired else ""),
-        "|---|" + "---|" * (len(LABEL_BUDGETS) + 3 + paired),
+        + (" ratio to DAgger paired by seed, median (seeds reaching) |" if paired else "")
+        + (
+            f" paired, target the mean of DAgger's last {SMOOTHED_TARGET_EVALUATIONS} evaluations |" if smoothed else ""
+        ),
+        "|---|" + "---|" * (len(LABEL_BUDGETS) + 3 + paired + smoothed),
     ]
     for name, method in _methods_run(summary):
         cells = [
@@ -137,6 +141,8 @@ def per_label_table(summary: dict[str, Any]) -> str:
         row = f"| {name} | {' | '.join(cells)} | {auc} | {labels}{reached} | {ratio} |"
         if paired:
             row += f" {_paired_ratio(method.get('labels_to_match_dagger_per_seed'))} |"
+        if smoothed:
+            row += f" {_paired_ratio(method.get('labels_to_match_dagger_per_seed_smoothed'))} |"
         lines.append(row)
     # Summaries from before same_set was recorded print no note.
     same = {m["labels_to_match_dagger"].get("same_set") for m in run if "labels_to_match_dagger" in m} - {None}

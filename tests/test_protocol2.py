@@ -290,3 +290,28 @@ def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_ow
     assert "labels_to_match_dagger_per_seed" not in summary["dagger"]
     # Protocol 1 (no per-maze outcomes) has no such figure: its final point is read on another set.
     assert "labels_to_match_dagger_per_seed" not in summarise(rows, ["dagger", "gated"])["gated"]
+
+
+def test_smoothed_paired_target_is_the_mean_of_daggers_last_evaluations():
+    rows, evaluations = [], []
+    # DAgger's last evaluation on seed 0 is a lucky 4/4 after 2/4 and 2/4: the plain paired target is 1.0, which
+    # gated never reaches; the smoothed target, the mean of the last 3 evaluations (2/3), gated reaches.
+    dagger = [{0: 0, 2: 1, 4: 2, 6: 2, 8: 4}]
+    gated = [{0: 0, 2: 1, 4: 3, 6: 3, 8: 3}]
+    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode)
+            rows += trial_rows
+            evaluations += outcomes
+    summary = summarise(rows, ["dagger", "gated"], evaluations=evaluations)["gated"]
+    plain, smoothed = summary["labels_to_match_dagger_per_seed"], summary["labels_to_match_dagger_per_seed_smoothed"]
+    assert plain["target_evaluations"] == 1 and smoothed["target_evaluations"] == 3
+    assert plain["per_seed"][0]["target"] == 1.0 and plain["per_seed"][0]["labels"] is None
+    assert plain["median_ratio"] is None
+    target = smoothed["per_seed"][0]["target"]
+    assert math.isclose(target, 2 / 3)
+    # gated: 1/4 at 10 labels, 3/4 at 20: 2/3 is reached at 10 + (2/3 - 1/4) / (1/2) * 10 labels.
+    assert math.isclose(smoothed["per_seed"][0]["labels"], 10 + (target - 0.25) / 0.5 * 10)
+    # DAgger: 2/4 up to 60 labels, 4/4 at 80: 2/3 at 60 + (2/3 - 1/2) / (1/2) * 20 labels.
+    assert math.isclose(smoothed["per_seed"][0]["baseline_labels"], 60 + (target - 0.5) / 0.5 * 20)
+    assert smoothed["median_ratio"] is not None and smoothed["median_ratio"] < 1
