@@ -109,7 +109,7 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
     try:
         state = client.participant("P01", "start", {})
         finished = 0
-        while finished < 1 or state["query"]["step"] < 2:  # one whole episode, then two clicks into the next
+        while finished < 1 or state["query"]["label_index"] < 2:  # one whole episode, then two clicks into the next
             click = oracle_click(state)
             result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
             state = result["state"]
