@@ -43,8 +43,8 @@ STUDY_EXTRA_HINT = (
 """How to add the study extra: the project is installed from its checkout, so the path form comes first."""
 _BODIES = sorted(BODY_SPECS)
 EVAL_LOW_ENVS = {"ant": 25, "point": 1}
-"""eval-low's default ``--num-envs``: a point reach env takes 0.2 s to build (MuJoCo compiles its XML), more
-than batching its small policy saves over 200 subgoals; the ant's policy forward dominates its run."""
+"""eval-low's default ``--num-envs``: building a point reach env (MuJoCo compiles its XML) costs more than
+batching its small policy saves over 200 subgoals; the ant's policy forward dominates its run."""
 
 
 class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescriptionHelpFormatter):

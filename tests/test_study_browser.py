@@ -43,7 +43,7 @@ def click_until(page, phases, save_screenshot=False):
         if state["phase"] in phases:
             return state
         assert state["phase"] == "label", state
-        if save_screenshot and not shot and state["query"]["step"] == 2:
+        if save_screenshot and not shot and state["query"]["label_index"] == 2:
             SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
             page.screenshot(path=str(SCREENSHOT))
             shot = True
@@ -219,7 +219,7 @@ def test_the_page_refuses_bad_clicks_shows_busy_and_summary_and_fits_the_window(
                 assert words in page.locator("#status").inner_text()
                 assert len(labels) == sent  # refused on the page: nothing was sent
                 walls_refused += words == "wall"
-            if state["query"]["step"] == 1 and not (images / f"study_page_{width}x{height}.png").exists():
+            if state["query"]["label_index"] == 1 and not (images / f"study_page_{width}x{height}.png").exists():
                 page.screenshot(path=str(images / f"study_page_{width}x{height}.png"))
             state = click_until_next_query(page, state)
             if state["phase"] == "intro":

@@ -8,11 +8,13 @@ import threading
 import time
 
 import httpx
+import numpy as np
+import pandas as pd
 import pytest
 from study_helpers import click_once, make_tiny_study, open_session
 
-from antmaze_hirl.study.data import EPISODE_COLUMNS, load_episodes
-from antmaze_hirl.study.logs import DamagedLog, append_csv_row, read_csv_rows, read_json_records
+from antmaze_hirl.study.data import CLICK_COLUMNS, EPISODE_COLUMNS, load_clicks, load_episodes
+from antmaze_hirl.study.logs import DamagedLog, append_csv_row, append_json_record, read_csv_rows, read_json_records
 from antmaze_hirl.study.plan import load_plan
 from antmaze_hirl.study.server import StudyServer
 from antmaze_hirl.study.session import DamagedRecords
@@ -114,8 +116,6 @@ def test_old_format_logs_without_checksums_still_load_and_keep_their_format(tmp_
     assert "crc32" not in legacy.read_text()
     answers = tmp_path / "events.jsonl"
     answers.write_text(json.dumps({"event": "trial_start"}) + "\n")  # a legacy line, then a checksummed one
-    from antmaze_hirl.study.logs import append_json_record
-
     append_json_record(answers, {"event": "pause"})
     assert [record["event"] for _, record in read_json_records(answers)] == ["trial_start", "pause"]
     answers.write_text(answers.read_text() + json.dumps({"event": "resume"}) + "\n")  # unsealed after sealed
@@ -205,3 +205,86 @@ def test_restoring_a_session_runs_off_the_event_loop(tmp_path, monkeypatch):
         waited = time.monotonic() - started
         worker.join()
     assert waited < 2.5  # served while P01's restore slept its 3 s
+
+
+def _rewrite_clicks(path, rename):
+    """Rewrites ``clicks.jsonl`` with each record passed through ``rename`` (sealed again, as if written so)."""
+    records = [rename(record) for _, record in read_json_records(path)]
+    path.unlink()
+    for record in records:
+        append_json_record(path, record)
+
+
+def _as_before_the_rename(record):
+    return {("step" if key == "label_index" else key): value for key, value in record.items()}
+
+
+def test_new_logs_write_label_index_and_high_level_step_and_never_step(one_episode_in):
+    folder, participant = one_episode_in
+    records = [record for _, record in read_json_records(participant / "clicks.jsonl")]
+    assert records and all(tuple(record) == CLICK_COLUMNS for record in records)
+    assert [record["label_index"] for record in records] == list(range(len(records)))  # one episode
+    with np.load(participant / "trial1" / "demonstrations.npz") as log:
+        assert "high_level_step" in log.files and "step" not in log.files
+        np.testing.assert_array_equal(log["high_level_step"], np.arange(len(log["episode"])))
+    clicks = load_clicks(folder, load_plan(folder))
+    assert list(clicks.columns) == list(CLICK_COLUMNS) and list(clicks["label_index"]) == list(range(len(records)))
+
+
+def test_an_old_clicks_log_with_step_loads_as_the_new_one(one_episode_in):
+    folder, participant = one_episode_in
+    plan = load_plan(folder)
+    new = load_clicks(folder, plan)
+    _rewrite_clicks(participant / "clicks.jsonl", _as_before_the_rename)
+    assert '"step": ' in (participant / "clicks.jsonl").read_text()
+    pd.testing.assert_frame_equal(load_clicks(folder, plan), new)
+    _rewrite_clicks(participant / "clicks.jsonl", lambda record: {**record, "label_index": record["step"]})
+    pd.testing.assert_frame_equal(load_clicks(folder, plan), new)  # both names, one value: read
+
+
+@pytest.mark.parametrize(
+    ("rename", "error"),
+    [
+        (lambda record: {**record, "step": record["label_index"] + 1}, "'label_index' and its old name 'step' hold"),
+        (
+            lambda record: {k: v for k, v in record.items() if k != "label_index"},
+            "no 'label_index' \\(nor its old name",
+        ),
+    ],
+    ids=["both-differing", "neither"],
+)
+def test_a_click_with_neither_name_or_both_differing_is_refused_naming_file_and_key(one_episode_in, rename, error):
+    folder, participant = one_episode_in
+    _rewrite_clicks(participant / "clicks.jsonl", rename)
+    with pytest.raises(ValueError, match=rf"clicks\.jsonl:1: {error}"):
+        load_clicks(folder, load_plan(folder))
+
+
+def _rewrite_checkpoint(checkpoint, change):
+    """Re-pickles the checkpoint's trial state after ``change(demonstrations.__dict__)``, as a bare pickle."""
+    data = checkpoint.read_bytes().split(b"\n", 2)[2]  # the pickle after the magic and hash lines
+    state = pickle.loads(data)
+    change(state.demonstrations.__dict__)
+    checkpoint.write_bytes(pickle.dumps(state))  # bare pickles still load (see above)
+
+
+def test_a_checkpoint_pickled_with_step_resumes_and_saves_high_level_step(one_episode_in):
+    folder, participant = one_episode_in
+    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    _rewrite_checkpoint(checkpoint, lambda log: log.update(step=log.pop("high_level_step")))
+    session = open_session(folder)
+    play_one_episode(session)
+    session.close()
+    with np.load(participant / "trial1" / "demonstrations.npz") as log:
+        assert "step" not in log.files
+        for episode in (0, 1):
+            steps = log["high_level_step"][log["episode"] == episode]
+            np.testing.assert_array_equal(steps, np.arange(len(steps)))
+
+
+def test_a_checkpoint_with_both_step_names_differing_stops_the_participant_naming_file_and_key(one_episode_in):
+    folder, participant = one_episode_in
+    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    _rewrite_checkpoint(checkpoint, lambda log: log.update(step=[s + 1 for s in log["high_level_step"]]))
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl .*'high_level_step' and its old name 'step'"):
+        open_session(folder)

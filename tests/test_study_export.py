@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from antmaze_hirl.study.data import participant_dir
-from antmaze_hirl.study.export import MinariMissingError, check_dataset_id, export_minari
+from antmaze_hirl.study.export import MinariMissingError, check_dataset_id, export_minari, load_demonstrations
 from antmaze_hirl.study.plan import make_plan, save_plan
 
 minari = pytest.importorskip("minari")
@@ -17,7 +17,7 @@ pytestmark = pytest.mark.filterwarnings("ignore:.*(is set to None|env_spec is No
 def _demonstrations(rng, episode_lengths, successes, image=(3, 32, 32), state=5):
     n = sum(episode_lengths)
     episode = np.repeat(np.arange(len(episode_lengths)), episode_lengths)
-    step = np.concatenate([np.arange(k) for k in episode_lengths])
+    high_level_step = np.concatenate([np.arange(k) for k in episode_lengths])
     labelled = rng.random(n) < 0.5
     labels = rng.normal(size=(n, 2)).astype(np.float32)
     labels[~labelled] = np.nan
@@ -32,7 +32,7 @@ def _demonstrations(rng, episode_lengths, successes, image=(3, 32, 32), state=5)
         "labels": labels,
         "labelled": labelled,
         "episode": episode,
-        "step": step,
+        "high_level_step": high_level_step,
         "terminal_success": terminal,
     }
     arrays = {k: v[order] for k, v in arrays.items()}
@@ -59,7 +59,7 @@ def study(tmp_path, monkeypatch):
 
 def _sorted_steps(arrays, episode):
     rows = np.flatnonzero(arrays["episode"] == episode)
-    return rows[np.argsort(arrays["step"][rows])]
+    return rows[np.argsort(arrays["high_level_step"][rows])]
 
 
 def test_export_round_trips_through_minari(study, tmp_path):
@@ -153,6 +153,44 @@ def test_bad_demonstrations_are_named(study):
     del arrays["labels"]
     np.savez(path, **arrays)
     with pytest.raises(ValueError, match=r"lacks the arrays \['labels'\]"):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
+
+
+def _episodes(dataset_id):
+    return [
+        (e.actions, e.observations["state"], e.infos["label"], e.rewards, e.terminations)
+        for e in minari.load_dataset(dataset_id).iterate_episodes()
+    ]
+
+
+def test_an_old_file_with_step_loads_and_exports_as_before(study):
+    study_dir, saved = study
+    export_minari(study_dir, "antmaze-hirl/new-v0")
+    for trial, arrays in saved.items():  # rewrite every trial as 0.2.0 did: the high-level step under "step"
+        old = {("step" if name == "high_level_step" else name): value for name, value in arrays.items()}
+        path = participant_dir(study_dir, "P01") / f"trial{trial}" / "demonstrations.npz"
+        np.savez(path, **old)
+        loaded = load_demonstrations(path)
+        assert "step" not in loaded and sorted(loaded) == sorted(arrays)
+        np.testing.assert_array_equal(loaded["high_level_step"], arrays["high_level_step"])
+    export_minari(study_dir, "antmaze-hirl/old-v0")
+    for new, old in zip(_episodes("antmaze-hirl/new-v0"), _episodes("antmaze-hirl/old-v0"), strict=True):
+        for new_array, old_array in zip(new, old, strict=True):
+            np.testing.assert_array_equal(new_array, old_array)
+
+
+def test_a_file_with_both_step_names_loads_if_they_agree_and_is_refused_naming_it_if_not(study):
+    study_dir, saved = study
+    path = participant_dir(study_dir, "P01") / "trial1" / "demonstrations.npz"
+    np.savez(path, **saved[1], step=saved[1]["high_level_step"])
+    assert "step" not in load_demonstrations(path)
+    np.savez(path, **saved[1], step=saved[1]["high_level_step"] + 1)
+    with pytest.raises(
+        ValueError, match=r"trial1/demonstrations\.npz: 'high_level_step' and its old name 'step' hold different"
+    ):
+        export_minari(study_dir, "antmaze-hirl/study-v0")
+    np.savez(path, **{name: value for name, value in saved[1].items() if name != "high_level_step"})
+    with pytest.raises(ValueError, match=r"trial1/demonstrations\.npz: no 'high_level_step' \(nor its old name"):
         export_minari(study_dir, "antmaze-hirl/study-v0")
 
 

@@ -109,7 +109,7 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
     try:
         state = client.participant("P01", "start", {})
         finished = 0
-        while finished < 1 or state["query"]["step"] < 2:  # one whole episode, then two clicks into the next
+        while finished < 1 or state["query"]["label_index"] < 2:  # one whole episode, then two clicks into the next
             click = oracle_click(state)
             result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
             state = result["state"]
@@ -126,7 +126,9 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
     server = _serve(folder, port, token)
     try:
         resumed = client.participant("P01", "state")
-        assert resumed["phase"] == "label" and resumed["episode"]["number"] == 2 and resumed["query"]["step"] == 0
+        assert (
+            resumed["phase"] == "label" and resumed["episode"]["number"] == 2 and resumed["query"]["label_index"] == 0
+        )
         assert resumed["labels"] == int(read_csv(participant / "episodes.csv")[0]["expert_cost"])
         for name, content in saved.items():
             assert (participant / name).read_bytes().startswith(content), name  # earlier data intact

@@ -77,8 +77,8 @@ class LearnerSettings:
         n_directions: Heading bins of the ``"heading"`` network (a positive multiple of 4, so the square's
             symmetries map bins to bins).
         planning_iterations: Value-iteration rounds (0, the default: CNN only). With the heading head,
-            value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN within
-            30 episodes: 70% vs 70% learner-only success on 20 mazes); with the next-cell head, the planner
+            value-iteration features beside the CNN's (on 5x5 point mazes they did not beat the CNN:
+            docs/lab-notes.md, "The high-level policy's value-iteration module"); with the next-cell head, the planner
             whose Q gives the logits, which needs at least the longest path's moves (:func:`planning_rounds`).
         channels: Convolution channels.
         hidden: Width of the fully connected layers.
@@ -348,8 +348,8 @@ class HighLevelPolicy:
         Where the reach (``subgoal_reach_m``) is shorter than a cell, a subgoal at the reach (at least
         :data:`AT_REACH` of it) points on along the path: it is carried one cell side from the agent
         before its cell is read. Without that, the ant's 2 m subgoals (half a 4 m cell) from an agent
-        near its cell's centre end in its own cell, and 58% of the oracle's labels on 4x4 ant mazes
-        would teach "stay" (``scripts/next_cell_labels.py``).
+        near its cell's centre end in its own cell, and most of the oracle's labels on ant mazes
+        would teach "stay" (docs/results/learner-ablation.md, ``scripts/next_cell_labels.py``).
         """
         agent_xy, subgoals = np.asarray(agent_xy, dtype=np.float64), np.asarray(subgoals, dtype=np.float64)
         if self.subgoal_reach_m < self.geometry.scale:

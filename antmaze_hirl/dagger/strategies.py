@@ -227,23 +227,23 @@ class NoiseQuery(QueryStrategy):
     With ``shared_noise`` (the default, as the paper has it) one buffer of ``n_noises`` perturbations
     is drawn per start and applied to every candidate, so candidates differ only in where they are,
     not in the luck of their noise. ``shared_noise=False`` draws fresh noise for each candidate: the
-    behaviour before issue 12, with which the committed ``noise`` results up to then were made (the
-    new default changes the method's numbers).
+    first behaviour, with which the oldest committed ``noise`` results were made (the default changes
+    the method's numbers).
 
     The output whose spread is measured is ``signal`` (:data:`SIGNALS`): by default the learner's softmax
     distribution over its classes, which varies continuously with the body observation; the subgoal
     offsets (``"offsets"``, protocol 1) of a next-cell head do not vary at all. Ties (a flat score, e.g.
     before the learner depends on the body) are broken at random (:func:`argmax_ties_random`).
 
-    With ``symmetries`` (the default since issue 32) each noisy state is also seen in the 8 symmetries of
+    With ``symmetries`` (the default) each noisy state is also seen in the 8 symmetries of
     the square, the learner's own augmentation group, and each view's output is read back in the state's
     frame (:mod:`~antmaze_hirl.dagger.symmetric_views`): the spread is over all ``8 * n_noises`` views.
     The learner has learnt to answer a trained state's images alike, not an unseen state's, so this
-    spread ranks unseen states above trained ones; body noise alone does not (AUC near 0.5,
+    spread ranks unseen states above trained ones; body noise alone does not (docs/guides/protocol.md,
     ``scripts/alg2_signal.py``). The spread is ``measure`` (:data:`MEASURES`): by default the
     Jensen-Shannon divergence of the views' class distributions (:func:`information_radius`), which
     ranked better than their variance. Protocol 1's score is ``signal="offsets", symmetries=False``;
-    protocol 2's before issue 32, ``symmetries=False, measure="variance"``.
+    protocol 2's first runs, before the symmetric views, ``symmetries=False, measure="variance"``.
 
     Args:
         n_noises: Perturbations per candidate.
@@ -342,7 +342,7 @@ class BaggedEnsemble:
         member_steps: Gradient steps per member per update. Default: the trainer's N divided by
             ``n_policies`` (rounded up), so the whole ensemble costs about as much as the learner;
             disagreement only has to rank states, and full-length member training made a trial
-            ~5x slower for no measured gain.
+            several times slower for no measured gain.
 
     Raises:
         ValueError: If ``n_policies`` is below 2 or ``member_steps`` below 1.

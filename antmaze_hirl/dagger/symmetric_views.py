@@ -3,8 +3,8 @@
 The learner trains on the 8 symmetries of the square (:func:`~antmaze_hirl.dagger.features.augment`), so
 on the states it was trained on its outputs for a state's 8 images agree once each is mapped back into
 the state's own frame; on states it has not seen they need not. :class:`~antmaze_hirl.dagger.strategies.NoiseQuery`
-measures that disagreement (issue 32: the only perturbation measured to separate unseen from trained
-states, ``scripts/alg2_signal.py``).
+measures that disagreement: of the perturbations tried, the only one that separates unseen from trained
+states (docs/guides/protocol.md, ``scripts/alg2_signal.py``).
 
 Everything here is array work; the learner is asked nothing but its ``planar_feature_dim`` and class geometry.
 """

@@ -42,13 +42,12 @@ os.register_at_fork(after_in_child=_mark_forked_child)
 def inference_threads(rows: int) -> Iterator[None]:
     """Runs the body on one torch thread when ``rows`` is small, restoring the caller's setting after.
 
-    A small forward pass (a low-level policy acting for one to a few hundred bodies) costs less than
-    waking a second thread: on a loaded 2-core machine one ensemble forward took 10.7 ms on torch's default
-    2 threads and 0.2 ms on one. One thread gives the same actions bit for bit here (measured for batches of
-    1 to 64). In a process forked from one that had used torch's OpenMP threads, every call runs on one
-    thread, whatever ``rows``, since a multi-threaded call there never returns. torch's global setting
-    (``torch.get_num_threads()``) is as the caller left it when the body ends; a process without torch
-    loaded is left alone.
+    A small forward pass (a low-level policy acting for one to a few hundred bodies) costs less than waking a second
+    thread (docs/guides/vector-envs.md, "Threads", has the timings). One thread gives the same actions bit for bit here
+    (checked for batches of 1 to 64). In a process forked from one that had used torch's OpenMP threads, every call runs
+    on one thread, whatever ``rows``, since a multi-threaded call there never returns. torch's global setting
+    (``torch.get_num_threads()``) is as the caller left it when the body ends; a process without torch loaded is left
+    alone.
 
     Args:
         rows: Number of observations in the forward pass.
@@ -232,7 +231,7 @@ class SmoothedController:
     Clipping first makes it the smoothing ``ReachEnv(action_smoothing=alpha)`` applies (which clips each
     action before smoothing), for controllers whose raw output leaves the action range too.
 
-    An inference-time candidate against flips (issue 16): it damps the step-to-step torque jumps of a
+    An inference-time candidate against the ant's flips in mazes: it damps the step-to-step torque jumps of a
     policy trained without smoothing, at the price of a slower response. The smoothing carries across
     subgoals (a new subgoal mid-stride does not reset the legs' torques) and restarts at :meth:`reset`,
     which the high-level env calls at each episode start.

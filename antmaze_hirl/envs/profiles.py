@@ -40,8 +40,8 @@ class BodySpec:
 
 BODY_SPECS: dict[str, BodySpec] = {
     # 0.45 m is gymnasium-robotics' own success radius; H=100 (5 s) leaves a walking ant time for one cell.
-    # Half of Ant-v5's gear-150 torque: at full torque TD3 learns to hop, and 30 of 32 failures of the
-    # full-torque policy were flips (see README, "Low-level policies").
+    # Half of Ant-v5's gear-150 torque: at full torque TD3 learns to hop, and the hopping ant flips
+    # (docs/lab-notes.md has the full-torque runs).
     "ant": BodySpec(scale=4.0, success_radius_m=0.45, default_horizon=100, dt=0.05, default_action_scale=0.5),
     # The point mass lives in 1 m cells, so the radius shrinks with it; it crosses a cell in ~20 steps.
     "point": BodySpec(scale=1.0, success_radius_m=0.2, default_horizon=50, dt=0.01),
@@ -120,7 +120,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
         learner_plans=True,
     ),
     # At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps (25 s) cover about 20 m: too short for
-    # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (README, the ant experiment). Holding
+    # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (docs/results/ant-in-mazes.md). Holding
     # layouts out needs its 4x4 family (1,968 wall grids; the 3x3 family has 48). Its learner is the CNN's
     # next-cell head: its 2 m labels cut corners the cell grid calls walls
     # (results/learner_ablation/learner_ablation_ant.json).

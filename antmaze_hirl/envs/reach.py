@@ -161,12 +161,12 @@ class ReachEnv(GoalEnv, EzPickle):
         tilt_penalty: Ant only: subtracted from every step's reward, times how far the torso's
             uprightness (``info["uprightness"]``, the world z of its up axis: 1 upright, 0 on its side)
             is below ``upright_threshold``. A dense warning before a flip, which ``flip_penalty`` marks
-            only at the terminal step: in mazes the shipped ant flips 2-25 steps (median 5) after its last
-            step at or above 0.6 uprightness (``scripts/flip_warning.py``). HER relabelling needs the
+            only at the terminal step: in mazes the ant's uprightness falls some steps before it flips
+            (docs/results/ant-in-mazes.md, "What comes before a flip"). HER relabelling needs the
             infos kept (SB3's ``copy_info_dict=True``). Default 0.
         upright_threshold: Uprightness in ``(-1, 1]`` below which ``tilt_penalty`` applies. Default 0.8
-            (a tilt of about 37 degrees): the shipped ant spends 0.9% of its steps in mazes below it when it
-            does not flip, and leaves it 5-30 steps before a flip.
+            (a tilt of about 37 degrees): rarely crossed by an ant that does not flip, and crossed some steps
+            before a flip (docs/results/ant-in-mazes.md, "What comes before a flip").
 
     """
 
@@ -325,8 +325,8 @@ class ReachEnv(GoalEnv, EzPickle):
 
     def _load_walls(self, walls: np.ndarray) -> None:
         # Any shape: the spaces hold xy and body state only. The random layouts of maze_probability
-        # differ in size from maze_map; a rebuild takes ~4 ms, against ~0.3 ms per ant step and far
-        # more per gradient update, so every from-rest episode may draw a new one.
+        # differ in size from maze_map; a rebuild costs about as much as a few ant steps, far less than
+        # a gradient update (docs/lab-notes.md), so every from-rest episode may draw a new one.
         if walls.shape != self.sim.walls.shape or not np.array_equal(walls, self.sim.walls):
             # The pool keeps the simulator of the maze this env leaves, so coming back to it skips the compile.
             release_simulator(self.sim)

@@ -1,7 +1,7 @@
 """Idle MuJoCo maze simulators kept by wall grid, so that an env coming back to a maze skips its compile.
 
 Building a :class:`~antmaze_hirl.envs.simulator.MazeSimulator` compiles the maze's MuJoCo model from XML,
-which takes most of a second on a loaded core, and an env builds one for every new layout. A protocol-2
+the slow part of building an env, and an env builds one for every new layout. A protocol-2
 trial plays the same 100 evaluation mazes 11 times, so without a pool it compiles about 1,100 models for
 100 distinct grids. An env hands the simulator of the layout it leaves back to the pool and takes one
 for the layout it enters; a simulator is held by one env at a time.

@@ -43,9 +43,9 @@ from antmaze_hirl.envs.suite_specs import SUITE_SPECS, SuiteSpec, check_suite_na
 
 POLICY_KEYWORDS = ("oracle", "random")
 DEFAULT_NUM_ENVS = 8
-"""Lockstep mazes of :func:`score_policy` and ``antmaze-hirl benchmark``: 1.1-4.8x faster than serial in
-``results/lockstep_agreement/lockstep_agreement.json`` (oracle and learner, both bodies), and a whole number of rounds
-on 100-episode protocols is not needed (a finished maze starts the next episode at once)."""
+"""Lockstep mazes of :func:`score_policy` and ``antmaze-hirl benchmark``: faster than serial for the oracle and
+the learner on both bodies (docs/guides/vector-envs.md, "Lockstep evaluation"), and a whole number of rounds on
+100-episode protocols is not needed (a finished maze starts the next episode at once)."""
 BOOTSTRAP_RESAMPLES = 2000
 RESULTS_FORMAT = "antmaze_hirl.benchmark_result/1"
 

@@ -35,9 +35,9 @@ BODY_DEFAULTS: dict[str, BodyDefaults] = {
 
 HELD_OUT_MAZE_SIZE: dict[str, int] = {body: profile.held_out_maze_size for body, profile in BODY_PROFILES.items()}
 """Maze size of the held-out-layouts protocol per body. Holding layouts out needs a family with many wall
-grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968, on which the oracle driving the
-shipped ant (stage 6) succeeds on 97% of 100 held-out mazes, 95% Wilson interval 91.5-99.0%, in 500 steps
-(``results/maze_families/maze_families.json``, ``results/paper_experiment/oracle_success_ant_4.json``)."""
+grids: the ant's 3x3 family has 48 (35 for training), its 4x4 family 1,968
+(``results/maze_families/maze_families.json``), on which the oracle driving the shipped ant succeeds nearly
+always in 500 steps (docs/results/ant-in-mazes.md)."""
 
 
 def body_settings(
@@ -84,7 +84,7 @@ class ExperimentConfig:
         decay: d in ``beta <- beta / d``.
         mixing: ``"blend"`` or ``"switch"``.
         expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
-            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (README).
+            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (docs/results/ant-in-mazes.md).
         held_out_layouts: Hold the evaluation mazes out by construction
             (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
             periodic evaluations from the ``"selection"`` part (seeds from :data:`SELECTION_SEED`: the
@@ -95,12 +95,12 @@ class ExperimentConfig:
             setting, still read as what they are): every maze is drawn from the whole family, held out
             by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
         protocol: How the curves are read. ``1`` (the default, so that the committed results folders,
-            which lack this setting, read as what they are): a periodic set and a different final set,
-            the untrained learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (issue 32; needs
-            ``held_out_layouts``): one fixed set, the ``final_eval_episodes`` mazes of the ``"eval"`` part
-            (symmetry-disjoint from training and selection), scored before the first episode (the
-            untrained learner), every ``eval_every`` episodes and after the last; ``eval_episodes`` is not
-            used. Every evaluation also writes its per-maze outcomes (``evaluations.csv``).
+            which lack this setting, read as what they are): a periodic set and a different final set, the untrained
+            learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (needs ``held_out_layouts``;
+            docs/guides/protocol.md): one fixed set, the ``final_eval_episodes`` mazes of the ``"eval"`` part
+            (symmetry-disjoint from training and selection), scored before the first episode (the untrained learner),
+            every ``eval_every`` episodes and after the last; ``eval_episodes`` is not used. Every evaluation also
+            writes its per-maze outcomes (``evaluations.csv``).
         learner: The high-level learner, one of :data:`LEARNERS`; ``None``: protocol 2's
             :data:`PROTOCOL_LEARNER`, or in protocol 1 the body's default (the planning learner
             :data:`STRONG_PRIOR` for the point, ``next_cell_cnn`` for the ant).

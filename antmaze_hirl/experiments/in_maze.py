@@ -1,4 +1,4 @@
-"""In-maze success: the scripted oracle driving an ant low level through held-out mazes (issue 16), the protocol.
+"""In-maze success: the scripted oracle driving an ant low level through held-out mazes, the protocol.
 
 The episode and protocol code of ``scripts/in_maze.py`` (its command line), shared with
 ``scripts/select_low_level.py``, ``scripts/flip_warning.py``, ``scripts/low_level.py`` and

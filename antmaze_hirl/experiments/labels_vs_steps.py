@@ -63,7 +63,7 @@ def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
         training = report.get("training", {})
         if "labels" in training:
             seed = report["policy"].split("seed ")[1].split(",")[0]
-            # One series per learner and seed: the learners differ in prior (issue 35's protocol rows).
+            # One series per learner and seed: the learners differ in prior, so their curves are not pooled.
             learner = training.get("learner", "generic")
             series, x, kind = f"DAgger (plain), {learner} learner, seed {seed}", training["labels"], "labels"
         elif "algorithm" in training:

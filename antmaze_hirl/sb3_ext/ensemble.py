@@ -1,8 +1,8 @@
 """Action ensembles of TD3 low-level policies, saved as one ordinary SB3 zip.
 
-Against the ant's flips (issue 16): on the selection mazes, averaging the deterministic actions of
+Against the ant's flips in mazes: on the selection mazes, averaging the deterministic actions of
 snapshots of *different* fine-tunes raised success and cut flips, where two snapshots of one run did not
-raise the score (README "The ant in mazes"). Why is not measured; a guess is that each run rears the torso up
+raise the score (docs/results/ant-in-mazes.md). Why is not measured; a guess is that each run rears the torso up
 in its own states, and the mean damps a stride that only one member takes.
 
 :class:`EnsemblePolicy` is SB3's TD3 ``MultiInputPolicy`` (with HER's action penalty, as the shipped
@@ -59,12 +59,12 @@ class MeanOfHeads(nn.Module):
 class BatchedMeanOfHeads(nn.Module):
     """The same mean as :class:`MeanOfHeads`, with one batched matrix product per layer for all heads.
 
-    An ensemble acts once per low-level step, on a batch of one: one small product per head and layer costs
-    more in call overhead than in arithmetic, so batching the heads makes acting faster (stage 5's
-    ``predict`` about 1.4x, ``benchmarks/ensemble_speed.py``). The sums are the same but may be rounded
-    differently in the last bits, and MuJoCo rollouts amplify such differences (README "The ant in mazes");
-    so it is a class of its own, chosen when the ensemble is built and recorded in its zip, and an ensemble
-    saved with :class:`MeanOfHeads` (stage 5) acts exactly as before.
+    An ensemble acts once per low-level step, on a batch of one: one small product per head and layer costs more in
+    call overhead than in arithmetic, so batching the heads makes acting faster (docs/guides/low-level.md has the
+    timings of ``benchmarks/ensemble_speed.py``). The sums are the same but may be rounded differently in the last
+    bits, and MuJoCo rollouts amplify such differences (docs/results/ant-in-mazes.md); so it is a class of its own,
+    chosen when the ensemble is built and recorded in its zip, and an ensemble saved with :class:`MeanOfHeads`
+    (stage 5) acts exactly as before.
 
     Args:
         heads: Two or more heads of one structure: ``nn.Sequential`` of ``nn.Linear`` layers (with bias) and

@@ -15,7 +15,9 @@ Data format (what the study server writes; ``DIR`` is the study folder):
 - ``DIR/participants/<pid>/answers.jsonl``: one JSON object per line, ``{"participant": "P01",
   "trial": 1, "method": "noise", "label": "Method B", "ratings": {"mental_demand": 3, ...},
   "comment": "...", "time": 1764000000.0}``.
-- ``DIR/participants/<pid>/clicks.jsonl``: the raw clicks (not used by the report).
+- ``DIR/participants/<pid>/clicks.jsonl``: the raw clicks, one JSON object per line
+  (:data:`~antmaze_hirl.study.data.CLICK_COLUMNS`; read by :func:`~antmaze_hirl.study.data.load_clicks`,
+  not used by the report).
 
 Practice trials are excluded from all analysis. Participants who are missing or part-way through
 contribute what they finished: episode measures use the trials whose every planned episode is on

@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from antmaze_hirl.experiments.runner import COLUMNS
-from antmaze_hirl.study.logs import read_csv_rows, read_json_records
+from antmaze_hirl.study.logs import read_csv_rows, read_json_records, renamed_value
 from antmaze_hirl.study.plan import StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
 
@@ -196,4 +196,60 @@ def _read_answers(path: Path, plan: StudyPlan, participant: str) -> list[dict[st
                 "comment": answers.comment,
             }
         )
+    return records
+
+
+CLICK_COLUMNS: tuple[str, ...] = (
+    "participant",
+    "trial",
+    "episode",
+    "label_index",
+    "query",
+    "time",
+    "x",
+    "y",
+    "response_seconds",
+    "server_seconds",
+)
+"""Keys of a ``clicks.jsonl`` record (before its checksum), in order; the columns of :func:`load_clicks`."""
+
+
+def load_clicks(study_dir: str | Path, plan: StudyPlan) -> pd.DataFrame:
+    """All participants' accepted clicks (practice included), checked against the plan.
+
+    A ``clicks.jsonl`` written up to 0.2.0 names the label index ``step``; it loads the same.
+
+    Args:
+        study_dir: The study folder.
+        plan: Its plan.
+
+    Returns:
+        One row per click with :data:`CLICK_COLUMNS`, in each file's order; ``label_index`` counts the
+        episode's labels from 0, ``response_seconds`` is NaN where the page sent none.
+
+    Raises:
+        ValueError: If a line lacks a key (or has both names of the label index, differing), or names
+            a participant or trial that contradicts the plan (the message names the file and line).
+    """
+    records = []
+    for participant in plan.participants:
+        path = participant_dir(study_dir, participant.id) / "clicks.jsonl"
+        if path.exists():
+            records.extend(_read_clicks(path, plan, participant.id))
+    frame = pd.DataFrame(records, columns=list(CLICK_COLUMNS))
+    return frame.astype({"response_seconds": float})
+
+
+def _read_clicks(path: Path, plan: StudyPlan, participant: str) -> list[dict[str, object]]:
+    records = []
+    for number, entry in read_json_records(path):
+        where = f"{path}:{number}"
+        entry = {**entry, "label_index": renamed_value(entry, "label_index", where)}
+        missing = [key for key in CLICK_COLUMNS if key not in entry]
+        if missing:
+            raise ValueError(f"{where}: the click lacks {missing}")
+        if entry["participant"] != participant:
+            raise ValueError(f"{where}: participant {entry['participant']!r} in {participant}'s file")
+        _trial(plan, participant, entry["trial"], where)
+        records.append({key: entry[key] for key in CLICK_COLUMNS})
     return records

@@ -8,7 +8,8 @@ The server saves each trial's demonstrations as
 - ``executed`` ``(N, 2)`` float32: the subgoal the env executed (Minari's action);
 - ``labels`` ``(N, 2)`` float32: the participant's click, NaN where they were not asked;
 - ``labelled`` ``(N,)`` bool: whether they were asked;
-- ``episode`` ``(N,)`` and ``step`` ``(N,)`` int: each step's episode (``0 .. E-1``) and position in it;
+- ``episode`` ``(N,)`` and ``high_level_step`` ``(N,)`` int: each step's episode (``0 .. E-1``) and position
+  in it (files written up to 0.2.0 name the latter ``step``; they load the same);
 - ``success`` ``(E,)`` bool: whether each episode reached its goal;
 - ``terminal_success`` ``(N,)`` bool: the reward at that step.
 
@@ -29,6 +30,7 @@ import numpy as np
 
 from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.study.data import participant_dir
+from antmaze_hirl.study.logs import RENAMED_KEYS, renamed_value
 from antmaze_hirl.study.plan import load_plan
 
 DATASET_ID_PATTERN = re.compile(r"[\w-]+(/[\w-]+)*/[\w.-]+?-v(0|[1-9][0-9]*)", re.ASCII)
@@ -42,7 +44,7 @@ _ARRAYS = {
     "labels": ("f", "float", (2,), True),
     "labelled": ("b", "bool", (), True),
     "episode": ("iu", "int", (), True),
-    "step": ("iu", "int", (), True),
+    "high_level_step": ("iu", "int", (), True),
     "success": ("b", "bool", (), False),
     "terminal_success": ("b", "bool", (), True),
 }
@@ -68,6 +70,9 @@ def check_dataset_id(dataset_id: str) -> str:
 def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
     """Reads and checks one trial's ``demonstrations.npz`` (format: module docstring).
 
+    Returns:
+        The arrays by name; the high-level steps under ``high_level_step`` whichever name the file used.
+
     Raises:
         ValueError: If an array is missing, has the wrong dtype or shape, or the episode indices
             do not fit ``success`` (the message names the file).
@@ -77,6 +82,8 @@ def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
             arrays = {name: npz[name] for name in npz.files}
     except (OSError, ValueError) as error:
         raise ValueError(f"{path} is not a readable .npz file: {error}") from None
+    arrays["high_level_step"] = renamed_value(arrays, "high_level_step", str(path))
+    arrays.pop(RENAMED_KEYS["high_level_step"], None)
     missing = sorted(set(_ARRAYS) - set(arrays))
     if missing:
         raise ValueError(f"{path} lacks the arrays {missing}")
@@ -102,9 +109,9 @@ def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
     if unlabelled.size:
         step = int(unlabelled[0])
         raise ValueError(f"{path}: step {step} is marked labelled but its label is {arrays['labels'][step].tolist()}")
-    pairs = np.stack([arrays["episode"], arrays["step"]], axis=1)
+    pairs = np.stack([arrays["episode"], arrays["high_level_step"]], axis=1)
     if len(np.unique(pairs, axis=0)) != steps:
-        raise ValueError(f"{path}: an (episode, step) pair repeats")
+        raise ValueError(f"{path}: an (episode, high_level_step) pair repeats")
     return arrays
 
 
@@ -112,7 +119,7 @@ def _episode_buffers(arrays: dict[str, np.ndarray], participant: int, trial: int
     """One Minari episode per episode of the trial, in episode order."""
     for episode in np.unique(arrays["episode"]):
         rows = np.flatnonzero(arrays["episode"] == episode)
-        rows = rows[np.argsort(arrays["step"][rows], kind="stable")]
+        rows = rows[np.argsort(arrays["high_level_step"][rows], kind="stable")]
         # Minari wants one observation more than actions; the state after the final subgoal is not
         # recorded, so the last observation is repeated (its info marks it unlabelled).
         with_last = np.append(rows, rows[-1])

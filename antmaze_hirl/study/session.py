@@ -50,7 +50,15 @@ from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
-from antmaze_hirl.study.logs import DamagedLog, append_csv_row, append_json_record, csv_cell, read_csv_rows
+from antmaze_hirl.study.logs import (
+    RENAMED_KEYS,
+    DamagedLog,
+    append_csv_row,
+    append_json_record,
+    csv_cell,
+    read_csv_rows,
+    renamed_value,
+)
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
 from antmaze_hirl.study.settings import StudySettings
@@ -113,7 +121,7 @@ class DemonstrationLog:
     labels: list[np.ndarray] = field(default_factory=list)
     labelled: list[bool] = field(default_factory=list)
     episode: list[int] = field(default_factory=list)
-    step: list[int] = field(default_factory=list)
+    high_level_step: list[int] = field(default_factory=list)
     terminal_success: list[bool] = field(default_factory=list)
     success: list[bool] = field(default_factory=list)
 
@@ -127,7 +135,7 @@ class DemonstrationLog:
         self.labels.append(np.asarray(label, dtype=np.float32))
         self.labelled.append(executed.asked)
         self.episode.append(episode)
-        self.step.append(int(executed.info["attempts"]) - 1)  # the high-level step, asked or not
+        self.high_level_step.append(int(executed.info["attempts"]) - 1)  # asked or not
         self.terminal_success.append(bool(executed.done and executed.info["is_success"]))
 
     def save(self, path: Path) -> None:
@@ -139,11 +147,22 @@ class DemonstrationLog:
             "labels": np.asarray(self.labels, dtype=np.float32).reshape(-1, 2),
             "labelled": np.asarray(self.labelled, dtype=bool),
             "episode": np.asarray(self.episode, dtype=np.int64),
-            "step": np.asarray(self.step, dtype=np.int64),
+            "high_level_step": np.asarray(self.high_level_step, dtype=np.int64),
             "terminal_success": np.asarray(self.terminal_success, dtype=bool),
             "success": np.asarray(self.success, dtype=bool),
         }
         atomic_write_with(path, lambda tmp: tmp.write_bytes(_npz_bytes(arrays)))
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Unpickles a checkpoint's log, also one pickled before ``high_level_step`` was renamed from ``step``.
+
+        Raises:
+            ValueError: If the state has neither name, or both with different values.
+        """
+        state = dict(state)
+        state["high_level_step"] = renamed_value(state, "high_level_step", "the pickled DemonstrationLog")
+        state.pop(RENAMED_KEYS["high_level_step"], None)
+        self.__dict__.update(state)
 
 
 def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:
@@ -274,7 +293,7 @@ class ParticipantSession:
         geometry = inner.geometry
         return {
             "query": (
-                {"id": self._query_id, "step": request.label_index, "executes": request.executes}
+                {"id": self._query_id, "label_index": request.label_index, "executes": request.executes}
                 if request is not None
                 else None
             ),
@@ -363,7 +382,7 @@ class ParticipantSession:
                     "participant": self.participant.id,
                     "trial": self.trial.index,
                     "episode": request.episode,
-                    "step": request.label_index,  # the log key of 0.1.0
+                    "label_index": request.label_index,
                     "query": query_id,
                     "time": now,
                     "x": subgoal[0],
