@@ -95,6 +95,37 @@ def paired_comparison(values: Sequence[float], baseline: Sequence[float]) -> dic
     }
 
 
+def smallest_signed_rank_p(pairs: int) -> float:
+    """The smallest two-sided p the exact Wilcoxon signed-rank test can give with ``pairs`` pairs: 2 / 2**n."""
+    return min(1.0, 2.0 ** (1 - pairs))
+
+
+def signed_rank_interval(differences: Sequence[float], confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """The Hodges-Lehmann interval of paired differences: order statistics of their Walsh averages.
+
+    The bounds are the k-th smallest and the k-th largest of the n(n+1)/2 averages ``(d_i + d_j) / 2``
+    (i <= j). k is the largest count whose exact signed-rank tail P(T <= k - 1) is <= (1 - confidence) / 2:
+    the interval that inverts the Wilcoxon test. Where no k >= 1 qualifies (5 pairs or fewer at 95%), it
+    is ``(-inf, inf)``: so few pairs exclude nothing.
+
+    Raises:
+        ValueError: If ``confidence`` is not in (0, 1).
+    """
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must lie in (0, 1), got {confidence}")
+    values = np.asarray(differences, dtype=float)
+    n = len(values)
+    counts = np.ones(1)  # counts[t]: subsets of the ranks 1..n with rank sum t, the null distribution of T+
+    for rank in range(1, n + 1):
+        counts = np.append(counts, np.zeros(rank)) + np.append(np.zeros(rank), counts)
+    tail = np.cumsum(counts) / 2.0**n
+    k = int(np.count_nonzero(tail <= (1 - confidence) / 2))  # tail[k - 1] = P(T <= k - 1)
+    if k == 0:
+        return -math.inf, math.inf
+    walsh = np.sort([(values[i] + values[j]) / 2 for i in range(n) for j in range(i, n)])
+    return float(walsh[k - 1]), float(walsh[len(walsh) - k])
+
+
 BOOTSTRAP_RESAMPLES = 2000
 BOOTSTRAP_SEED = 0
 

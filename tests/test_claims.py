@@ -1,4 +1,4 @@
-"""The protocol-2 claims table of ``scripts/paper_claims.py``: its verdicts on crafted summaries."""
+"""The paper's claims (``antmaze_hirl.experiments.claims``): verdicts on crafted summaries, and its script."""
 
 import json
 import math
@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 from script_helpers import load_script
 
-from antmaze_hirl.experiments.uncertainty import paired_comparison
+from antmaze_hirl.experiments import claims as cl
+from antmaze_hirl.experiments.uncertainty import paired_comparison, signed_rank_interval, smallest_signed_rank_p
 
 pc = load_script("scripts/paper_claims.py")
+CLAIM = {claim.number: claim for claim in cl.CLAIMS}
 
 ROOT = Path(__file__).resolve().parents[1]
 INTERIM = ROOT / "results" / "protocol2" / "interim"
@@ -68,30 +70,30 @@ def body(name, seeds=10, gain=None, labels=None, untrained=0.01, episodes=None):
     dagger_rates = [0.8 + JITTER[seed] for seed in range(seeds)]
     dagger_labels = [500.0 + 10 * seed for seed in range(seeds)]
     methods = {"dagger": figures(dagger_rates, dagger_rates, dagger_labels, dagger_labels, untrained)}
-    for method in (*pc.ACTIVE, "aggrevate"):
+    for method in (*cl.ACTIVE, "aggrevate"):
         shift = gain.get(method, 0.0)
         rates = [round(rate + shift + JITTER[(seed + 3) % 10] / 2, 3) for seed, rate in enumerate(dagger_rates)]
         methods[method] = figures(rates, dagger_rates, labels.get(method, dagger_labels), dagger_labels, untrained)
     summary = {"config": {"body": name, "protocol": 2, "episodes": 100}, "methods": methods}
-    return pc.Body(name, Path(name), summary, episodes)
+    return cl.Body(name, Path(name), summary, episodes)
 
 
 def rows_of(bodies):
-    return {row.number: row for row in pc.protocol2_claims(bodies)}
+    return {row.number: row for row in cl.judge_claims(bodies)}
 
 
 def test_a_clear_effect_on_ten_seeds_holds():
     fewer = [100.0 + 5 * seed for seed in range(10)]  # 0.2x DAgger's labels on every seed
-    bodies = [body(name, gain={"reward": 0.15, "aggrevate": -0.2}, labels={"gated": fewer}) for name in pc.BODIES]
+    bodies = [body(name, gain={"reward": 0.15, "aggrevate": -0.2}, labels={"gated": fewer}) for name in cl.BODIES]
     rows = rows_of(bodies)
-    assert rows[1].verdict == pc.HOLDS and rows[1].printed == "holds"
-    assert rows[1].outcomes["reward"] == {"point": pc.SUPPORTS, "ant": pc.SUPPORTS}
+    assert rows[1].verdict == cl.HOLDS and rows[1].printed == "holds"
+    assert rows[1].outcomes["reward"] == {"point": cl.SUPPORTS, "ant": cl.SUPPORTS}
     # reward_per_step is at DAgger's success (its CI excludes a 5-point gain), but one reading holding is enough.
-    assert rows[1].outcomes["reward_per_step"]["point"] == pc.CONTRADICTS
-    assert rows[5].verdict == pc.HOLDS and rows[5].printed.startswith("holds (bounded:")
-    assert rows[6].verdict == pc.HOLDS and rows[6].outcomes["gated"]["ant"] == pc.SUPPORTS
-    assert rows[7].verdict == pc.NOT_TESTABLE
-    table = pc.markdown(bodies, list(rows.values()))
+    assert rows[1].outcomes["reward_per_step"]["point"] == cl.CONTRADICTS
+    assert rows[5].verdict == cl.HOLDS and rows[5].printed.startswith("holds (bounded:")
+    assert rows[6].verdict == cl.HOLDS and rows[6].outcomes["gated"]["ant"] == cl.SUPPORTS
+    assert rows[7].verdict == cl.NOT_TESTABLE
+    table = pc.markdown(cl.ClaimsReport(tuple(bodies), tuple(rows.values())))
     assert table.startswith("Protocol 2 claims:") and table.count("10 seeds per method (complete)") == 2
 
 
@@ -99,25 +101,25 @@ def test_the_opposite_effect_or_an_excluded_one_does_not_hold():
     more = [700.0 + 5 * seed for seed in range(10)]
     bodies = [
         body(name, gain={"multi_policy": 0.1, "aggrevate": 0.1}, labels={"reward": more, "reward_per_step": more})
-        for name in pc.BODIES
+        for name in cl.BODIES
     ]
     rows = rows_of(bodies)
     # reward at DAgger's success +-1 point: the CI excludes the claimed 5-point gain.
-    assert rows[1].verdict == pc.DOES_NOT_HOLD
-    assert rows[2].verdict == pc.DOES_NOT_HOLD  # more labels than DAgger, significantly
-    assert rows[3].verdict == pc.DOES_NOT_HOLD  # multi_policy is better, significantly
+    assert rows[1].verdict == cl.DOES_NOT_HOLD
+    assert rows[2].verdict == cl.DOES_NOT_HOLD  # more labels than DAgger, significantly
+    assert rows[3].verdict == cl.DOES_NOT_HOLD  # multi_policy is better, significantly
     # aggrevate beating DAgger with a dense Q says nothing of a sparse-reward AggreVaTeD.
-    assert rows[5].verdict == pc.NOT_TESTABLE
+    assert rows[5].verdict == cl.NOT_TESTABLE
     # No method reaches DAgger's success at <= 0.3x its labels: every CI of labels - 0.3x DAgger's is above 0.
-    assert rows[6].verdict == pc.DOES_NOT_HOLD
+    assert rows[6].verdict == cl.DOES_NOT_HOLD
     assert "does not hold" in rows[6].printed
 
 
 def test_five_seeds_are_inconclusive_and_interim_whatever_the_effect():
-    bodies = [body(name, seeds=5, gain={"reward": 0.15, "reward_per_step": 0.15}) for name in pc.BODIES]
+    bodies = [body(name, seeds=5, gain={"reward": 0.15, "reward_per_step": 0.15}) for name in cl.BODIES]
     row = rows_of(bodies)[1]
     # Every seed better by about 15 points, but 5 pairs cannot go below p = 0.0625.
-    assert row.verdict == pc.INCONCLUSIVE
+    assert row.verdict == cl.INCONCLUSIVE
     assert "p = 0.0625 (n = 5, floor 0.0625), CI [-inf, +inf]: undecided" in row.measurement
     assert row.printed == "interim: leaning holds (direction only)"
 
@@ -129,38 +131,38 @@ def test_a_method_short_of_ten_seeds_makes_the_folder_interim():
     assert not full.interim and short.interim and short.seeds == (9, 10)
     rows = rows_of([full, short])
     # The tests decide it, but on an interim folder the row only leans; claim 7 needs people, not seeds.
-    assert rows[1].verdict == pc.HOLDS and rows[1].printed == "interim: leaning holds"
+    assert rows[1].verdict == cl.HOLDS and rows[1].printed == "interim: leaning holds"
     assert all(row.printed.startswith("interim: leaning ") for n, row in rows.items() if n != 7)
-    table = pc.markdown([full, short], list(rows.values()))
+    table = pc.markdown(cl.ClaimsReport((full, short), tuple(rows.values())))
     assert "Protocol 2 claims (INTERIM: not a result)" in table
     assert "- ant: `ant`, 9-10 seeds per method (INTERIM" in table
     assert "- point: `point`, 10 seeds per method (complete)" in table
 
 
 def test_sixty_percent_counts_episodes_from_the_untrained_success():
-    fast = {method: dict.fromkeys(range(10), 30.0) for method in (*pc.ACTIVE, "dagger", "aggrevate")}
-    rows = rows_of([body(name, episodes=fast) for name in pc.BODIES])
-    assert rows[4].verdict == pc.HOLDS and "10 of 10 seeds under 100 episodes" in rows[4].measurement
+    fast = {method: dict.fromkeys(range(10), 30.0) for method in (*cl.ACTIVE, "dagger", "aggrevate")}
+    rows = rows_of([body(name, episodes=fast) for name in cl.BODIES])
+    assert rows[4].verdict == cl.HOLDS and "10 of 10 seeds under 100 episodes" in rows[4].measurement
     slow = {method: dict.fromkeys(range(10), None) for method in fast}
-    assert rows_of([body(name, episodes=slow) for name in pc.BODIES])[4].verdict == pc.DOES_NOT_HOLD
+    assert rows_of([body(name, episodes=slow) for name in cl.BODIES])[4].verdict == cl.DOES_NOT_HOLD
     # An untrained learner at 60% already: the claim is about learning, so it cannot be tested.
-    assert rows_of([body(name, untrained=0.7, episodes=fast) for name in pc.BODIES])[4].verdict == pc.NOT_TESTABLE
+    assert rows_of([body(name, untrained=0.7, episodes=fast) for name in cl.BODIES])[4].verdict == cl.NOT_TESTABLE
     # Without episodes.csv there are no episode counts: it cannot hold, only lean.
-    row = rows_of([body(name) for name in pc.BODIES])[4]
-    assert row.verdict == pc.INCONCLUSIVE and row.leaning == "holds (direction only)"
+    row = rows_of([body(name) for name in cl.BODIES])[4]
+    assert row.verdict == cl.INCONCLUSIVE and row.leaning == "holds (direction only)"
     assert "untrained 1.0% pooled" in row.measurement
 
 
 def test_the_interval_inverts_the_signed_rank_test():
-    assert pc.signed_rank_interval([1, 2, 3, 4, 5]) == (-math.inf, math.inf)
-    assert pc.signed_rank_interval([3, 1, 4, 1, 5, 9]) == (1.0, 9.0)  # 6 pairs: the extreme Walsh averages
+    assert signed_rank_interval([1, 2, 3, 4, 5]) == (-math.inf, math.inf)
+    assert signed_rank_interval([3, 1, 4, 1, 5, 9]) == (1.0, 9.0)  # 6 pairs: the extreme Walsh averages
     differences = [0.5, -1.0, 2.0, 3.0, 1.5, 4.0, -0.5, 2.5, 6.0, 1.0]
     walsh = sorted((a + b) / 2 for i, a in enumerate(differences) for b in differences[i:])
     # 10 pairs: the two-sided 5% critical value of T is 8, so the bounds are the 9th Walsh average from each end.
-    assert pc.signed_rank_interval(differences) == (walsh[8], walsh[-9])
-    assert [pc.smallest_p(n) for n in (3, 5, 10)] == [0.25, 0.0625, 2 / 1024]
+    assert signed_rank_interval(differences) == (walsh[8], walsh[-9])
+    assert [smallest_signed_rank_p(n) for n in (3, 5, 10)] == [0.25, 0.0625, 2 / 1024]
     with pytest.raises(ValueError, match="confidence must lie in"):
-        pc.signed_rank_interval([1.0, 2.0], confidence=1.5)
+        signed_rank_interval([1.0, 2.0], confidence=1.5)
 
 
 def test_the_committed_interim_folders_print_an_interim_table(tmp_path, capsys):
@@ -189,7 +191,7 @@ def test_bad_folders_are_one_line_errors(tmp_path, capsys):
 
 
 def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
-    figures = pc.claims(ROOT / "results" / "paper_experiment" / "ant")["methods"]["reward"]
+    figures = cl.protocol1_figures(ROOT / "results" / "paper_experiment" / "ant")["methods"]["reward"]
     # docs/paper-claims.md: "Pruning removed 137 of `reward`'s 4,903 labels (2.8%)".
     assert (figures["labels_removed_by_pruning"], figures["labels_spent"]) == (137, 4903)
     assert figures["episodes_to_60_percent"]["median"] == 30.0
@@ -197,26 +199,26 @@ def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
 
 def test_the_threshold_is_split_over_the_readings_a_claim_tries():
     differences = [0.05, 0.04, 0.06, 0.03, 0.07, -0.03, 0.05, 0.02, -0.04, 0.08]  # p = 0.035 with 10 pairs
-    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.05).outcome == pc.SUPPORTS
-    assert pc.compare(differences, 1, pc.SUCCESS_EFFECT, 0.025).outcome == pc.UNDECIDED
-    rows = rows_of([body(name) for name in pc.BODIES])
+    assert cl.compare(differences, 1, cl.SUCCESS_EFFECT, 0.05).outcome == cl.SUPPORTS
+    assert cl.compare(differences, 1, cl.SUCCESS_EFFECT, 0.025).outcome == cl.UNDECIDED
+    rows = rows_of([body(name) for name in cl.BODIES])
     assert rows[1].measurement.startswith("threshold p < 0.025<br>")  # reward and reward_per_step
     assert rows[3].measurement.startswith("threshold p < 0.05<br>")  # multi_policy alone
     assert rows[6].measurement.startswith("threshold p < 0.01;")  # five active methods
 
 
 def test_passing_sixty_percent_at_the_hundredth_episode_is_not_under_a_hundred():
-    last = {method: dict.fromkeys(range(10), 100.0) for method in (*pc.ACTIVE, "dagger", "aggrevate")}
-    row = rows_of([body(name, episodes=last) for name in pc.BODIES])[4]
-    assert row.verdict == pc.DOES_NOT_HOLD and "0 of 10 seeds under 100 episodes" in row.measurement
+    last = {method: dict.fromkeys(range(10), 100.0) for method in (*cl.ACTIVE, "dagger", "aggrevate")}
+    row = rows_of([body(name, episodes=last) for name in cl.BODIES])[4]
+    assert row.verdict == cl.DOES_NOT_HOLD and "0 of 10 seeds under 100 episodes" in row.measurement
 
 
 def test_saving_expert_cost_needs_the_ratio_not_only_fewer_labels():
     # noise needs 0.6x DAgger's labels on every seed: significantly fewer, but not <= 0.3x.
     fewer = [0.6 * (500.0 + 10 * seed) for seed in range(10)]
-    rows = rows_of([body(name, labels={"noise": fewer}) for name in pc.BODIES])
-    assert rows[6].outcomes["noise"] == {"point": pc.CONTRADICTS, "ant": pc.CONTRADICTS}
-    assert rows[6].verdict == pc.DOES_NOT_HOLD
+    rows = rows_of([body(name, labels={"noise": fewer}) for name in cl.BODIES])
+    assert rows[6].outcomes["noise"] == {"point": cl.CONTRADICTS, "ant": cl.CONTRADICTS}
+    assert rows[6].verdict == cl.DOES_NOT_HOLD
     assert "`noise` 327 (10 of 10 reach it), 0.60x, p = 0.00195: contradicts" in rows[6].measurement
 
 
@@ -235,7 +237,7 @@ def test_episodes_to_sixty_percent_are_read_from_the_episode_rows():
     summary = {"methods": {"dagger": figures([0.8, 0.8, 0.8], [0.8] * 3, [500.0] * 3, [500.0] * 3)}}
     # Seed 0 passes after 20 episodes, seed 1 never; seed 2's untrained learner is at 70% already.
     summary["methods"]["dagger"]["untrained_success"]["per_seed"] = [0.0, 0.0, 0.7]
-    assert pc.episodes_to_target(rows, summary) == {"dagger": {0: 20.0, 1: None, 2: 0.0}}
+    assert cl.episodes_to_target(rows, summary) == {"dagger": {0: 20.0, 1: None, 2: 0.0}}
 
 
 def test_the_claims_doc_quotes_the_table_printed_on_the_interim_folders(monkeypatch, capsys):
@@ -253,9 +255,9 @@ def test_claim_6_reads_the_labels_paired_by_seed_where_dagger_misses_its_own_med
     for name in ("point", "ant"):
         one = body(name, labels={"dagger": [None] * 10})
         one.summary["methods"]["dagger"]["labels_to_match_dagger"]["median"] = None
-        for method in pc.ACTIVE:
+        for method in cl.ACTIVE:
             mine = 0.25 if method == "gated" else 1.0
-            one.summary["methods"][method][pc.PAIRED] = {
+            one.summary["methods"][method][cl.PAIRED] = {
                 "median_ratio": mine,
                 "seeds": 10,
                 "seeds_reached": 10,
@@ -265,11 +267,64 @@ def test_claim_6_reads_the_labels_paired_by_seed_where_dagger_misses_its_own_med
                 ],
             }
         bodies.append(one)
-    saving = pc.claim_saving(bodies)
-    assert saving.verdict == pc.HOLDS
+    saving = CLAIM[6].judge(bodies)
+    assert saving.verdict == cl.HOLDS
     assert "paired by seed: median 0.25x DAgger's (10 of 10 seeds reach it)" in saving.measurement
     # Without the paired figure the same bodies cannot decide: DAgger's own median is never reached.
     for one in bodies:
-        for method in pc.ACTIVE:
-            del one.summary["methods"][method][pc.PAIRED]
-    assert pc.claim_saving(bodies).verdict != pc.HOLDS
+        for method in cl.ACTIVE:
+            del one.summary["methods"][method][cl.PAIRED]
+    assert CLAIM[6].judge(bodies).verdict != cl.HOLDS
+
+
+def _write_folder(folder, one_body):
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps(one_body.summary))
+    return folder
+
+
+def test_a_verdict_read_from_folders_on_disk_turns_with_the_data(tmp_path):
+    # The same folders but for reward's success: 15 points above DAgger's on every seed, or 15 below.
+    def report(gain):
+        folders = [_write_folder(tmp_path / f"{gain}" / name, body(name, gain={"reward": gain})) for name in cl.BODIES]
+        return cl.evaluate_folders(*folders)
+
+    better, worse = report(0.15), report(-0.15)
+    assert not better.interim and [verdict.number for verdict in better.verdicts] == list(range(1, 8))
+    assert better.verdicts[0].verdict == cl.HOLDS and better.verdicts[0].printed == "holds"
+    assert better.verdicts[0].outcomes["reward"] == {"point": cl.SUPPORTS, "ant": cl.SUPPORTS}
+    assert worse.verdicts[0].verdict == cl.DOES_NOT_HOLD
+    assert worse.verdicts[0].outcomes["reward"] == {"point": cl.CONTRADICTS, "ant": cl.CONTRADICTS}
+    # No episodes.csv in these folders: claim 4 reads summary.json's labels only.
+    assert better.bodies[0].episodes_to_target is None
+
+
+def test_bad_folders_are_one_line_errors_naming_them(tmp_path):
+    ant = _write_folder(tmp_path / "ant", body("ant"))
+    missing = tmp_path / "nowhere"
+    with pytest.raises(ValueError, match=f"^no summary.json in {missing} "):
+        cl.evaluate_folders(missing, ant)
+    with pytest.raises(ValueError, match=f"^no summary.json in {tmp_path} "):
+        cl.evaluate_folders(tmp_path, ant)
+    with pytest.raises(ValueError, match=r"ant/summary.json is of body 'ant', but it was passed as the point folder"):
+        cl.evaluate_folders(ant, ant)
+    without_dagger = body("point")
+    del without_dagger.summary["methods"]["dagger"]
+    point = _write_folder(tmp_path / "point", without_dagger)
+    with pytest.raises(ValueError, match=r"point/summary.json has no dagger trials to compare with"):
+        cl.evaluate_folders(point, ant)
+
+
+def test_protocol_1_bad_folders_are_one_line_errors_naming_them(tmp_path, capsys):
+    with pytest.raises(ValueError, match=f"^no summary.json in {tmp_path} "):
+        cl.protocol1_figures(tmp_path)
+    # A summary without episodes.csv beside it.
+    with pytest.raises(ValueError, match=f"^no episodes.csv in {INTERIM / 'point'} "):
+        cl.protocol1_figures(INTERIM / "point")
+    old = ROOT / "results" / "paper_experiment" / "ant_stage1"
+    with pytest.raises(ValueError, match=r"ant_stage1/summary.json: 'dagger' has no 'total_labels'"):
+        cl.protocol1_figures(old)
+    with pytest.raises(SystemExit):
+        pc.main(["--folders", str(tmp_path / "nowhere")])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[-1].endswith(f": error: no summary.json in {tmp_path / 'nowhere'} (a paper-experiment results folder)")
