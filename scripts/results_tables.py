@@ -336,42 +336,42 @@ def selection_ranked(name: str, keys: Sequence[str] | None = None, labels: dict[
 
 
 def low_level_eval() -> str:
-    """Eval-low of the shipped point and ant: seed 0, each disjoint set, and the sets pooled."""
+    """Eval-low of the shipped point and ant per disjoint set of subgoals and pooled, then the ant's eval-low files."""
     summary = load("low_level/low_level.json")
+    bodies = [("point", summary.get("eval_low", "point")), ("ant", summary.get("eval_low", "ant"))]
+    seeds = list(bodies[0][1]["disjoint_sets"])
     lines = []
-    for body in ("point", "ant"):
-        entry = summary.get("eval_low", body)
-        episodes = entry["episodes"]
-        lines.append(
-            [
-                f"shipped {body} (`{entry['low_level_id']}`), up to {entry['max_distance_m']:g} m, seed 0",
-                rate_cell_of(entry["success_rate"], episodes),
-                f"{entry['mean_steps']:.1f}",
-            ]
-        )
-        for seed, rate in entry["disjoint_sets"].items():
-            lines.append([f"shipped {body}, seed {seed}", rate_cell_of(rate, episodes), ""])
-        pooled = entry["pooled_episodes"]
+    for body, entry in bodies:
+        episodes, pooled = entry["episodes"], entry["pooled_episodes"]
         hits = count(entry["pooled_success_rate"], pooled)
         lines.append(
             [
-                f"shipped {body}, the {len(entry['disjoint_sets'])} sets pooled",
+                f"{body} (`{entry['low_level_id']}`)",
+                f"{entry['max_distance_m']:g} m",
+                *(rate_cell_of(entry["disjoint_sets"][seed], episodes) for seed in seeds),
                 f"{hits} of {pooled}: {rate_cell(hits, pooled)}",
-                "",
+                f"{entry['mean_steps']:.1f}",
             ]
         )
+    header = ["shipped", "subgoals up to", *(f"seed {seed} ({bodies[0][1]['episodes']})" for seed in seeds)]
+    header += ["pooled", "mean steps, seed 0"]
+    files = []
     for seed in ("", "_200", "_400", "_600"):
-        name = f"low_level/eval_low_ant{seed}.json"
-        entry = load(name)
-        lines.append(
+        entry = load(f"low_level/eval_low_ant{seed}.json")
+        files.append(
             [
-                f"`{name}` (`antmaze-hirl eval-low --body ant`)",
+                f"`low_level/eval_low_ant{seed}.json`",
+                f"`{entry.get('low_level_id')}`",
                 rate_cell_of(entry.get("success_rate"), entry.get("episodes")),
                 f"{entry.get('mean_steps'):.1f}",
             ]
         )
     goal = summary.get("goals", "ant_success_rate")
-    return table(["eval-low (ant goal " + goal + ")", "success [95% Wilson]", "mean steps"], lines)
+    return (
+        table(header, lines)
+        + f"\n\nThe ant's goal: {goal}. Its `antmaze-hirl eval-low` files:\n\n"
+        + table(["file", "low level", "success [95% Wilson]", "mean steps"], files)
+    )
 
 
 def low_level_throughput() -> str:
