@@ -1,22 +1,23 @@
-"""Writes the suites table and the results table of ``docs/leaderboard.md`` from the committed results.
+"""Prints one section of ``docs/leaderboard.md`` (the suites, the results or the figure) from the committed results.
 
 Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
 ``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
 figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
-Nothing is typed in by hand: rerun this after adding a report. ``--check`` compares instead of writing
-(exit 1 on a difference).
+Nothing is typed in by hand. Each section is a generated block of the page
+(``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
+``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py [--check]
+Usage: python scripts/leaderboard.py --section suites|results|figure
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
-from antmaze_hirl.atomic_io import atomic_write_bytes
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
@@ -24,11 +25,6 @@ from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, poin
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
 PAGE = ROOT / "docs" / "leaderboard.md"
-MARKERS = {
-    "suites": ("<!-- suites:start -->", "<!-- suites:end -->"),
-    "results": ("<!-- results:start -->", "<!-- results:end -->"),
-    "figure": ("<!-- figure:start -->", "<!-- figure:end -->"),
-}
 
 GOAL = 0.95
 """The issue's goal for the oracle hierarchy on every suite."""
@@ -162,29 +158,16 @@ def figure_section() -> str:
     return f"![{alt}]({image})\n\n{points_table(points)}"
 
 
-def page_text(current: str) -> str:
-    """``current`` with the text between each pair of markers replaced by its table."""
-    sections = (("suites", suites_table()), ("results", results_table()), ("figure", figure_section()))
-    for name, table in sections:
-        start, end = MARKERS[name]
-        head, rest = current.split(start, 1)
-        _, tail = rest.split(end, 1)
-        current = f"{head}{start}\n{table}\n{end}{tail}"
-    return current
+SECTIONS: dict[str, Callable[[], str]] = {"suites": suites_table, "results": results_table, "figure": figure_section}
+"""The page's generated sections, by the name ``--section`` takes."""
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    """Prints the section named by ``--section``; returns the exit status."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--check", action="store_true", help="compare with docs/leaderboard.md; write nothing")
-    args = parser.parse_args()
-    current = PAGE.read_text()
-    text = page_text(current)
-    if args.check:
-        print(f"{PAGE}: {'up to date' if text == current else 'OUT OF DATE: run scripts/leaderboard.py'}")
-        return 0 if text == current else 1
-    atomic_write_bytes(PAGE, text.encode())
-    print(results_table())
-    print(f"wrote {PAGE}")
+    parser.add_argument("--section", required=True, choices=list(SECTIONS), help="the section of the page to print")
+    args = parser.parse_args(argv)
+    print(SECTIONS[args.section]())
     return 0
 
 

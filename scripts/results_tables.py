@@ -1,0 +1,941 @@
+"""Prints the Markdown tables of the hand-written results pages from the committed JSON files under ``results/``.
+
+Each section is one generated block of ``docs/results/low-level.md``, ``ant-in-mazes.md``,
+``learner-ablation.md`` or ``other.md``::
+
+    <!-- generated: python scripts/results_tables.py in-maze-stage6 -->
+
+so every figure of those pages comes from a committed file through a command a reader can rerun; the pages'
+prose names no figure of its own. A success rate measured on a known number of episodes carries its 95% Wilson
+interval (:func:`antmaze_hirl.experiments.uncertainty.wilson_interval`). What a row is called (its label, its
+heads) is written here; what it scored is read from the file.
+
+A missing or damaged file, or a file without a field a section reads, is a one-line error naming the file.
+
+Usage: python scripts/results_tables.py SECTION   (``--list`` names the sections)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import statistics
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from antmaze_hirl.experiments.uncertainty import wilson_interval
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results"
+FAMILIES = ("ant3", "ant4", "u", "medium", "large")
+FAMILY_LABELS = {
+    "ant3": "ant3 (3x3, 500 steps)",
+    "ant4": "ant4 (4x4 held-out layouts, 500 steps)",
+    "u": "u",
+    "medium": "medium",
+    "large": "large",
+}
+FAMILY_GOALS = {"ant4": 0.95, "u": 0.90, "medium": 0.90, "large": 0.90}
+"""Issue 16's success goals per in-maze family; ant3 has none (its mazes are held out by seed only)."""
+
+
+class ResultsFileError(ValueError):
+    """A results file that is missing, is not JSON, or lacks a field a section reads."""
+
+
+LOADED: list[str] = []
+"""The files read so far in this process (``main`` names them when a field is missing)."""
+
+
+@dataclass(frozen=True)
+class Results:
+    """One committed results file: its path under ``results/`` and its parsed JSON."""
+
+    name: str
+    data: Any
+
+    def get(self, *keys: str | int) -> Any:
+        """The value at ``keys`` (nested dict keys or list indices).
+
+        Raises:
+            ResultsFileError: Naming the file and the missing field.
+        """
+        value = self.data
+        for depth, key in enumerate(keys):
+            try:
+                value = value[key]
+            except (KeyError, IndexError, TypeError):
+                where = "".join(f"[{k!r}]" for k in keys[: depth + 1])
+                raise ResultsFileError(f"results/{self.name}: no field {where}") from None
+        return value
+
+
+def load(name: str, results: Path | None = None) -> Results:
+    """The results file ``results/<name>``.
+
+    Raises:
+        ResultsFileError: If the file does not exist or is not JSON, naming it.
+    """
+    path = (results or RESULTS) / name
+    LOADED.append(name)
+    try:
+        return Results(name, json.loads(path.read_text()))
+    except FileNotFoundError:
+        raise ResultsFileError(f"results/{name}: no such results file") from None
+    except json.JSONDecodeError as error:
+        raise ResultsFileError(f"results/{name} is not JSON: {error}") from None
+
+
+# --- formatting -------------------------------------------------------------------------------------------
+
+
+def percent(rate: float, trials: int | None = None) -> str:
+    """``rate`` in percent: whole on 100 trials or fewer dividing 100, else one decimal."""
+    decimals = 0 if trials is not None and trials <= 100 and 100 % trials == 0 else 1
+    return f"{100 * rate:.{decimals}f}%"
+
+
+def count(rate: float, trials: int) -> int:
+    """The whole number of successes behind ``rate`` on ``trials``.
+
+    Raises:
+        ResultsFileError: If ``rate * trials`` is not a whole number (to 1e-6).
+    """
+    successes = round(rate * trials)
+    if abs(successes - rate * trials) > 1e-6:
+        raise ResultsFileError(f"a success rate of {rate} is no whole count of {trials} episodes")
+    return successes
+
+
+def rate_cell(successes: int, trials: int) -> str:
+    """``"92.5% [88.0, 95.4]"``: the rate and its 95% Wilson interval, in percent."""
+    low, high = wilson_interval(successes, trials)
+    return f"{percent(successes / trials, trials)} [{100 * low:.1f}, {100 * high:.1f}]"
+
+
+def rate_cell_of(rate: float, trials: int) -> str:
+    """:func:`rate_cell` of a recorded ``rate`` on ``trials`` episodes."""
+    return rate_cell(count(rate, trials), trials)
+
+
+def share(value: float) -> str:
+    """A share of subgoals or steps, in percent with two decimals (flip rates are small)."""
+    return f"{100 * value:.2f}%"
+
+
+def share_range(values: Sequence[float]) -> str:
+    """``"0.55-2.10%"``: the lowest and highest of ``values`` as shares."""
+    return f"{100 * min(values):.2f}-{100 * max(values):.2f}%"
+
+
+def table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A Markdown table."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(cell) for cell in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+# --- in-maze files (scripts/in_maze.py) ----------------------------------------------------------------------
+
+
+def families(results: Results, row: str) -> dict[str, Any]:
+    """The per-family outcomes of one row (one low level at one smoothing) of an in-maze file."""
+    return results.get("results", row, "families")
+
+
+def success(family: dict[str, Any]) -> str:
+    """One family's success with its interval."""
+    return rate_cell(family["successes"], family["episodes"])
+
+
+def seconds_per_step(family: dict[str, Any]) -> float:
+    """Wall seconds per mean episode step (the files time a family, not a step)."""
+    return family["seconds"] / family["mean_low_level_steps"]
+
+
+def goal_cell(name: str, family: dict[str, Any]) -> str:
+    """Issue 16's goal for ``name`` and whether the row's rate meets it."""
+    if name not in FAMILY_GOALS:
+        return "held out by seed only"
+    goal = FAMILY_GOALS[name]
+    return f">= {percent(goal, 100)}: {'met' if family['success_rate'] >= goal else 'not met'}"
+
+
+def in_maze_pair(name: str, new_row: str, old_row: str, new_name: str, old_name: str) -> str:
+    """Two low levels of one in-maze run side by side, per family, then their flips over every episode."""
+    results = load(name)
+    new, old = families(results, new_row), families(results, old_row)
+    header = [
+        "family",
+        f"{new_name} [95% Wilson]",
+        "flips, frozen, timeouts",
+        "flips / subgoal",
+        "mean episode steps",
+        f"{old_name} [95% Wilson]",
+        "flips, frozen, timeouts",
+        "flips / subgoal",
+        "mean episode steps",
+        f"success ratio ({new_name} / {old_name})",
+        "time per step ratio",
+        "goal (issue 16)",
+    ]
+    rows = []
+    for family in FAMILIES:
+        a, b = new[family], old[family]
+        rows.append(
+            [
+                FAMILY_LABELS[family],
+                success(a),
+                f"{a['flips']}, {a['frozen']}, {a['timeouts']}",
+                share(a["flips_per_subgoal"]),
+                f"{a['mean_low_level_steps']:.0f}",
+                success(b),
+                f"{b['flips']}, {b['frozen']}, {b['timeouts']}",
+                share(b["flips_per_subgoal"]),
+                f"{b['mean_low_level_steps']:.0f}",
+                f"{a['success_rate'] / b['success_rate']:.2f}",
+                f"{seconds_per_step(a) / seconds_per_step(b):.2f}",
+                goal_cell(family, a),
+            ]
+        )
+    episodes = sum(new[family]["episodes"] for family in FAMILIES)
+    rows.append(
+        [
+            f"all {episodes} episodes",
+            "",
+            f"{sum(new[f]['flips'] for f in FAMILIES)} flips",
+            share_range([new[f]["flips_per_subgoal"] for f in FAMILIES]),
+            "",
+            "",
+            f"{sum(old[f]['flips'] for f in FAMILIES)} flips",
+            share_range([old[f]["flips_per_subgoal"] for f in FAMILIES]),
+            "",
+            "",
+            "",
+            "",
+        ]
+    )
+    return table(header, rows)
+
+
+@dataclass(frozen=True)
+class InMazeRow:
+    """One low level (at one smoothing) of one in-maze file, as a table row names it."""
+
+    label: str
+    file: str
+    row: str
+
+
+def in_maze_rows(rows: Sequence[InMazeRow], with_file: bool = False) -> str:
+    """One row per low level: per-family success, the flips' range per subgoal and total, ant4's walk."""
+    header = ["low level", *(["file"] if with_file else []), *FAMILIES]
+    header += ["flips / subgoal", "flips (episodes)", "ant4 mean steps", "ant4 timeouts"]
+    lines = []
+    for spec in rows:
+        outcome = families(load(spec.file), spec.row)
+        run = [name for name in FAMILIES if name in outcome]
+        cells = [success(outcome[name]) if name in outcome else "not run" for name in FAMILIES]
+        ant4 = outcome.get("ant4")
+        lines.append(
+            [
+                spec.label,
+                *([f"`{spec.file}`"] if with_file else []),
+                *cells,
+                share_range([outcome[name]["flips_per_subgoal"] for name in run]),
+                f"{sum(outcome[name]['flips'] for name in run)} ({sum(outcome[name]['episodes'] for name in run)})",
+                f"{ant4['mean_low_level_steps']:.0f}" if ant4 else "not run",
+                ant4["timeouts"] if ant4 else "not run",
+            ]
+        )
+    return table(header, lines)
+
+
+def in_maze_columns(name: str, columns: Sequence[tuple[str, str]]) -> str:
+    """Several low levels of one in-maze run as columns (label, row), one row per family."""
+    results = load(name)
+    outcomes = [(label, families(results, row)) for label, row in columns]
+    lines = []
+    for family in FAMILIES:
+        cells = []
+        for _, outcome in outcomes:
+            f = outcome[family]
+            cells.append(f"{success(f)}; {f['flips']} flips, {f['timeouts']} timeouts")
+        lines.append([family, *cells])
+    lines.append(
+        ["flips / subgoal", *(share_range([o[f]["flips_per_subgoal"] for f in FAMILIES]) for _, o in outcomes)]
+    )
+    lines.append(
+        [
+            "mean episode steps",
+            *(", ".join(f"{o[f]['mean_low_level_steps']:.0f}" for f in FAMILIES) for _, o in outcomes),
+        ]
+    )
+    return table(["family", *(f"{label} [95% Wilson]" for label, _ in outcomes)], lines)
+
+
+# --- selection files (scripts/select_low_level.py) ----------------------------------------------------------
+
+
+def selection(name: str, rows: Sequence[tuple[str, str]], extra: str | None = None) -> str:
+    """Selection rows (label, key in ``scores``): eval-low, the select4/select6 oracle success, flips, score.
+
+    ``extra`` names a column written with the labels (``label`` is then ``"text|extra"``): the heads of an
+    ensemble, say, which the file does not record.
+    """
+    results = load(name)
+    episodes, mazes = results.get("settings", "episodes"), results.get("settings", "mazes")
+    header = ["row", *([extra] if extra else []), f"eval-low ({episodes})", f"select4 ({mazes})", f"select6 ({mazes})"]
+    header += ["flips / subgoal (4x4, 6x6)", "score"]
+    best = results.get("best")
+    lines = []
+    for label, key in rows:
+        row = results.get("scores", key)
+        text, _, more = label.partition("|")
+        flips = row["flips_per_subgoal"]
+        lines.append(
+            [
+                f"{text}{' (the best row)' if key == best else ''}",
+                *([more] if extra else []),
+                rate_cell_of(row["eval_low"], episodes),
+                rate_cell_of(row["success"]["select4"], mazes),
+                rate_cell_of(row["success"]["select6"], mazes),
+                f"{share(flips['select4'])}, {share(flips['select6'])}",
+                f"{row['score']:.3f}",
+            ]
+        )
+    return table(header, lines)
+
+
+SNAPSHOT = re.compile(r"(?:.*/)?(?P<run>[^/]+)/snapshots/step_(?P<steps>\d+)\.zip")
+
+
+def snapshot_label(key: str) -> str:
+    """``train_runs/ant_maze/snapshots/step_700000.zip smoothing=0.5`` -> ``ant_maze 700k, smoothing 0.5``."""
+    path, _, smoothing = key.partition(" smoothing=")
+    match = SNAPSHOT.fullmatch(path)
+    label = f"`{match['run']}` {int(match['steps']) // 1000}k" if match else f"`{path}`"
+    return f"{label}, smoothing {smoothing}" if smoothing else label
+
+
+def selection_ranked(name: str, keys: Sequence[str] | None = None, labels: dict[str, str] | None = None) -> str:
+    """The selection rows ``keys`` (default: all) of a file, best score first, labelled by run and snapshot."""
+    results = load(name)
+    scores = results.get("scores")
+    chosen = list(scores) if keys is None else list(keys)
+    chosen.sort(key=lambda key: -scores[key]["score"])
+    names = labels or {}
+    return selection(name, [(names.get(key, snapshot_label(key)), key) for key in chosen])
+
+
+# --- the low level ----------------------------------------------------------------------------------------
+
+
+def low_level_eval() -> str:
+    """Eval-low of the shipped point and ant per disjoint set of subgoals and pooled, then the ant's eval-low files."""
+    summary = load("low_level/low_level.json")
+    bodies = [("point", summary.get("eval_low", "point")), ("ant", summary.get("eval_low", "ant"))]
+    seeds = list(bodies[0][1]["disjoint_sets"])
+    lines = []
+    for body, entry in bodies:
+        episodes, pooled = entry["episodes"], entry["pooled_episodes"]
+        hits = count(entry["pooled_success_rate"], pooled)
+        lines.append(
+            [
+                f"{body} (`{entry['low_level_id']}`)",
+                f"{entry['max_distance_m']:g} m",
+                *(rate_cell_of(entry["disjoint_sets"][seed], episodes) for seed in seeds),
+                f"{hits} of {pooled}: {rate_cell(hits, pooled)}",
+                f"{entry['mean_steps']:.1f}",
+            ]
+        )
+    header = ["shipped", "subgoals up to", *(f"seed {seed} ({bodies[0][1]['episodes']})" for seed in seeds)]
+    header += ["pooled", "mean steps, seed 0"]
+    files = []
+    for seed in ("", "_200", "_400", "_600"):
+        entry = load(f"low_level/eval_low_ant{seed}.json")
+        files.append(
+            [
+                f"`low_level/eval_low_ant{seed}.json`",
+                f"`{entry.get('low_level_id')}`",
+                rate_cell_of(entry.get("success_rate"), entry.get("episodes")),
+                f"{entry.get('mean_steps'):.1f}",
+            ]
+        )
+    goal = summary.get("goals", "ant_success_rate")
+    return (
+        table(header, lines)
+        + f"\n\nThe ant's goal: {goal}. Its `antmaze-hirl eval-low` files:\n\n"
+        + table(["file", "low level", "success [95% Wilson]", "mean steps"], files)
+    )
+
+
+def low_level_throughput() -> str:
+    """``train_low_level`` against plain SB3 ``learn``: steps per second and their ratios."""
+    speed = load("low_level/low_level.json").get("training_throughput")
+    goal = load("low_level/low_level.json").get("goals", "ratio_checkpoint_every_50k")
+    return table(
+        [
+            "steps per block",
+            "ours, steps/s",
+            "plain SB3, steps/s",
+            "checkpoint save",
+            "ratio, one checkpoint per block",
+            f"ratio, checkpoint every 50k (goal {goal})",
+        ],
+        [
+            [
+                speed["steps_per_block"],
+                speed["ours_steps_per_s"],
+                speed["plain_sb3_steps_per_s"],
+                f"{speed['checkpoint_save_s']} s",
+                speed["ratio_one_checkpoint_per_block"],
+                speed["ratio_checkpoint_every_50k"],
+            ]
+        ],
+    )
+
+
+def selection_oracle(name: str, rows: Sequence[tuple[str, str]]) -> str:
+    """Rows (label, key) of an early selection file, which scored eval-low and the oracle's success (``ceiling``)."""
+    results = load(name)
+    episodes, mazes = results.get("settings", "episodes"), results.get("settings", "mazes")
+    best = results.get("best")
+    lines = []
+    for label, key in rows:
+        row = results.get("scores", key)
+        lines.append(
+            [
+                f"{label}{' (the best row)' if key == best else ''}",
+                rate_cell_of(row["eval_low"], episodes),
+                rate_cell_of(row["ceiling"], mazes),
+                f"{row['score']:.3f}",
+            ]
+        )
+    return table(["row", f"eval-low ({episodes} subgoals)", f"oracle success ({mazes} mazes)", "score"], lines)
+
+
+def low_level_selection() -> str:
+    """Stage 2's selection: the pick and stage 1."""
+    name = "select_low_level/low_level_selection.json"
+    results = load(name)
+    rows = [("the pick (stage 2)", results.get("best")), ("stage 1", "antmaze_hirl/policies/ant_td3.zip")]
+    return f"{len(results.get('scores'))} rows scored.\n\n" + selection_oracle(name, rows)
+
+
+def selection_held_out() -> str:
+    """The held-out-layouts fine-tune's first snapshots beside stage 2 and the maze fine-tune (4x4 mazes only)."""
+    name = "select_low_level/low_level_selection_held_out.json"
+    labels = {"/work/main/antmaze_hirl/policies/ant_td3.zip": "stage 2"}
+    return selection_oracle(name, [(labels.get(key, snapshot_label(key)), key) for key in load(name).get("scores")])
+
+
+def env_throughput() -> str:
+    """AntReach against raw AntMaze steps/s, and the point oracle's random mazes."""
+    results = load("env_throughput/env_throughput.json")
+    low, oracle = results.get("low_level"), results.get("high_level_point_oracle")
+    goals = results.get("goals")
+    return table(
+        ["figure", "value", "goal"],
+        [
+            ["AntReach-v0, steps/s (random actions)", low["ours_steps_per_s"], ""],
+            ["raw `AntMaze_UMaze-v5`, steps/s", low["raw_AntMaze_UMaze_v5_steps_per_s"], ""],
+            ["ratio", low["ratio"], goals["low_level_ratio"]],
+            [
+                f"PointMaze-v0, oracle and scripted controller, {oracle['mazes']} random mazes",
+                rate_cell_of(oracle["success_rate"], oracle["mazes"]),
+                goals["oracle_success_rate"],
+            ],
+            [
+                "episodes/s, mean subgoals, mean steps",
+                f"{oracle['episodes_per_s']}, {oracle['mean_subgoals']}, {oracle['mean_low_level_steps']:.0f}",
+                "",
+            ],
+        ],
+    )
+
+
+# --- the ant in mazes -----------------------------------------------------------------------------------------
+
+STAGE6_ROWS = [
+    ("stage 5 (sequential heads)|5", "antmaze_hirl/policies/ant_td3.zip"),
+    ("stage 5 + x|6", "runs/device/s5x.zip"),
+    ("stage 5 + y|6", "runs/device/s5y.zip"),
+    ("stage 5 + x + y (stage 6, shipped)|7", "runs/device/s5xy.zip"),
+    ("stage 5 + x + x2 + y + y2|9", "runs/device/s5xxyy.zip"),
+    ("x + y|2", "runs/device/xy.zip"),
+    ("x alone|1", "runs/device/x.zip"),
+    ("y alone|1", "runs/device/y.zip"),
+]
+ENSEMBLES = "train_runs/ensembles/"
+STAGE5_MEMBERS = "t750_b325_b225_s3_t700"
+
+
+def ensemble_row(name: str) -> tuple[str, str]:
+    """An ensemble's selection row: ``t750_s3`` -> (``"t750 + s3|2"``, its zip)."""
+    members = name.split("_")
+    label = " + ".join(members) + (" (stage 5)" if name == STAGE5_MEMBERS else "")
+    return f"{label}|{len(members)}", f"{ENSEMBLES}{name}.zip"
+
+
+ENSEMBLE_ROWS = [
+    ("stage 4 (tilt 750k alone)|1", "train_runs/ant_stage4.zip"),
+    *map(
+        ensemble_row,
+        (
+            "t750_b325",
+            "t750_b325_b225",
+            "t750_b325_b225_s3",
+            "t750_t700",
+            "b325_b225",
+            "t750_b325_s3",
+            STAGE5_MEMBERS,
+            "t750_s3",
+            "t750_b325_b225_s3_t700_k350",
+            "t750_b325_s3_k350",
+            "t750_b325_b225_s3_t700_s650",
+        ),
+    ),
+]
+TILT = "train_runs/ant_maze_tilt/snapshots/step_{}000.zip"
+TILT3 = "train_runs/ant_maze_tilt3/snapshots/step_{}000.zip"
+TILT_BUFFER = "train_runs/ant_maze_tilt_buffer/snapshots/step_{}000.zip"
+TILT_ROWS = [
+    ("stage 3 (`ant_maze` 700k)", "train_runs/ant_maze/snapshots/step_700000.zip"),
+    *(
+        (f"`ant_maze_tilt.yml` (w = 1, empty buffer) {k}k{' (stage 4, shipped)' if k == 750 else ''}", TILT.format(k))
+        for k in (150, 350, 500, 650, 700, 750)
+    ),
+    *((f"`ant_maze_tilt3.yml` (w = 3) {k}k", TILT3.format(k)) for k in (150, 350)),
+    *(
+        (f"w = 1, stage 3's replay buffer carried (`--init-buffer`) {k}k", TILT_BUFFER.format(k))
+        for k in (125, 225, 275, 325)
+    ),
+]
+STAGE2 = "stage 2"
+CANDIDATES = [
+    InMazeRow(STAGE2, "in_maze/in_maze_smoothing.json", "shipped"),
+    InMazeRow(
+        "maze fine-tune (`ant_maze.yml`), 75k steps",
+        "in_maze/in_maze_ant_maze_75k.json",
+        "/work/runs/ant_maze_step_75000.zip",
+    ),
+    *(
+        InMazeRow(
+            f"the same, {k}k", f"in_maze/in_maze_ant_maze_{k}k.json", f"/work/runs/ant_maze/snapshots/step_{k}000.zip"
+        )
+        for k in (125, 475, 650)
+    ),
+    InMazeRow(
+        "the same, 700k (stage 3)",
+        "in_maze/in_maze_ant_maze_700k_smoothing.json",
+        "/work/runs/ant_maze/snapshots/step_700000.zip",
+    ),
+    InMazeRow(
+        "the same, 700k, smoothing 0.5",
+        "in_maze/in_maze_ant_maze_700k_smoothing.json",
+        "/work/runs/ant_maze/snapshots/step_700000.zip smoothing=0.5",
+    ),
+    InMazeRow(
+        "smoothing fine-tune (`ant_maze_smoothed.yml`), 375k, smoothing 0.5",
+        "in_maze/in_maze_ant_maze_smoothed_375k.json",
+        "/work/runs/ant_maze_smoothed/snapshots/step_375000.zip smoothing=0.5",
+    ),
+    InMazeRow(
+        "stage 2, smoothing 0.5 (beside the row above)",
+        "in_maze/in_maze_ant_maze_smoothed_375k.json",
+        "shipped smoothing=0.5",
+    ),
+]
+SMOOTHING_ROWS = [
+    InMazeRow("2 m, none (stage 2)", "in_maze/in_maze_smoothing.json", "shipped"),
+    *(
+        InMazeRow(f"2 m, {s}", "in_maze/in_maze_smoothing.json", f"shipped smoothing={s}")
+        for s in ("0.25", "0.5", "0.75")
+    ),
+    *(InMazeRow(f"{d} m, none", f"in_maze/in_maze_distance_{d}.json", "shipped") for d in ("1.5", "3", "4")),
+]
+
+
+def flip_diagnostics() -> str:
+    """Where the stage-2 ant flips, pooled over the five families: by turn, then per family."""
+    outcome = families(load("in_maze/in_maze_smoothing.json"), "shipped")
+    bins = list(outcome["ant3"]["flip_diagnostics"]["by_turn_degrees"])
+    lines = []
+    for name in bins:
+        subgoals = sum(outcome[f]["flip_diagnostics"]["by_turn_degrees"][name]["subgoals"] for f in FAMILIES)
+        flips = sum(outcome[f]["flip_diagnostics"]["by_turn_degrees"][name]["flips"] for f in FAMILIES)
+        label = name if name == "standstill" else f"{name} degrees"
+        lines.append([label, f"{subgoals:,}", flips, share(flips / subgoals)])
+    lines.append(
+        ["all", f"{sum(outcome[f]['subgoals'] for f in FAMILIES):,}", sum(outcome[f]["flips"] for f in FAMILIES), ""]
+    )
+    per_family = table(
+        ["family", "median steps into a subgoal at a flip", "flips within 10 steps of a new subgoal"],
+        [
+            [
+                f,
+                f"{outcome[f]['flip_diagnostics']['flip_steps_into_subgoal_median']:g}",
+                outcome[f]["flip_diagnostics"]["flips_within_10_steps_of_a_new_subgoal"],
+            ]
+            for f in FAMILIES
+        ],
+    )
+    return table(["turn to the subgoal", "subgoals", "flips", "flips / subgoal"], lines) + "\n\n" + per_family
+
+
+def flip_warning() -> str:
+    """Uprightness before a flip, and the reflexes' success, on the select6 mazes."""
+    results = load("flip_warning/flip_warning.json")
+    warning = table(
+        [
+            "uprightness threshold",
+            "flips",
+            "steps from the last step at or above it to the flip: median (range)",
+            "share of non-flip steps below it",
+        ],
+        [
+            [
+                t,
+                w["flips"],
+                f"{w['lead_steps_median']:g} ({w['lead_steps_min']}-{w['lead_steps_max']})",
+                share(w["non_flip_steps_below"] / w["non_flip_steps"]),
+            ]
+            for t, w in results.get("warning").items()
+        ],
+    )
+    reflexes = []
+    for name, r in results.get("reflexes").items():
+        label = "none" if name == "none" else "K = {}, U = {}".format(*name.split("@"))
+        reflexes.append(
+            [
+                label,
+                rate_cell(r["success"], r["episodes"]),
+                r["flip"],
+                r["frozen"],
+                r["timeout"],
+                share(r["reflex_share_of_steps"]),
+            ]
+        )
+    return (
+        warning
+        + "\n\n"
+        + table(
+            [
+                "reflex (torques x K below uprightness U)",
+                "success [95% Wilson]",
+                "flips",
+                "frozen",
+                "timeouts",
+                "steps under the reflex",
+            ],
+            reflexes,
+        )
+    )
+
+
+def algorithms() -> str:
+    """TD3 against SAC from scratch: eval-low, in mazes, training speed."""
+    results = load("low_level/low_level_algorithms.json")
+    names = {"shipped": "stage 2 (then shipped)", "td3": "TD3, 250k", "sac": "SAC, 250k"}
+    lines = []
+    for key, label in names.items():
+        eval_low = results.get("eval_low", key)
+        outcome = results.get("in_maze", key, "families")
+        training = results.get("training", key) if key != "shipped" else None
+        lines.append(
+            [
+                label,
+                rate_cell(eval_low["successes"], eval_low["episodes"]),
+                *(success(outcome[f]) for f in ("ant4", "u", "medium", "large")),
+                share_range([outcome[f]["flips_per_subgoal"] for f in ("ant4", "u", "medium", "large")]),
+                f"{training['median_steps_per_s']} ({training['steps_per_s_ratio_to_first']}x)" if training else "",
+            ]
+        )
+    return table(
+        ["policy", "eval-low", "ant4", "u", "medium", "large", "flips / subgoal", "training steps/s (ratio to TD3)"],
+        lines,
+    )
+
+
+# --- the learner ablation -------------------------------------------------------------------------------------
+
+
+def agreement(cell_agreement: dict[str, float]) -> str:
+    """``"97.3% / 64.9%"``: the oracle's cell on the trial's own labels / on held-out states."""
+    return f"{percent(cell_agreement['training_labels'])} / {percent(cell_agreement['held_out_states'])}"
+
+
+def learner_table(name: str, labels: dict[str, str]) -> str:
+    """One row per variant: per-seed final success with intervals, median, selection, labels, agreement, minutes."""
+    results = load(name)
+    lines = []
+    for variant, label in labels.items():
+        spec = results.get("variants", variant)
+        trials = spec["trials"]
+        selection_rates = [t["selection_success"]["rate"] for t in trials]
+        lines.append(
+            [
+                f"`{variant}` ({label}), seeds {','.join(str(s) for s in spec['seeds'])}",
+                "; ".join(rate_cell(t["final_success"]["successes"], t["final_success"]["episodes"]) for t in trials),
+                percent(spec["final_success_median"]),
+                ", ".join(percent(rate, 100) for rate in selection_rates)
+                + f" (mean {percent(statistics.mean(selection_rates))})",
+                ", ".join(str(t["labels"]) for t in trials),
+                "; ".join(agreement(t["oracle_cell_agreement"]) for t in trials),
+                ", ".join(f"{t['trial_seconds'] / 60:.1f}" for t in trials)
+                + f" (median {spec['trial_seconds_median'] / 60:.1f})",
+            ]
+        )
+    final, selection_mazes = results.get("protocol", "final_mazes"), results.get("protocol", "selection_mazes")
+    return table(
+        [
+            "variant",
+            f"final success per seed [95% Wilson], {final} eval mazes",
+            "median",
+            f"selection success per seed ({selection_mazes} mazes)",
+            "labels per seed",
+            "oracle cell agreement per seed: own labels / held-out states",
+            "trial minutes per seed",
+        ],
+        lines,
+    )
+
+
+def learner_point() -> str:
+    return learner_table(
+        "learner_ablation/learner_ablation.json",
+        {
+            "heading_cnn": "previous default: CNN + MLP, 16 heading bins + distance",
+            "next_cell_cnn": "same CNN, classifies the next cell (3x3)",
+            "next_cell_vin": "next cell read from value iteration's Q (16 rounds, learned costs)",
+            "next_cell_vin_walls": "the same, moves into walls ruled out: **the point's default**",
+        },
+    )
+
+
+def learner_ant() -> str:
+    oracle = families(load("in_maze/in_maze_stage3.json"), "runs/ant_stage2.zip")["ant4"]
+    return (
+        learner_table(
+            "learner_ablation/learner_ablation_ant.json",
+            {
+                "heading_cnn": "CNN + MLP, 16 heading bins + distance: the ant's previous head, "
+                "here with the 2 m reach",
+                "next_cell_cnn": "same CNN, classifies the next cell: **the ant's default**",
+                "next_cell_vin": "next cell from value iteration's Q, 14 rounds",
+                "next_cell_vin_walls": "the same, wall moves ruled out: the point's default",
+            },
+        )
+        + "\n\n"
+        + table(
+            ["the oracle driving the stage-2 low level on the same 100 ant4 mazes", "success [95% Wilson]"],
+            [["`in_maze/in_maze_stage3.json`, row `runs/ant_stage2.zip`", success(oracle)]],
+        )
+    )
+
+
+def next_cell_labels() -> str:
+    """The oracle's 2 m labels on the ant read by the old and the new rule."""
+    results = load("next_cell_labels/next_cell_labels.json")
+    lines = [
+        [rule, share(r["stay"]), share(r["matches_grid_path"]), share(r["goal_within_reach_moved"])]
+        for rule, r in results.get("rules").items()
+    ]
+    return f"{results.get('states'):,} sampled states.\n\n" + table(
+        [
+            "rule",
+            "labels read as stay",
+            "labels matching the grid path's next cell",
+            "goal labels moved out of the goal's cell",
+        ],
+        lines,
+    )
+
+
+# --- other results --------------------------------------------------------------------------------------------
+
+
+def demo() -> str:
+    """``antmaze-hirl demo`` per body, with the ant oracle's success on that family."""
+    results = load("demo_success/demo_success.json")
+    oracle = load("paper_experiment/oracle_success_ant_3.json")
+    lines = []
+    for body in ("point", "ant"):
+        d = results.get(body)
+        settings = ", ".join(f"{k} {v}" for k, v in d["settings"].items() if v is not None)
+        lines.append(
+            [
+                f"{body} (`{d['low_level_id']}`; {settings})",
+                d["seeds"],
+                f"{d['successes']} of {d['episodes']}: {rate_cell(d['successes'], d['episodes'])}",
+                "yes" if d["default_seed_succeeds"] else "no",
+                ", ".join(f"{k}: {v}" for k, v in d["failures"].items()) or "none",
+            ]
+        )
+    lines.append(
+        [
+            "the ant oracle, held-out 3x3 mazes (`paper_experiment/oracle_success_ant_3.json`)",
+            f"maze seed {oracle.get('maze_seed'):,}-",
+            rate_cell_of(oracle.get("success_rate"), oracle.get("episodes")),
+            "",
+            "",
+        ]
+    )
+    return table(["run", "seeds", "success [95% Wilson]", "seed 0 (the default) succeeds", "failures"], lines)
+
+
+def maze_families() -> str:
+    """Distinct wall grids per family in the draws, per part of the layout partition."""
+    results = load("maze_families/maze_families.json")
+    lines = []
+    for name, f in results.get("families").items():
+        parts = f["distinct_wall_grids_per_split"]
+        lines.append(
+            [
+                name,
+                f"{f['draws']:,}",
+                f"{f['distinct_wall_grids']:,}",
+                f"{parts['train']:,}",
+                f"{parts['eval']:,}",
+                f"{parts['selection']:,}",
+            ]
+        )
+    return table(
+        ["family", "draws", "distinct wall grids", "training part", "evaluation part", "selection part"], lines
+    )
+
+
+def import_time() -> str:
+    results = load("import_time/import_time.json")
+    median = results.get("median_seconds")
+    return table(
+        ["fresh interpreters", "`import antmaze_hirl`", "`import gymnasium_robotics`", "ratio", "goal", "loads torch"],
+        [
+            [
+                f"median of {results.get('repeats')} (Python {results.get('python')})",
+                f"{median['antmaze_hirl']:.3f} s",
+                f"{median['gymnasium_robotics']:.3f} s",
+                results.get("ratio"),
+                f"<= {results.get('goal_ratio_at_most')}",
+                "yes" if results.get("antmaze_hirl_loads_torch") else "no",
+            ]
+        ],
+    )
+
+
+def sweeps() -> str:
+    results = load("sweep_scaling/sweep_scaling.json")
+    machine = results.get("machine")
+    return table(
+        ["grid", "serial", "Ray, grid only", "Ray start-up", "Ray end to end", "same `episodes.csv`", "machine"],
+        [
+            [
+                f"{results.get('grid', 'trials')} {results.get('grid', 'body')} trials, "
+                f"{results.get('ray_workers')} Ray workers",
+                f"{results.get('serial_seconds')} s",
+                f"{results.get('ray_grid_seconds')} s",
+                f"{results.get('ray_startup_seconds')} s",
+                f"{results.get('ray_end_to_end_seconds')} s",
+                "yes" if results.get("episodes_csv_identical") else "no",
+                f"{machine['cpu_count']} cores, load average {machine['load_average_1_5_15_before'][0]:.0f} before",
+            ]
+        ],
+    )
+
+
+SECTIONS: dict[str, Callable[[], str]] = {
+    # docs/results/low-level.md
+    "low-level-eval": low_level_eval,
+    "low-level-throughput": low_level_throughput,
+    "low-level-selection": low_level_selection,
+    "env-throughput": env_throughput,
+    # docs/results/ant-in-mazes.md
+    "in-maze-stage6": lambda: in_maze_pair(
+        "in_maze/in_maze.json", "shipped", "runs/device/stage5.zip", "stage 6", "stage 5"
+    ),
+    "selection-stage6": lambda: selection(
+        "select_low_level/low_level_selection_stage6.json", STAGE6_ROWS, extra="heads"
+    ),
+    "in-maze-stage5": lambda: in_maze_pair(
+        "in_maze/in_maze_stage5.json", "shipped", ".dev_run/stage4.zip", "stage 5", "stage 4"
+    ),
+    "selection-ensembles": lambda: selection(
+        "select_low_level/low_level_selection_ensembles.json", ENSEMBLE_ROWS, extra="members"
+    ),
+    "in-maze-stage4": lambda: in_maze_pair(
+        "in_maze/in_maze_stage4.json", "shipped", "runs/ant_stage3.zip", "stage 4", "stage 3"
+    ),
+    "in-maze-stage3": lambda: in_maze_pair(
+        "in_maze/in_maze_stage3.json", "shipped", "runs/ant_stage2.zip", "stage 3", "stage 2"
+    ),
+    "selection-stage3": lambda: selection_ranked(
+        "select_low_level/low_level_selection_held_out_large.json",
+        labels={
+            "antmaze_hirl/policies/ant_td3.zip": "stage 2",
+            "antmaze_hirl/policies/ant_td3.zip smoothing=0.5": "stage 2, smoothing 0.5",
+        },
+    ),
+    "selection-stage3-later": lambda: selection_ranked(
+        "select_low_level/low_level_selection_held_out_large_775k.json",
+        [
+            f"train_runs/ant_maze/snapshots/step_{k}000.zip{s}"
+            for k in (700, 725, 750, 775)
+            for s in ("", " smoothing=0.5")
+        ],
+    ),
+    "selection-held-out": selection_held_out,
+    "candidates": lambda: in_maze_rows(CANDIDATES, with_file=True),
+    "selection-tilt": lambda: selection("select_low_level/low_level_selection_tilt.json", TILT_ROWS),
+    "in-maze-tilt": lambda: in_maze_columns(
+        "in_maze/in_maze_tilt.json",
+        [
+            ("stage 3", "shipped"),
+            ("tilt w = 1, 750k", TILT.format(750)),
+            ("tilt w = 1 + buffer, 325k", TILT_BUFFER.format(325)),
+        ],
+    ),
+    "algorithms": algorithms,
+    "smoothing": lambda: in_maze_rows(SMOOTHING_ROWS),
+    "flip-diagnostics": flip_diagnostics,
+    "flip-warning": flip_warning,
+    # docs/results/learner-ablation.md
+    "learner-point": learner_point,
+    "learner-ant": learner_ant,
+    "next-cell-labels": next_cell_labels,
+    # docs/results/other.md
+    "demo": demo,
+    "maze-families": maze_families,
+    "import-time": import_time,
+    "sweeps": sweeps,
+}
+"""Each generated block's section, by the name the command line takes."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Prints one section; returns the exit status (2 with a one-line error on a bad results file)."""
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("section", nargs="?", choices=list(SECTIONS), help="the table to print")
+    parser.add_argument("--list", action="store_true", help="print the section names")
+    args = parser.parse_args(argv)
+    if args.list or args.section is None:
+        print("\n".join(SECTIONS))
+        return 0 if args.list else 2
+    LOADED.clear()
+    try:
+        print(SECTIONS[args.section]())
+    except ResultsFileError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except KeyError as error:
+        print(f"error: no field {error} in {', '.join(f'results/{name}' for name in LOADED)}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
