@@ -259,7 +259,8 @@ def _paired_labels_to_match(
     """Per seed: labels to the baseline's success on that seed, the method's over the baseline's.
 
     The target on a seed is the mean of the baseline's last ``target_evaluations`` evaluations there (all of
-    them if it has fewer); 1 is its final success.
+    them if it has fewer), at most the best of them, so the baseline's curve always reaches it; 1 is its final
+    success.
     """
     per_seed, skipped = [], sorted(set(trials) ^ set(baseline))  # a seed only one of the two ran
     for seed in sorted(set(trials) & set(baseline)):
