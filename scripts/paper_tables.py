@@ -24,11 +24,13 @@ from typing import Any
 
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
-from antmaze_hirl.experiments.summary import SMOOTHED_TARGET_EVALUATIONS, median_range
+from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
 
 TABLES = ("cost", "per-label", "effort", "beside")
 """The tables this prints, in order; ``beside`` only with ``--beside``."""
+SMOOTHED = "labels_to_match_dagger_per_seed_smoothed"
+"""The paired figure whose per-seed target averages DAgger's last evaluations (its count: ``target_evaluations``)."""
 
 # The settings that fix a seed's final evaluation mazes: two runs are paired by seed only when they agree.
 SAME_MAZES = ("body", "maze_size", "held_out_layouts", "final_eval_episodes")
@@ -119,13 +121,13 @@ def per_label_table(summary: dict[str, Any]) -> str:
     auc = "normalised AUC" if horizon is None else f"normalised AUC over 0-{horizon:.0f} labels"
     # Protocol 2 summaries also pair the question by seed (summary.py); older ones print as they did.
     paired = any("labels_to_match_dagger_per_seed" in m for m in run)
-    smoothed = any("labels_to_match_dagger_per_seed_smoothed" in m for m in run)
+    # The count of evaluations each smoothed target averaged, as the summary recorded it.
+    counts = sorted({int(m[SMOOTHED]["target_evaluations"]) for m in run if SMOOTHED in m})
+    smoothed = bool(counts)
     lines = [
         f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |"
         + (" ratio to DAgger paired by seed, median (seeds reaching) |" if paired else "")
-        + (
-            f" paired, target the mean of DAgger's last {SMOOTHED_TARGET_EVALUATIONS} evaluations |" if smoothed else ""
-        ),
+        + (f" paired, target the mean of DAgger's last {'/'.join(map(str, counts))} evaluations |" if smoothed else ""),
         "|---|" + "---|" * (len(LABEL_BUDGETS) + 3 + paired + smoothed),
     ]
     for name, method in _methods_run(summary):
@@ -142,7 +144,7 @@ def per_label_table(summary: dict[str, Any]) -> str:
         if paired:
             row += f" {_paired_ratio(method.get('labels_to_match_dagger_per_seed'))} |"
         if smoothed:
-            row += f" {_paired_ratio(method.get('labels_to_match_dagger_per_seed_smoothed'))} |"
+            row += f" {_paired_ratio(method.get(SMOOTHED))} |"
         lines.append(row)
     # Summaries from before same_set was recorded print no note.
     same = {m["labels_to_match_dagger"].get("same_set") for m in run if "labels_to_match_dagger" in m} - {None}

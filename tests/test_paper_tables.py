@@ -138,6 +138,10 @@ def test_labels_to_match_dagger_at_0_labels_has_a_ratio_and_protocol_2_notes_the
     assert "| paired, target the mean of DAgger's last 3 evaluations |" in per_label[0]
     assert per_label[3].endswith("| 0 (2 of 2) | 0.00x | 0.00x (2 of 2) | 0.00x (2 of 2) |")
     assert per_label[2].endswith("| 40 (2 of 2) | 1.00x | 1.00x | 1.00x |")
+    # The header states the count the summary recorded, not today's default.
+    older = copy.deepcopy(summary)
+    older["methods"]["noise"]["labels_to_match_dagger_per_seed_smoothed"]["target_evaluations"] = 5
+    assert "| paired, target the mean of DAgger's last 5 evaluations |" in paper_tables.per_label_table(older)
     assert per_label[-1].startswith("Labels to match DAgger: same_set true: DAgger's target and every curve")
     # DAgger itself at 0 labels: 0 against 0 is a ratio of 1; a method needing more has no finite ratio.
     both = {"methods": summarise(rows, ["noise"], baseline="noise", evaluations=evaluations)}

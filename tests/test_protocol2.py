@@ -315,3 +315,22 @@ def test_smoothed_paired_target_is_the_mean_of_daggers_last_evaluations():
     # DAgger: 2/4 up to 60 labels, 4/4 at 80: 2/3 at 60 + (2/3 - 1/2) / (1/2) * 20 labels.
     assert math.isclose(smoothed["per_seed"][0]["baseline_labels"], 60 + (target - 0.5) / 0.5 * 20)
     assert smoothed["median_ratio"] is not None and smoothed["median_ratio"] < 1
+
+
+def test_smoothed_paired_target_on_a_plateau_is_reached_by_daggers_own_curve():
+    rows, evaluations = [], []
+    # DAgger ends on a plateau at 72/100: the mean of 0.72 three times is 0.7200000000000001 in floating point,
+    # which no evaluation reaches; the target must be the plateau itself, reached by DAgger at 40 labels.
+    dagger = [{0: 0, 2: 50, 4: 72, 6: 72, 8: 72}]
+    gated = [{0: 0, 2: 72, 4: 72, 6: 72, 8: 72}]
+    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode, mazes=100)
+            rows += trial_rows
+            evaluations += outcomes
+    smoothed = summarise(rows, ["dagger", "gated"], evaluations=evaluations)["gated"][
+        "labels_to_match_dagger_per_seed_smoothed"
+    ]
+    assert smoothed["per_seed"][0]["target"] == 0.72
+    assert smoothed["per_seed"][0]["baseline_labels"] == 40.0 and smoothed["per_seed"][0]["labels"] == 10.0
+    assert smoothed["median_ratio"] == 0.25

@@ -245,7 +245,10 @@ def test_an_old_clicks_log_with_step_loads_as_the_new_one(one_episode_in):
 @pytest.mark.parametrize(
     ("rename", "error"),
     [
-        (lambda record: {**record, "step": record["label_index"] + 1}, "'label_index' and its old name 'step' hold"),
+        (
+            lambda record: {**record, "step": record["label_index"] + 1},
+            "'label_index' and its old name 'step' hold different values \\(0 against 1\\)",
+        ),
         (
             lambda record: {k: v for k, v in record.items() if k != "label_index"},
             "no 'label_index' \\(nor its old name",

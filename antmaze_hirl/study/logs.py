@@ -63,18 +63,32 @@ def renamed_value(record: Mapping[str, Any], key: str, where: str) -> Any:
     ``.npz`` arrays and JSON values alike).
 
     Raises:
-        ValueError: If ``record`` has neither name, or both with different values (names ``where`` and the key).
+        ValueError: If ``record`` has neither name, or both with different values (names ``where``, the key
+            and the first values that differ).
     """
     old_key = RENAMED_KEYS[key]
     if key in record and old_key in record:
-        if not np.array_equal(record[key], record[old_key]):
-            raise ValueError(f"{where}: {key!r} and its old name {old_key!r} hold different values")
+        new, old = np.asarray(record[key]), np.asarray(record[old_key])
+        if not np.array_equal(new, old):
+            raise ValueError(
+                f"{where}: {key!r} and its old name {old_key!r} hold different values ({_difference(new, old)})"
+            )
         return record[key]
     if key in record:
         return record[key]
     if old_key in record:
         return record[old_key]
     raise ValueError(f"{where}: no {key!r} (nor its old name {old_key!r})")
+
+
+def _difference(new: np.ndarray, old: np.ndarray) -> str:
+    """Where two values differ, in a few words: the values, their shapes, or the first index and its values."""
+    if new.ndim == 0 and old.ndim == 0:
+        return f"{new.item()!r} against {old.item()!r}"
+    if new.shape != old.shape:
+        return f"shapes {new.shape} against {old.shape}"
+    index = int(np.flatnonzero(new.ravel() != old.ravel())[0])
+    return f"at index {index}: {new.ravel()[index].item()!r} against {old.ravel()[index].item()!r}"
 
 
 def line_checksum(text: str) -> str:
