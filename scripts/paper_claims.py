@@ -1,8 +1,8 @@
-"""The paper's claims, one by one, against the committed results folders (issue 32).
+"""The paper's claims, one by one, against the committed results folders.
 
 **Protocol 1** (the default, ``python scripts/paper_claims.py [--folders A,B]``): the figures that the
 hand-written table of ``docs/paper-claims.md`` quotes, per body and method, from the old folders
-(``results/paper_experiment/{point,ant}``, with the flaws of issue 32's audit). It prints final
+(``results/paper_experiment/{point,ant}``, with the flaws the audit of protocol 1 found). It prints final
 success (median, min-max over seeds, the paired Wilcoxon p against DAgger), labels per trial, labels to
 DAgger's median final success and that ratio, the training episodes and labels at which each trial's
 learner first scored >= 60% on a periodic evaluation, and the share of labels that reward-based pruning
@@ -12,48 +12,8 @@ removed.
 verdicts, computed from each folder's ``summary.json`` (and ``episodes.csv`` where the folder has it). It
 prints one markdown row per claim: the claim, what was measured on each body, and the verdict.
 
-Verdict rules (protocol 2). A "reading" is one method that stands for the claim on one body:
-
-* **A comparison with DAgger.** The per-seed figures are paired by seed. The test is the two-sided
-  Wilcoxon signed-rank test. The interval is the 95% Hodges-Lehmann interval of the paired differences
-  (from the Walsh averages; unbounded with 5 pairs or fewer). A body *supports* the claim when the
-  median difference points the claimed way and p < the threshold. It *contradicts* the claim when the
-  median difference points the other way with p < the threshold, or when the interval excludes the
-  claimed effect. The claimed effects are 5 points of final success for "beats" and "worse", and, for
-  labels, 10% of DAgger's median labels per trial. Otherwise the body is *undecided*.
-* **Thresholds.** p < 0.05, divided by the number of methods that one claim tries (Bonferroni). The two
-  reward-based readings, ``reward`` and ``reward_per_step`` (Alg. 4 as written), give 0.025. The five
-  active methods of claim 6 give 0.01. With n pairs the exact test cannot go below 2 / 2**n: 0.0625 with
-  5 pairs, 0.0039 with 9, 0.0020 with 10.
-* **Labels** are the labels at which a seed's curve first reaches DAgger's median final success, on the
-  same evaluation set (``labels_to_match_dagger``). A seed that never reaches it counts as more labels
-  than any seed that does (1e9 in the test), as in ``summary.json``'s median. Two such seeds tie.
-* **Claim 4** has no paired test. A seed passes if its learner's first evaluation at >= 60% comes after
-  fewer than 100 training episodes (from ``episodes.csv``). A seed whose untrained learner already scores
-  >= 60% passes at 0 episodes. If the median seed's untrained learner does, the claim is *not testable*:
-  the curve starts where the claim ends. The one-sided sign test of k passing seeds out of n supports the
-  claim when P(X >= k) < the threshold. It contradicts it when P(X <= k) < the threshold. A folder without
-  ``episodes.csv`` has no episode counts, only ``summary.json``'s labels. There it can only contradict the
-  claim (seeds that never pass within the trial).
-* **Claim 6** is supported on a body when some active method reaches DAgger's final success with a median
-  ratio of labels <= 0.3x DAgger's, and its labels beat DAgger's in the paired test at 0.01. It is
-  contradicted when, for every active method, the 95% interval of the paired differences
-  ``labels - 0.3 x DAgger's labels`` lies above 0.
-* **Labels (claims 2 and 6)** are read paired by seed where the summary has ``labels_to_match_dagger_per_seed``
-  (protocol-2 summaries written since it exists): each seed's target is its own DAgger final success, which
-  DAgger always reaches. Older summaries read DAgger's median final success as the target.
-* **A claim** holds when every body supports it. It does not hold when some body contradicts it.
-  Otherwise it is inconclusive. With several readings, the claim holds when one reading holds, and does
-  not hold when every reading does not hold.
-* **Claim 5's** ``aggrevate`` uses the oracle's dense cost-to-go, not the paper's sparse reward. DAgger
-  beating it is evidence for the claim, since the sparse-reward version can only do worse. The dense
-  version beating DAgger decides nothing about the sparse one: that verdict is *not testable here*.
-* **Claim 7** is not testable without people.
-* **Interim folders.** A folder where some method has fewer than 10 seeds (the issue's count) is
-  INTERIM. No verdict on it is final: a row reads "interim: leaning <verdict>". The leaning is the verdict
-  where the tests already decide it. Otherwise it is the direction of the data: "holds (direction only)"
-  when the median points the claimed way on every body of some reading, "does not hold (direction only)"
-  when it points the other way on some body of every reading, else "inconclusive".
+The verdict rules are stated once, in the docstring of :mod:`antmaze_hirl.experiments.claims`, which
+computes every verdict; the table's footnote summarises them.
 
 Usage:
   python scripts/paper_claims.py                       # protocol 1, the committed folders
@@ -97,7 +57,7 @@ def _folder_line(body: Body) -> str:
 
 
 FOOTNOTE = (
-    "Verdict rules (the docstring of `scripts/paper_claims.py`). Each method is paired by seed against "
+    "Verdict rules (the docstring of `antmaze_hirl.experiments.claims`). Each method is paired by seed against "
     f"DAgger: two-sided Wilcoxon signed-rank test at p < {ALPHA}, split over the methods a claim tries "
     "(two reward-based: 0.025; five active: 0.01). CI is the 95% Hodges-Lehmann interval of the paired "
     "differences, unbounded with 5 pairs or fewer. With n pairs, p cannot go below 2/2^n (the floor). A body "
