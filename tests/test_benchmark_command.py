@@ -186,3 +186,48 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
         report = load_report(path)
         assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
         assert f"`{path.name}` |" in page
+
+
+def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env):
+    spec = benchmark.SUITE_SPECS["point5"]
+    obs, _ = point_env.reset(seed=0, options={"task_id": 0})
+    agent = obs["state"][:2]
+    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
+    short, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
+    assert np.linalg.norm(default(obs) - agent) > 0.6  # one cell (1 m) by default
+    assert np.linalg.norm(short(obs) - agent) == pytest.approx(0.5)
+    report = score_policy("point5", "oracle", task_ids=[0], subgoal_reach_m=0.5)
+    assert report["oracle_subgoal_reach_m"] == 0.5 and report["successes"] == 1
+    assert report["mean_attempts"] > score_policy("point5", "oracle", task_ids=[0])["mean_attempts"]
+    assert "oracle_subgoal_reach_m" not in score_policy("point5", "random", task_ids=[0])
+
+
+def test_a_suites_own_oracle_reach_is_the_default_of_policy_oracle(monkeypatch):
+    from dataclasses import replace
+
+    specs = benchmark.SUITE_SPECS
+    assert benchmark.oracle_subgoal_reach_m(specs["point5"]) is None  # one cell, the point's experiment setting
+    assert benchmark.oracle_subgoal_reach_m(replace(specs["large"], oracle_subgoal_reach_m=None)) == 2.0  # the ant's
+    monkeypatch.setitem(specs, "point5", replace(specs["point5"], oracle_subgoal_reach_m=0.5))
+    report = score_policy("point5", "oracle", task_ids=[0])
+    assert report["oracle_subgoal_reach_m"] == 0.5
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), True])
+def test_a_bad_subgoal_reach_m_is_refused_naming_the_value(bad):
+    with pytest.raises(ValueError, match=rf"subgoal_reach_m must be a finite number of metres > 0, got {bad!r}"):
+        score_policy("point5", "oracle", task_ids=[0], subgoal_reach_m=bad)
+
+
+def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
+    with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; policy 'random' takes none"):
+        score_policy("point5", "random", task_ids=[0], subgoal_reach_m=1.0)
+    with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; a function policy takes none"):
+        score_policy("point5", lambda obs: obs["state"][:2], task_ids=[0], subgoal_reach_m=1.0)
+    for argv, message in (
+        (["--policy", "random", "--subgoal-reach-m", "1"], "is the oracle's setting; --policy random"),
+        (["--policy", "oracle", "--subgoal-reach-m", "0"], "--subgoal-reach-m must be a finite number > 0"),
+    ):
+        code, captured = run_cli(capsys, "point5", *argv, "--tasks", "0")
+        lines = captured.err.strip().splitlines()
+        assert code == 2 and len(lines) == 1 and message in lines[0], lines
