@@ -202,17 +202,6 @@ def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env
     assert "oracle_subgoal_reach_m" not in score_policy("point5", "random", task_ids=[0])
 
 
-def test_a_suites_own_oracle_reach_is_the_default_of_policy_oracle(monkeypatch):
-    from dataclasses import replace
-
-    specs = benchmark.SUITE_SPECS
-    assert benchmark.oracle_subgoal_reach_m(specs["point5"]) is None  # one cell, the point's experiment setting
-    assert benchmark.oracle_subgoal_reach_m(replace(specs["large"], oracle_subgoal_reach_m=None)) == 2.0  # the ant's
-    monkeypatch.setitem(specs, "point5", replace(specs["point5"], oracle_subgoal_reach_m=0.5))
-    report = score_policy("point5", "oracle", task_ids=[0])
-    assert report["oracle_subgoal_reach_m"] == 0.5
-
-
 @pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), True])
 def test_a_bad_subgoal_reach_m_is_refused_naming_the_value(bad):
     with pytest.raises(ValueError, match=rf"subgoal_reach_m must be a finite number of metres > 0, got {bad!r}"):

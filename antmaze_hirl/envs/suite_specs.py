@@ -38,9 +38,6 @@ class SuiteSpec:
         episodes_per_task: The protocol's episodes per task, K: 1 on a random family (100 mazes), 20 on a
             fixed map (100 episodes over 5 tasks; OGBench plays 50 per task), each with its own start and goal
             noise.
-        oracle_subgoal_reach_m: The farthest subgoal of the benchmark's scripted oracle (``--policy oracle``)
-            on this suite, metres; ``None``: the body's experiment setting (one cell for the point, 2 m for the
-            ant). Part of what ``--policy oracle`` means on the suite, so a change is recorded in its reports.
     """
 
     name: str
@@ -52,7 +49,6 @@ class SuiteSpec:
     max_low_level_steps: int
     checksum: str
     episodes_per_task: int = 1
-    oracle_subgoal_reach_m: float | None = None
 
     @property
     def max_episode_steps(self) -> int:

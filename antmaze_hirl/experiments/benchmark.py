@@ -205,20 +205,6 @@ def _space_text(space: Any) -> str:
     return str(getattr(space, "shape", space))
 
 
-def oracle_subgoal_reach_m(spec: SuiteSpec) -> float | None:
-    """The farthest subgoal of ``--policy oracle`` on suite ``spec``, metres; ``None``: one cell.
-
-    The suite's own setting (:attr:`SuiteSpec.oracle_subgoal_reach_m`) where it has one, else the body's
-    experiment default (:attr:`~antmaze_hirl.envs.profiles.BodyProfile.subgoal_reach_m`: one cell for the
-    point, 2 m for the ant).
-    """
-    if spec.oracle_subgoal_reach_m is not None:
-        return spec.oracle_subgoal_reach_m
-    from antmaze_hirl.experiments.config import BODY_DEFAULTS
-
-    return BODY_DEFAULTS[spec.body]["expert_max_distance"]
-
-
 def resolve_policy(
     spec: SuiteSpec,
     policy: str | os.PathLike[str],
@@ -229,9 +215,10 @@ def resolve_policy(
 ) -> tuple[Any, str]:
     """The policy named by ``policy`` for suite ``spec`` (on ``env``, one of its envs) and its description.
 
-    ``"oracle"``: the scripted oracle, its subgoals at most ``subgoal_reach_m`` metres away (default
-    :func:`oracle_subgoal_reach_m`); ``"random"``: :class:`RandomSubgoalPolicy` seeded with ``seed``; else a
-    path to an SB3 zip of a high-level model (PPO, A2C, SAC, TD3/DDPG) or to a saved DAgger learner
+    ``"oracle"``: the scripted oracle, its subgoals at most ``subgoal_reach_m`` metres away (default the
+    body's experiment setting: one cell for the point, 2 m for the ant); ``"random"``:
+    :class:`RandomSubgoalPolicy` seeded with ``seed``; else a path to an SB3 zip of a high-level model (PPO,
+    A2C, SAC, TD3/DDPG) or to a saved DAgger learner
     (:meth:`~antmaze_hirl.dagger.high_level_policy.HighLevelPolicy.save`, e.g. a study's ``learner.zip``).
 
     Raises:
@@ -246,9 +233,10 @@ def resolve_policy(
         if not (number and np.isfinite(subgoal_reach_m) and subgoal_reach_m > 0):
             raise ValueError(f"subgoal_reach_m must be a finite number of metres > 0, got {subgoal_reach_m!r}")
     if policy == "oracle":
+        from antmaze_hirl.experiments.config import BODY_DEFAULTS
         from antmaze_hirl.experts import PathOracle
 
-        reach = oracle_subgoal_reach_m(spec) if subgoal_reach_m is None else float(subgoal_reach_m)
+        reach = BODY_DEFAULTS[spec.body]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
         return PathOracle.for_env(env, subgoal_reach_m=reach), "oracle"
     if policy == "random":
         space = env.action_space
@@ -389,7 +377,7 @@ def score_policy(
         num_envs: Mazes played at once in lockstep; 1 plays them one after another (module docstring).
         progress: Show a progress bar.
         subgoal_reach_m: The oracle's farthest subgoal, metres (``policy="oracle"`` only); default the
-            suite's (:func:`oracle_subgoal_reach_m`).
+            body's experiment setting (one cell for the point, 2 m for the ant).
 
     Returns:
         The report (module docstring): suite figures, ``"tasks"`` per task, the policy, budget and wall time;
@@ -515,8 +503,8 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--subgoal-reach-m",
         type=float,
         default=None,
-        help="--policy oracle only: its farthest subgoal, metres (default: the suite's, docs/leaderboard.md; "
-        "the body's experiment setting, 1 cell for the point and 2 m for the ant, where the suite sets none)",
+        help="--policy oracle only: its farthest subgoal, metres (default: the body's experiment setting, "
+        "1 cell for the point and 2 m for the ant)",
     )
     parser.add_argument(
         "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
