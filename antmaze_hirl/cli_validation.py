@@ -91,6 +91,7 @@ INT_BOUNDS: dict[str, IntBounds] = {
 
 FLOAT_BOUNDS: dict[str, FloatBounds] = {
     "subgoal_reach_m": _METRES,
+    "clearance_m": _METRES,
     "sample_radius_m": _METRES,
     "decay": FloatBounds(1.0, 1e6, low_inclusive=True),
     "noise": FloatBounds(0.0, 100.0, low_inclusive=True),

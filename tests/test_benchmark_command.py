@@ -203,3 +203,56 @@ def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
     with pytest.raises(SystemExit):
         leaderboard.main(["--section", "leaderboard"])
     assert "invalid choice: 'leaderboard'" in capsys.readouterr().err
+
+
+def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env):
+    spec = benchmark.SUITE_SPECS["point5"]
+    obs, _ = point_env.reset(seed=0, options={"task_id": 0})
+    agent = obs["state"][:2]
+    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
+    short, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
+    assert np.linalg.norm(default(obs) - agent) > 0.6  # one cell (1 m) by default
+    assert np.linalg.norm(short(obs) - agent) == pytest.approx(0.5)
+    report = score_policy("point5", "oracle", task_ids=[0], subgoal_reach_m=0.5)
+    assert report["oracle_subgoal_reach_m"] == 0.5 and report["successes"] == 1
+    assert report["mean_attempts"] > score_policy("point5", "oracle", task_ids=[0])["mean_attempts"]
+    assert "oracle_subgoal_reach_m" not in score_policy("point5", "random", task_ids=[0])
+
+
+def test_clearance_m_moves_the_oracles_subgoals_off_the_walls_and_is_recorded(point_env):
+    spec = benchmark.SUITE_SPECS["point5"]
+    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
+    wide, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, clearance_m=0.45)
+    obs, _ = point_env.reset(seed=0, options={"task_id": 0})
+    moved, done = 0, False
+    while not done:  # one episode of the default oracle; the wide one labels the same observations
+        moved += not np.allclose(wide(obs), default(obs))
+        obs, _, terminated, truncated, _ = point_env.step(default(obs))
+        done = terminated or truncated
+    assert moved > 0
+    report = score_policy("point5", "oracle", task_ids=[0], clearance_m=0.45)
+    assert report["oracle_clearance_m"] == 0.45 and report["oracle_subgoal_reach_m"] == 1.0
+    assert score_policy("point5", "oracle", task_ids=[0])["oracle_clearance_m"] == pytest.approx(0.2)  # 0.2 cell
+
+
+@pytest.mark.parametrize("name", ["subgoal_reach_m", "clearance_m"])
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), True])
+def test_a_bad_oracle_setting_is_refused_naming_it_and_the_value(name, bad):
+    with pytest.raises(ValueError, match=rf"{name} must be a finite number of metres > 0, got {bad!r}"):
+        score_policy("point5", "oracle", task_ids=[0], **{name: bad})
+
+
+def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
+    with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; policy 'random' takes none"):
+        score_policy("point5", "random", task_ids=[0], subgoal_reach_m=1.0)
+    with pytest.raises(ValueError, match=r"clearance_m are the oracle's settings; a function policy takes none"):
+        score_policy("point5", lambda obs: obs["state"][:2], task_ids=[0], subgoal_reach_m=1.0)
+    for argv, message in (
+        (["--policy", "random", "--subgoal-reach-m", "1"], "is the oracle's setting; --policy random"),
+        (["--policy", "oracle", "--subgoal-reach-m", "0"], "--subgoal-reach-m must be a finite number > 0"),
+        (["--policy", "random", "--clearance-m", "1"], "--clearance-m is the oracle's setting; --policy random"),
+        (["--policy", "oracle", "--clearance-m", "nan"], "--clearance-m must be a finite number > 0"),
+    ):
+        code, captured = run_cli(capsys, "point5", *argv, "--tasks", "0")
+        lines = captured.err.strip().splitlines()
+        assert code == 2 and len(lines) == 1 and message in lines[0], lines

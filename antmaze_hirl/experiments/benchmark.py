@@ -205,23 +205,44 @@ def _space_text(space: Any) -> str:
     return str(getattr(space, "shape", space))
 
 
-def resolve_policy(spec: SuiteSpec, policy: str | os.PathLike[str], env: Any, *, seed: int) -> tuple[Any, str]:
+def resolve_policy(
+    spec: SuiteSpec,
+    policy: str | os.PathLike[str],
+    env: Any,
+    *,
+    seed: int,
+    subgoal_reach_m: float | None = None,
+    clearance_m: float | None = None,
+) -> tuple[Any, str]:
     """The policy named by ``policy`` for suite ``spec`` (on ``env``, one of its envs) and its description.
 
-    ``"oracle"``: the scripted oracle (subgoals at most one cell away for the point, 2 m for the ant, as in
-    the experiments); ``"random"``: :class:`RandomSubgoalPolicy` seeded with ``seed``; else a path to an SB3
-    zip of a high-level model (PPO, A2C, SAC, TD3/DDPG) or to a saved DAgger learner
+    ``"oracle"``: the scripted oracle, its subgoals at most ``subgoal_reach_m`` metres away (default the
+    body's experiment setting: one cell for the point, 2 m for the ant) and its straight walks ``clearance_m``
+    from walls (default :class:`~antmaze_hirl.experts.PathOracle`'s, 0.2 cell); ``"random"``:
+    :class:`RandomSubgoalPolicy` seeded with ``seed``; else a path to an SB3 zip of a high-level model (PPO,
+    A2C, SAC, TD3/DDPG) or to a saved DAgger learner
     (:meth:`~antmaze_hirl.dagger.high_level_policy.HighLevelPolicy.save`, e.g. a study's ``learner.zip``).
 
     Raises:
         FileNotFoundError: If a path names no file.
-        ValueError: If the file is neither kind, or its policy is for another body or maze shape.
+        ValueError: If the file is neither kind, its policy is for another body or maze shape, or
+            ``subgoal_reach_m`` or ``clearance_m`` is given for a policy other than the oracle or is not a
+            finite number > 0.
     """
+    for name, metres in (("subgoal_reach_m", subgoal_reach_m), ("clearance_m", clearance_m)):
+        if metres is None:
+            continue
+        if policy != "oracle":
+            raise ValueError(f"{name} is the oracle's setting; policy {str(policy)!r} takes none")
+        number = isinstance(metres, int | float) and not isinstance(metres, bool)
+        if not (number and np.isfinite(metres) and metres > 0):
+            raise ValueError(f"{name} must be a finite number of metres > 0, got {metres!r}")
     if policy == "oracle":
         from antmaze_hirl.experiments.config import BODY_DEFAULTS
         from antmaze_hirl.experts import PathOracle
 
-        return PathOracle.for_env(env, subgoal_reach_m=BODY_DEFAULTS[spec.body]["expert_max_distance"]), "oracle"
+        reach = BODY_DEFAULTS[spec.body]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
+        return PathOracle.for_env(env, subgoal_reach_m=reach, clearance=clearance_m), "oracle"
     if policy == "random":
         space = env.action_space
         return RandomSubgoalPolicy(space.low, space.high, seed), "random"
@@ -346,6 +367,8 @@ def score_policy(
     low_level: Any = None,
     num_envs: int = DEFAULT_NUM_ENVS,
     progress: bool = False,
+    subgoal_reach_m: float | None = None,
+    clearance_m: float | None = None,
 ) -> dict[str, Any]:
     """Scores a high-level policy on every task (or ``task_ids``) of ``suite``.
 
@@ -359,13 +382,20 @@ def score_policy(
         low_level: The low-level controller (default: the body's shipped policy).
         num_envs: Mazes played at once in lockstep; 1 plays them one after another (module docstring).
         progress: Show a progress bar.
+        subgoal_reach_m: The oracle's farthest subgoal, metres (``policy="oracle"`` only); default the
+            body's experiment setting (one cell for the point, 2 m for the ant).
+        clearance_m: How far the oracle's straight walks keep from walls, metres (``policy="oracle"`` only);
+            default 0.2 cell.
 
     Returns:
-        The report (module docstring): suite figures, ``"tasks"`` per task, the policy, budget and wall time.
+        The report (module docstring): suite figures, ``"tasks"`` per task, the policy, budget and wall time;
+        for the oracle also ``"oracle_subgoal_reach_m"`` and ``"oracle_clearance_m"``, the settings it played
+        with.
 
     Raises:
-        ValueError: On an unknown suite, ``episodes_per_task < 1``, ``num_envs < 1``, a bad task id, or a bad
-            policy file.
+        ValueError: On an unknown suite, ``episodes_per_task < 1``, ``num_envs < 1``, a bad task id, a bad
+            policy file, or a ``subgoal_reach_m`` or ``clearance_m`` that is not > 0 or is given for a policy
+            other than the oracle.
         FileNotFoundError: If a policy path names no file.
     """
     spec = check_suite_name(suite)
@@ -384,9 +414,15 @@ def score_policy(
     if isinstance(policy, str | os.PathLike):
         probe = make_env()
         try:
-            acting, description = resolve_policy(spec, policy, probe, seed=seed)
+            acting, description = resolve_policy(
+                spec, policy, probe, seed=seed, subgoal_reach_m=subgoal_reach_m, clearance_m=clearance_m
+            )
         finally:
             probe.close()
+    elif subgoal_reach_m is not None or clearance_m is not None:
+        raise ValueError(
+            f"subgoal_reach_m and clearance_m are the oracle's settings; a {type(policy).__name__} policy takes none"
+        )
     else:
         acting, description = policy, getattr(policy, "__name__", type(policy).__name__)
     episodes = [(k, seed + k * episodes_per_task + j) for k in ids for j in range(episodes_per_task)]
@@ -409,6 +445,11 @@ def score_policy(
         "seed": seed,
         "num_envs": num_envs,
         "task_ids": "all" if task_ids is None else ids,
+        **(
+            {"oracle_subgoal_reach_m": acting.subgoal_reach_m, "oracle_clearance_m": acting.clearance}
+            if policy == "oracle"
+            else {}
+        ),
         **_figures(outcomes),
         "low_level_steps_total": int(sum(outcome.low_level_steps for outcome in outcomes)),
         "seconds": round(seconds, 1),
@@ -476,6 +517,20 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     )
     parser.add_argument("--tasks", default=None, help="comma-separated task ids (default: all)")
     parser.add_argument(
+        "--subgoal-reach-m",
+        type=float,
+        default=None,
+        help="--policy oracle only: its farthest subgoal, metres (default: the body's experiment setting, "
+        "1 cell for the point and 2 m for the ant)",
+    )
+    parser.add_argument(
+        "--clearance-m",
+        type=float,
+        default=None,
+        help="--policy oracle only: how far its straight walks to a subgoal keep from walls, metres "
+        "(default: 0.2 cell, 0.8 m for the ant)",
+    )
+    parser.add_argument(
         "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
     )
     parser.add_argument(
@@ -499,6 +554,9 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     spec = check_suite_name(args.suite)
     if args.episodes_per_task is not None and args.episodes_per_task < 1:
         raise ValueError(f"--episodes-per-task must be >= 1, got {args.episodes_per_task}")
+    for option, value in (("--subgoal-reach-m", args.subgoal_reach_m), ("--clearance-m", args.clearance_m)):
+        if value is not None and args.policy != "oracle":
+            raise ValueError(f"{option} is the oracle's setting; --policy {args.policy} takes none")
     import torch
 
     torch.set_num_threads(1)  # small-batch forwards: a second thread only contends (shared/README.md)
@@ -510,10 +568,14 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         task_ids=_parse_task_ids(args.tasks),
         num_envs=args.num_envs,
         progress=not args.no_progress,
+        subgoal_reach_m=args.subgoal_reach_m,
+        clearance_m=args.clearance_m,
     )
     command = ["antmaze-hirl", "benchmark", spec.name, "--policy", str(args.policy)]
     command += ["--episodes-per-task", str(report["episodes_per_task"]), "--seed", str(args.seed)]
     command += ["--num-envs", str(args.num_envs)]
+    command += [] if args.subgoal_reach_m is None else ["--subgoal-reach-m", f"{args.subgoal_reach_m:g}"]
+    command += [] if args.clearance_m is None else ["--clearance-m", f"{args.clearance_m:g}"]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
     print(report_table(report, per_task=args.per_task or len(report["tasks"]) <= 10))
     if args.json is not None:
