@@ -8,12 +8,13 @@ Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|results|figure
+Usage: python scripts/leaderboard.py --section suites|results|spread|figure
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -37,8 +38,8 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "DAgger (plain), protocol learner, seeds 1 and up",
-        "`python scripts/benchmark_dagger.py --learner protocol --seed 1`: only seed 0 ran (issue 35's session)",
+        "DAgger (plain), protocol learner, seeds 3 and up",
+        "`python scripts/benchmark_dagger.py --learner protocol --seed 3`: seeds 0-2 ran (the spread table below)",
     ),
     (
         "point5",
@@ -53,8 +54,9 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "ant4",
-        "DAgger (plain), protocol learner, seeds 2 and up; the generic (heading) learner on the ant",
-        "`python scripts/benchmark_dagger.py --body ant --learner protocol --seed 2` (or `--learner generic`)",
+        "DAgger (plain), protocol learner, seeds 4 and up; the generic (heading) learner on the ant",
+        "`python scripts/benchmark_dagger.py --body ant --learner protocol --seed 4` (or `--learner generic`): "
+        "seeds 0-3 ran",
     ),
     (
         "ant suites",
@@ -150,6 +152,40 @@ def results_table() -> str:
     return "\n".join(lines)
 
 
+DAGGER_ROW = re.compile(r"(?P<suite>[a-z0-9]+)_dagger_(?P<learner>[a-z]+)_s(?P<seed>\d+)_(?P<target>\d+)\.json")
+"""A DAgger row's file name (``scripts/benchmark_dagger.py``): suite, learner, seed and label target."""
+
+
+def spread_table() -> str:
+    """DAgger's rows across seeds: per suite, learner and label target, each seed's successes, mean and range.
+
+    One seed's row is one draw of the training run; this table shows how far seeds disagree at each budget.
+    The label count of a row is the first evaluation at or past its target, so it varies a little by seed.
+    """
+    groups: dict[tuple[str, str, int], dict[int, dict]] = {}
+    for path in sorted(RESULTS.glob("*_dagger_*.json")):
+        match = DAGGER_ROW.fullmatch(path.name)
+        if match is None:
+            raise SystemExit(f"error: {path}: a DAgger row's name must be SUITE_dagger_LEARNER_sSEED_TARGET.json")
+        key = (match["suite"], match["learner"], int(match["target"]))
+        groups.setdefault(key, {})[int(match["seed"])] = load_report(path)
+    order = list(SUITE_SPECS)
+    lines = [
+        "| suite | learner | label target | seeds | labels per seed | successes per seed (of 100) | mean | range |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for (suite, learner, target), by_seed in sorted(groups.items(), key=lambda kv: (order.index(kv[0][0]), kv[0][1:])):
+        seeds = sorted(by_seed)
+        rates = [100 * by_seed[seed]["success_rate"] for seed in seeds]
+        labels = [str(by_seed[seed].get("training", {}).get("labels", 0)) for seed in seeds]
+        lines.append(
+            f"| `{suite}` | {learner} | {target} | {', '.join(map(str, seeds))} | {', '.join(labels)} | "
+            f"{', '.join(f'{rate:.0f}' for rate in rates)} | {sum(rates) / len(rates):.1f} | "
+            f"{min(rates):.0f}-{max(rates):.0f} |"
+        )
+    return "\n".join(lines)
+
+
 def figure_section() -> str:
     """The figure (drawn by ``scripts/labels_vs_steps.py``) and the table of its points."""
     points, _ = figure_points(RESULTS)
@@ -158,7 +194,12 @@ def figure_section() -> str:
     return f"![{alt}]({image})\n\n{points_table(points)}"
 
 
-SECTIONS: dict[str, Callable[[], str]] = {"suites": suites_table, "results": results_table, "figure": figure_section}
+SECTIONS: dict[str, Callable[[], str]] = {
+    "suites": suites_table,
+    "results": results_table,
+    "spread": spread_table,
+    "figure": figure_section,
+}
 """The page's generated sections, by the name ``--section`` takes."""
 
 

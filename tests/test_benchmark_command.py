@@ -256,3 +256,30 @@ def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
         code, captured = run_cli(capsys, "point5", *argv, "--tasks", "0")
         lines = captured.err.strip().splitlines()
         assert code == 2 and len(lines) == 1 and message in lines[0], lines
+
+
+def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeypatch):
+    import shutil
+
+    from script_helpers import load_script
+
+    leaderboard = load_script("scripts/leaderboard.py")
+    source = leaderboard.RESULTS
+    for seed in (0, 1):
+        for target in (0, 1000):
+            name = f"ant4_dagger_protocol_s{seed}_{target}.json"
+            shutil.copy(source / name, tmp_path / name)
+    monkeypatch.setattr(leaderboard, "RESULTS", tmp_path)
+    rows = leaderboard.spread_table().splitlines()[2:]
+    expected = {
+        target: [load_report(source / f"ant4_dagger_protocol_s{seed}_{target}.json") for seed in (0, 1)]
+        for target in (0, 1000)
+    }
+    assert len(rows) == 2
+    for row, target in zip(rows, (0, 1000), strict=True):
+        rates = [100 * report["success_rate"] for report in expected[target]]
+        assert row.startswith(f"| `ant4` | protocol | {target} | 0, 1 |")
+        assert f"| {sum(rates) / 2:.1f} | {min(rates):.0f}-{max(rates):.0f} |" in row
+    (tmp_path / "ant4_dagger_protocol_seed2.json").write_text("{}")
+    with pytest.raises(SystemExit, match=r"ant4_dagger_protocol_seed2\.json: a DAgger row.s name must be"):
+        leaderboard.spread_table()
