@@ -15,6 +15,7 @@ def page_with(tmp_path, body, name="page.md"):
     return page
 
 
+@pytest.mark.integration  # some 40 script subprocesses, each importing the package: minutes, not seconds
 def test_every_generated_block_of_the_docs_matches_its_command(capsys):
     # The docs' tables printed from committed results: a results file or a printer that changes fails here.
     assert generate_docs.main(["--check"]) == 0, capsys.readouterr().out
