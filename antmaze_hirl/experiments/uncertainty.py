@@ -6,6 +6,7 @@ cluster bootstrap interval over seeds and mazes; methods are compared by paired 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -65,6 +66,18 @@ def pooled_rate(successes: int, trials: int) -> dict[str, Any]:
     }
 
 
+@functools.lru_cache(maxsize=4096)
+def _wilcoxon_p(differences: tuple[float, ...]) -> float:
+    """The two-sided Wilcoxon signed-rank p-value of ``differences`` (scipy's), cached.
+
+    With ties scipy falls back to an exact permutation test over all 2**n sign flips (about half a second for
+    10 pairs), and the claims and summaries ask for the same differences many times.
+    """
+    from scipy.stats import wilcoxon  # here, not at import: see Z_95
+
+    return float(wilcoxon(np.asarray(differences), alternative="two-sided").pvalue)
+
+
 def paired_comparison(values: Sequence[float], baseline: Sequence[float]) -> dict[str, Any]:
     """Paired comparison of a method with the baseline over seeds (pair i = seed i of each).
 
@@ -89,9 +102,7 @@ def paired_comparison(values: Sequence[float], baseline: Sequence[float]) -> dic
     elif not differences.any():
         p_value = 1.0  # scipy divides by a zero variance here; no difference is no evidence of one
     else:
-        from scipy.stats import wilcoxon  # here, not at import: see Z_95
-
-        p_value = float(wilcoxon(differences, alternative="two-sided").pvalue)
+        p_value = _wilcoxon_p(tuple(differences.tolist()))
     return {
         "pairs": len(differences),
         "differences": [float(d) for d in differences],
