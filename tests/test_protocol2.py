@@ -264,19 +264,25 @@ def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
     assert summarise(rows, ["dagger"])["dagger"]["cost_to_60_percent"] == {"median": 40.0, "seeds_reached": 2}
 
 
-def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_own_median():
+def dagger_and_gated(dagger, gated, mazes=4):
+    """Rows and per-maze outcomes of DAgger (10 labels per episode) and gated (5), one crafted curve per seed."""
     rows, evaluations = [], []
+    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode, mazes=mazes)
+            rows += trial_rows
+            evaluations += outcomes
+    return rows, evaluations
+
+
+def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_own_median():
     # DAgger's three seeds end at 2/4, 3/4 and 4/4: its median final success (0.75) is first reached by only
     # seeds 1 and 2, so the median-target figure's ratio is read on 2 of 3 seeds.
     dagger = [{0: 0, 2: 1, 4: 2}, {0: 0, 2: 3, 4: 3}, {0: 0, 2: 2, 4: 4}]
     # gated: half the labels per episode; reaches each seed's DAgger final by episode 2 on seeds 0 and 2 only.
     # Its seed 3 has no DAgger trial to pair with: skipped, and named.
     gated = [{0: 0, 2: 2, 4: 2}, {0: 0, 2: 1, 4: 2}, {0: 0, 2: 4, 4: 4}, {0: 0, 2: 4, 4: 4}]
-    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
-        for seed, curve in enumerate(curves):
-            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode)
-            rows += trial_rows
-            evaluations += outcomes
+    rows, evaluations = dagger_and_gated(dagger, gated)
     summary = summarise(rows, ["dagger", "gated"], evaluations=evaluations)
     paired = summary["gated"]["labels_to_match_dagger_per_seed"]
     assert [seed["target"] for seed in paired["per_seed"]] == [0.5, 0.75, 1.0]
@@ -293,16 +299,11 @@ def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_ow
 
 
 def test_smoothed_paired_target_is_the_mean_of_daggers_last_evaluations():
-    rows, evaluations = [], []
     # DAgger's last evaluation on seed 0 is a lucky 4/4 after 2/4 and 2/4: the plain paired target is 1.0, which
     # gated never reaches; the smoothed target, the mean of the last 3 evaluations (2/3), gated reaches.
     dagger = [{0: 0, 2: 1, 4: 2, 6: 2, 8: 4}]
     gated = [{0: 0, 2: 1, 4: 3, 6: 3, 8: 3}]
-    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
-        for seed, curve in enumerate(curves):
-            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode)
-            rows += trial_rows
-            evaluations += outcomes
+    rows, evaluations = dagger_and_gated(dagger, gated)
     summary = summarise(rows, ["dagger", "gated"], evaluations=evaluations)["gated"]
     plain, smoothed = summary["labels_to_match_dagger_per_seed"], summary["labels_to_match_dagger_per_seed_smoothed"]
     assert plain["target_evaluations"] == 1 and smoothed["target_evaluations"] == 3
@@ -318,16 +319,11 @@ def test_smoothed_paired_target_is_the_mean_of_daggers_last_evaluations():
 
 
 def test_smoothed_paired_target_on_a_plateau_is_reached_by_daggers_own_curve():
-    rows, evaluations = [], []
     # DAgger ends on a plateau at 72/100: the mean of 0.72 three times is 0.7200000000000001 in floating point,
     # which no evaluation reaches; the target must be the plateau itself, reached by DAgger at 40 labels.
     dagger = [{0: 0, 2: 50, 4: 72, 6: 72, 8: 72}]
     gated = [{0: 0, 2: 72, 4: 72, 6: 72, 8: 72}]
-    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
-        for seed, curve in enumerate(curves):
-            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode, mazes=100)
-            rows += trial_rows
-            evaluations += outcomes
+    rows, evaluations = dagger_and_gated(dagger, gated, mazes=100)
     smoothed = summarise(rows, ["dagger", "gated"], evaluations=evaluations)["gated"][
         "labels_to_match_dagger_per_seed_smoothed"
     ]
