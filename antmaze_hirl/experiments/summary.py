@@ -57,6 +57,7 @@ from antmaze_hirl.experiments.curves import (
     labels_to_reach,
     normalised_auc,
     success_at_labels,
+    success_curve,
 )
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap, paired_comparison, pooled_rate, rate_with_interval
 
@@ -264,10 +265,9 @@ def _paired_labels_to_match(
     """
     per_seed, skipped = [], sorted(set(trials) ^ set(baseline))  # a seed only one of the two ran
     for seed in sorted(set(trials) & set(baseline)):
-        evaluated = [float(row["eval_success"]) for row in baseline[seed] if not math.isnan(row["eval_success"])]
-        last = evaluated[-target_evaluations:]
+        last = success_curve(baseline[seed])[1][1:][-target_evaluations:]  # [0] is the curve's start, not an evaluation
         # Capped at the best of them: the mean of a plateau (0.72 three times) rounds above it, out of reach.
-        target = min(float(np.mean(last)), max(last)) if last else 0.0
+        target = min(float(np.mean(last)), float(last.max())) if len(last) else 0.0
         if target <= 0:  # a baseline at 0% sets no success to match
             skipped.append(seed)
             continue
