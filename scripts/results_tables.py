@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import posixpath
 import re
 import statistics
 import sys
@@ -457,6 +458,99 @@ def env_throughput() -> str:
             ],
         ],
     )
+
+
+HEADLINE_PAGES = {
+    "low level": "results/low-level.md",
+    "the ant in mazes": "results/ant-in-mazes.md",
+    "paper experiment": "results/paper-experiment.md",
+    "user study": "guides/user-study.md",
+}
+"""The page each headline row links to, relative to ``docs/``."""
+
+
+def misses(family: dict[str, Any]) -> str:
+    """``"2 flips, 1 timeout"``: how an in-maze family's failed episodes ended (empty when none failed)."""
+    plural = {"flips": ("flip", "flips"), "frozen": ("frozen", "frozen"), "timeouts": ("timeout", "timeouts")}
+    return ", ".join(f"{family[key]} {words[family[key] > 1]}" for key, words in plural.items() if family[key])
+
+
+def headline(links_from: str = "docs/results") -> str:
+    """The current headline figures, each with its file and page, the links relative to ``links_from``.
+
+    The README (``links_from="."``) and ``docs/results/index.md`` print the same rows, so the figures have one home.
+    """
+
+    def page(name: str) -> str:
+        target = posixpath.relpath(posixpath.join("docs", HEADLINE_PAGES[name]), links_from)
+        return f"[{name}]({target})"
+
+    low = load("low_level/low_level.json")
+    rows = []
+    for body, what in (
+        ("point", "shipped point low level"),
+        ("ant", "shipped ant low level (stage 6)"),
+    ):
+        entry = low.get("eval_low", body)
+        pooled = entry["pooled_episodes"]
+        hits = count(entry["pooled_success_rate"], pooled)
+        sets = len(entry["disjoint_sets"])
+        reach = f" up to {entry['max_distance_m']:g} m" if body == "ant" else ""
+        rows.append(
+            [
+                f"{what}, {sets} disjoint sets of {entry['episodes']} subgoals{reach}",
+                f"{hits} of {pooled}: {rate_cell(hits, pooled)}",
+                "`low_level/low_level.json`",
+                page("low level"),
+            ]
+        )
+    in_maze = families(load("in_maze/in_maze.json"), "shipped")
+    for family, what in (
+        ("ant4", "oracle driving the shipped ant, 100 4x4 mazes held out by raw grid (protocol 1), 500 steps"),
+        ("large", "the same, gymnasium-robotics `large` map"),
+    ):
+        outcome = in_maze[family]
+        ends = misses(outcome)
+        rows.append(
+            [
+                what,
+                success(outcome) + (f" ({ends})" if ends else ""),
+                "`in_maze/in_maze.json`",
+                page("the ant in mazes"),
+            ]
+        )
+    ant = load("paper_experiment/ant/summary.json")
+    seeds = ant.get("methods", "dagger", "seeds")
+    dagger_labels = ant.get("methods", "dagger", "total_labels", "median")
+    for method, what in (
+        (
+            "dagger",
+            f"ant paper experiment (protocol 1), {seeds} seeds x 100 episodes: DAgger final success, median (min-max)",
+        ),
+        ("gated", "the same, `gated`: final success and labels per trial"),
+    ):
+        final = ant.get("methods", method, "final_success")
+        labels = ant.get("methods", method, "total_labels", "median")
+        ratio = "" if method == "dagger" else f" ({labels / dagger_labels:.2f}x DAgger's)"
+        rows.append(
+            [
+                what,
+                f"{percent(final['median'], 100)} ({percent(final['min'], 100)}-{percent(final['max'], 100)}), "
+                f"{labels:.0f} labels per trial{ratio}",
+                "`paper_experiment/ant/summary.json`",
+                page("paper experiment"),
+            ]
+        )
+    latency = load("study_latency/study_latency.json").get("bodies", "ant", "all", "server", "p95_ms")
+    rows.append(
+        [
+            "study page, ant, server time from a click to the next state, p95",
+            f"{latency} ms",
+            "`study_latency/study_latency.json`",
+            page("user study"),
+        ]
+    )
+    return table(["what", "figure", "file (`results/`)", "page"], rows)
 
 
 # --- the ant in mazes -----------------------------------------------------------------------------------------
@@ -903,6 +997,9 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "smoothing": lambda: in_maze_rows(SMOOTHING_ROWS),
     "flip-diagnostics": flip_diagnostics,
     "flip-warning": flip_warning,
+    # README.md and docs/results/index.md
+    "headline": headline,
+    "headline-readme": lambda: headline(links_from="."),
     # docs/results/learner-ablation.md
     "learner-point": learner_point,
     "learner-ant": learner_ant,

@@ -1,6 +1,8 @@
 """scripts/results_tables.py: the results pages' tables, read from the committed JSON files."""
 
 import json
+import re
+from pathlib import Path
 
 import pytest
 from script_helpers import load_script
@@ -90,3 +92,20 @@ def test_an_unknown_section_is_refused_naming_it(capsys):
     with pytest.raises(SystemExit):
         results_tables.main(["in-maze-stage7"])
     assert "invalid choice: 'in-maze-stage7'" in capsys.readouterr().err
+
+
+def test_the_headline_rows_are_one_table_whose_links_resolve_from_the_readme_and_the_results_page():
+    root = Path(results_tables.__file__).resolve().parent.parent
+    docs, readme = results_tables.headline(), results_tables.headline(links_from=".")
+    link = re.compile(r"\]\(([^)]+)\)")
+    assert link.sub("]()", docs) == link.sub("]()", readme)
+    for text, base in ((docs, root / "docs" / "results"), (readme, root)):
+        targets = link.findall(text)
+        assert len(targets) == len(text.splitlines()) - 2
+        assert all((base / target).is_file() for target in targets), targets
+
+
+def test_an_in_maze_familys_misses_name_each_way_it_failed():
+    family = in_maze_family(90, flips=7, timeouts=1) | {"frozen": 2}
+    assert results_tables.misses(family) == "7 flips, 2 frozen, 1 timeout"
+    assert results_tables.misses(in_maze_family(100, flips=0)) == ""
