@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The 10-seed protocol-2 rerun of issue 32, run in the background across sessions from a frozen clone.
+# The 10-seed protocol-2 rerun (docs/guides/protocol.md), run in the background across sessions from a frozen clone.
 #
 #   scripts/protocol2_rerun.sh start BODY        # restore the committed checkpoint if need be, then resume
 #   scripts/protocol2_rerun.sh checkpoint BODY   # pack the finished trials into the committed checkpoint
@@ -54,15 +54,23 @@ case "${1:-}" in
       echo "the $body rerun is already running (pid $(cat "$WORK/$body.pid")): not starting another" >&2
       exit 1
     fi
-    if [ ! -d "$CLONE/.git" ]; then
-      git clone -q "$MAIN" "$CLONE"
-    fi
-    git -C "$CLONE" checkout -q "$COMMIT"
+    mkdir -p "$WORK"
+    # Both bodies start from one clone: the lock keeps two starts at once from racing on its index.lock.
+    (
+      flock 9
+      if [ ! -d "$CLONE/.git" ]; then
+        git clone -q "$MAIN" "$CLONE"
+      fi
+      if [ "$(git -C "$CLONE" rev-parse HEAD)" != "$COMMIT" ]; then
+        git -C "$CLONE" checkout -q "$COMMIT"
+      fi
+    ) 9> "$WORK/.clone.lock"
     restore "$body"
     # PYTHONPATH first: the venv's editable install points at main, the trials must run the clone's code.
-    (cd "$CLONE" && PYTHONPATH="$CLONE" nohup "$MAIN/.venv/bin/python" benchmarks/paper_experiment.py \
+    # setsid and no inherited stdin: the caller (a shell tool, a CI step) must not wait on the trials.
+    (cd "$CLONE" && PYTHONPATH="$CLONE" setsid nohup "$MAIN/.venv/bin/python" benchmarks/paper_experiment.py \
       --body "$body" --seeds "$SEEDS" --methods "$METHODS" --out "$out" --backend serial --cpus-per-trial 1 \
-      >> "$WORK/$body.log" 2>&1 & echo $! > "$WORK/$body.pid")
+      < /dev/null >> "$WORK/$body.log" 2>&1 & echo $! > "$WORK/$body.pid")
     echo "started $body: log $WORK/$body.log, folder $out"
     ;;
   checkpoint)
