@@ -16,7 +16,7 @@ learner's episodes run their full 500 steps, a trained learner's end sooner at t
 ``--episodes 100`` for the trial itself.
 
 Times are wall-clock (``*_s``) and this process's CPU time (``cpu_*_s``). The trial runs on one thread, so
-on a shared machine the CPU time is the closer stand-in for a trial alone on its cores (the issue's goal:
+on a shared machine the CPU time is the closer stand-in for a trial alone on its cores (the trial-speed goal:
 <= 3 min alone on 2 cores). Also reported: per-maze agreement of the two paths' evaluations (same success out
 of all maze plays), since batched float rounding can change an ant episode; the load average before and
 after (read the ratios first, the absolute times with the load).

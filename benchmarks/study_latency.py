@@ -8,7 +8,7 @@ walk). Evaluations are left out of the clicks measured by evaluating
 only after the trial (``eval_every`` = episodes), and the final evaluation uses 5 mazes: a real study's
 evaluation every 10 episodes adds a wait on about one click in 60-100 (see the README).
 
-Goal (issue 11): ant p95 <= 300 ms.
+Goal, so that a participant does not wait on the page: ant p95 <= 300 ms.
 
 Usage: python benchmarks/study_latency.py [--episodes 10] [--bodies point,ant] [--out FILE.json]
 """

@@ -1,6 +1,6 @@
 """Wall time of one protocol-2 trial with and without the outcome-neutral speed-ups, side by side.
 
-The speed-ups (issue 32's "affordable rerun"):
+The speed-ups, which make protocol 2's 10-seed rerun affordable:
 
 * the simulator pool (:mod:`antmaze_hirl.envs.simulator_pool`): an env coming back to a maze reuses its
   compiled MuJoCo simulator, so the 100 evaluation mazes compile once per process instead of once per

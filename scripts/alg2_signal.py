@@ -1,4 +1,4 @@
-"""Does a start-selection score carry a signal? Its ranking of unseen states above trained ones (issue 32).
+"""Does a start-selection score carry a signal, as protocol 2 asks? Its ranking of unseen states above trained ones.
 
 For each seed, a learner is trained by a few episodes of one trainer on the ``"train"`` part of the
 held-out layouts; each score is then taken at every state of its dataset (states it was trained on) and
@@ -7,14 +7,14 @@ symmetry). Printed and written per seed and score: the medians and the AUC, the 
 unseen state scores above a trained one (0.5: no signal).
 
 Trainers (``--methods``): ``dagger`` (corner starts: no score chose the trained states, the fair ground
-for comparing scores), ``noise_old`` (starts by the old noise score, as in the issue's measurement),
+for comparing scores), ``noise_old`` (starts by the old noise score, as in the audit that found it had none),
 ``noise`` (starts by the new one) and ``multi_policy``. A trainer whose starts a score picks trains on
 the states that score ranked highest, which biases that score's AUC downwards; ``dagger`` has no such bias.
 
 Scores, old and new side by side:
 
-- ``noise_old``: protocol 2's noise score before issue 32, the variance of the class distribution under
-  body noise (``NoiseQuery(symmetries=False, measure="variance")``).
+- ``noise_old``: protocol 2's first noise score, before the symmetric views: the variance of the class
+  distribution under body noise (``NoiseQuery(symmetries=False, measure="variance")``).
 - ``noise``: the ``noise`` method's score now (``NoiseQuery()``), the Jensen-Shannon divergence of the
   class distributions of each state's body-noisy copies seen in the 8 symmetries of the square.
 - ``ensemble_old``: ``multi_policy``'s score, the members' variance of their class distributions

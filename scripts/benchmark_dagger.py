@@ -12,8 +12,8 @@ is scored first: a curve starts at its measured score, not at 0.
 
 Learners (:data:`LEARNERS`):
 
-- ``generic`` (default): issue 32's learner that must learn, the heading head without the wall-blocking
-  planner (``head="heading", planning_iterations=0, block_walls=False``); the committed point rows.
+- ``generic`` (default): a learner that must learn (it solves few mazes untrained), the heading head without the
+  wall-blocking planner (``head="heading", planning_iterations=0, block_walls=False``); the committed point rows.
 - ``protocol``: protocol 2's learner (:data:`~antmaze_hirl.experiments.config.PROTOCOL_LEARNER`, the CNN
   next-cell head), as ``scripts/paper_experiment.py`` trains it.
 - ``default``: the body's protocol-1 default (the point's next-cell planner, a strong prior that solves most
@@ -52,7 +52,7 @@ LEARNERS = ("generic", "protocol", "default")
 """The learners ``--learner`` names (module docstring); :func:`learner_setup` gives their settings."""
 
 GENERIC_SETTINGS: dict[str, Any] = {"head": "heading", "planning_iterations": 0, "block_walls": False}
-"""The ``generic`` learner's :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings (issue 32)."""
+"""The ``generic`` learner's :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings: no planner, so it must learn."""
 
 
 def report_name(body: str, learner: str, seed: int, labels: int) -> str:

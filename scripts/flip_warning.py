@@ -1,4 +1,4 @@
-"""What comes before a flip, and whether a reflex at inference can stop it (issue 16).
+"""What comes before a flip, and whether a reflex at inference can stop it (flips end the ant's walks in mazes).
 
 The scripted oracle (2 m subgoals) drives a low level (default the shipped ant) through ``--mazes`` ``select6``
 mazes (``in_maze.py``'s selection family: 6x6 layouts of the ``selection`` part of the layout partition, step

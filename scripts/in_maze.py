@@ -1,4 +1,4 @@
-"""In-maze success: the scripted oracle driving a low-level policy through held-out mazes (issue 16).
+"""In-maze success: the scripted oracle driving a low-level policy through held-out mazes (what the high level gets).
 
 For each low level (default the shipped ant; ``--low-level ZIP`` for candidates, repeatable, run side by side on
 the same mazes) and each maze family:
@@ -15,7 +15,8 @@ the reported ones above.
 
 The oracle's subgoals are at most 2 m away (the ant experiment's ``expert_max_distance``). Episode ``i`` of every
 family resets with seed ``HELD_OUT_SEED + i`` (1,000,000 + i, as every held-out figure): for ``ant3`` these are the
-mazes of ``paper_experiment/oracle_success_ant_3.json``. Note the 3x3 family has only 48 distinct wall grids, so a
+mazes of ``paper_experiment/oracle_success_ant_3.json``. Note the 3x3 family has few distinct wall grids
+(``results/maze_families/maze_families.json``), so a
 training run that sees random 3x3 layouts (``ReachEnv(maze_probability=...)``) has seen these grids; only the
 seeds are held out.
 

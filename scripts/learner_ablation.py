@@ -1,4 +1,4 @@
-"""Which change to the high-level learner closes a body's gap to its teacher (issue 13): an ablation.
+"""Which change to the high-level learner closes a body's gap to its teacher, the oracle: an ablation.
 
 Each variant is a set of :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings. Each trial runs plain
 DAgger with the oracle for ``--episodes`` episodes on the body's training mazes of the held-out-layouts
@@ -239,7 +239,8 @@ def summarise(trials: list[dict[str, Any]], config: ExperimentConfig) -> dict[st
 
 
 UNTRAINED_LIMIT = 0.2
-"""Protocol 2's rule (issue 32): a main-protocol learner scores at most this untrained on the selection mazes."""
+"""Protocol 2's rule, a learner that must learn: a main-protocol learner scores at most this untrained on the
+selection mazes."""
 
 
 def untrained_total(trials: list[dict[str, Any]]) -> dict[str, Any] | None:

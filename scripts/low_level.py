@@ -16,14 +16,15 @@
 Usage: python scripts/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
 Writes results/low_level/low_level.json and results/low_level/ant_learning_curve.png.
 
-**Algorithms side by side** (issue 16), a separate mode: ``--algorithms td3=FILE,sac=FILE`` trains one ant low
-level per algorithm from scratch, each with its hyperparameter file (``train-low --hyperparams``), the same
-seed and the same step budget, in alternating chunks (``--chunk``), so machine load and an interrupted
-session hit every algorithm alike; each run lives in ``--runs-dir/<algo>`` and resumes from its checkpoint,
-so the comparison can span sessions. At the budget it scores every final policy beside the shipped one in
-one pass: eval-low (``--episodes`` free-space subgoals from seed 0, up to 4 m) and in-maze success
-(``in_maze.py``'s families, ``--maze-episodes`` each), with 95% Wilson intervals, plus each algorithm's
-training steps/s (median over its chunks) and its ratio to the first algorithm's.
+**Algorithms side by side** (which SB3-compatible algorithm trains the best ant), a separate mode:
+``--algorithms td3=FILE,sac=FILE`` trains one ant low level per algorithm from scratch, each with its
+hyperparameter file (``train-low --hyperparams``), the same seed and the same step budget, in alternating
+chunks (``--chunk``), so machine load and an interrupted session hit every algorithm alike; each run lives in
+``--runs-dir/<algo>`` and resumes from its checkpoint, so the comparison can span sessions. At the budget it
+scores every final policy beside the shipped one in one pass: eval-low (``--episodes`` free-space subgoals
+from seed 0, up to 4 m) and in-maze success (``in_maze.py``'s families, ``--maze-episodes`` each), with 95%
+Wilson intervals, plus each algorithm's training steps/s (median over its chunks) and its ratio to the first
+algorithm's.
 
 Usage: python scripts/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
            [--runs-dir runs/algorithms] [--maze-episodes 100] [--families ant4,u,medium,large]

@@ -4,7 +4,7 @@ Draws ``--draws`` layouts (default 20,000) from each family's own sampler (the h
 ``sample_layout`` at the experiment's settings: wall fraction 0.3, goal at least 3 steps from a
 start corner) and counts distinct wall grids and distinct layouts (walls, start and goal), overall
 and per part of the layout partition (:mod:`antmaze_hirl.envs.layout_splits`). A family needs
->= 1,000 distinct wall grids for the ant's held-out evaluation (issue 12).
+>= 1,000 distinct wall grids to hold the ant's evaluation mazes out by layout, not by seed only.
 
 Usage: python scripts/maze_families.py [--draws 20000] [--seed 0]
 Writes results/maze_families/maze_families.json.

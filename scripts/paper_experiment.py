@@ -13,20 +13,21 @@ CSV per finished trial, so an interrupted run resumes), then prints the figures 
 It also reports the oracle's success, with its 95% Wilson interval: the oracle driving the same low level
 on the same held-out mazes (no ceiling: a learner may beat it on a sample of 100 mazes).
 
-``--protocol 2`` (the default; issue 32, ``ExperimentConfig.protocol``) holds the mazes out by wall grid
+``--protocol 2`` (the default, ``ExperimentConfig.protocol``; docs/guides/protocol.md) holds the mazes out by wall grid
 up to the square's symmetries and reads every curve on one fixed set of ``--final-eval-episodes``
 (default 100) held-out mazes, scored before the first episode (the untrained learner), every
 ``eval_every`` episodes and after the last, with per-maze outcomes in ``evaluations.csv`` and pooled
 rates with a cluster bootstrap over seeds and mazes. ``--protocol 1`` reads as the committed results folders do
-(``results/paper_experiment/{point,ant}``): with ``--held-out-layouts`` the protocol of issue 12
-(periodic and final evaluation on different sets), without it mazes held out by seed only. Re-running
+(``results/paper_experiment/{point,ant}``): with ``--held-out-layouts`` the first held-out-layouts
+protocol (periodic and final evaluation on different sets), without it mazes held out by seed only. Re-running
 those folders exactly needs the commit their provenance.json names: the strategies' scores, the start rule
 and the layout split have changed since.
 
 Per body defaults (BODY_DEFAULTS): the point runs 5x5 mazes with one-cell (1 m) oracle subgoals; the ant
 runs 3x3 mazes with 2 m oracle subgoals, and 4x4 mazes with ``--held-out-layouts`` (HELD_OUT_MAZE_SIZE: the 3x3
-family has only 48 wall grids). At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps
-(25 s) cover about 20 m: too short for most 5x5 paths, and 4 m subgoals often run past H = 100 steps.
+family has too few wall grids: ``results/maze_families/maze_families.json``). At half torque the shipped ant walks
+too slowly for 500 steps to cover most 5x5 paths, and 4 m subgoals often run past H = 100 steps (docs/lab-notes.md,
+stage 1).
 
 Usage: python scripts/paper_experiment.py --body point|ant [--jobs 2] [--backend serial|processes|ray]
            [--address RAY_ADDRESS] [--cpus-per-trial 1] [--evaluation-envs 25] [--seeds 5] [--episodes 100]
@@ -92,7 +93,7 @@ def goals(summary: dict, body: str) -> dict:
         "best_method": best,
         "best_final_success_median": finals.get(best) if best else None,
         "final_success_goal": 0.8 if body == "ant" else None,
-        # Issue 12: the best active method matches DAgger's median final success with <= 0.5x its labels.
+        # The expert-cost goal: the best active method matches DAgger's median final success with <= 0.5x its labels.
         "best_active_method_by_labels_to_match_dagger": best_active,
         "labels_to_match_dagger_ratio": match_ratios.get(best_active) if best_active else None,
         "labels_ratio_goal": 0.5,

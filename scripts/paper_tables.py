@@ -175,7 +175,7 @@ def _paired_ratio(figure: dict[str, Any] | None) -> str:
 def effort_table(summary: dict[str, Any]) -> str:
     """Each method's labels over a trial against plain DAgger's, and whether its final success is DAgger's.
 
-    The [ask-less] goal reads off it: ``gated`` at <= 0.3x DAgger's labels, its median final success
+    The ask-less goal reads off it: ``gated`` at <= 0.3x DAgger's labels, its median final success
     inside DAgger's pooled 95% interval (or above it): Wilson in protocol 1, cluster bootstrap in protocol 2.
     """
     dagger = summary["methods"].get("dagger", {})
@@ -272,7 +272,7 @@ def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: b
     if any("final_success" not in method for method in runs):
         parser.error(f"{path} has a method with trials but no 'final_success': not a paper-experiment summary")
     if per_label and any("success_at_labels" not in method for method in runs):
-        parser.error(f"{path} predates the per-label figures (written before issue 12): rerun the experiment")
+        parser.error(f"{path} predates the per-label figures (success at label budgets): rerun the experiment")
     return summary
 
 

@@ -41,7 +41,7 @@ FAMILY_LABELS = {
     "large": "large",
 }
 FAMILY_GOALS = {"ant4": 0.95, "u": 0.90, "medium": 0.90, "large": 0.90}
-"""Issue 16's success goals per in-maze family; ant3 has none (its mazes are held out by seed only)."""
+"""The in-maze success goals per family (the oracle driving the shipped ant); ant3 has none (held out by seed only)."""
 
 
 class ResultsFileError(ValueError):
@@ -159,7 +159,7 @@ def seconds_per_step(family: dict[str, Any]) -> float:
 
 
 def goal_cell(name: str, family: dict[str, Any]) -> str:
-    """Issue 16's goal for ``name`` and whether the row's rate meets it."""
+    """The in-maze goal for ``name`` and whether the row's rate meets it."""
     if name not in FAMILY_GOALS:
         return "held out by seed only"
     goal = FAMILY_GOALS[name]
@@ -182,7 +182,7 @@ def in_maze_pair(name: str, new_row: str, old_row: str, new_name: str, old_name:
         "mean episode steps",
         f"success ratio ({new_name} / {old_name})",
         "time per step ratio",
-        "goal (issue 16)",
+        "in-maze goal",
     ]
     rows = []
     for family in FAMILIES:

@@ -1,6 +1,7 @@
 """Picks the ant policy to ship from the snapshots of one or more ``train-low`` runs, without peeking at the test sets.
 
-TD3's success rate swings by +-10 points between evaluations of one run, so the last step is rarely the best.
+TD3's success rate swings between evaluations of one run (``results/low_level/ant_learning_curve*.csv``), so the last
+step is rarely the best.
 Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, at each action-smoothing weight of
 ``--action-smoothing``, on *selection* sets that the reported figures never use:
 
@@ -20,7 +21,7 @@ Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, a
     limit scaled to the path as on the standard maps, so that the pick also weighs long walks.
 
 A row's score is the mean of its figures (eval-low and one success rate per family): what the high level needs
-and what issue 16's targets measure. The pick is the best row, a (snapshot, smoothing weight) pair; a tie
+and what the in-maze goals measure. The pick is the best row, a (snapshot, smoothing weight) pair; a tie
 keeps the row listed first (policy files come before run snapshots, in the order given). Scores are cached per
 row in the JSON, so a rerun while training goes on scores only new snapshots.
 

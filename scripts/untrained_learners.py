@@ -1,4 +1,4 @@
-"""A learner that must learn: each candidate learner's success before its first label (issue 32).
+"""A learner that must learn, as protocol 2 asks: each candidate learner's success before its first label.
 
 The curve of a method starts at its untrained learner's success. A learner that solves the held-out
 mazes untrained (the point's planning next-cell head, which reads the next cell out of value iteration

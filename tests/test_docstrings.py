@@ -1,5 +1,7 @@
 """Docstrings state the contract and comments say why: no issue numbers, which mean nothing to a reader.
 
+The rule holds in the package and in every script and benchmark (:data:`FOLDERS`).
+
 Both are read from the source (``ast`` and ``tokenize``), so no module is imported.
 """
 
@@ -107,7 +109,19 @@ def test_the_scan_finds_references_in_docstrings_and_comments_but_not_in_private
     ]
 
 
-def test_no_docstring_or_comment_in_the_package_cites_an_issue_number():
+FOLDERS = ("antmaze_hirl", "scripts", "benchmarks")
+"""Where the rule holds: the package, and the scripts and benchmarks a reader runs and reads beside it."""
+
+CHECKED = sorted(path for folder in FOLDERS for path in (PACKAGE.parent / folder).rglob("*.py"))
+
+
+def test_every_folder_has_files_to_check():
+    # Guards the parametrisation below: a folder that matched no file would pass it vacuously.
+    assert {path.relative_to(PACKAGE.parent).parts[0] for path in CHECKED} == set(FOLDERS)
+
+
+@pytest.mark.parametrize("path", CHECKED, ids=lambda path: path.relative_to(PACKAGE.parent).as_posix())
+def test_no_docstring_or_comment_cites_an_issue_number(path):
     # An issue number goes stale and tells a reader nothing: say why in words, or point at the docs page.
-    found = [reference for path in sorted(PACKAGE.rglob("*.py")) for reference in issue_references(path)]
+    found = issue_references(path)
     assert not found, "issue references (say why in words instead):\n" + "\n".join(found)
