@@ -120,7 +120,7 @@ BODY_PROFILES: dict[str, BodyProfile] = {
         learner_plans=True,
     ),
     # At half torque the shipped ant walks ~0.7-1 m/s, so 500 steps (25 s) cover about 20 m: too short for
-    # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (docs/results/ant-in-mazes.md). Holding
+    # most 5x5 paths, and 4 m subgoals often run past H = 100 steps (docs/lab-notes.md, stage 1). Holding
     # layouts out needs its 4x4 family (1,968 wall grids; the 3x3 family has 48). Its learner is the CNN's
     # next-cell head: its 2 m labels cut corners the cell grid calls walls
     # (results/learner_ablation/learner_ablation_ant.json).
