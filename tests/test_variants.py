@@ -1,4 +1,4 @@
-"""The paper's algorithms as written beside this project's variants (issue 12): Alg. 4 per step, Alg. 2's
+"""The paper's algorithms as written beside this project's variants: Alg. 4 per step, Alg. 2's
 shared noise buffer, the ensemble's stated settings, and the AggreVaTe baseline."""
 
 import dataclasses
@@ -139,7 +139,7 @@ def test_fresh_noise_reproduces_the_old_scores():
     scores = NoiseQuery(n_noises=6, shared_noise=False, signal="offsets", symmetries=False).scores(
         query, np.random.default_rng(3)
     )
-    # The scores before issue 12: one uniform draw of shape (candidates, noises, body).
+    # The scores before the faithful variants: one uniform draw of shape (candidates, noises, body).
     rng = np.random.default_rng(3)
     noisy = query.body_observation + rng.uniform(-1.0, 1.0, size=(4, 6, 2))
     outputs = query.learner.offsets(query.encode(np.repeat(query.candidates, 6, axis=0), noisy.reshape(-1, 2)))
