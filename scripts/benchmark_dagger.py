@@ -1,7 +1,8 @@
-"""Leaderboard rows for plain DAgger: one learner trained on a body's training part, scored at label counts.
+"""Leaderboard rows for DAgger, plain or active: a learner trained on a body's training part, scored at label counts.
 
 The learner trains with the experiment's own trainer (:func:`antmaze_hirl.experiments.runner.make_trainer`,
-method ``dagger``, the body's held-out-layouts settings, :func:`~antmaze_hirl.experiments.config.body_settings`)
+the strategy of ``--method``: ``dagger`` by default, or any of the experiment's active methods), under the
+body's held-out-layouts settings (:func:`~antmaze_hirl.experiments.config.body_settings`),
 on mazes of the body family's ``train`` part only (the held-out protocol's training env, with the body's
 shipped low level), the scripted oracle as the expert. When its label count first reaches each of
 ``--labels`` (checked after every episode, so the count recorded is the first one at or past the target),
@@ -20,8 +21,8 @@ Learners (:data:`LEARNERS`):
   mazes untrained; the ant's next-cell CNN).
 
 Usage: python scripts/benchmark_dagger.py [--body point|ant] [--learner generic|protocol|default]
-    [--labels 100,300,1000] [--seed 0] [--num-envs 8]
-Writes results/leaderboard/<suite>_dagger_<learner>_s<seed>_<labels>.json (:func:`report_name`) and the
+    [--method dagger|noise|...] [--labels 100,300,1000] [--seed 0] [--num-envs 8]
+Writes results/leaderboard/<suite>_<method>_<learner>_s<seed>_<labels>.json (:func:`report_name`) and the
 learners under --out.
 """
 
@@ -38,6 +39,7 @@ from typing import Any
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.dagger.strategies import METHODS
 from antmaze_hirl.experiments.benchmark import DEFAULT_NUM_ENVS, score_policy
 from antmaze_hirl.experiments.config import PROTOCOL_LEARNER, ExperimentConfig, body_settings, learner_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
@@ -55,17 +57,25 @@ GENERIC_SETTINGS: dict[str, Any] = {"head": "heading", "planning_iterations": 0,
 """The ``generic`` learner's :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings: no planner, so it must learn."""
 
 
-def report_name(body: str, learner: str, seed: int, labels: int) -> str:
-    """The report's file name, distinct per body (its suite), learner, seed and label target.
+def report_name(body: str, learner: str, seed: int, labels: int, method: str = "dagger") -> str:
+    """The report's file name, distinct per body (its suite), method, learner, seed and label target.
 
     Raises:
-        ValueError: Naming an unknown body or learner.
+        ValueError: Naming an unknown body, learner or method.
     """
     if body not in SUITES:
         raise ValueError(f"unknown body {body!r}; choose from {sorted(SUITES)}")
     if learner not in LEARNERS:
         raise ValueError(f"unknown learner {learner!r}; choose from {list(LEARNERS)}")
-    return f"{SUITES[body]}_dagger_{learner}_s{seed}_{labels}.json"
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; choose from {list(METHODS)}")
+    return f"{SUITES[body]}_{method.replace('+', '_')}_{learner}_s{seed}_{labels}.json"
+
+
+def policy_name(method: str, learner: str, seed: int, labels: int) -> str:
+    """The report's ``policy``, as the leaderboard prints it: plain DAgger or the active method by name."""
+    trained_by = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}` (active)"
+    return f"{trained_by}, {learner} learner, seed {seed}, {labels} labels"
 
 
 def learner_setup(body: str, learner: str) -> tuple[ExperimentConfig, dict[str, Any]]:
@@ -113,6 +123,9 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--body", choices=sorted(SUITES), default="point", help="the body; its suite is scored")
     parser.add_argument("--learner", choices=LEARNERS, default="generic")
+    parser.add_argument(
+        "--method", choices=METHODS, default="dagger", help="the query strategy (plain DAgger or an active one)"
+    )
     parser.add_argument("--labels", default="100,300,1000", help="comma-separated label counts to score at")
     parser.add_argument("--seed", type=int, default=0, help="the learner's and the trainer's seed")
     parser.add_argument("--num-envs", type=int, default=DEFAULT_NUM_ENVS, help="suite mazes scored in lockstep")
@@ -139,7 +152,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     suite = SUITES[args.body]
     env = make_env(config, split="train")
     expert = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
-    trainer = make_trainer("dagger", args.seed, config, env, expert, policy_settings=policy_settings or None)
+    trainer = make_trainer(args.method, args.seed, config, env, expert, policy_settings=policy_settings or None)
     recorded_settings = learner_settings(config.learner, config.maze_size) if config.learner else policy_settings
     task_ids = None if args.tasks is None else list(range(args.tasks))
     command = shlex.join(["python", "scripts/benchmark_dagger.py", *(sys.argv[1:] if argv is None else argv)])
@@ -150,12 +163,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             trainer.run_episode()
         training_seconds += time.perf_counter() - started
         labels = trainer.total_expert_cost
-        stem = Path(report_name(args.body, args.learner, args.seed, target)).stem
+        name = report_name(args.body, args.learner, args.seed, target, args.method)
+        stem = Path(name).stem
         path = trainer.learner.save(args.out / f"{stem}.zip")
         report = score_policy(suite, str(path), task_ids=task_ids, num_envs=args.num_envs)
-        report["policy"] = f"DAgger (plain), {args.learner} learner, seed {args.seed}, {labels} labels"
+        report["policy"] = policy_name(args.method, args.learner, args.seed, labels)
         report["training"] = {
-            "method": "dagger",
+            "method": args.method,
             "body": args.body,
             "learner": args.learner,
             "learner_settings": recorded_settings,
@@ -167,7 +181,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "num_envs": args.num_envs,
             "command": command,
         }
-        out = args.results / report_name(args.body, args.learner, args.seed, target)
+        out = args.results / name
         atomic_write_json(out, report)
         low, high = report["wilson_95"]
         print(

@@ -44,7 +44,8 @@ NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
         "best active method (protocol 2), 100 / 300 / 1,000 labels",
-        "as DAgger, with the method's strategy; then `antmaze-hirl benchmark point5 --policy learner.zip`",
+        "`python scripts/benchmark_dagger.py --learner protocol --method METHOD --seed 0` (and 1, 2), METHOD the "
+        "best of protocol 2's rerun, which is not finished",
     ),
     (
         "point5",

@@ -13,6 +13,7 @@ script = load_script("scripts/benchmark_dagger.py")
     [
         (["--body", "car"], "'car'"),
         (["--learner", "vin"], "'vin'"),
+        (["--method", "bc"], "'bc'"),
         (["--labels", "100,x"], "'100,x'"),
         (["--labels", "0,100"], "'0,100'"),
         (["--num-envs", "0"], "--num-envs must be >= 1, got 0"),
@@ -55,12 +56,24 @@ def test_report_names_are_distinct_per_body_learner_seed_and_labels():
         for labels in (0, 100)
     }
     assert len(names) == 2 * len(script.LEARNERS) * 2 * 2
+    active = {script.report_name("point", "protocol", 0, 100, method) for method in script.METHODS}
+    assert len(active) == len(script.METHODS) and "point5_dagger_protocol_s0_100.json" in active
+    assert script.report_name("ant", "protocol", 1, 0, "gated+noise") == "ant4_gated_noise_protocol_s1_0.json"
 
 
-@pytest.mark.parametrize(("body", "learner", "named"), [("car", "generic", "'car'"), ("ant", "vin", "'vin'")])
-def test_report_name_refuses_an_unknown_body_or_learner_naming_it(body, learner, named):
+def test_an_active_methods_rows_name_it_and_plain_dagger_keeps_its_committed_name():
+    assert script.parse_args([]).method == "dagger"
+    assert script.policy_name("dagger", "protocol", 2, 1001) == "DAgger (plain), protocol learner, seed 2, 1001 labels"
+    assert script.policy_name("noise", "protocol", 0, 103).startswith("DAgger with `noise` (active), protocol learner")
+
+
+@pytest.mark.parametrize(
+    ("body", "learner", "method", "named"),
+    [("car", "generic", "dagger", "'car'"), ("ant", "vin", "dagger", "'vin'"), ("ant", "protocol", "bc", "'bc'")],
+)
+def test_report_name_refuses_an_unknown_body_learner_or_method_naming_it(body, learner, method, named):
     with pytest.raises(ValueError, match=named):
-        script.report_name(body, learner, 0, 0)
+        script.report_name(body, learner, 0, 0, method)
 
 
 @pytest.mark.integration  # ~5-15 s: 200 gradient steps and the suite env's start
