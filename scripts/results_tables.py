@@ -1,14 +1,16 @@
 """Prints the Markdown tables of the hand-written results pages from the committed JSON files under ``results/``.
 
 Each section is one generated block of ``docs/results/low-level.md``, ``ant-in-mazes.md``,
-``learner-ablation.md`` or ``other.md``::
+``learner-ablation.md`` or ``other.md``, of the guides ``docs/guides/vector-envs.md``, ``low-level.md`` or
+``protocol.md``, or of ``docs/ray.md``::
 
     <!-- generated: python scripts/results_tables.py in-maze-stage6 -->
 
-so every figure of those pages comes from a committed file through a command a reader can rerun; the pages'
-prose names no figure of its own. A success rate measured on a known number of episodes carries its 95% Wilson
-interval (:func:`antmaze_hirl.experiments.uncertainty.wilson_interval`). What a row is called (its label, its
-heads) is written here; what it scored is read from the file.
+so every figure of those tables comes from a committed file through a command a reader can rerun; the results
+pages' prose names no figure of its own, and a guide's prose names a figure only beside its file. A success
+rate measured on a known number of episodes carries its 95% Wilson interval
+(:func:`antmaze_hirl.experiments.uncertainty.wilson_interval`). What a row is called (its label, its heads, a
+goal it is held to) is written here; what it scored is read from the file.
 
 A missing or damaged file, or a file without a field a section reads, is a one-line error naming the file.
 
@@ -942,6 +944,416 @@ def sweeps() -> str:
     )
 
 
+# --- the guides -----------------------------------------------------------------------------------------------
+
+
+def times(ratio: float) -> str:
+    """``"2.05x"``: a speed or throughput ratio, two decimals."""
+    return f"{ratio:.2f}x"
+
+
+def lockstep_agreement() -> str:
+    """Serial against lockstep evaluation on the same mazes: agreement, successes, time; then what differed."""
+    results = load("lockstep_agreement/lockstep_agreement.json")
+    rows = results.get("rows")
+    lines = [
+        [
+            f"{r['body']} ({r['maze_size']}x{r['maze_size']})",
+            r["high_level"],
+            r["mazes"],
+            r["same_success"],
+            r["same_episode"],
+            f"{r['serial_successes']} / {r['lockstep_successes']}",
+            r["serial_s"],
+            r["lockstep_s"],
+            times(r["speedup"]),
+        ]
+        for r in rows
+    ]
+    differed = "; ".join(
+        f"{r['body']} {r['high_level']}: {r['mazes'] - r['same_success']} of {r['mazes']}" for r in rows
+    )
+    bodies = dict.fromkeys(r["body"] for r in rows)
+    alike = ", ".join(
+        f"{body} {sum(r['same_episode'] for r in rows if r['body'] == body)} of "
+        f"{sum(r['mazes'] for r in rows if r['body'] == body)}"
+        for body in bodies
+    )
+    return (
+        f"{results.get('num_envs')} mazes at once.\n\n"
+        + table(
+            [
+                "body",
+                "high level",
+                "mazes",
+                "same success outcome",
+                "same episode (success, attempts, steps)",
+                "successes serial / lockstep",
+                "serial s",
+                "lockstep s",
+                "speedup",
+            ],
+            lines,
+        )
+        + f"\n\nRead from it: success outcomes that differed, {differed}. Episodes the same step for step: {alike}."
+    )
+
+
+HIERARCHY_GOAL_RATIO_AT_16 = 0.7
+"""The lockstep ant's goal: at least this share of the raw simulator's steps/s at N = 16, at each thread setting."""
+HIERARCHY_GOAL_THREAD_RATIO = 0.5
+"""The thread scope's goal: no thread setting below this share of the other's steps/s, at the same mode and N."""
+
+
+def hierarchy_throughput() -> str:
+    """Low-level steps/s of the hierarchy per body, mode, N and torch threads; the raw baselines; the goals."""
+    results = load("hierarchy_throughput/hierarchy_throughput.json")
+    rows = results.get("rows")
+    raw = results.get("raw_baselines")
+    idle = load("env_throughput/env_throughput.json").get("low_level", "raw_AntMaze_UMaze_v5_steps_per_s")
+    lines = [
+        [
+            r["body"],
+            r["mode"],
+            r["num_envs"],
+            r["torch_threads"],
+            f"{r['steps_per_s']:,.0f}",
+            f"{r['ratio_to_raw']:.2f}",
+            f"{r['ratio_to_best']:.2f}",
+        ]
+        for r in rows
+    ]
+
+    def row(body: str, mode: str, num_envs: int, threads: int) -> dict[str, Any]:
+        for r in rows:
+            if (r["body"], r["mode"], r["num_envs"], r["torch_threads"]) == (body, mode, num_envs, threads):
+                return r
+        raise ResultsFileError(
+            f"results/{results.name}: no row for {body}, {mode}, N = {num_envs}, {threads} torch threads"
+        )
+
+    def raw_ratio(body: str, num_envs: int, threads: int) -> float:
+        return row(body, "lockstep", num_envs, threads)["ratio_to_raw"]
+
+    at_16 = [raw_ratio("ant", 16, threads) for threads in (1, 2)]
+    point_64 = [raw_ratio("point", 64, threads) for threads in (1, 2)]
+    pairs = []
+    for r in rows:
+        other = [o for o in rows if (o["body"], o["mode"], o["num_envs"]) == (r["body"], r["mode"], r["num_envs"])]
+        if r["torch_threads"] == 1 and len(other) == 2:
+            slow, fast = sorted(o["steps_per_s"] for o in other)
+            pairs.append((slow / fast, r, {o["torch_threads"]: o["steps_per_s"] for o in other}))
+    worst, widest, speeds = min(pairs, key=lambda pair: pair[0])
+    baselines = ", ".join(f"{body} `{b['id']}` {b['before']:,}/{b['after']:,}" for body, b in raw.items())
+    return (
+        table(["body", "mode", "N", "torch threads", "steps/s", "x raw", "x best of body"], lines)
+        + f"\n\nRaw baselines (before/after the rows): {baselines} steps/s; the ratios divide by their mean. "
+        f"Idle, raw `AntMaze_UMaze-v5` ran {idle:,.0f} steps/s (`env_throughput/env_throughput.json`)."
+        + "\n\nRead from it: the thread scope alone takes the serial ant from "
+        f"{row('ant', 'serial, unscoped', 1, 2)['steps_per_s']:.0f} to {row('ant', 'serial', 1, 2)['steps_per_s']:.0f} "
+        "low-level steps/s at 2 threads. Lockstep reached "
+        f"{times(at_16[0])} (1 thread) and {times(at_16[1])} (2 threads) the raw simulator at N = 16, and "
+        f"{times(raw_ratio('ant', 64, 1))} and {times(raw_ratio('ant', 64, 2))} at N = 64: the goal of >= "
+        f"{times(HIERARCHY_GOAL_RATIO_AT_16)} at N = 16 is "
+        f"{'met' if min(at_16) >= HIERARCHY_GOAL_RATIO_AT_16 else 'not met'} at both thread settings "
+        f"in this run. The point at N = 64: {min(point_64):.2f}-{times(max(point_64))} raw. At the same mode and N, "
+        f"no thread setting fell below {times(worst)} of the other (the widest gap: the {widest['body']}'s "
+        f"{widest['mode']} env at N = {widest['num_envs']}, {speeds[1]:.0f} steps/s at 1 thread against "
+        f"{speeds[2]:.0f} at 2): the goal of no thread setting below {times(HIERARCHY_GOAL_THREAD_RATIO)} of the "
+        f"best {'holds' if worst >= HIERARCHY_GOAL_THREAD_RATIO else 'fails'} in this run."
+    )
+
+
+LOCKSTEP_TOOLS = {"in_maze": "`in_maze`", "demo_success": "`demo_success`", "eval_low": "`eval-low`"}
+"""How the tools of ``lockstep_paths.json`` are called on the page."""
+
+
+def lockstep_paths() -> str:
+    """The tools' serial against lockstep runs on the same seeds: agreement, successes, speed-up."""
+    results = load("lockstep_paths/lockstep_paths.json")
+    lines = [
+        [
+            LOCKSTEP_TOOLS.get(r["tool"], f"`{r['tool']}`"),
+            r["case"],
+            r["episodes"],
+            r["same_outcome"],
+            r["same_success"],
+            f"{r['serial_successes']} / {r['lockstep_successes']}",
+            times(r["speedup"]) + (" (slower)" if r["speedup"] < 1 else ""),
+        ]
+        for r in results.get("rows")
+    ]
+    return table(
+        [
+            "tool",
+            "case",
+            "episodes",
+            "same outcome (`eval-low`: same step count)",
+            "same success",
+            "successes serial / lockstep",
+            "speed-up",
+        ],
+        lines,
+    )
+
+
+def high_level_ppo() -> str:
+    """PPO on the high level: one env against the lockstep env."""
+    results = load("high_level_ppo/high_level_ppo.json")
+    return table(
+        ["env", "high-level steps", "one `gym.make` env, steps/s", "lockstep env, steps/s", "N", "ratio"],
+        [
+            [
+                f"`{results.get('env_id')}`",
+                results.get("steps"),
+                results.get("single_steps_per_s"),
+                results.get("lockstep_steps_per_s"),
+                results.get("num_envs"),
+                times(results.get("ratio")),
+            ]
+        ],
+    )
+
+
+def minutes(seconds: float) -> str:
+    """``"19.8 min"``."""
+    return f"{seconds / 60:.1f} min"
+
+
+def paper_trial_speed() -> str:
+    """One protocol-2 ant trial, serial against lockstep evaluation: wall and CPU time, agreement, the goal."""
+    results = load("paper_trial_speed/paper_trial_speed.json")
+    lines = [
+        [
+            f"{'serial' if r['evaluation_envs'] == 1 else 'lockstep'} ({r['evaluation_envs']})",
+            f"{r['total_s']:,} s",
+            f"{r['training_s']} s",
+            f"{r['evaluation_s']:,} s",
+            f"{r['cpu_total_s']} s",
+            f"{r['cpu_evaluation_s']} s",
+            minutes(r["cpu_scaled_full_trial_s"]),
+            r["labels"],
+            f"{r['final_successes']} of {r['final_mazes']}",
+            "{:.1f} to {:.1f}".format(*r["load_average_1min"]),
+        ]
+        for r in results.get("rows")
+    ]
+    serial, lockstep = results.get("rows", 0), results.get("rows", -1)
+    goal = results.get("goal_full_trial_s")
+    wall, wall_evaluations = times(results.get("speedup_total")), times(results.get("speedup_evaluation"))
+    cpu, cpu_evaluations = times(results.get("cpu_speedup_total")), times(results.get("cpu_speedup_evaluation"))
+    return (
+        table(
+            [
+                "evaluation (envs)",
+                "wall",
+                "training, wall",
+                "evaluations, wall",
+                "CPU",
+                "evaluations, CPU",
+                "a whole trial, CPU (scaled)",
+                "labels",
+                "final success",
+                "1-minute load average, start to end",
+            ],
+            lines,
+        )
+        + f"\n\nRead from it: lockstep is {wall} faster in wall time ({wall_evaluations} on the evaluations) "
+        f"and {cpu} in CPU time ({cpu_evaluations} on the evaluations); the training was "
+        f"{'identical' if results.get('same_training') else 'not identical'}, and "
+        f"{results.get('maze_plays_same_success')} of {results.get('maze_plays')} maze plays had the same outcome. "
+        f"The goal of <= {goal / 60:g} min per ant trial is "
+        f"{'met' if lockstep['cpu_scaled_full_trial_s'] <= goal else '**missed**'} "
+        f"(CPU, scaled: {minutes(serial['cpu_scaled_full_trial_s'])} serial, "
+        f"{minutes(lockstep['cpu_scaled_full_trial_s'])} in lockstep)."
+    )
+
+
+def ensemble_speed() -> str:
+    """The shipped ensemble's two layouts, sequential and batched heads, timed side by side."""
+    results = load("ensemble_speed/ensemble_speed.json")
+    median = results.get("median_microseconds")
+    goal = results.get("goal_predict_speedup_at_least")
+    predict = results.get("predict_speedup")
+    return table(
+        [
+            "policy",
+            "heads",
+            "`predict`, sequential",
+            "`predict`, batched",
+            "`predict` speed-up (goal)",
+            "a whole low-level step, speed-up",
+            "largest action gap",
+            "calls x rounds",
+        ],
+        [
+            [
+                f"`{results.get('policy')}` (`{results.get('fingerprints', 'batched')}`)",
+                results.get("heads"),
+                f"{median['sequential']:.0f} us",
+                f"{median['batched']:.0f} us",
+                f"{times(predict)} (>= {goal}x: {'met' if predict >= goal else 'missed'})",
+                times(results.get("low_level_step_speedup")),
+                results.get("max_action_gap"),
+                f"{results.get('settings', 'calls')} x {results.get('settings', 'rounds')}",
+            ]
+        ],
+    )
+
+
+UNTRAINED_LABELS = {
+    "heading_cnn": "`heading_cnn`",
+    "next_cell_cnn": "`next_cell_cnn` (protocol 2's default)",
+    "next_cell_vin": "`next_cell_vin` (value iteration, no wall blocking)",
+    "next_cell_vin_walls": '`next_cell_vin_walls` (the "strong prior")',
+}
+"""The learners of the untrained-learner files, in the table's order, as protocol 2's page calls them."""
+
+
+def untrained_learners() -> str:
+    """Each learner's untrained success per body: selection and evaluation mazes per init, the rule's bound."""
+    bodies = [load(f"untrained_learners/untrained_learners_{body}.json") for body in ("point", "ant")]
+    header = ["learner"]
+    for results in bodies:
+        rows = results.get("rows")
+        inits = len({r["seed"] for r in rows})
+        size = results.get("maze_size")
+        header.append(
+            f"{results.get('body')}: selection / eval, {inits} init{'s' if inits > 1 else ''} x "
+            f"{rows[0]['mazes']} {size}x{size} mazes"
+        )
+    header += [f"{results.get('body')}: 95% Wilson upper bound, largest selection count" for results in bodies] + [
+        f"meets the {percent(bodies[0].get('untrained_limit'), 100)} rule (point, ant)"
+    ]
+    lines = []
+    for variant, label in UNTRAINED_LABELS.items():
+        cells, bounds, meets = [], [], []
+        for results in bodies:
+            rows = [r for r in results.get("rows") if r["variant"] == variant]
+            if not rows:
+                cells.append("not measured")
+                bounds.append("")
+                meets.append("not measured")
+                continue
+            splits = [
+                " and ".join(f"{count(r['success_rate'], r['mazes'])}/{r['mazes']}" for r in rows if r["split"] == s)
+                for s in ("selection", "eval")
+            ]
+            cells.append("; ".join(splits) if len(rows) > 2 else ", ".join(splits))
+            worst = max((r for r in rows if r["split"] == "selection"), key=lambda r: r["success_rate"])
+            bounds.append(
+                f"{count(worst['success_rate'], worst['mazes'])}/{worst['mazes']}: {100 * worst['wilson_95'][1]:.1f}%"
+            )
+            meets.append("yes" if results.get("by_variant", variant, "meets_limit") else "no")
+        lines.append([label, *cells, *bounds, ", ".join(meets)])
+    return table(header, lines)
+
+
+def learner_selection() -> str:
+    """The learner choice rerun on the symmetry-closed selection part, per body: untrained, then trained."""
+    bodies = {body: load(f"learner_ablation/learner_selection_{body}.json") for body in ("point", "ant")}
+    first = bodies["point"]
+    episodes, mazes = first.get("protocol", "episodes"), first.get("protocol", "selection_mazes")
+    lines = []
+    for body, results in bodies.items():
+        for variant, spec in results.get("variants").items():
+            untrained = spec["untrained_selection_successes"]
+            lines.append(
+                [
+                    body,
+                    f"`{variant}`",
+                    f"{untrained['successes']} of {untrained['episodes']}: "
+                    f"{rate_cell(untrained['successes'], untrained['episodes'])}",
+                    " and ".join(str(t["selection_success"]["successes"]) for t in spec["trials"]),
+                    f"{spec['selection_success_median']:.2f}",
+                    f"{spec['labels_median']:.0f}",
+                ]
+            )
+    return table(
+        [
+            "body",
+            "learner",
+            "untrained: selection plays solved [95% Wilson]",
+            f"after {episodes} DAgger episodes: selection mazes solved per seed (of {mazes})",
+            "median",
+            "labels, median",
+        ],
+        lines,
+    )
+
+
+def protocol2_interim() -> str:
+    """The lost protocol-2 run's mid-run summaries: untrained success, DAgger, gated and aggrevate per body."""
+    lines = []
+    for body in ("point", "ant"):
+        results = load(f"protocol2/interim/{body}/summary.json")
+        methods = results.get("methods")
+        seeds = [spec["seeds"] for spec in methods.values()]
+        dagger, gated, aggrevate = (results.get("methods", name) for name in ("dagger", "gated", "aggrevate"))
+
+        def final(spec: dict[str, Any]) -> str:
+            success = spec["final_success"]
+            return f"{percent(success['median'], 100)} ({percent(success['min'], 100)}-{percent(success['max'], 100)})"
+
+        untrained = dagger["untrained_success"]
+        mazes = untrained["pooled"]["mazes"]
+        lines.append(
+            [
+                body,
+                f"{min(seeds)}-{max(seeds)}",
+                f"{percent(untrained['pooled']['rate'])} ({count(min(untrained['per_seed']), mazes)}-"
+                f"{count(max(untrained['per_seed']), mazes)} of {mazes} mazes per seed)",
+                f"{final(dagger)}, {dagger['total_labels']['median']:.0f} labels",
+                f"{final(gated)}, {gated['total_labels']['median']:.0f} labels "
+                f"({gated['total_labels']['median'] / dagger['total_labels']['median']:.2f}x DAgger's)",
+                final(aggrevate),
+            ]
+        )
+    return table(
+        [
+            "body",
+            "seeds per method",
+            "untrained (DAgger's seeds), pooled",
+            "DAgger: final success, median (min-max); labels per trial, median",
+            "`gated`",
+            "`aggrevate`",
+        ],
+        lines,
+    )
+
+
+def ray_sweep() -> str:
+    """The small grid on the serial backend against a local Ray instance, with the ratios."""
+    results = load("sweep_scaling/sweep_scaling.json")
+    machine = results.get("machine")
+    before, after = machine["load_average_1_5_15_before"][0], machine["load_average_1_5_15_after"][0]
+    return (
+        table(
+            [
+                f"measured (commit {results.get('git_commit')[:7]}, {machine['cpu_model']}, {machine['cpu_count']} "
+                f"cores, 1-minute load average {before:.1f} before, {after:.1f} after)",
+                "seconds",
+            ],
+            [
+                ["serial backend, the whole grid", results.get("serial_seconds")],
+                ["Ray start-up: `ray.init()` + first trivial task", results.get("ray_startup_seconds")],
+                [
+                    f"Ray with {results.get('ray_workers')} workers, the grid on the started instance",
+                    results.get("ray_grid_seconds"),
+                ],
+                ["Ray, start-up and grid together", results.get("ray_end_to_end_seconds")],
+                [
+                    f"sum of the {results.get('grid', 'trials')} trials' own wall times: serial / Ray",
+                    f"{results.get('serial_trial_seconds_sum')} / {results.get('ray_trial_seconds_sum')}",
+                ],
+            ],
+        )
+        + f"\n\nSerial over Ray: {times(results.get('speedup_serial_over_ray_grid'))} for the grid alone, "
+        f"{times(results.get('speedup_serial_over_ray_end_to_end'))} with the start-up. The same `episodes.csv` "
+        f"from both: {'yes' if results.get('episodes_csv_identical') else 'no'}."
+    )
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     # docs/results/low-level.md
     "low-level-eval": low_level_eval,
@@ -1009,6 +1421,20 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "maze-families": maze_families,
     "import-time": import_time,
     "sweeps": sweeps,
+    # docs/guides/vector-envs.md
+    "lockstep-agreement": lockstep_agreement,
+    "hierarchy-throughput": hierarchy_throughput,
+    "lockstep-paths": lockstep_paths,
+    "high-level-ppo": high_level_ppo,
+    "paper-trial-speed": paper_trial_speed,
+    # docs/guides/low-level.md
+    "ensemble-speed": ensemble_speed,
+    # docs/guides/protocol.md
+    "untrained-learners": untrained_learners,
+    "learner-selection": learner_selection,
+    "protocol2-interim": protocol2_interim,
+    # docs/ray.md
+    "ray-sweep": ray_sweep,
 }
 """Each generated block's section, by the name the command line takes."""
 

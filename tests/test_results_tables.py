@@ -109,3 +109,126 @@ def test_an_in_maze_familys_misses_name_each_way_it_failed():
     family = in_maze_family(90, flips=7, timeouts=1) | {"frozen": 2}
     assert results_tables.misses(family) == "7 flips, 2 frozen, 1 timeout"
     assert results_tables.misses(in_maze_family(100, flips=0)) == ""
+
+
+GUIDE_FIGURES = {
+    "lockstep-agreement": "| ant (3x3) | learner (20 DAgger episodes) | 100 | 69 | 5 | 62 / 65 | 152.0 | 31.6 |",
+    "hierarchy-throughput": "no thread setting fell below 0.77x of the other (the widest gap: the ant's lockstep env "
+    "at N = 4, 126 steps/s at 1 thread against 164 at 2): the goal of no thread setting below 0.50x of the best holds",
+    "lockstep-paths": "| `eval-low` | point | 200 | 200 | 200 | 200 / 200 | 0.67x (slower) |",
+    "high-level-ppo": "| `antmaze_hirl/PointMaze-v0` | 256 | 1.07 | 3.68 | 8 | 3.45x |",
+    "paper-trial-speed": "The goal of <= 3 min per ant trial is **missed** (CPU, scaled: 19.8 min serial, 11.4 min",
+    "ensemble-speed": "| 7 | 851 us | 523 us | 1.63x (>= 1.5x: met) | 1.33x |",
+    "untrained-learners": "| 0/30 and 2/30; 1/30 and 0/30 | 0/10, 0/10 | 2/30: 21.3% | 0/10: 27.8% | yes, yes |",
+    "learner-selection": "| ant | `next_cell_cnn` | 1 of 100: 1% [0.2, 5.4] | 39 and 36 | 0.75 | 278 |",
+    "protocol2-interim": "| ant | 3-4 | 1.5% (1-2 of 100 mazes per seed) | 84% (79%-90%), 939 labels | 82% (81%-86%), "
+    "257 labels (0.27x DAgger's) | 61% (61%-63%) |",
+    "ray-sweep": "Serial over Ray: 0.83x for the grid alone, 0.70x with the start-up.",
+}
+"""One line each guide's section prints from the committed files, as the guides quote it."""
+
+
+@pytest.mark.parametrize(("section", "line"), list(GUIDE_FIGURES.items()))
+def test_each_guide_section_prints_its_figures_from_the_committed_files(section, line, capsys):
+    assert results_tables.main([section]) == 0
+    assert line in capsys.readouterr().out
+
+
+def without(data, keys):
+    """``data`` with the field at ``keys`` (dict keys or list indices, the last one deleted) removed."""
+    *path, last = keys
+    parent = data
+    for key in path:
+        parent = parent[key]
+    if isinstance(last, dict):  # a row of a list picked by its fields
+        parent.remove(next(row for row in parent if last.items() <= row.items()))
+    else:
+        del parent[last]
+    return data
+
+
+@pytest.mark.parametrize(
+    ("section", "name", "keys", "error"),
+    [
+        (
+            "lockstep-agreement",
+            "lockstep_agreement/lockstep_agreement.json",
+            ["rows", 1, "same_success"],
+            "no field 'same_success' in results/lockstep_agreement/lockstep_agreement.json",
+        ),
+        (
+            "hierarchy-throughput",
+            "hierarchy_throughput/hierarchy_throughput.json",
+            ["raw_baselines"],
+            "results/hierarchy_throughput/hierarchy_throughput.json: no field ['raw_baselines']",
+        ),
+        (
+            "hierarchy-throughput",
+            "hierarchy_throughput/hierarchy_throughput.json",
+            ["rows", {"body": "ant", "mode": "lockstep", "num_envs": 16, "torch_threads": 2}],
+            "results/hierarchy_throughput/hierarchy_throughput.json: no row for ant, lockstep, N = 16, 2 torch threads",
+        ),
+        (
+            "lockstep-paths",
+            "lockstep_paths/lockstep_paths.json",
+            ["rows", 4, "speedup"],
+            "no field 'speedup' in results/lockstep_paths/lockstep_paths.json",
+        ),
+        (
+            "high-level-ppo",
+            "high_level_ppo/high_level_ppo.json",
+            ["ratio"],
+            "results/high_level_ppo/high_level_ppo.json: no field ['ratio']",
+        ),
+        (
+            "paper-trial-speed",
+            "paper_trial_speed/paper_trial_speed.json",
+            ["goal_full_trial_s"],
+            "results/paper_trial_speed/paper_trial_speed.json: no field ['goal_full_trial_s']",
+        ),
+        (
+            "ensemble-speed",
+            "ensemble_speed/ensemble_speed.json",
+            ["median_microseconds"],
+            "results/ensemble_speed/ensemble_speed.json: no field ['median_microseconds']",
+        ),
+        (
+            "untrained-learners",
+            "untrained_learners/untrained_learners_ant.json",
+            ["by_variant", "next_cell_cnn"],
+            "results/untrained_learners/untrained_learners_ant.json: no field ['by_variant']['next_cell_cnn']",
+        ),
+        (
+            "learner-selection",
+            "learner_ablation/learner_selection_ant.json",
+            ["variants", "heading_cnn", "untrained_selection_successes"],
+            "no field 'untrained_selection_successes' in results/learner_ablation/learner_selection_point.json, "
+            "results/learner_ablation/learner_selection_ant.json",
+        ),
+        (
+            "protocol2-interim",
+            "protocol2/interim/ant/summary.json",
+            ["methods", "gated"],
+            "results/protocol2/interim/ant/summary.json: no field ['methods']['gated']",
+        ),
+        (
+            "ray-sweep",
+            "sweep_scaling/sweep_scaling.json",
+            ["machine"],
+            "results/sweep_scaling/sweep_scaling.json: no field ['machine']",
+        ),
+    ],
+)
+def test_a_guide_section_missing_a_field_is_a_one_line_error_naming_it(
+    section, name, keys, error, tmp_path, monkeypatch, capsys
+):
+    assert results_tables.main([section]) == 0
+    capsys.readouterr()
+    for loaded in set(results_tables.LOADED):  # the section's files, copied into a results/ of its own
+        (tmp_path / loaded).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / loaded).write_text((results_tables.RESULTS / loaded).read_text())
+    damaged = tmp_path / name
+    damaged.write_text(json.dumps(without(json.loads(damaged.read_text()), keys)))
+    monkeypatch.setattr(results_tables, "RESULTS", tmp_path)
+    assert results_tables.main([section]) == 2
+    assert capsys.readouterr().err == f"error: {error}\n"
