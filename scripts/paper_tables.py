@@ -11,7 +11,7 @@ episodes); a note names every other setting they differ in.
 
 Usage:
   python scripts/paper_tables.py results/paper_experiment/point [--tables cost,per-label,effort]
-  cd results/paper_experiment && python ../../scripts/paper_tables.py ant --beside ant_stage5
+  python scripts/paper_tables.py results/paper_experiment/ant --beside OTHER_FOLDER --names 'this run,other'
 """
 
 from __future__ import annotations

@@ -8,11 +8,16 @@ entries it supersedes and a note. Entries it lists as ``removed`` are gone from 
 git still has them. Which pages quote an entry is not stored but read from README.md and docs/**/*.md, so the
 table cannot claim a page that no longer quotes the file.
 
-``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, or a removed
-entry still present); ``--table`` prints the Markdown tables of ``docs/results/files.md`` (a generated block).
-``--removable`` lists the superseded entries that no page quotes.
+A superseded entry is removed from the tree: the entry that supersedes it names it in ``supersedes``, and
+``removed`` names the commit where git still has it. Every field of an entry holds a value: a fact the file
+or git does not record is written ``not recorded``, one that does not apply (no low level in an env
+benchmark) ``n/a``.
 
-Usage: python scripts/results_index.py [--check | --table | --removable]
+``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, a removed
+entry still present, a superseded entry not listed as removed, or an entry's null or missing field);
+``--table`` prints the Markdown tables of ``docs/results/files.md`` (a generated block).
+
+Usage: python scripts/results_index.py [--check | --table]
 """
 
 from __future__ import annotations
@@ -34,6 +39,8 @@ PAGES_OWN = Path("docs") / "results" / "files.md"
 COMMAND_CHARS = 100
 """Longer recorded commands are cut in the table (the whole command is in the file and in the index)."""
 TICKED = re.compile(r"`+([^`\s]+)`+")
+FIELDS = ("command", "committed_in", "made_at", "low_level", "machine", "supersedes", "note")
+"""Every entry's fields; each must be present and not null (``note`` may be empty, the others not)."""
 
 
 def load_index(path: Path = INDEX) -> dict[str, Any]:
@@ -80,11 +87,23 @@ def problems(results: Path, index: dict[str, Any]) -> list[str]:
             lines.append(f"{removed['path']}: listed as removed, still on disk")
         if not removed.get("commit") or not removed.get("superseded_by"):
             lines.append(f"{removed['path']}: a removed entry needs its commit and what supersedes it")
+    superseded: dict[str, str] = {}  # results/<experiment>/<old> -> the entry that supersedes it
     for experiment, spec in index["experiments"].items():
         for name, entry in spec["entries"].items():
-            for old in entry["supersedes"]:
-                if f"{experiment}/{old}" not in indexed:
-                    lines.append(f"{experiment}/{name} supersedes {old}, which is not an entry of {experiment}/")
+            lines += [
+                f"{experiment}/{name}: field {field!r} is missing, null or empty (write 'not recorded' or 'n/a')"
+                for field in FIELDS
+                if entry.get(field) is None or (entry[field] == "" and field != "note")
+            ]
+            for old in entry.get("supersedes") or []:
+                superseded[f"results/{experiment}/{old}"] = f"results/{experiment}/{name}"
+    listed = {removed["path"]: removed.get("superseded_by") for removed in index["removed"]}
+    for path in sorted(superseded.keys() | listed.keys()):
+        newer, named = superseded.get(path), listed.get(path)
+        if newer != named:
+            by = f"{newer}'s supersedes names it" if newer else "no entry's supersedes names it"
+            said = f"removed gives {named} as superseding it" if path in listed else "removed does not list it"
+            lines.append(f"{path}: {by}, {said} (a superseded entry leaves the tree, named in both)")
     return lines
 
 
@@ -127,24 +146,13 @@ def matches(token: str, entry: str) -> bool:
     return fnmatch.fnmatchcase(entry, token) or token.startswith(entry + "/")
 
 
-def superseded_by(index: dict[str, Any]) -> dict[str, str]:
-    """Each superseded entry (``experiment/name``) and the entry that supersedes it."""
-    return {
-        f"{experiment}/{old}": f"{experiment}/{name}"
-        for experiment, spec in index["experiments"].items()
-        for name, entry in spec["entries"].items()
-        for old in entry["supersedes"]
-    }
-
-
-def cell(text: str | None) -> str:
-    """A table cell: ``not recorded`` for a missing fact, pipes escaped."""
-    return "not recorded" if not text else text.replace("|", "\\|")
+def cell(text: str) -> str:
+    """A table cell: pipes escaped."""
+    return text.replace("|", "\\|")
 
 
 def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
     """The Markdown tables of ``docs/results/files.md``: one per experiment, then the removed entries."""
-    later = superseded_by(index)
     lines = []
     for experiment, spec in index["experiments"].items():
         lines += [f"### `results/{experiment}/`", "", f"Made by `{spec['made_by']}`.", ""]
@@ -156,27 +164,24 @@ def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
         for name, entry in spec["entries"].items():
             path = f"{experiment}/{name}"
             command = entry["command"]
-            if command and len(command) > COMMAND_CHARS:
+            if len(command) > COMMAND_CHARS:
                 command = command[: COMMAND_CHARS - 3] + "..."
             relations = [f"supersedes `{old}`" for old in entry["supersedes"]]
-            if path in later:
-                kept = "kept: quoted" if quoted[path] else "no page quotes it: removable"
-                relations.append(f"superseded by `{later[path].split('/', 1)[1]}`, {kept}")
             if entry["note"]:
                 relations.append(cell(entry["note"]))
             pages = ", ".join(f"`{page}`" for page in quoted[path]) or "no page"
+            shown = command if command in ("not recorded", "n/a") else f"`{cell(command)}`"
             lines.append(
-                f"| `{name}` | {f'`{cell(command)}`' if command else cell(None)} | {entry['committed_in']} "
+                f"| `{name}` | {shown} | {entry['committed_in']} "
                 f"| {cell(entry['made_at'])} | {cell(entry['low_level'])} | {cell(entry['machine'])} "
                 f"| {'; '.join(relations)} | {pages} |"
             )
         lines.append("")
-    lines += ["### Removed", ""]
-    if index["removed"]:
-        lines += ["| entry | superseded by | in git at |", "|---|---|---|"]
-        lines += [f"| `{r['path']}` | `{r['superseded_by']}` | {r['commit']} |" for r in index["removed"]]
-    else:
-        lines.append("None yet.")
+    lines += ["### Removed", "", "| entry | superseded by | in git at | note |", "|---|---|---|---|"]
+    lines += [
+        f"| `{r['path']}` | `{r['superseded_by']}` | {r['commit']} | {cell(r.get('note', ''))} |"
+        for r in index["removed"]
+    ]
     return "\n".join(lines).rstrip()
 
 
@@ -185,7 +190,6 @@ def main(argv: list[str] | None = None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--check", action="store_true", help="compare results/index.json with the tree")
     mode.add_argument("--table", action="store_true", help="print the tables of docs/results/files.md")
-    mode.add_argument("--removable", action="store_true", help="list superseded entries no page quotes")
     args = parser.parse_args(argv)
     try:
         index = load_index()
@@ -195,13 +199,7 @@ def main(argv: list[str] | None = None) -> int:
         found = problems(RESULTS, index)
         print("\n".join(found) if found else f"{INDEX.relative_to(ROOT)}: matches results/")
         return 1 if found else 0
-    quoted = quoting_pages(ROOT, entry_paths(index))
-    if args.table:
-        print(table(index, quoted))
-        return 0
-    for entry, newer in superseded_by(index).items():
-        if not quoted[entry]:
-            print(f"{entry}: superseded by {newer}, quoted by no page")
+    print(table(index, quoting_pages(ROOT, entry_paths(index))))
     return 0
 
 

@@ -815,7 +815,7 @@ def learner_point() -> str:
 
 
 def learner_ant() -> str:
-    oracle = families(load("in_maze/in_maze_stage3.json"), "runs/ant_stage2.zip")["ant4"]
+    oracle = families(load("in_maze/in_maze_smoothing.json"), "shipped")["ant4"]
     return (
         learner_table(
             "learner_ablation/learner_ablation_ant.json",
@@ -830,7 +830,7 @@ def learner_ant() -> str:
         + "\n\n"
         + table(
             ["the oracle driving the stage-2 low level on the same 100 ant4 mazes", "success [95% Wilson]"],
-            [["`in_maze/in_maze_stage3.json`, row `runs/ant_stage2.zip`", success(oracle)]],
+            [["`in_maze/in_maze_smoothing.json`, row `shipped` (then stage 2)", success(oracle)]],
         )
     )
 
@@ -1367,17 +1367,8 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "selection-stage6": lambda: selection(
         "select_low_level/low_level_selection_stage6.json", STAGE6_ROWS, extra="heads"
     ),
-    "in-maze-stage5": lambda: in_maze_pair(
-        "in_maze/in_maze_stage5.json", "shipped", ".dev_run/stage4.zip", "stage 5", "stage 4"
-    ),
     "selection-ensembles": lambda: selection(
         "select_low_level/low_level_selection_ensembles.json", ENSEMBLE_ROWS, extra="members"
-    ),
-    "in-maze-stage4": lambda: in_maze_pair(
-        "in_maze/in_maze_stage4.json", "shipped", "runs/ant_stage3.zip", "stage 4", "stage 3"
-    ),
-    "in-maze-stage3": lambda: in_maze_pair(
-        "in_maze/in_maze_stage3.json", "shipped", "runs/ant_stage2.zip", "stage 3", "stage 2"
     ),
     "selection-stage3": lambda: selection_ranked(
         "select_low_level/low_level_selection_held_out_large.json",

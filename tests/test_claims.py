@@ -313,7 +313,11 @@ def test_protocol_1_bad_folders_are_one_line_errors_naming_them(tmp_path, capsys
     # A summary without episodes.csv beside it.
     with pytest.raises(ValueError, match=f"^no episodes.csv in {INTERIM / 'point'} "):
         cl.protocol1_figures(INTERIM / "point")
-    old = ROOT / "results" / "paper_experiment" / "ant_stage1"
+    # A summary from before total_labels (as the stage-1 ant's was), with its episodes.csv.
+    older = body("ant")
+    del older.summary["methods"]["dagger"]["total_labels"]
+    old = _write_folder(tmp_path / "ant_stage1", older)
+    (old / "episodes.csv").write_text("method,seed\n")
     with pytest.raises(ValueError, match=r"ant_stage1/summary.json: 'dagger' has no 'total_labels'"):
         cl.protocol1_figures(old)
     with pytest.raises(SystemExit):

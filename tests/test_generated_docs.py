@@ -22,7 +22,7 @@ def test_every_generated_block_of_the_docs_matches_its_command(capsys):
     blocks = [
         block for page in generate_docs.default_pages() for block in generate_docs.find_blocks(page, page.read_text())
     ]
-    assert len(blocks) >= 3  # the paper-experiment page's point, ant and stage-6-beside-stage-5 tables
+    assert len(blocks) >= 3  # the paper-experiment page's point and ant tables, the results pages' tables
 
 
 def test_a_stale_block_is_reported_then_rewritten_and_the_rest_of_the_page_kept(tmp_path, capsys):

@@ -49,21 +49,49 @@ def test_the_results_index_matches_the_results_tree():
     assert results_index.problems(results_index.RESULTS, index) == []
 
 
+def full_entry(**fields):
+    """An index entry with every field set, then ``fields``."""
+    entry = {"command": "python x.py", "committed_in": "abc1234", "made_at": "not recorded", "low_level": "n/a"}
+    return entry | {"machine": "not recorded", "supersedes": [], "note": ""} | fields
+
+
 def test_the_results_index_check_names_an_unindexed_entry_and_a_removed_one_still_there(tmp_path):
     results_index = load_script("scripts/results_index.py")
     (tmp_path / "in_maze").mkdir()
     (tmp_path / "in_maze" / "in_maze.json").write_text("{}")
     (tmp_path / "in_maze" / "stray.json").write_text("{}")
-    entry = {"supersedes": ["gone.json"]}
+    gone = {"path": "results/in_maze/gone.json", "commit": "abc1234", "superseded_by": "results/in_maze/in_maze.json"}
     index = {
-        "experiments": {"in_maze": {"entries": {"in_maze.json": entry}}},
-        "removed": [{"path": "scripts/results_index.py", "commit": "", "superseded_by": "x"}],
+        "experiments": {"in_maze": {"entries": {"in_maze.json": full_entry(supersedes=["gone.json", "kept.json"])}}},
+        "removed": [gone, {"path": "scripts/results_index.py", "commit": "", "superseded_by": "x"}],
     }
     assert results_index.problems(tmp_path, index) == [
         "in_maze/stray.json: on disk, not in results/index.json",
         "scripts/results_index.py: listed as removed, still on disk",
         "scripts/results_index.py: a removed entry needs its commit and what supersedes it",
-        "in_maze/in_maze.json supersedes gone.json, which is not an entry of in_maze/",
+        "results/in_maze/kept.json: results/in_maze/in_maze.json's supersedes names it, removed does not list it "
+        "(a superseded entry leaves the tree, named in both)",
+        "scripts/results_index.py: no entry's supersedes names it, removed gives x as superseding it "
+        "(a superseded entry leaves the tree, named in both)",
+    ]
+
+
+@pytest.mark.parametrize("field", ["command", "committed_in", "made_at", "low_level", "machine", "supersedes", "note"])
+def test_the_results_index_check_refuses_an_entrys_null_or_missing_field_naming_both(tmp_path, field):
+    results_index = load_script("scripts/results_index.py")
+    (tmp_path / "in_maze").mkdir()
+    (tmp_path / "in_maze" / "in_maze.json").write_text("{}")
+    missing = full_entry()
+    del missing[field]
+    for entry in (full_entry(**{field: None}), missing):
+        index = {"experiments": {"in_maze": {"entries": {"in_maze.json": entry}}}, "removed": []}
+        assert results_index.problems(tmp_path, index) == [
+            f"in_maze/in_maze.json: field {field!r} is missing, null or empty (write 'not recorded' or 'n/a')"
+        ]
+    # A note may be empty; a fact may not: an unknown one is written "not recorded".
+    index = {"experiments": {"in_maze": {"entries": {"in_maze.json": full_entry(machine="")}}}, "removed": []}
+    assert results_index.problems(tmp_path, index) == [
+        "in_maze/in_maze.json: field 'machine' is missing, null or empty (write 'not recorded' or 'n/a')"
     ]
 
 

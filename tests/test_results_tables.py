@@ -67,8 +67,8 @@ def test_a_damaged_results_file_is_a_one_line_error_naming_it(tiny_results, caps
 
 
 def test_a_missing_file_or_field_is_a_one_line_error_naming_the_file(tiny_results, capsys):
-    assert results_tables.main(["in-maze-stage5"]) == 2
-    assert capsys.readouterr().err == "error: results/in_maze/in_maze_stage5.json: no such results file\n"
+    assert results_tables.main(["in-maze-tilt"]) == 2
+    assert capsys.readouterr().err == "error: results/in_maze/in_maze_tilt.json: no such results file\n"
     data = json.loads((tiny_results / "in_maze" / "tiny.json").read_text())
     del data["results"]["new"]["families"]["u"]["successes"]
     (tiny_results / "in_maze" / "in_maze.json").write_text(json.dumps({"results": {"shipped": data["results"]["new"]}}))
