@@ -39,12 +39,14 @@ import torch as th
 import antmaze_hirl  # noqa: F401  (registers the ids)
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs import controllers
+from antmaze_hirl.envs.profiles import BODY_PROFILES, maze_env_id
 from antmaze_hirl.experts.oracle import PathOracle
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "hierarchy_throughput" / "hierarchy_throughput.json"
 RAW_IDS = {"ant": "AntMaze_UMaze-v5", "point": "PointMaze_UMaze-v3"}
-# The ant's 4x4 mazes, on which the hierarchy was profiled before the low level batched; the point's default.
-MAZE_SIZES = {"ant": 4, "point": 5}
+# The held-out-layouts families (ant 4x4, point 5x5): the ant's 4x4 mazes are those the hierarchy was
+# profiled on before the low level batched.
+MAZE_SIZES = {body: profile.held_out_maze_size for body, profile in BODY_PROFILES.items()}
 
 
 def raw_steps_per_s(body: str, seconds: float, seed: int) -> float:
@@ -77,7 +79,7 @@ def hierarchy_steps_per_s(env: Any, oracle: PathOracle, seconds: float, seed: in
 
 def serial_steps_per_s(body: str, subgoal_reach_m: float | None, seconds: float, seed: int) -> tuple[float, int]:
     """Low-level steps/s of one ``gym.make`` env, as :func:`hierarchy_steps_per_s` counts them."""
-    env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=MAZE_SIZES[body])
+    env = gym.make(maze_env_id(body), maze_size=MAZE_SIZES[body])
     oracle = PathOracle.for_env(env, subgoal_reach_m=subgoal_reach_m)
     obs, _ = env.reset(seed=seed)
     steps, start = 0, time.perf_counter()
@@ -107,7 +109,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     baselines = {}
     for body in args.bodies:
-        subgoal_reach_m = 2.0 if body == "ant" else None  # the ant experiment's oracle reach
+        subgoal_reach_m = BODY_PROFILES[body].subgoal_reach_m  # the experiment's oracle reach (ant 2 m)
         before = raw_steps_per_s(body, args.seconds, args.seed)
         body_rows = []
         th.set_num_threads(2)
@@ -122,7 +124,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed)
             body_rows.append({"mode": "serial", "num_envs": 1, "torch_threads": threads, "steps_per_s": rate})
         for num_envs in args.num_envs:
-            env = gym.make_vec(f"antmaze_hirl/{body.capitalize()}Maze-v0", num_envs, maze_size=MAZE_SIZES[body])
+            env = gym.make_vec(maze_env_id(body), num_envs, maze_size=MAZE_SIZES[body])
             oracle = PathOracle.for_env(env.envs[0], subgoal_reach_m=subgoal_reach_m)
             for threads in args.threads:
                 th.set_num_threads(threads)

@@ -30,6 +30,7 @@ import antmaze_hirl  # noqa: F401  (registers the ids)
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluation_episodes
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.experiments.config import body_settings
 from antmaze_hirl.experts.oracle import PathOracle
 
@@ -84,7 +85,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     rows = []
     for body in args.bodies:
         settings = body_settings(body)
-        env = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=settings["maze_size"])
+        env = gym.make(maze_env_id(body), maze_size=settings["maze_size"])
         oracle = PathOracle.for_env(env, subgoal_reach_m=settings["expert_max_distance"])
         learner = trained_learner(env, oracle, args.train_episodes, args.seed)
         for name, policy in (("oracle", oracle), (f"learner ({args.train_episodes} DAgger episodes)", learner)):

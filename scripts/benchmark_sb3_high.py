@@ -24,10 +24,9 @@ from gymnasium.wrappers import TimeLimit
 from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import score_policy
-from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
+from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
 SETTINGS = {
@@ -48,7 +47,7 @@ def main() -> int:
         parser.error(f"--steps must be >= 1, got {args.steps}")
     torch.set_num_threads(1)
     env = TimeLimit(
-        SplitMazeEnv("point", split="train", low_level=ShippedPolicyController("point")),
+        make_maze_env("point", split="train"),  # the shipped low level
         SUITE_SPECS["point5"].max_episode_steps,
     )
     algorithm, settings = SETTINGS[args.algo]

@@ -54,7 +54,6 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
-from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import (
     LEARNERS,
@@ -72,6 +71,7 @@ from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experiments.uncertainty import pooled_rate, rate_with_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.experts.oracle import plan_subgoal
+from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "learner_ablation"
 
@@ -101,7 +101,7 @@ def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, lab
 
 def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> float:
     """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
-    env = SplitMazeEnv(config.body, split="selection", maze_size=config.maze_size, low_level=lambda *_: None)
+    env = make_maze_env(config.body, low_level=lambda *_: None, split="selection", maze_size=config.maze_size)
     geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
     reach = config.expert_max_distance or geometry.scale
     # The body at rest as a reset leaves it (the point's is zero velocity; the ant's is not all zeros).

@@ -23,6 +23,7 @@ import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.layout_splits import SPLITS, wall_grid_split
 from antmaze_hirl.envs.layouts import wall_grid_string
+from antmaze_hirl.envs.profiles import maze_env_id
 
 FAMILIES = {"ant_3x3": ("ant", 3), "ant_4x4": ("ant", 4), "ant_5x5": ("ant", 5), "point_5x5": ("point", 5)}
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "maze_families"
@@ -31,9 +32,7 @@ RESULTS = Path(__file__).resolve().parents[1] / "results" / "maze_families"
 def family_figures(body: str, maze_size: int, draws: int, seed: int) -> dict:
     # Only the layout sampler is used: a do-nothing controller spares loading the shipped policy.
     action_dim = {"ant": 8, "point": 2}[body]
-    env = gym.make(
-        f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, low_level=lambda obs: np.zeros(action_dim)
-    )
+    env = gym.make(maze_env_id(body), maze_size=maze_size, low_level=lambda obs: np.zeros(action_dim))
     rng = np.random.default_rng(seed)
     layouts = [env.unwrapped.sample_layout(rng) for _ in range(draws)]
     env.close()

@@ -44,11 +44,9 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
-from antmaze_hirl.envs.vector import HighLevelVectorEnv, copies_of
-from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
+from antmaze_hirl.sb3_ext.shipped import make_maze_env, make_maze_vector_env
 from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
@@ -97,7 +95,7 @@ class FlatMazeEnv(gym.Env):
     """
 
     def __init__(self) -> None:
-        self.high = SplitMazeEnv("point", split="train", low_level=_no_low_level, horizon=FLAT_STEPS)
+        self.high = make_maze_env("point", low_level=_no_low_level, split="train", horizon=FLAT_STEPS)
         self.reach = self.high.reach
         self.observation_space = self.reach.observation_space
         self.action_space = self.reach.action_space
@@ -134,9 +132,8 @@ class FinalGoalPolicy:
 
 def high_level_vec_env(num_envs: int) -> GymnasiumVecEnv:
     """``num_envs`` ``train``-part point mazes in lockstep behind one shipped low level, as an SB3 VecEnv."""
-    first = SplitMazeEnv("point", split="train", low_level=ShippedPolicyController("point"), clip_subgoals=True)
-    envs = [first, *copies_of(first, num_envs - 1)] if num_envs > 1 else [first]
-    return GymnasiumVecEnv(HighLevelVectorEnv(envs, autoreset_mode="SameStep"))
+    venv = make_maze_vector_env(num_envs, "point", split="train", autoreset_mode="SameStep", clip_subgoals=True)
+    return GymnasiumVecEnv(venv)
 
 
 def make_model(algo: str, num_envs: int, seed: int) -> Any:

@@ -8,10 +8,10 @@ import pickle
 import zipfile
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+from conftest import point_maze
 
 from antmaze_hirl import dagger
 from antmaze_hirl.dagger import (
@@ -26,7 +26,6 @@ from antmaze_hirl.dagger import (
     QueryStrategy,
 )
 from antmaze_hirl.dagger.high_level_policy import ENV_SHAPE_KEYS, FILE_KEYS
-from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.profiles import BODY_PROFILES
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -34,12 +33,6 @@ from antmaze_hirl.envs.task import Task
 from antmaze_hirl.experiments.config import LEARNERS
 
 V2_ZIP = Path(__file__).parent / "data" / "high_level_policy_v2.zip"
-
-
-def point_env(**kwargs):
-    return gym.make(
-        "antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController(), **kwargs
-    )
 
 
 def demo(episode, step, value=0.0):
@@ -68,7 +61,7 @@ def test_dataset_removal_clears_the_mask_and_keeps_ids_of_the_rest():
 
 
 def test_learner_encodings_stay_right_after_removal():
-    env = point_env()
+    env = point_maze()
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0))
     dataset = DemonstrationDataset()
     observations = [env.reset(seed=seed)[0] for seed in range(4)]
@@ -85,7 +78,7 @@ def test_learner_encodings_stay_right_after_removal():
 
 
 def test_learner_and_policy_leave_torchs_global_rng_alone():
-    env = point_env()
+    env = point_maze()
     obs, _ = env.reset(seed=0)
     dataset = DemonstrationDataset()
     dataset.add(Demonstration(obs["image"], obs["state"], np.zeros(2), 0, 0))
@@ -101,7 +94,7 @@ def test_bc_learner_leaves_torchs_global_rng_alone():
     pytest.importorskip("imitation", reason="the imitation extra is not installed")
     from antmaze_hirl.dagger.interop import BCLearner
 
-    env = point_env()
+    env = point_maze()
     dataset = DemonstrationDataset()
     for seed in range(4):
         obs, _ = env.reset(seed=seed)
@@ -143,14 +136,14 @@ def test_state_layout_reads_agent_goal_and_body():
     assert STATE_LAYOUT.body_dim(7) == 3 and STATE_LAYOUT.state_dim(3) == 7
     with pytest.raises(ValueError, match="at least 4 values, got 3"):
         STATE_LAYOUT.body_dim(3)
-    env = point_env()
+    env = point_maze()
     obs, _ = env.reset(seed=0)
     np.testing.assert_allclose(STATE_LAYOUT.agent_xy(obs["state"]), env.unwrapped.agent_xy, atol=1e-6)
     np.testing.assert_allclose(STATE_LAYOUT.goal_xy(obs["state"]), env.unwrapped.goal_xy, atol=1e-6)
 
 
 def test_reset_draws_its_task_with_sample_task():
-    env = point_env()
+    env = point_maze()
     env.reset(seed=5)
     task = env.unwrapped.sample_task(np.random.default_rng(5))  # what reset(seed=5) drew from np_random
     assert isinstance(task, Task)
@@ -170,7 +163,7 @@ def test_trainer_draws_its_task_with_sample_task():
     from antmaze_hirl import PathOracle
     from antmaze_hirl.dagger import DAggerTrainer
 
-    env = point_env()
+    env = point_maze()
     rng = np.random.default_rng(3)
     trainer = DAggerTrainer(
         env=env, expert=PathOracle.for_env(env), learner=HighLevelPolicy.for_env(env, rng=rng), rng=rng
@@ -192,7 +185,7 @@ def test_trainer_draws_its_task_with_sample_task():
 
 
 def test_no_op_subgoal_check_matches_the_push_out():
-    env = point_env(min_subgoal_distance=0.4)
+    env = point_maze(min_subgoal_distance=0.4)
     env.reset(seed=0)
     inner = env.unwrapped
     assert inner.is_no_op_subgoal(inner.agent_xy + np.array([0.3, 0.0]))
@@ -246,7 +239,7 @@ def test_unknown_settings_and_bodies_are_named():
     with pytest.raises(ValueError, match=r"unknown learner settings \['hiden'\]; choose from \['subgoal_reach_m', "):
         LearnerSettings().replace(hiden=64)
     with pytest.raises(ValueError, match=r"unknown learner settings \['max_offset'\]"):  # the file's key is no keyword
-        HighLevelPolicy.for_env(point_env(), rng=np.random.default_rng(0), max_offset=1.0)
+        HighLevelPolicy.for_env(point_maze(), rng=np.random.default_rng(0), max_offset=1.0)
     with pytest.raises(ValueError, match=r"unknown body 'cat'; choose from \['ant', 'point'\]"):
         LearnerSettings.for_body("cat", MazeGeometry(3, 3, 1.0))
     with pytest.raises(dataclasses.FrozenInstanceError):

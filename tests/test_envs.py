@@ -10,6 +10,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from antmaze_hirl.envs import HighLevelMazeEnv, PointGoToController, ReachEnv
 from antmaze_hirl.envs.layouts import validate_maze_map
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.registration import ENV_IDS
 from antmaze_hirl.sb3_ext import shipped
@@ -296,7 +297,7 @@ def test_reaching_the_goal_terminates_with_reward(still_controller):
 @pytest.mark.parametrize("body", ["ant", "point"])
 def test_no_temporary_maze_xml_is_left_behind(body):
     env = ReachEnv(body)
-    high = gym.make(f"antmaze_hirl/{body.capitalize()}Maze-v0", low_level=StillController())
+    high = gym.make(maze_env_id(body), low_level=StillController())
     high.reset(seed=0)
     high.reset(seed=1)  # a new layout rebuilds the model
     for simulator in (env.sim, high.unwrapped.reach.sim):

@@ -1,24 +1,19 @@
-import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
 
 pytest.importorskip("imitation", reason="the imitation extra is not installed")
 
+from conftest import point_maze
 from imitation.algorithms import bc
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, RewardBasedQuery
 from antmaze_hirl.dagger.interop import BCLearner, to_transitions
-from antmaze_hirl.envs import PointGoToController
-
-
-def point_env():
-    return gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
 
 
 def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
-    env = point_env()
+    env = point_maze()
     rng = np.random.default_rng(0)
     trainer = DAggerTrainer(
         env=env,
@@ -58,7 +53,7 @@ def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
 
 
 def test_bc_serves_as_dagger_learner_with_reward_based_filtering():
-    env = point_env()
+    env = point_maze()
     rng = np.random.default_rng(1)
     learner = BCLearner(env, rng=rng, batch_size=4)
     before = [p.detach().clone() for p in learner.bc.policy.parameters()]

@@ -19,6 +19,7 @@ from antmaze_hirl.envs.layouts import (
     transform_layout,
     wall_grid_string,
 )
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.sb3_ext.shipped import ShippedPolicyController
 
@@ -29,9 +30,7 @@ def still(action_dim):
 
 def family_sampler(body, maze_size):
     # The family exactly as the experiment draws it: the high-level env's own sampler.
-    env = gym.make(
-        f"antmaze_hirl/{body.capitalize()}Maze-v0", maze_size=maze_size, low_level=still(8 if body == "ant" else 2)
-    )
+    env = gym.make(maze_env_id(body), maze_size=maze_size, low_level=still(8 if body == "ant" else 2))
     return env.unwrapped.sample_layout
 
 

@@ -120,15 +120,10 @@ def test_bad_beside_arguments_get_one_line_errors(tmp_path, monkeypatch, capsys,
 
 
 def test_labels_to_match_dagger_at_0_labels_has_a_ratio_and_protocol_2_notes_the_same_set():
-    from test_protocol2 import crafted_trial
+    from test_protocol2 import crafted_trials
 
-    rows, evaluations = [], []
     # DAgger reaches its median final success (4/4) after 4 episodes (40 labels); noise starts there untrained.
-    for method, curves in (("dagger", [{0: 1, 2: 3, 4: 4}] * 2), ("noise", [{0: 4, 2: 4, 4: 4}] * 2)):
-        for seed, curve in enumerate(curves):
-            trial_rows, outcomes = crafted_trial(method, seed, curve)
-            rows += trial_rows
-            evaluations += outcomes
+    rows, evaluations = crafted_trials({"dagger": [{0: 1, 2: 3, 4: 4}] * 2, "noise": [{0: 4, 2: 4, 4: 4}] * 2})
     summary = {"methods": summarise(rows, ["dagger", "noise"], evaluations=evaluations)}
     noise = summary["methods"]["noise"]["labels_to_match_dagger"]
     assert noise["median"] == 0.0 and noise["ratio_vs_dagger"] == 0.0  # not None: 0 labels is a count

@@ -8,12 +8,15 @@ import ast
 import inspect
 from pathlib import Path
 
+import pytest
+
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.dagger.high_level_policy import LearnerSettings
-from antmaze_hirl.envs import profiles
+from antmaze_hirl.envs import profiles, suite_specs
 from antmaze_hirl.envs.bodies import BODY_SPECS, BodySpec
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.config import BODY_DEFAULTS, HELD_OUT_MAZE_SIZE, SELECTION_SEED, body_settings
 from antmaze_hirl.registration import ENV_IDS, VECTOR_ENTRY_POINTS
 
@@ -43,7 +46,7 @@ def test_the_body_facts_are_the_values_of_before():
 
 def test_the_seed_table_is_the_values_of_before():
     assert (HELD_OUT_SEED, SELECTION_SEED) == (1_000_000, 3_000_000)
-    assert profiles.SEEDS == profiles.SeedTable(1_000_000, 2_000_000, 3_000_000, 10_000, 100_000, 0)
+    assert profiles.SEEDS == profiles.SeedTable(1_000_000, 2_000_000, 3_000_000, 10_000, 100_000, 0, 4_000_000)
     from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 
     assert inspect.signature(SuccessRateCallback).parameters["seed"].default == 10_000
@@ -88,11 +91,33 @@ def test_the_ids_and_the_maze_families_are_the_values_of_before():
     assert select_low_level.RESERVED_SUBGOAL_SEEDS == (range(0, 1_000), range(10_000, 20_000))
 
 
+def test_the_suites_read_their_ids_and_step_limits_from_their_families_with_the_values_of_before():
+    assert list(profiles.SUITE_FAMILIES) == list(SUITE_SPECS)  # the order sets each suite's seed
+    assert {
+        name: (spec.env_id, spec.body, spec.maze_size, spec.max_low_level_steps) for name, spec in SUITE_SPECS.items()
+    } == {
+        "point5": ("antmaze_hirl/PointMaze-5x5-v0", "point", 5, 500),
+        "ant4": ("antmaze_hirl/AntMaze-4x4-v0", "ant", 4, 500),
+        "u": ("antmaze_hirl/AntMaze-u-v0", "ant", None, 960),
+        "medium": ("antmaze_hirl/AntMaze-medium-v0", "ant", None, 1600),
+        "large": ("antmaze_hirl/AntMaze-large-v0", "ant", None, 3040),
+        "giant": ("antmaze_hirl/AntMaze-giant-v0", "ant", None, 4800),
+    }
+    assert profiles.path_scaled_step_limit(4.0) == 500 and profiles.path_scaled_step_limit(24.1) == 964
+
+
+def test_a_suite_spec_without_the_longest_path_its_family_needs_is_refused_naming_the_suite():
+    with pytest.raises(ValueError, match=r"^suite 'u': longest_path_cells=None; give it exactly for a path-scaled"):
+        suite_specs._suite_spec("u", 5, "0" * 64)
+    with pytest.raises(ValueError, match=r"^suite 'ant4': longest_path_cells=3;"):
+        suite_specs._suite_spec("ant4", 100, "0" * 64, longest_path_cells=3)
+
+
 def test_profiles_imports_only_the_standard_library():
     tree = ast.parse((ROOT / "antmaze_hirl" / "envs" / "profiles.py").read_text())
     imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
     imported |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
-    assert imported == {"__future__", "dataclasses", "typing"}
+    assert imported == {"__future__", "dataclasses", "math", "typing"}
 
 
 def test_the_profiles_reach_has_the_one_name_of_the_oracles_reach():

@@ -56,18 +56,30 @@ def crafted_trial(method, seed, evaluations_by_episode, labels_per_episode=10, m
     return rows, outcomes
 
 
-def test_curve_metrics_on_one_set_start_at_the_untrained_success():
+def crafted_trials(curves_by_method, labels_per_episode=None, mazes=4):
+    """:func:`crafted_trial` of every ``{method: [curve of seed 0, curve of seed 1, ...]}``, rows and outcomes joined.
+
+    ``labels_per_episode`` maps a method to its labels per episode (default 10).
+    """
     rows, evaluations = [], []
-    # DAgger: untrained 2/4, 3/4 after 2 episodes, 4/4 after 4: its median final success is 1.0 on the same set.
-    for seed, curve in enumerate([{0: 2, 2: 3, 4: 4}, {0: 2, 2: 2, 4: 4}]):
-        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
-        rows += trial_rows
-        evaluations += outcomes
-    # noise: 3/4 and 4/4 untrained (a learner that needs few or no labels), then damaged by training.
-    for seed, curve in enumerate([{0: 3, 2: 1, 4: 2}, {0: 4, 2: 3, 4: 4}]):
-        trial_rows, outcomes = crafted_trial("noise", seed, curve)
-        rows += trial_rows
-        evaluations += outcomes
+    for method, curves in curves_by_method.items():
+        per_episode = (labels_per_episode or {}).get(method, 10)
+        for seed, curve in enumerate(curves):
+            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode, mazes=mazes)
+            rows += trial_rows
+            evaluations += outcomes
+    return rows, evaluations
+
+
+def test_curve_metrics_on_one_set_start_at_the_untrained_success():
+    rows, evaluations = crafted_trials(
+        {
+            # DAgger: untrained 2/4, 3/4 after 2 episodes, 4/4 after 4: its median final success is 1.0 on the set.
+            "dagger": [{0: 2, 2: 3, 4: 4}, {0: 2, 2: 2, 4: 4}],
+            # noise: 3/4 and 4/4 untrained (a learner that needs few or no labels), then damaged by training.
+            "noise": [{0: 3, 2: 1, 4: 2}, {0: 4, 2: 3, 4: 4}],
+        }
+    )
     summary = summarise(rows, ["dagger", "noise"], evaluations=evaluations)
     dagger, noise = summary["dagger"], summary["noise"]
     assert dagger["untrained_success"]["per_seed"] == [0.5, 0.5]
@@ -210,11 +222,7 @@ def test_the_success_curves_start_at_the_untrained_success():
     from antmaze_hirl.experiments.results_folder import untrained_by_seed
     from antmaze_hirl.plotting import success_points
 
-    rows, evaluations = [], []
-    for seed, curve in enumerate([{0: 1, 2: 3, 4: 4}, {0: 3, 2: 2, 4: 4}]):
-        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
-        rows += trial_rows
-        evaluations += outcomes
+    rows, evaluations = crafted_trials({"dagger": [{0: 1, 2: 3, 4: 4}, {0: 3, 2: 2, 4: 4}]})
     untrained = untrained_by_seed(evaluations)
     assert untrained == {"dagger": {0: 0.25, 1: 0.75}}
     episodes, labels, success = success_points(rows, "dagger", untrained["dagger"])
@@ -250,12 +258,8 @@ def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(finished_
 def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
     from antmaze_hirl.experiments.summary import cost_to_reach
 
-    rows, evaluations = [], []
     # Seed 0 is at 3/4 untrained, then 2/4 and 3/4: 0 labels. Seed 1 starts at 1/4 and reaches 3/4 after 4 episodes.
-    for seed, curve in enumerate([{0: 3, 2: 2, 4: 3}, {0: 1, 2: 2, 4: 3}]):
-        trial_rows, outcomes = crafted_trial("dagger", seed, curve)
-        rows += trial_rows
-        evaluations += outcomes
+    rows, evaluations = crafted_trials({"dagger": [{0: 3, 2: 2, 4: 3}, {0: 1, 2: 2, 4: 3}]})
     figure = summarise(rows, ["dagger"], evaluations=evaluations)["dagger"]["cost_to_60_percent"]
     assert figure == {"median": 20.0, "seeds_reached": 2}  # median of 0 and 40 labels
     seed0 = [row for row in rows if row["seed"] == 0]
@@ -266,13 +270,7 @@ def test_cost_to_60_percent_counts_the_untrained_evaluation_in_protocol_2():
 
 def dagger_and_gated(dagger, gated, mazes=4):
     """Rows and per-maze outcomes of DAgger (10 labels per episode) and gated (5), one crafted curve per seed."""
-    rows, evaluations = [], []
-    for method, curves, per_episode in (("dagger", dagger, 10), ("gated", gated, 5)):
-        for seed, curve in enumerate(curves):
-            trial_rows, outcomes = crafted_trial(method, seed, curve, labels_per_episode=per_episode, mazes=mazes)
-            rows += trial_rows
-            evaluations += outcomes
-    return rows, evaluations
+    return crafted_trials({"dagger": dagger, "gated": gated}, {"gated": 5}, mazes)
 
 
 def test_labels_to_match_paired_by_seed_stays_defined_where_dagger_misses_its_own_median():

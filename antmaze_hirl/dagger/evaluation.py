@@ -22,7 +22,7 @@ from antmaze_hirl.envs.high_level import HighLevelMazeEnv, SubgoalWalk
 from antmaze_hirl.envs.layouts import MazeLayout
 from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.protocol import maze_env
-from antmaze_hirl.envs.vector import check_num_envs, copies_of, walk_in_lockstep
+from antmaze_hirl.envs.vector import check_episodes_and_num_envs, check_num_envs, copies_of, walk_in_lockstep
 from antmaze_hirl.rollout import play_episode
 
 HELD_OUT_SEED = SEEDS.held_out
@@ -88,9 +88,7 @@ def evaluation_outcomes(
     Raises:
         ValueError: If ``episodes`` or ``num_envs`` is below 1.
     """
-    if episodes < 1:
-        raise ValueError(f"episodes must be >= 1, got {episodes}")
-    num_envs = check_num_envs(num_envs)
+    num_envs = check_episodes_and_num_envs(episodes, num_envs)
     if num_envs == 1:
         played, maze = [], maze_env(env)
         for episode in range(episodes):

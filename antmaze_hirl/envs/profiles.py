@@ -4,13 +4,15 @@ Every other module reads these values from here instead of restating them: the b
 (:data:`BODY_SPECS`, re-exported by :mod:`antmaze_hirl.envs.bodies`), what each body does in the maze
 experiment (:data:`BODY_PROFILES`, read by :mod:`antmaze_hirl.experiments.config` and the high-level learner's
 defaults), the registered id strings (:func:`maze_env_id`, :func:`reach_env_id`), the seed ranges that keep
-evaluation sets apart (:data:`SEEDS`), and the maze families with their step limits (:data:`MAZE_FAMILIES`).
+evaluation sets apart (:data:`SEEDS`), and the maze families with their step limits (:data:`MAZE_FAMILIES`,
+:data:`SUITE_FAMILIES`).
 
 The lowest layer: it imports only the standard library, so the CLI, registration and ``--help`` read it for free.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -61,9 +63,16 @@ def body_spec(body: str) -> BodySpec:
     return BODY_SPECS[body]
 
 
-def maze_env_id(body: str) -> str:
-    """The registered high-level maze id of ``body``: ``antmaze_hirl/AntMaze-v0`` or ``antmaze_hirl/PointMaze-v0``."""
-    return f"antmaze_hirl/{body.capitalize()}Maze-v0"
+def maze_env_id(body: str, variant: str | None = None, *, version: int = 0) -> str:
+    """The registered high-level maze id of ``body``: ``antmaze_hirl/AntMaze-v0`` or ``antmaze_hirl/PointMaze-v0``.
+
+    Args:
+        body: ``"ant"`` or ``"point"``.
+        variant: A benchmark suite's maze (``"5x5"``, ``"large"``): ``antmaze_hirl/AntMaze-large-v0``.
+        version: The id's ``-vN``.
+    """
+    name = f"{body.capitalize()}Maze" if variant is None else f"{body.capitalize()}Maze-{variant}"
+    return f"antmaze_hirl/{name}-v{version}"
 
 
 def reach_env_id(body: str) -> str:
@@ -160,6 +169,8 @@ class SeedTable:
         low_level_curve: Subgoal seeds of ``train-low``'s held-out success curve (:class:`SuccessRateCallback`).
         low_level_selection_subgoals: First subgoal seed of ``select_low_level.py``'s ``eval-low``.
         low_level_report_subgoals: First subgoal seed of ``eval-low``'s reported set (its ``--seed`` default).
+        suites: The benchmark suites' draws: suite ``i`` (in ``SUITE_SPECS`` order) draws its tasks from
+            ``np.random.default_rng(suites + i)`` (``scripts/make_suites.py``).
     """
 
     held_out: int = 1_000_000
@@ -168,6 +179,7 @@ class SeedTable:
     low_level_curve: int = 10_000
     low_level_selection_subgoals: int = 100_000
     low_level_report_subgoals: int = 0
+    suites: int = 4_000_000
 
 
 SEEDS = SeedTable()
@@ -187,7 +199,7 @@ class MazeFamily:
             ``max(MIN_STEPS, ceil(STEPS_PER_METRE * metres))``.
     """
 
-    body: str
+    body: Body
     source: str
     maze_size: int | None
     split: str | None
@@ -200,6 +212,15 @@ STEPS_PER_METRE = 40
 """Step budget per metre of shortest cell path: a 0.5 m/s average, half the ~1 m/s of a straight walk."""
 MIN_STEPS = DEFAULT_MAX_STEPS
 """No path-scaled episode gets fewer steps than the high-level env's default budget."""
+
+
+def path_scaled_step_limit(path_m: float) -> int:
+    """A path-scaled family's step limit for a shortest cell path of ``path_m`` metres.
+
+    ``max(MIN_STEPS, ceil(STEPS_PER_METRE * path_m))``.
+    """
+    return max(MIN_STEPS, math.ceil(STEPS_PER_METRE * path_m))
+
 
 MAZE_FAMILIES: dict[str, MazeFamily] = {
     # The ant experiment's family (paper_experiment.py --body ant --oracle-only).
@@ -216,3 +237,12 @@ MAZE_FAMILIES: dict[str, MazeFamily] = {
     "select6": MazeFamily("ant", "random", 6, "selection", None),
 }
 """The maze families of ``scripts/in_maze.py`` and ``scripts/select_low_level.py``, by name."""
+
+SUITE_FAMILIES: dict[str, MazeFamily] = {
+    # The point's experiment family, its "eval" part (the ant's is ant4).
+    "point5": MazeFamily("point", "random", BODY_PROFILES["point"].held_out_maze_size, "eval", DEFAULT_MAX_STEPS),
+    **{name: MAZE_FAMILIES[name] for name in ("ant4", "u", "medium", "large")},
+    # OGBench's giant map (antmaze_hirl.envs.suites.GIANT_MAP).
+    "giant": MazeFamily("ant", "giant", None, None, None),
+}
+"""The family each benchmark suite draws its tasks from, by suite name (``SUITE_SPECS``, same order)."""

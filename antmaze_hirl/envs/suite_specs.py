@@ -4,14 +4,16 @@ A suite is a fixed, versioned list of evaluation tasks (walls, start cell, goal 
 stored in ``antmaze_hirl/envs/benchmark_suites.json`` and played by
 :class:`~antmaze_hirl.envs.suites.SuiteMazeEnv`. This module holds only what registration and the CLI need
 without reading that file or importing the simulator; :mod:`antmaze_hirl.envs.suites` checks the file
-against :attr:`SuiteSpec.checksum`, so an edited or damaged task list is refused, not scored.
+against :attr:`SuiteSpec.checksum`, so an edited or damaged task list is refused, not scored. A suite's body,
+maze, id and step limit come from its family in :mod:`antmaze_hirl.envs.profiles`; only the task list's own
+facts (its size, checksum and longest path) are stated here.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from antmaze_hirl.envs.bodies import Body
+from antmaze_hirl.envs.profiles import SUITE_FAMILIES, Body, body_spec, maze_env_id, path_scaled_step_limit
 
 SUITE_VERSION = 0
 """The ``-v0`` of every suite id. A changed task list is a new version (new id, new checksum), never an edit."""
@@ -56,77 +58,78 @@ class SuiteSpec:
         return -(-self.max_low_level_steps // LOW_LEVEL_STEPS_PER_SUBGOAL)
 
 
+def _suite_spec(
+    name: str, n_tasks: int, checksum: str, *, longest_path_cells: int | None = None, episodes_per_task: int = 1
+) -> SuiteSpec:
+    """Suite ``name``'s spec, its body, maze, id and step limit read from its family.
+
+    The family is ``name``'s entry in :data:`~antmaze_hirl.envs.profiles.SUITE_FAMILIES`.
+
+    Args:
+        name: A key of :data:`~antmaze_hirl.envs.profiles.SUITE_FAMILIES`.
+        n_tasks: Tasks in the list.
+        checksum: SHA-256 of the task list.
+        longest_path_cells: For a path-scaled family, the grid steps of the longest task's shortest cell path,
+            which sets :attr:`SuiteSpec.max_low_level_steps`.
+        episodes_per_task: As :attr:`SuiteSpec.episodes_per_task`.
+
+    Raises:
+        ValueError: If a path-scaled family's ``longest_path_cells`` is missing, or a fixed limit's is given.
+    """
+    family = SUITE_FAMILIES[name]
+    if (family.step_limit is None) != (longest_path_cells is not None):
+        raise ValueError(
+            f"suite {name!r}: longest_path_cells={longest_path_cells!r}; give it exactly for a path-scaled family"
+        )
+    if family.step_limit is None:
+        max_steps = path_scaled_step_limit(longest_path_cells * body_spec(family.body).scale)
+    else:
+        max_steps = family.step_limit
+    variant = family.source if family.maze_size is None else f"{family.maze_size}x{family.maze_size}"
+    env_id = maze_env_id(family.body, variant, version=SUITE_VERSION)
+    return SuiteSpec(
+        name, env_id, family.body, family.source, family.maze_size, n_tasks, max_steps, checksum, episodes_per_task
+    )
+
+
 SUITE_SPECS: dict[str, SuiteSpec] = {
     spec.name: spec
     for spec in (
-        SuiteSpec(
-            "point5",
-            "antmaze_hirl/PointMaze-5x5-v0",
-            "point",
-            "random",
-            5,
-            100,
-            500,
-            "63de7a54329766843be615c6cae1ea1e72cc8ed13911c0c6d3fe5c82c7197fc1",
-        ),
-        SuiteSpec(
-            "ant4",
-            "antmaze_hirl/AntMaze-4x4-v0",
-            "ant",
-            "random",
-            4,
-            100,
-            500,
-            "100530cd4d47ddf9e98402683dba85adf964cc56eb9d3224188fe9553f7b463b",
-        ),
-        SuiteSpec(
+        _suite_spec("point5", 100, "63de7a54329766843be615c6cae1ea1e72cc8ed13911c0c6d3fe5c82c7197fc1"),
+        _suite_spec("ant4", 100, "100530cd4d47ddf9e98402683dba85adf964cc56eb9d3224188fe9553f7b463b"),
+        # A fixed map's longest_path_cells: the longest of its 5 tasks' shortest cell paths, in grid steps.
+        _suite_spec(
             "u",
-            "antmaze_hirl/AntMaze-u-v0",
-            "ant",
-            "u",
-            None,
             5,
-            960,
             "1e3a297858444af78ceaacad7613c898399ce9d5bdd7a1524824ca1677b821e0",
-            20,
+            longest_path_cells=6,
+            episodes_per_task=20,
         ),
-        SuiteSpec(
+        _suite_spec(
             "medium",
-            "antmaze_hirl/AntMaze-medium-v0",
-            "ant",
-            "medium",
-            None,
             5,
-            1600,
             "dd00145768a21ebf331971b89310741654197a2587e047b5b6241fc0a3bed770",
-            20,
+            longest_path_cells=10,
+            episodes_per_task=20,
         ),
-        SuiteSpec(
+        _suite_spec(
             "large",
-            "antmaze_hirl/AntMaze-large-v0",
-            "ant",
-            "large",
-            None,
             5,
-            3040,
             "0a2b43afd252ef12ccabd52a8fa08a0a9eebcdf61aefed594e7ec7144c04496b",
-            20,
+            longest_path_cells=19,
+            episodes_per_task=20,
         ),
-        SuiteSpec(
+        _suite_spec(
             "giant",
-            "antmaze_hirl/AntMaze-giant-v0",
-            "ant",
-            "giant",
-            None,
             5,
-            4800,
             "4df9aa760368eaff67cf1eacaa310ec710d44730d909dc69eca8833e32166395",
-            20,
+            longest_path_cells=30,
+            episodes_per_task=20,
         ),
     )
 }
-"""Every suite, by name. Checksums and step limits are those of ``benchmark_suites.json``
-(``scripts/make_suites.py`` regenerates it byte for byte)."""
+"""Every suite, by name, in the order of :data:`~antmaze_hirl.envs.profiles.SUITE_FAMILIES`. Checksums and step
+limits are those of ``benchmark_suites.json`` (``scripts/make_suites.py`` regenerates it byte for byte)."""
 
 SUITE_ENTRY_POINT = "antmaze_hirl.sb3_ext.suite_envs:make_suite_env"
 """Entry point of every suite id: the suite env with the body's shipped low level unless one is given."""

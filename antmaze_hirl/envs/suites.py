@@ -14,7 +14,9 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``scripts/make_suit
   ``eval`` part of :mod:`~antmaze_hirl.envs.layout_splits`, which is closed under the square's 8
   symmetries: no suite maze is, up to rotation or mirror, a wall grid of any family's ``train`` or
   ``selection`` part. Tasks that are symmetric images of an earlier task are skipped, so the 100 tasks
-  are 100 distinct tasks to a learner trained on all 8 images. Low-level step limit 500.
+  are 100 distinct tasks to a learner trained on all 8 images. The ``i``-th suite of :data:`SUITE_SPECS`
+  draws from ``np.random.default_rng(SEEDS.suites + i)`` (the seed table,
+  :data:`~antmaze_hirl.envs.profiles.SEEDS`). Low-level step limit: the family's, 500.
 * fixed maps (``u``, ``medium``, ``large``, ``giant``): 5 tasks per map, as OGBench. ``medium``,
   ``large`` and ``giant`` (:data:`GIANT_MAP`) carry OGBench's own ``navigate`` tasks (its ``task1`` to
   ``task5`` are ``task_id`` 0 to 4; gymnasium-robotics' medium and large maps are OGBench's grids). ``u``
@@ -24,8 +26,9 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``scripts/make_suit
   walls where that family places 3; both checked in the tests), whatever part the partition's hash gives
   the grid, and the start/goal pairs are fixed. A learner trained on the map itself is on OGBench's
   protocol (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
-  Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))`` (``scripts/in_maze.py``'s
-  rule, a 0.5 m/s average).
+  Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))``
+  (:func:`~antmaze_hirl.envs.profiles.path_scaled_step_limit`, ``scripts/in_maze.py``'s rule, a 0.5 m/s
+  average).
 """
 
 from __future__ import annotations
@@ -33,7 +36,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import math
 from dataclasses import dataclass
 from importlib import resources
 from typing import Any, ClassVar
@@ -56,15 +58,11 @@ from antmaze_hirl.envs.layouts import (
     validate_maze_map,
     wall_grid_string,
 )
-from antmaze_hirl.envs.profiles import MIN_STEPS, STEPS_PER_METRE
+from antmaze_hirl.envs.profiles import SEEDS, path_scaled_step_limit
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS, SuiteSpec, check_suite_name
 
 SUITES_FILE = "benchmark_suites.json"
 FORMAT = "antmaze_hirl.benchmark_suites/1"
-SUITE_SEED = 4_000_000
-"""Suite ``i`` (in :data:`SUITE_SPECS` order) is drawn from ``np.random.default_rng(SUITE_SEED + i)``: a seed
-range apart from the evaluations' (1,000,000), the low-level selection's (2,000,000) and the periodic
-evaluations' (3,000,000)."""
 WALL_FRACTION = 0.3
 """The random families' share of interior walls (:class:`HighLevelMazeEnv`'s default)."""
 
@@ -131,12 +129,11 @@ class SuiteTask:
 
 
 def path_step_limit(walls: np.ndarray, start_cell: tuple[int, int], goal_cell: tuple[int, int], scale: float) -> int:
-    """``max(MIN_STEPS, ceil(STEPS_PER_METRE * L))``, ``L`` the shortest 4-connected cell path in metres.
+    """The step limit of a shortest 4-connected cell path of ``L`` metres (:func:`path_scaled_step_limit`).
 
     ``L`` counts cell centre to cell centre (grid steps times ``scale``), so the detours around walls count.
     """
-    metres = (len(shortest_path(walls, start_cell, goal_cell)) - 1) * scale
-    return max(MIN_STEPS, math.ceil(STEPS_PER_METRE * metres))
+    return path_scaled_step_limit((len(shortest_path(walls, start_cell, goal_cell)) - 1) * scale)
 
 
 def scaled_step_limit(layout: MazeLayout, scale: float) -> int:
@@ -161,7 +158,8 @@ def draw_suite_tasks(name: str) -> list[SuiteTask]:
         walls = validate_maze_map(fixed_map(spec))
         layouts = [MazeLayout(walls, start, goal) for start, goal in FIXED_MAP_TASKS[spec.source]]
         return [SuiteTask(layout, scaled_step_limit(layout, scale)) for layout in layouts]
-    rng = np.random.default_rng(SUITE_SEED + list(SUITE_SPECS).index(name))
+    # Suite i draws from its own seed (the seed table's range, apart from every evaluation set's).
+    rng = np.random.default_rng(SEEDS.suites + list(SUITE_SPECS).index(name))
     family = functools.partial(
         generate_layout,
         n_rows=spec.maze_size,
@@ -176,7 +174,7 @@ def draw_suite_tasks(name: str) -> list[SuiteTask]:
         key = canonical_task(layout)
         if key not in seen:
             seen.add(key)
-            tasks.append(SuiteTask(layout, MIN_STEPS))
+            tasks.append(SuiteTask(layout, spec.max_low_level_steps))
     return tasks
 
 

@@ -40,6 +40,17 @@ def check_num_envs(num_envs: Any) -> int:
     return int(num_envs)
 
 
+def check_episodes_and_num_envs(episodes: int, num_envs: Any) -> int:
+    """``num_envs`` as an int (:func:`check_num_envs`), once an evaluation's ``episodes`` is checked too.
+
+    Raises:
+        ValueError: If ``episodes`` is below 1, or ``num_envs`` is not an integer >= 1.
+    """
+    if episodes < 1:
+        raise ValueError(f"episodes must be >= 1, got {episodes}")
+    return check_num_envs(num_envs)
+
+
 def _autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
     try:
         return AutoresetMode(mode)

@@ -113,8 +113,8 @@ class ExperimentConfig:
         step_gradient_steps: Gradient steps after every labelled step for the strategies that update
             after every step (``reward_per_step``, Alg. 4). 20 gives about the gradient budget of the
             per-episode methods (N = 200 per episode of about 10 labels), so the comparison is of when the
-            learner updates, not of how much; ``None`` runs N after every step (10x the compute: about
-            35 minutes per point trial on one core).
+            learner updates, not of how much; ``None`` runs N after every step (10x the compute; its trial
+            time is in ``docs/guides/dagger.md``).
     """
 
     body: str = "point"

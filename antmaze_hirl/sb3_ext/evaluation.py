@@ -14,7 +14,7 @@ from antmaze_hirl.atomic_io import atomic_write_text
 from antmaze_hirl.envs.controllers import as_batch_controller, as_controller
 from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.envs.vector import check_num_envs
+from antmaze_hirl.envs.vector import check_episodes_and_num_envs
 from antmaze_hirl.sb3_ext.loading import save_policy
 
 
@@ -62,9 +62,7 @@ def reach_outcomes(policy: Any, env: ReachEnv, *, episodes: int, seed: int, num_
     Raises:
         ValueError: If ``episodes`` or ``num_envs`` is below 1.
     """
-    if episodes < 1:
-        raise ValueError(f"episodes must be >= 1, got {episodes}")
-    num_envs = check_num_envs(num_envs)
+    num_envs = check_episodes_and_num_envs(episodes, num_envs)
     if num_envs == 1:
         controller = as_controller(policy)
         return [_reach_once(env, controller, seed + episode) for episode in range(episodes)]
