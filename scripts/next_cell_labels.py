@@ -41,7 +41,7 @@ RESULTS = Path(__file__).resolve().parents[1] / "results" / "next_cell_labels"
 
 def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """Oracle labels of ant states: agent xy, subgoal, the grid path's next step (dx, dy) and what the label is."""
-    size, reach = HELD_OUT_MAZE_SIZE["ant"], BODY_DEFAULTS["ant"]["expert_max_distance"]
+    size, reach = HELD_OUT_MAZE_SIZE["ant"], BODY_DEFAULTS["ant"]["subgoal_reach_m"]
     geometry = MazeGeometry(size + 2, size + 2, body_spec("ant").scale)
     agents, subgoals, path_steps, is_goal, is_own_centre = [], [], [], [], []
     for _ in range(mazes):

@@ -20,7 +20,7 @@ from antmaze_hirl.study.settings import (
 SETTINGS_KEYS = [
     "body",
     "maze_size",
-    "expert_max_distance",
+    "subgoal_reach_m",
     "eval_every",
     "eval_episodes",
     "final_eval_episodes",
@@ -81,7 +81,8 @@ def test_the_trials_experiment_config_carries_every_shared_setting():
 def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     save_settings(StudySettings.for_body("point"), tmp_path)
     assert list(json.loads((tmp_path / SETTINGS_FILE).read_text())) == SETTINGS_KEYS
-    # A settings.json written before held-out layouts existed: no held_out_layouts key.
+    # A settings.json written before held-out layouts existed (no held_out_layouts key) and before 0.2.0 (the
+    # reach under its old key), as results/study/simulated_point/settings.json.
     old = {
         "body": "ant",
         "maze_size": 3,
@@ -95,5 +96,22 @@ def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     }
     (tmp_path / SETTINGS_FILE).write_text(json.dumps(old, indent=2))
     loaded = load_settings(tmp_path)
-    assert asdict(loaded) == {**old, "held_out_layouts": False}
-    assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, expert_max_distance=2.0)
+    renamed = {("subgoal_reach_m" if key == "expert_max_distance" else key): value for key, value in old.items()}
+    assert asdict(loaded) == {**renamed, "held_out_layouts": False}
+    assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, subgoal_reach_m=2.0)
+
+
+def test_the_committed_studys_settings_load():
+    settings = load_settings(Path(__file__).resolve().parents[1] / "results" / "study" / "simulated_point")
+    assert (settings.body, settings.subgoal_reach_m, settings.eval_every) == ("point", None, 5)
+
+
+def test_a_settings_file_with_the_reach_under_both_keys_is_one_line_naming_both(tmp_path):
+    save_settings(StudySettings.for_body("ant"), tmp_path)
+    written = json.loads((tmp_path / SETTINGS_FILE).read_text())
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps({**written, "expert_max_distance": 3.0}))
+    with pytest.raises(ValueError) as error:
+        load_settings(tmp_path)
+    message = str(error.value)
+    assert "\n" not in message and str(tmp_path / SETTINGS_FILE) in message
+    assert "expert_max_distance 3.0 and subgoal_reach_m 2.0" in message

@@ -241,7 +241,7 @@ def resolve_policy(
         from antmaze_hirl.experiments.config import BODY_DEFAULTS
         from antmaze_hirl.experts import PathOracle
 
-        reach = BODY_DEFAULTS[spec.body]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
+        reach = BODY_DEFAULTS[spec.body]["subgoal_reach_m"] if subgoal_reach_m is None else subgoal_reach_m
         return PathOracle.for_env(env, subgoal_reach_m=reach, clearance=clearance_m), "oracle"
     if policy == "random":
         space = env.action_space

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
@@ -19,15 +21,15 @@ class BodyDefaults(TypedDict):
 
     Attributes:
         maze_size: Free cells per side of the random layouts.
-        expert_max_distance: The oracle's farthest subgoal, metres; ``None``: one cell.
+        subgoal_reach_m: The oracle's farthest subgoal, metres; ``None``: one cell.
     """
 
     maze_size: int
-    expert_max_distance: float | None
+    subgoal_reach_m: float | None
 
 
 BODY_DEFAULTS: dict[str, BodyDefaults] = {
-    body: {"maze_size": profile.maze_size, "expert_max_distance": profile.subgoal_reach_m}
+    body: {"maze_size": profile.maze_size, "subgoal_reach_m": profile.subgoal_reach_m}
     for body, profile in BODY_PROFILES.items()
 }
 """Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's
@@ -41,7 +43,7 @@ always in 500 steps (docs/results/ant-in-mazes.md)."""
 
 
 def body_settings(
-    body: str, *, held_out_layouts: bool = False, maze_size: int | None = None, expert_max_distance: float | None = None
+    body: str, *, held_out_layouts: bool = False, maze_size: int | None = None, subgoal_reach_m: float | None = None
 ) -> BodyDefaults:
     """A body's maze size and oracle reach, each replaced by its argument when that is not ``None``.
 
@@ -57,9 +59,37 @@ def body_settings(
         settings["maze_size"] = HELD_OUT_MAZE_SIZE[body]
     if maze_size is not None:
         settings["maze_size"] = maze_size
-    if expert_max_distance is not None:
-        settings["expert_max_distance"] = expert_max_distance
+    if subgoal_reach_m is not None:
+        settings["subgoal_reach_m"] = subgoal_reach_m
     return BodyDefaults(**settings)
+
+
+RENAMED_KEYS: dict[str, str] = {"expert_max_distance": "subgoal_reach_m"}
+"""Settings that files written before 0.2.0 hold under an older key, ``{old key: field}``: a results folder's
+``config.json`` (the committed ones, and protocol 2's runs) and a study's ``settings.json``. They are written
+with the fields' names and read through :func:`current_keys`, so both kinds of file load."""
+
+
+def current_keys(recorded: Mapping[str, Any], source: str | Path) -> dict[str, Any]:
+    """A settings file's object with every old key of :data:`RENAMED_KEYS` under its field's name, in place.
+
+    A file holding one setting under both keys with one value reads as holding it once.
+
+    Raises:
+        ValueError: One line naming ``source``: not a JSON object, or both keys of a setting with different values.
+    """
+    if not isinstance(recorded, Mapping):
+        raise ValueError(f"{source} holds a {type(recorded).__name__}, not an object of settings")
+    for old, new in RENAMED_KEYS.items():
+        if old in recorded and new in recorded and recorded[old] != recorded[new]:
+            raise ValueError(
+                f"{source} holds {old} {recorded[old]!r} and {new} {recorded[new]!r}: one setting under its old "
+                f"and new names, with two values; keep {new}"
+            )
+    settings: dict[str, Any] = {}
+    for key, value in recorded.items():
+        settings.setdefault(RENAMED_KEYS.get(key, key), value)
+    return settings
 
 
 SELECTION_SEED = SEEDS.selection
@@ -83,7 +113,7 @@ class ExperimentConfig:
         episodes_per_update: K.
         decay: d in ``beta <- beta / d``.
         mixing: ``"blend"`` or ``"switch"``.
-        expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
+        subgoal_reach_m: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
             shipped low level reaches 2 m subgoals far more reliably than 4 m ones (docs/results/ant-in-mazes.md).
         held_out_layouts: Hold the evaluation mazes out by construction
             (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
@@ -127,7 +157,7 @@ class ExperimentConfig:
     episodes_per_update: int = 1
     decay: float = 2.0
     mixing: str = "blend"
-    expert_max_distance: float | None = None
+    subgoal_reach_m: float | None = None
     held_out_layouts: bool = False
     step_gradient_steps: int | None = 20
     protocol: int = 1
@@ -147,8 +177,8 @@ class ExperimentConfig:
         ):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if self.expert_max_distance is not None and not self.expert_max_distance > 0:
-            raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
+        if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
+            raise ValueError(f"subgoal_reach_m must be > 0 metres, got {self.subgoal_reach_m}")
         if self.mixing not in ("blend", "switch"):
             raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
         if self.step_gradient_steps is not None and self.step_gradient_steps < 1:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, current_keys
 
 SETTINGS_FILE = "settings.json"
 
@@ -20,12 +20,13 @@ class StudySettings:
 
     The fields it shares with :class:`~antmaze_hirl.experiments.config.ExperimentConfig` (:data:`EXPERIMENT_FIELDS`)
     take their defaults from it, so that a default changed there changes here; their names are the keys of a
-    study's ``settings.json``, so they stay as they are.
+    study's ``settings.json`` (files from before 0.2.0 hold some under older keys, read through
+    :func:`~antmaze_hirl.experiments.config.current_keys`).
 
     Attributes:
         body: ``"point"`` or ``"ant"``.
         maze_size: Free cells per side of the random mazes.
-        expert_max_distance: Farthest subgoal a participant may click from the agent, metres (the
+        subgoal_reach_m: Farthest subgoal a participant may click from the agent, metres (the
             circle on the page); ``None``: one cell.
         eval_every: Learner-only evaluation every this many episodes (the paper's M).
         eval_episodes: Held-out mazes per intermediate evaluation.
@@ -41,7 +42,7 @@ class StudySettings:
 
     body: str = ExperimentConfig.body
     maze_size: int = ExperimentConfig.maze_size
-    expert_max_distance: float | None = ExperimentConfig.expert_max_distance
+    subgoal_reach_m: float | None = ExperimentConfig.subgoal_reach_m
     eval_every: int = ExperimentConfig.eval_every
     eval_episodes: int = ExperimentConfig.eval_episodes
     final_eval_episodes: int = ExperimentConfig.final_eval_episodes
@@ -52,7 +53,7 @@ class StudySettings:
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
-        for name in ("expert_max_distance", "decay"):  # never NaN or Infinity in settings.json (not JSON)
+        for name in ("subgoal_reach_m", "decay"):  # never NaN or Infinity in settings.json (not JSON)
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
@@ -138,12 +139,13 @@ def load_settings(study_dir: str | Path) -> StudySettings:
 
     Raises:
         FileNotFoundError: If the study has no settings file (not made by ``antmaze-hirl study init``).
-        ValueError: If the file is not valid settings (names the file).
+        ValueError: If the file is not valid settings, or holds a setting under its old and new keys with two
+            values (names the file).
     """
     path = Path(study_dir) / SETTINGS_FILE
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found: create the study with 'antmaze-hirl study init {study_dir}'")
     try:
-        return StudySettings(**json.loads(path.read_text()))
+        return StudySettings(**current_keys(json.loads(path.read_text()), path))
     except (json.JSONDecodeError, TypeError, ValueError) as error:
         raise ValueError(f"{path} holds no valid study settings: {error}") from error
