@@ -115,7 +115,7 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
             continue
         agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
         label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
+            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance_m=0.2 * geometry.scale
         )
         walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
     env.close()
