@@ -22,7 +22,7 @@ COMMITTED_RUNS = sorted((ROOT / "results").glob("**/runs/*.tar.gz"))
 def recorded_config(config, **old_keys):
     # config.json as the runner writes it, with the renamed settings under their old keys instead.
     settings = {**asdict(config), "low_level": "sha256:test"}
-    for old, new in RENAMED_KEYS.items():
+    for new, old in RENAMED_KEYS.items():
         if old in old_keys:
             settings = {old if key == new else key: value for key, value in settings.items()}
             settings[old] = old_keys[old]
@@ -30,15 +30,15 @@ def recorded_config(config, **old_keys):
 
 
 def test_the_map_renames_old_keys_to_fields_and_new_files_use_the_fields_names():
-    assert set(RENAMED_KEYS.values()) <= KNOWN
-    assert not set(RENAMED_KEYS) & KNOWN  # asdict (config.json, settings.json) writes no old key
+    assert set(RENAMED_KEYS) <= KNOWN
+    assert not set(RENAMED_KEYS.values()) & KNOWN  # asdict (config.json, settings.json) writes no old key
     assert "subgoal_reach_m" in asdict(ExperimentConfig())
 
 
 def test_an_old_key_loads_under_the_fields_name_in_its_place():
     old = recorded_config(ExperimentConfig(body="ant", maze_size=4), expert_max_distance=2.0)
     settings = current_keys(old, "config.json")
-    assert list(settings) == [RENAMED_KEYS.get(key, key) for key in old]
+    assert list(settings) == [key for key in asdict(ExperimentConfig()) if key in settings] + ["low_level"]
     assert settings["subgoal_reach_m"] == 2.0 and "expert_max_distance" not in settings
     assert current_keys({**settings, "expert_max_distance": 2.0}, "config.json") == settings  # one value twice
 
@@ -47,8 +47,8 @@ def test_both_keys_with_two_values_is_one_line_naming_both_and_the_file():
     with pytest.raises(ValueError) as error:
         current_keys({"expert_max_distance": 2.0, "subgoal_reach_m": 3.0}, "out/config.json")
     message = str(error.value)
-    assert "\n" not in message and message.startswith("out/config.json holds expert_max_distance 2.0 and ")
-    assert "subgoal_reach_m 3.0" in message
+    assert "\n" not in message and message.startswith("out/config.json: 'subgoal_reach_m' and its old name ")
+    assert "'expert_max_distance' hold different values (3.0 against 2.0)" in message
     with pytest.raises(ValueError, match=r"out/config\.json holds a list, not an object of settings"):
         current_keys([], "out/config.json")
 
@@ -93,7 +93,8 @@ def test_a_folder_with_the_reach_under_both_keys_is_refused_naming_both(tmp_path
     folder = old_folder(tmp_path, ExperimentConfig(subgoal_reach_m=0.5), provenance, expert_max_distance=0.6)
     config = json.loads((folder / "config.json").read_text())
     (folder / "config.json").write_text(json.dumps({**config, "subgoal_reach_m": 0.5}))
-    with pytest.raises(ValueError, match=r"expert_max_distance 0\.6 and subgoal_reach_m 0\.5"):
+    both = r"'subgoal_reach_m' and its old name 'expert_max_distance' hold different values \(0\.5 against 0\.6\)"
+    with pytest.raises(ValueError, match=both):
         check_resumable(folder, ExperimentConfig(subgoal_reach_m=0.5), "sha256:test", provenance, False)
 
 

@@ -114,4 +114,4 @@ def test_a_settings_file_with_the_reach_under_both_keys_is_one_line_naming_both(
         load_settings(tmp_path)
     message = str(error.value)
     assert "\n" not in message and str(tmp_path / SETTINGS_FILE) in message
-    assert "expert_max_distance 3.0 and subgoal_reach_m 2.0" in message
+    assert "'subgoal_reach_m' and its old name 'expert_max_distance' hold different values (2.0 against 3.0)" in message

@@ -64,14 +64,14 @@ def body_settings(
     return BodyDefaults(**settings)
 
 
-RENAMED_KEYS: dict[str, str] = {"expert_max_distance": "subgoal_reach_m"}
-"""Settings that files written before 0.2.0 hold under an older key, ``{old key: field}``: a results folder's
-``config.json`` (the committed ones, and protocol 2's runs) and a study's ``settings.json``. They are written
-with the fields' names and read through :func:`current_keys`, so both kinds of file load."""
+RENAMED_KEYS: dict[str, str] = {"subgoal_reach_m": "expert_max_distance"}
+"""Settings that files written up to 0.2.0 hold under an older key, each field with its old key (as
+``study.logs.RENAMED_KEYS``): a results folder's ``config.json`` (the committed ones, protocol 2's runs) and a
+study's ``settings.json``. Files are written with the fields' names and read through :func:`current_keys`."""
 
 
 def current_keys(recorded: Mapping[str, Any], source: str | Path) -> dict[str, Any]:
-    """A settings file's object with every old key of :data:`RENAMED_KEYS` under its field's name, in place.
+    """A settings file's object with each old key of :data:`RENAMED_KEYS` replaced, in place, by its field's name.
 
     A file holding one setting under both keys with one value reads as holding it once.
 
@@ -80,15 +80,16 @@ def current_keys(recorded: Mapping[str, Any], source: str | Path) -> dict[str, A
     """
     if not isinstance(recorded, Mapping):
         raise ValueError(f"{source} holds a {type(recorded).__name__}, not an object of settings")
-    for old, new in RENAMED_KEYS.items():
-        if old in recorded and new in recorded and recorded[old] != recorded[new]:
+    for key, old_key in RENAMED_KEYS.items():
+        if key in recorded and old_key in recorded and recorded[key] != recorded[old_key]:
             raise ValueError(
-                f"{source} holds {old} {recorded[old]!r} and {new} {recorded[new]!r}: one setting under its old "
-                f"and new names, with two values; keep {new}"
+                f"{source}: {key!r} and its old name {old_key!r} hold different values "
+                f"({recorded[key]!r} against {recorded[old_key]!r})"
             )
+    fields_by_old_key = {old_key: key for key, old_key in RENAMED_KEYS.items()}
     settings: dict[str, Any] = {}
     for key, value in recorded.items():
-        settings.setdefault(RENAMED_KEYS.get(key, key), value)
+        settings.setdefault(fields_by_old_key.get(key, key), value)
     return settings
 
 
