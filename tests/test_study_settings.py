@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings
 from antmaze_hirl.study import settings as settings_module
 from antmaze_hirl.study.settings import (
     EXPERIMENT_FIELDS,
@@ -26,10 +26,10 @@ SETTINGS_KEYS = [
     "final_eval_episodes",
     "gradient_steps",
     "decay",
-    "show_learner_subgoal",
     "held_out_layouts",
+    "show_learner_subgoal",
 ]
-"""The keys of a study folder's settings.json, in the order written since held-out layouts came in."""
+"""The keys of a study folder's settings.json, in the order written since 0.2.0 (TrialSettings' first)."""
 
 
 def experiment_field(name):
@@ -41,29 +41,23 @@ def test_the_shared_fields_are_every_study_setting_but_the_page_one():
 
 
 @pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
-def test_a_shared_fields_type_is_the_experiments(name):
-    # The default's value is ExperimentConfig's by construction (the source test below checks it is read from
-    # there); what can still drift apart is the declared type.
+def test_a_shared_fields_type_and_default_are_the_experiments(name):
     study = next(field for field in fields(StudySettings) if field.name == name)
     experiment = experiment_field(name)
     assert experiment.default is not MISSING
-    assert study.type == experiment.type
+    assert (study.type, study.default) == (experiment.type, experiment.default)
 
 
-def test_a_shared_default_is_read_from_the_experiment_not_typed_again():
-    # Equal values would pass the test above even if typed twice: the source must name ExperimentConfig's.
+def test_the_study_declares_only_the_pages_setting_and_inherits_the_rest():
+    # Equal fields would pass the test above even if typed twice: the class must declare none of them.
     source = Path(settings_module.__file__).read_text()
     study_class = next(
         node for node in ast.parse(source).body if isinstance(node, ast.ClassDef) and node.name == "StudySettings"
     )
-    defaults = {
-        node.target.id: ast.unparse(node.value)
-        for node in study_class.body
-        if isinstance(node, ast.AnnAssign) and node.value is not None
-    }
-    assert {name: defaults[name] for name in EXPERIMENT_FIELDS} == {
-        name: f"ExperimentConfig.{name}" for name in EXPERIMENT_FIELDS
-    }
+    declared = [node.target.id for node in study_class.body if isinstance(node, ast.AnnAssign)]
+    assert declared == ["show_learner_subgoal"]
+    assert issubclass(StudySettings, TrialSettings) and issubclass(ExperimentConfig, TrialSettings)
+    assert EXPERIMENT_FIELDS == tuple(field.name for field in fields(TrialSettings))
 
 
 def test_the_trials_experiment_config_carries_every_shared_setting():

@@ -99,32 +99,55 @@ range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evalua
 the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
 
 
-@dataclass(frozen=True)
-class ExperimentConfig:
-    """Settings shared by every (method, seed) trial.
+@dataclass(frozen=True, kw_only=True)
+class TrialSettings:
+    """The settings of a trial that the experiment and the user study share, whoever labels.
+
+    :class:`ExperimentConfig` and :class:`~antmaze_hirl.study.settings.StudySettings` are both these fields
+    plus their own, so the two cannot drift apart in a name, type or default; a study checks its settings with
+    the experiment's checks (:meth:`~antmaze_hirl.study.settings.StudySettings.experiment_config`).
 
     Attributes:
         body: ``"point"`` or ``"ant"`` (the ant uses its shipped low-level policy).
-        episodes: Training episodes per trial.
+        maze_size: Free cells per side of the random layouts.
+        subgoal_reach_m: The farthest subgoal, metres: the oracle's, and in the study the circle a participant
+            clicks in. ``None``: one cell. The ant's shipped low level reaches 2 m subgoals far more reliably
+            than 4 m ones (docs/results/ant-in-mazes.md).
         eval_every: M: learner-only evaluation every M episodes.
         eval_episodes: Held-out mazes per intermediate evaluation.
         final_eval_episodes: Held-out mazes at the end.
-        maze_size: Free cells per side of the random layouts.
         gradient_steps: N per update.
-        episodes_per_update: K.
         decay: d in ``beta <- beta / d``.
-        mixing: ``"blend"`` or ``"switch"``.
-        subgoal_reach_m: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
-            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (docs/results/ant-in-mazes.md).
         held_out_layouts: Hold the evaluation mazes out by construction
             (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
             periodic evaluations from the ``"selection"`` part (seeds from :data:`SELECTION_SEED`: the
             same ``eval_episodes`` mazes every time, a fixed set; about 50 is the intended size), the
             final evaluation from the ``"eval"`` part (seeds from ``HELD_OUT_SEED``), so no evaluation
             maze shares its wall grid with a training maze and the two evaluation sets share none
-            either. ``False`` (the default, kept so that the committed results folders, which lack this
-            setting, still read as what they are): every maze is drawn from the whole family, held out
-            by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+            either. ``False`` (the default, kept so that the committed results folders and study folders,
+            which lack this setting, still read as what they are): every maze is drawn from the whole family,
+            held out by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+    """
+
+    body: str = "point"
+    maze_size: int = 5
+    subgoal_reach_m: float | None = None
+    eval_every: int = 10
+    eval_episodes: int = 20
+    final_eval_episodes: int = 100
+    gradient_steps: int = 200
+    decay: float = 2.0
+    held_out_layouts: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExperimentConfig(TrialSettings):
+    """Settings shared by every (method, seed) trial: the :class:`TrialSettings` fields, and these.
+
+    Attributes:
+        episodes: Training episodes per trial.
+        episodes_per_update: K.
+        mixing: ``"blend"`` or ``"switch"``.
         protocol: How the curves are read. ``1`` (the default, so that the committed results folders,
             which lack this setting, read as what they are): a periodic set and a different final set, the untrained
             learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (needs ``held_out_layouts``;
@@ -148,18 +171,9 @@ class ExperimentConfig:
             35 minutes per point trial on one core).
     """
 
-    body: str = "point"
     episodes: int = 100
-    eval_every: int = 10
-    eval_episodes: int = 20
-    final_eval_episodes: int = 100
-    maze_size: int = 5
-    gradient_steps: int = 200
     episodes_per_update: int = 1
-    decay: float = 2.0
     mixing: str = "blend"
-    subgoal_reach_m: float | None = None
-    held_out_layouts: bool = False
     step_gradient_steps: int | None = 20
     protocol: int = 1
     learner: str | None = None
