@@ -333,7 +333,7 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         "--subgoal-reach-m",
         type=float,
         default=None,
-        help="the oracle's farthest subgoal, metres: ExperimentConfig.expert_max_distance "
+        help="the oracle's farthest subgoal, metres: ExperimentConfig.subgoal_reach_m "
         "(default: per body, point one cell, ant 2 m)",
     )
     renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
@@ -408,7 +408,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
             args.body,
             held_out_layouts=held_out,
             maze_size=args.maze_size,
-            expert_max_distance=args.subgoal_reach_m,
+            subgoal_reach_m=args.subgoal_reach_m,
         ),
     )
     summary = run_experiment(

@@ -48,7 +48,7 @@ def demo_setup(
         raise ValueError(f"unknown body {body!r}; choose one of {sorted(BODY_DEFAULTS)}")
     defaults = BODY_DEFAULTS[body]
     maze_size = maze_size if maze_size is not None else defaults["maze_size"]
-    distance = subgoal_reach_m if subgoal_reach_m is not None else defaults["expert_max_distance"]
+    distance = subgoal_reach_m if subgoal_reach_m is not None else defaults["subgoal_reach_m"]
     env = gym.make(maze_env_id(body), maze_size=maze_size, **env_kwargs)
     return env, PathOracle.for_env(env, subgoal_reach_m=distance)
 

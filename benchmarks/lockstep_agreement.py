@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     for body in args.bodies:
         settings = body_settings(body)
         env = gym.make(maze_env_id(body), maze_size=settings["maze_size"])
-        oracle = PathOracle.for_env(env, subgoal_reach_m=settings["expert_max_distance"])
+        oracle = PathOracle.for_env(env, subgoal_reach_m=settings["subgoal_reach_m"])
         learner = trained_learner(env, oracle, args.train_episodes, args.seed)
         for name, policy in (("oracle", oracle), (f"learner ({args.train_episodes} DAgger episodes)", learner)):
             row = {"body": body, "maze_size": settings["maze_size"], "high_level": name}

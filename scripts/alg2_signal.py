@@ -249,7 +249,7 @@ def main() -> None:
         for seed in range(args.seeds):
             start = time.perf_counter()
             env = make_env(config, split="train")
-            oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
+            oracle = PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m)
             trainer = make_trainer(method.removesuffix("_old"), seed, config, env, oracle, policy_settings=GENERIC)
             if method == "noise_old":
                 trainer.strategy = SCORES["noise_old"]
@@ -258,7 +258,7 @@ def main() -> None:
             trained = trainer.dataset.observations_by_id(trainer.dataset.ids())
             held_out = make_env(config, split="eval")
             unseen = oracle_states(
-                held_out, PathOracle.for_env(held_out, subgoal_reach_m=config.expert_max_distance), 5, 1000 + seed
+                held_out, PathOracle.for_env(held_out, subgoal_reach_m=config.subgoal_reach_m), 5, 1000 + seed
             )
             for row in seed_scores(method, trainer, trained, unseen, seed):
                 row = {

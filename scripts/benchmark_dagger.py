@@ -151,7 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     config, policy_settings = learner_setup(args.body, args.learner)
     suite = SUITES[args.body]
     env = make_env(config, split="train")
-    expert = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
+    expert = PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m)
     trainer = make_trainer(args.method, args.seed, config, env, expert, policy_settings=policy_settings or None)
     recorded_settings = learner_settings(config.learner, config.maze_size) if config.learner else policy_settings
     task_ids = None if args.tasks is None else list(range(args.tasks))
@@ -173,7 +173,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "body": args.body,
             "learner": args.learner,
             "learner_settings": recorded_settings,
-            "expert_max_distance_m": config.expert_max_distance,
+            "subgoal_reach_m": config.subgoal_reach_m,
             "labels": labels,
             "episodes": trainer.episodes_done,
             "training_split": "train",

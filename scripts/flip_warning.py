@@ -119,7 +119,7 @@ def play_chunk(path: Path | None, scale: float, threshold: float, seeds: range) 
     model = worker_low_level(path)
     reflex = TiltReflex(model, threshold, scale)
     env = family_env(FAMILY, reflex)
-    oracle = PathOracle.for_env(env, subgoal_reach_m=BODY_DEFAULTS["ant"]["expert_max_distance"])
+    oracle = PathOracle.for_env(env, subgoal_reach_m=BODY_DEFAULTS["ant"]["subgoal_reach_m"])
     outcomes, traces = [], []
     try:
         for seed in seeds:

@@ -13,7 +13,7 @@ the same mazes) and each maze family:
 ``select4`` and ``select6`` (:data:`SELECTION_FAMILIES`) are for ``select_low_level.py`` only: ``--families`` takes
 the reported ones above.
 
-The oracle's subgoals are at most 2 m away (the ant experiment's ``expert_max_distance``). Episode ``i`` of every
+The oracle's subgoals are at most 2 m away (the ant experiment's ``subgoal_reach_m``). Episode ``i`` of every
 family resets with seed ``HELD_OUT_SEED + i`` (1,000,000 + i, as every held-out figure): for ``ant3`` these are the
 mazes of ``paper_experiment/oracle_success_ant_3.json``. Note the 3x3 family has few distinct wall grids
 (``results/maze_families/maze_families.json``), so a
@@ -108,7 +108,7 @@ def main() -> None:
         "--subgoal-reach-m",
         type=float,
         default=None,
-        help=f"the oracle's farthest subgoal, metres (default {BODY_DEFAULTS['ant']['expert_max_distance']}: "
+        help=f"the oracle's farthest subgoal, metres (default {BODY_DEFAULTS['ant']['subgoal_reach_m']}: "
         "the ant experiment's)",
     )
     renamed_option(parser, "--subgoal-distance", "--subgoal-reach-m")
@@ -138,7 +138,7 @@ def main() -> None:
     if missing:
         parser.error(f"--low-level files not found: {missing}")
     torch.set_num_threads(1)
-    subgoal_reach_m = args.subgoal_reach_m or BODY_DEFAULTS["ant"]["expert_max_distance"]
+    subgoal_reach_m = args.subgoal_reach_m or BODY_DEFAULTS["ant"]["subgoal_reach_m"]
     results = run(
         [None, *(args.low_level or [])],
         families,
@@ -154,7 +154,7 @@ def main() -> None:
         args.out,
         {
             "command": shlex.join(["python", "scripts/in_maze.py", *sys.argv[1:]]),
-            "expert_max_distance": subgoal_reach_m,
+            "subgoal_reach_m": subgoal_reach_m,
             "num_envs": args.num_envs,
             "step_limit": (
                 f"ant3, ant4: 500; standard maps: max({MIN_STEPS}, ceil({STEPS_PER_METRE} * shortest cell path m))"

@@ -103,7 +103,7 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
     """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
     env = make_maze_env(config.body, low_level=lambda *_: None, split="selection", maze_size=config.maze_size)
     geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
-    reach = config.expert_max_distance or geometry.scale
+    reach = config.subgoal_reach_m or geometry.scale
     # The body at rest as a reset leaves it (the point's is zero velocity; the ant's is not all zeros).
     at_rest = STATE_LAYOUT.body_observation(env.reset(seed=seed)[0]["state"])
     walls, agents, goals, labels = [], [], [], []
@@ -115,7 +115,7 @@ def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> 
             continue
         agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
         label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
+            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance_m=0.2 * geometry.scale
         )
         walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
     env.close()
@@ -141,7 +141,7 @@ def run_variant_trial(
     """
     start = time.perf_counter()
     env = make_env(config, split="train")
-    oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m)
     trainer = make_trainer("dagger", seed, config, env, oracle, policy_settings=variant_settings(variant, config))
     sets = {"selection": ("selection", SELECTION_SEED, SELECTION_MAZES)}
     if final:
@@ -330,7 +330,7 @@ def main() -> None:
                 "maze_size": config.maze_size,
                 "method": "dagger",
                 "expert": "PathOracle",
-                "expert_max_distance": config.expert_max_distance,
+                "subgoal_reach_m": config.subgoal_reach_m,
                 "episodes": config.episodes,
                 "gradient_steps_per_update": config.gradient_steps,
                 "held_out_layouts": True,

@@ -6,7 +6,7 @@ cell. The old rule read that as "stay"; the new one carries a label at the reach
 ``AT_REACH`` of it) one cell side along its direction first. This script samples oracle-labelled states
 on freshly generated 4x4 ant mazes (the size of the held-out-layouts family; no learner is trained or
 scored here, so no split applies), no simulation: the agent uniformly within ``--spread`` metres of a
-free cell's centre (in that cell), the goal in another cell, off its centre by up to ``position_noise``
+free cell's centre (in that cell), the goal in another cell, off its centre by up to ``position_noise_cells``
 (0.25 cells, the high-level env's default), and counts per rule:
 
 * ``stay``: the class is the agent's own cell;
@@ -41,7 +41,7 @@ RESULTS = Path(__file__).resolve().parents[1] / "results" / "next_cell_labels"
 
 def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """Oracle labels of ant states: agent xy, subgoal, the grid path's next step (dx, dy) and what the label is."""
-    size, reach = HELD_OUT_MAZE_SIZE["ant"], BODY_DEFAULTS["ant"]["expert_max_distance"]
+    size, reach = HELD_OUT_MAZE_SIZE["ant"], BODY_DEFAULTS["ant"]["subgoal_reach_m"]
     geometry = MazeGeometry(size + 2, size + 2, body_spec("ant").scale)
     agents, subgoals, path_steps, is_goal, is_own_centre = [], [], [], [], []
     for _ in range(mazes):
@@ -54,7 +54,7 @@ def sample_labels(mazes: int, states: int, spread: float, rng: np.random.Generat
             if cell == layout.goal_cell or geometry.xy_to_cell(agent) != cell:
                 continue
             label = plan_subgoal(
-                layout.walls, geometry, agent, goal_xy, subgoal_reach_m=reach, clearance=0.2 * geometry.scale
+                layout.walls, geometry, agent, goal_xy, subgoal_reach_m=reach, clearance_m=0.2 * geometry.scale
             )
             row, col = np.subtract(shortest_path(layout.walls, cell, layout.goal_cell)[1], cell)
             agents.append(agent), subgoals.append(label), path_steps.append((col, -row))

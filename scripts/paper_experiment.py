@@ -109,13 +109,13 @@ def oracle_success(config: ExperimentConfig, low_level_path: Path | None = None)
     low_level = load_low_level(config.body, low_level_path) if low_level_path is not None else None
     split, seed, episodes = evaluation_sets(config)["final"]
     env = make_env(config, low_level, split=split)
-    oracle = PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m)
     result = evaluate_high_level(oracle, env, episodes=episodes, seed=seed)
     return {
         "low_level": "shipped" if low_level_path is None else str(low_level_path),
         "low_level_id": low_level_identity(config.body, low_level),
         "maze_size": config.maze_size,
-        "expert_max_distance": config.expert_max_distance,
+        "subgoal_reach_m": config.subgoal_reach_m,
         "maze_seed": seed,
         "held_out_layouts": config.held_out_layouts,
         "layout_split": split if config.held_out_layouts else None,
@@ -142,7 +142,7 @@ def main() -> None:
         "--subgoal-reach-m",
         type=float,
         default=None,
-        help="the oracle's farthest subgoal, ExperimentConfig.expert_max_distance; default: BODY_DEFAULTS",
+        help="the oracle's farthest subgoal, ExperimentConfig.subgoal_reach_m; default: BODY_DEFAULTS",
     )
     renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-episodes", type=int, default=None, help="mazes per periodic evaluation (default 20)")
@@ -183,7 +183,7 @@ def main() -> None:
             args.body,
             held_out_layouts=args.held_out_layouts,
             maze_size=args.maze_size,
-            expert_max_distance=args.subgoal_reach_m,
+            subgoal_reach_m=args.subgoal_reach_m,
         )
     )
     if args.eval_episodes is not None:

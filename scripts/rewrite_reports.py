@@ -25,6 +25,7 @@ from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json
 from antmaze_hirl.experiments import ExperimentConfig
+from antmaze_hirl.experiments.config import current_keys
 from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.results_folder import write_reports
 
@@ -46,8 +47,9 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
     """Copies ``folder``'s settings and trials into ``out`` and writes the reports there; returns the summary.
 
     Raises:
-        ValueError: One line naming the folder: no ``config.json`` or one that is not JSON, no finished trial, a
-            method in ``methods`` without finished trials, or ``out`` not empty.
+        ValueError: One line naming the folder: no ``config.json``, one that is not JSON or holds a setting
+            under its old and new keys with two values, no finished trial, a method in ``methods`` without
+            finished trials, or ``out`` not empty.
     """
     if not (folder / "config.json").is_file():
         raise ValueError(f"no config.json in {folder}: not an experiment results folder")
@@ -73,7 +75,8 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
             shutil.copy2(folder / name, out / name)
     shutil.copytree(folder / "trials", out / "trials")
     known = {field.name for field in fields(ExperimentConfig)}
-    config = ExperimentConfig(**{key: value for key, value in recorded.items() if key in known})
+    settings = current_keys(recorded, folder / "config.json")  # a folder from before 0.2.0: its old keys
+    config = ExperimentConfig(**{key: value for key, value in settings.items() if key in known})
     summary = write_reports(out, methods, seeds, config)
     summary["reports_provenance"] = {
         key: value for key, value in code_provenance().items() if key in ("git_commit", "git_dirty", "source_sha256")

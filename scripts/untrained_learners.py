@@ -39,7 +39,7 @@ UNTRAINED_LIMIT = 0.2
 def untrained_success(config: ExperimentConfig, variant: str, seed: int, split: str, first: int, mazes: int) -> dict:
     """One fresh learner of ``variant`` (initialised from ``seed``) on ``mazes`` mazes of ``split``."""
     env = make_env(config, split=split)
-    reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
+    reach = {} if config.subgoal_reach_m is None else {"subgoal_reach_m": config.subgoal_reach_m}
     policy = HighLevelPolicy.for_env(
         env, rng=np.random.default_rng(seed), **{**reach, **learner_settings(variant, config.maze_size)}
     )

@@ -29,11 +29,11 @@ def test_writers_get_their_own_temp_file_beside_the_target(tmp_path):
 
 
 def test_strict_json_refuses_nan_and_infinity_and_keeps_the_old_file(tmp_path):
-    target = atomic_write_json(tmp_path / "settings.json", {"expert_max_distance": 2.0})
+    target = atomic_write_json(tmp_path / "settings.json", {"subgoal_reach_m": 2.0})
     for bad in (float("nan"), float("inf")):
         with pytest.raises(ValueError, match=r"settings.json: .*not JSON"):
-            atomic_write_json(target, {"expert_max_distance": bad}, allow_nan=False)
-    assert target.read_text() == '{\n  "expert_max_distance": 2.0\n}\n'
+            atomic_write_json(target, {"subgoal_reach_m": bad}, allow_nan=False)
+    assert target.read_text() == '{\n  "subgoal_reach_m": 2.0\n}\n'
     assert os.listdir(tmp_path) == ["settings.json"]
 
 

@@ -35,7 +35,7 @@ def test_the_ant_protocol_learner_scores_on_ant4_with_lockstep_by_default():
     config, settings = script.learner_setup("ant", "protocol")
     assert (config.body, config.maze_size, config.held_out_layouts) == ("ant", 4, True)
     assert config.learner == "next_cell_cnn" and settings == {}
-    assert config.expert_max_distance == 2.0  # the ant oracle's 2 m subgoals, as the ant experiment
+    assert config.subgoal_reach_m == 2.0  # the ant oracle's 2 m subgoals, as the ant experiment
 
 
 def test_the_generic_learner_keeps_the_heading_head_of_the_committed_point_rows():

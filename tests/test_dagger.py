@@ -168,7 +168,7 @@ def test_blend_executes_the_beta_mix_and_counts_labels():
     assert record.expert_cost == len(executed) == len(labels) == record.attempts
     for action, (expert, learner, agent) in zip(executed, labels, strict=True):
         mix = np.clip(0.25 * expert + 0.75 * learner, env.action_space.low, env.action_space.high)
-        no_op = np.linalg.norm(mix - agent) < env.unwrapped.min_subgoal_distance
+        no_op = np.linalg.norm(mix - agent) < env.unwrapped.min_subgoal_distance_m
         np.testing.assert_allclose(action, expert if no_op else mix)
 
 

@@ -185,7 +185,7 @@ def test_trainer_draws_its_task_with_sample_task():
 
 
 def test_no_op_subgoal_check_matches_the_push_out():
-    env = point_maze(min_subgoal_distance=0.4)
+    env = point_maze(min_subgoal_distance_m=0.4)
     env.reset(seed=0)
     inner = env.unwrapped
     assert inner.is_no_op_subgoal(inner.agent_xy + np.array([0.3, 0.0]))

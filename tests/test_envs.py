@@ -216,7 +216,7 @@ def test_default_action_scale_is_the_bodys(body, scale):
 
 
 def test_high_level_step_info_and_subgoal_errors():
-    env = gym.make("antmaze_hirl/PointMaze-v0", min_subgoal_distance=0.0)
+    env = gym.make("antmaze_hirl/PointMaze-v0", min_subgoal_distance_m=0.0)
     obs, info = env.reset(seed=0)
     inner = env.unwrapped
     assert obs["image"].shape == (3, 7 * 8, 7 * 8) and obs["image"].dtype == np.uint8
@@ -239,18 +239,18 @@ def test_subgoals_inside_the_reach_radius_are_pushed_out_along_their_heading(sti
     env = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller)
     env.reset(seed=0)
     agent = env.unwrapped.agent_xy
-    assert env.unwrapped.min_subgoal_distance == 2 * env.unwrapped.reach.success_radius_m == 0.9
+    assert env.unwrapped.min_subgoal_distance_m == 2 * env.unwrapped.reach.success_radius_m == 0.9
     info = env.step(agent + np.array([0.0, 0.1]))[4]
     assert info["subgoal_extended"] and not info["subgoal_reached"]
     np.testing.assert_allclose(info["subgoal"] - env.unwrapped.agent_xy, [0.0, 0.9], atol=0.02)
     far = env.step(env.unwrapped.agent_xy + np.array([0.0, 2.0]))[4]
     assert not far["subgoal_extended"]
-    off = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance=0.0)
+    off = gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance_m=0.0)
     off.reset(seed=0)
     info = off.step(off.unwrapped.agent_xy + np.array([0.0, 0.1]))[4]
     assert not info["subgoal_extended"] and info["subgoal_reached"] and info["low_level_steps"] == 1
-    with pytest.raises(ValueError, match=r"min_subgoal_distance must lie in \[0, 4.0\) metres \(one cell\), got 5.0"):
-        gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance=5.0)
+    with pytest.raises(ValueError, match=r"min_subgoal_distance_m must lie in \[0, 4.0\) metres \(one cell\), got 5.0"):
+        gym.make("antmaze_hirl/AntMaze-v0", low_level=still_controller, min_subgoal_distance_m=5.0)
 
 
 def test_high_level_clips_when_asked_and_flags_it():

@@ -93,8 +93,8 @@ def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
         run_experiment(["dagger"], 1, ExperimentConfig(body="point", episodes=4), tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="unknown method 'gail'"):
         run_experiment(["gail"], 1, TINY, tmp_path / "other", progress_bar=False)
-    with pytest.raises(ValueError, match="expert_max_distance must be > 0 metres, got -1"):
-        ExperimentConfig(expert_max_distance=-1.0)
+    with pytest.raises(ValueError, match="subgoal_reach_m must be > 0 metres, got -1"):
+        ExperimentConfig(subgoal_reach_m=-1.0)
 
 
 @pytest.mark.integration
@@ -121,11 +121,11 @@ def test_results_written_before_a_setting_existed_still_resume(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     config_file = tmp_path / "config.json"
     saved = json.loads(config_file.read_text())
-    del saved["expert_max_distance"]  # as written by an older version
+    del saved["subgoal_reach_m"]  # as written by an older version
     config_file.write_text(json.dumps(saved))
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)  # the new setting at its default matches
     with pytest.raises(ValueError, match="holds results made with"):
-        run_experiment(["dagger"], 1, dataclasses.replace(TINY, expert_max_distance=0.5), tmp_path, progress_bar=False)
+        run_experiment(["dagger"], 1, dataclasses.replace(TINY, subgoal_reach_m=0.5), tmp_path, progress_bar=False)
 
 
 def test_trials_written_before_eval_mazes_existed_get_whole_counts_filled():
@@ -139,7 +139,7 @@ def test_trials_written_before_eval_mazes_existed_get_whole_counts_filled():
 
 
 @pytest.mark.integration
-def test_expert_max_distance_reaches_the_oracle(monkeypatch):
+def test_subgoal_reach_m_reaches_the_oracle(monkeypatch):
     from antmaze_hirl.experiments import runner
 
     seen = []
@@ -151,7 +151,7 @@ def test_expert_max_distance_reaches_the_oracle(monkeypatch):
         return oracle
 
     monkeypatch.setattr(runner.PathOracle, "for_env", recording_for_env)
-    runner.run_trial("dagger", 0, dataclasses.replace(TINY, episodes=1, expert_max_distance=0.5))
+    runner.run_trial("dagger", 0, dataclasses.replace(TINY, episodes=1, subgoal_reach_m=0.5))
     runner.run_trial("dagger", 0, dataclasses.replace(TINY, episodes=1))
     assert seen == [0.5, 1.0]  # the point's cell is 1 m
 
@@ -396,12 +396,12 @@ def test_experiment_records_provenance_and_refuses_other_code(tmp_path):
 def test_body_settings_pick_the_held_out_family_and_keep_given_values():
     from antmaze_hirl.experiments.config import body_settings
 
-    assert body_settings("ant") == {"maze_size": 3, "expert_max_distance": 2.0}
-    assert body_settings("ant", held_out_layouts=True) == {"maze_size": 4, "expert_max_distance": 2.0}
-    assert body_settings("ant", held_out_layouts=True, maze_size=5, expert_max_distance=3.0) == {
+    assert body_settings("ant") == {"maze_size": 3, "subgoal_reach_m": 2.0}
+    assert body_settings("ant", held_out_layouts=True) == {"maze_size": 4, "subgoal_reach_m": 2.0}
+    assert body_settings("ant", held_out_layouts=True, maze_size=5, subgoal_reach_m=3.0) == {
         "maze_size": 5,
-        "expert_max_distance": 3.0,
+        "subgoal_reach_m": 3.0,
     }
-    assert body_settings("point", held_out_layouts=True) == {"maze_size": 5, "expert_max_distance": None}
+    assert body_settings("point", held_out_layouts=True) == {"maze_size": 5, "subgoal_reach_m": None}
     with pytest.raises(ValueError, match="unknown body 'cat'"):
         body_settings("cat")

@@ -187,7 +187,7 @@ class Perfect:
 
     def __init__(self, env, rng):
         self.oracle = PathOracle.for_env(env)
-        self.reach = env.unwrapped.min_subgoal_distance * 1.05
+        self.reach = env.unwrapped.min_subgoal_distance_m * 1.05
 
     def predict(self, observation):
         agent = observation["state"][:2].astype(np.float64)

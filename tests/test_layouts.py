@@ -125,8 +125,8 @@ def test_segment_clearance_is_exact_at_wall_corners():
     walls = validate_maze_map("u")  # cell (2, 1) and (2, 2) are walls: square x in [-1.5, 0.5], y in [-0.5, 0.5]
     geometry = MazeGeometry(*walls.shape, scale=1.0)
     along = np.array([0.5 + 0.3, 0.9]), np.array([0.5 + 0.3, -0.9])  # vertical line 0.3 m right of the block
-    assert geometry.segment_is_free(walls, *along, clearance=0.29)
-    assert not geometry.segment_is_free(walls, *along, clearance=0.31)
+    assert geometry.segment_is_free(walls, *along, clearance_m=0.29)
+    assert not geometry.segment_is_free(walls, *along, clearance_m=0.31)
     diagonal = np.array([1.0, 0.2]), np.array([0.0, -1.0])  # free ends, but cuts the block's corner (0.5, -0.5)
     assert not geometry.segment_is_free(walls, *diagonal)
     assert not geometry.segment_is_free(walls, np.array([1.0, 1.0]), np.array([1.0, 5.0]))  # ends outside

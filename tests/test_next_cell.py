@@ -226,7 +226,7 @@ def test_the_experiment_gives_the_learner_its_oracles_reach():
 
     env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, low_level=PointGoToController())
     oracle = PathOracle.for_env(env, subgoal_reach_m=0.6)
-    trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", expert_max_distance=0.6), env, oracle)
+    trainer = make_trainer("dagger", 0, ExperimentConfig(body="point", subgoal_reach_m=0.6), env, oracle)
     assert trainer.learner.subgoal_reach_m == pytest.approx(0.6)
     default = make_trainer("dagger", 0, ExperimentConfig(body="point"), env, PathOracle.for_env(env))
     assert default.learner.subgoal_reach_m == pytest.approx(env.unwrapped.geometry.scale)

@@ -37,7 +37,7 @@ def test_oracle_subgoals_stay_within_the_reach_and_free_space():
         for _ in range(5):
             subgoal = oracle.label(obs)
             assert np.linalg.norm(subgoal - inner.agent_xy) <= 0.7 + 1e-5  # state is float32
-            assert inner.geometry.segment_is_free(inner.layout.walls, inner.agent_xy, subgoal, oracle.clearance)
+            assert inner.geometry.segment_is_free(inner.layout.walls, inner.agent_xy, subgoal, oracle.clearance_m)
             obs, _, terminated, truncated, _ = env.step(subgoal)
             if terminated or truncated:
                 break
@@ -47,10 +47,10 @@ def test_plan_subgoal_turns_corners_along_the_shortest_path():
     walls = validate_maze_map("u")  # free: top row, right column, bottom row
     geometry = MazeGeometry(*walls.shape, scale=1.0)
     start, goal = geometry.cell_to_xy((1, 1)), geometry.cell_to_xy((3, 1))
-    subgoal = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=10.0, clearance=0.2)
+    subgoal = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=10.0, clearance_m=0.2)
     # The goal is 2 m straight down but behind a wall; the plan heads right, to the corner cell (1, 3).
     np.testing.assert_allclose(subgoal, geometry.cell_to_xy((1, 3)))
-    short = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=0.5, clearance=0.2)
+    short = plan_subgoal(walls, geometry, start, goal, subgoal_reach_m=0.5, clearance_m=0.2)
     np.testing.assert_allclose(short, start + np.array([0.5, 0.0]))
 
 
@@ -74,7 +74,7 @@ def test_oracle_reads_observations_not_env_state():
         state[STATE_AGENT_XY],
         state[STATE_GOAL_XY],
         subgoal_reach_m=oracle.subgoal_reach_m,
-        clearance=oracle.clearance,
+        clearance_m=oracle.clearance_m,
     )
     np.testing.assert_allclose(oracle.label(mixed), expected)
     assert not np.allclose(expected, label_a), "maze b's walls must change a's plan, or this check proves nothing"

@@ -29,11 +29,11 @@ def test_the_body_facts_are_the_values_of_before():
         "point": BodySpec(scale=1.0, success_radius_m=0.2, default_horizon=50, dt=0.01, default_action_scale=1.0),
     }
     assert BODY_DEFAULTS == {
-        "point": {"maze_size": 5, "expert_max_distance": None},
-        "ant": {"maze_size": 3, "expert_max_distance": 2.0},
+        "point": {"maze_size": 5, "subgoal_reach_m": None},
+        "ant": {"maze_size": 3, "subgoal_reach_m": 2.0},
     }
     assert HELD_OUT_MAZE_SIZE == {"point": 5, "ant": 4}
-    assert body_settings("ant", held_out_layouts=True) == {"maze_size": 4, "expert_max_distance": 2.0}
+    assert body_settings("ant", held_out_layouts=True) == {"maze_size": 4, "subgoal_reach_m": 2.0}
     for body, profile in profiles.BODY_PROFILES.items():
         assert profile.body == body and profile.spec is BODY_SPECS[body]
     point_map, ant_map = MazeGeometry(7, 7, 1.0), MazeGeometry(6, 6, 4.0)

@@ -65,5 +65,5 @@ def test_study_settings_never_hold_nan_or_infinity():
     from antmaze_hirl.study.settings import StudySettings
 
     for value in (float("inf"), float("nan")):
-        with pytest.raises(ValueError, match="expert_max_distance must be"):
-            StudySettings.for_body("point", expert_max_distance=value)
+        with pytest.raises(ValueError, match="subgoal_reach_m must be"):
+            StudySettings.for_body("point", subgoal_reach_m=value)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings
 from antmaze_hirl.study import settings as settings_module
 from antmaze_hirl.study.settings import (
     EXPERIMENT_FIELDS,
@@ -20,16 +20,16 @@ from antmaze_hirl.study.settings import (
 SETTINGS_KEYS = [
     "body",
     "maze_size",
-    "expert_max_distance",
+    "subgoal_reach_m",
     "eval_every",
     "eval_episodes",
     "final_eval_episodes",
     "gradient_steps",
     "decay",
-    "show_learner_subgoal",
     "held_out_layouts",
+    "show_learner_subgoal",
 ]
-"""The keys of a study folder's settings.json, in the order written since held-out layouts came in."""
+"""The keys of a study folder's settings.json, in the order written since 0.2.0 (TrialSettings' first)."""
 
 
 def experiment_field(name):
@@ -41,29 +41,23 @@ def test_the_shared_fields_are_every_study_setting_but_the_page_one():
 
 
 @pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
-def test_a_shared_fields_type_is_the_experiments(name):
-    # The default's value is ExperimentConfig's by construction (the source test below checks it is read from
-    # there); what can still drift apart is the declared type.
+def test_a_shared_fields_type_and_default_are_the_experiments(name):
     study = next(field for field in fields(StudySettings) if field.name == name)
     experiment = experiment_field(name)
     assert experiment.default is not MISSING
-    assert study.type == experiment.type
+    assert (study.type, study.default) == (experiment.type, experiment.default)
 
 
-def test_a_shared_default_is_read_from_the_experiment_not_typed_again():
-    # Equal values would pass the test above even if typed twice: the source must name ExperimentConfig's.
+def test_the_study_declares_only_the_pages_setting_and_inherits_the_rest():
+    # Equal fields would pass the test above even if typed twice: the class must declare none of them.
     source = Path(settings_module.__file__).read_text()
     study_class = next(
         node for node in ast.parse(source).body if isinstance(node, ast.ClassDef) and node.name == "StudySettings"
     )
-    defaults = {
-        node.target.id: ast.unparse(node.value)
-        for node in study_class.body
-        if isinstance(node, ast.AnnAssign) and node.value is not None
-    }
-    assert {name: defaults[name] for name in EXPERIMENT_FIELDS} == {
-        name: f"ExperimentConfig.{name}" for name in EXPERIMENT_FIELDS
-    }
+    declared = [node.target.id for node in study_class.body if isinstance(node, ast.AnnAssign)]
+    assert declared == ["show_learner_subgoal"]
+    assert issubclass(StudySettings, TrialSettings) and issubclass(ExperimentConfig, TrialSettings)
+    assert EXPERIMENT_FIELDS == tuple(field.name for field in fields(TrialSettings))
 
 
 def test_the_trials_experiment_config_carries_every_shared_setting():
@@ -81,7 +75,8 @@ def test_the_trials_experiment_config_carries_every_shared_setting():
 def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     save_settings(StudySettings.for_body("point"), tmp_path)
     assert list(json.loads((tmp_path / SETTINGS_FILE).read_text())) == SETTINGS_KEYS
-    # A settings.json written before held-out layouts existed: no held_out_layouts key.
+    # A settings.json written before held-out layouts existed (no held_out_layouts key) and before 0.2.0 (the
+    # reach under its old key), as results/study/simulated_point/settings.json.
     old = {
         "body": "ant",
         "maze_size": 3,
@@ -95,5 +90,22 @@ def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     }
     (tmp_path / SETTINGS_FILE).write_text(json.dumps(old, indent=2))
     loaded = load_settings(tmp_path)
-    assert asdict(loaded) == {**old, "held_out_layouts": False}
-    assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, expert_max_distance=2.0)
+    renamed = {("subgoal_reach_m" if key == "expert_max_distance" else key): value for key, value in old.items()}
+    assert asdict(loaded) == {**renamed, "held_out_layouts": False}
+    assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, subgoal_reach_m=2.0)
+
+
+def test_the_committed_studys_settings_load():
+    settings = load_settings(Path(__file__).resolve().parents[1] / "results" / "study" / "simulated_point")
+    assert (settings.body, settings.subgoal_reach_m, settings.eval_every) == ("point", None, 5)
+
+
+def test_a_settings_file_with_the_reach_under_both_keys_is_one_line_naming_both(tmp_path):
+    save_settings(StudySettings.for_body("ant"), tmp_path)
+    written = json.loads((tmp_path / SETTINGS_FILE).read_text())
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps({**written, "expert_max_distance": 3.0}))
+    with pytest.raises(ValueError) as error:
+        load_settings(tmp_path)
+    message = str(error.value)
+    assert "\n" not in message and str(tmp_path / SETTINGS_FILE) in message
+    assert "'subgoal_reach_m' and its old name 'expert_max_distance' hold different values (2.0 against 3.0)" in message

@@ -87,7 +87,7 @@ def test_reward_per_step_updates_and_decays_beta_after_every_step(step_gradient_
     assert [beta for *_, beta in labels] == [0.5**k for k in range(first.expert_cost)]
     for action, (expert, learner, agent, beta) in zip(executed, labels, strict=True):
         mix = np.clip(beta * expert + (1 - beta) * learner, env.action_space.low, env.action_space.high)
-        no_op = np.linalg.norm(mix - agent) < env.unwrapped.min_subgoal_distance
+        no_op = np.linalg.norm(mix - agent) < env.unwrapped.min_subgoal_distance_m
         np.testing.assert_allclose(action, expert if no_op else mix)
     second = trainer.run_episode()
     # No episode-end update: every update is a step's.

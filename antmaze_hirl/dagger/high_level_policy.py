@@ -72,7 +72,7 @@ class LearnerSettings:
 
     Attributes:
         subgoal_reach_m: Farthest subgoal from the agent, metres; ``None``: one cell (the oracle's default
-            reach; the experiment passes its oracle's ``expert_max_distance``, the ant's 2 m). The learner
+            reach; the experiment passes its oracle's ``subgoal_reach_m``, the ant's 2 m). The learner
             resolves ``None`` to its map's cell side.
         n_directions: Heading bins of the ``"heading"`` network (a positive multiple of 4, so the square's
             symmetries map bins to bins).

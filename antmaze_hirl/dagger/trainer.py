@@ -190,7 +190,7 @@ class DAggerTrainer:
 
     Beta is the *expert's* weight, as in Ross et al. and ``imitation``: beta = 1 executes the expert's
     subgoal, beta = 0 the learner's. A mix that is still a no-op after clipping to the maze (the env's
-    ``is_no_op_subgoal``: within ``min_subgoal_distance`` of the agent, as a learner pointing into a
+    ``is_no_op_subgoal``: within ``min_subgoal_distance_m`` of the agent, as a learner pointing into a
     border corner, or two opposite proposals blended) is replaced by the expert's subgoal: it would be
     "reached" without moving, so every low-level step would cost a label and add the same sample to D.
 

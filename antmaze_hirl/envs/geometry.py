@@ -60,8 +60,8 @@ class MazeGeometry:
         row, col = self.xy_to_cell(xy)
         return 0 <= row < self.n_rows and 0 <= col < self.n_cols and not walls[row, col]
 
-    def segment_is_free(self, walls: np.ndarray, start: np.ndarray, end: np.ndarray, clearance: float = 0.0) -> bool:
-        """Whether the straight segment ``start -> end`` keeps more than ``clearance`` metres from every wall.
+    def segment_is_free(self, walls: np.ndarray, start: np.ndarray, end: np.ndarray, clearance_m: float = 0.0) -> bool:
+        """Whether the straight segment ``start -> end`` keeps more than ``clearance_m`` from every wall.
 
         Exact (no sampling): the distance from the segment to each nearby wall square is computed.
 
@@ -69,12 +69,12 @@ class MazeGeometry:
             walls: Boolean wall grid.
             start: Segment start, world metres.
             end: Segment end, world metres.
-            clearance: Required gap, so a body of that half-width does not clip a wall corner.
+            clearance_m: Required gap, so a body of that half-width does not clip a wall corner.
         """
         start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
         if not (self.is_free(walls, start) and self.is_free(walls, end)):
             return False
-        margin = max(clearance, 1e-9)
+        margin = max(clearance_m, 1e-9)
         row_a, col_a = self.xy_to_cell(np.minimum(start, end) - margin)
         row_b, col_b = self.xy_to_cell(np.maximum(start, end) + margin)
         rows = range(max(min(row_a, row_b), 0), min(max(row_a, row_b), self.n_rows - 1) + 1)

@@ -81,7 +81,7 @@ class SubgoalWalk:
     Attributes:
         subgoal: The subgoal as executed (clipped, pushed out), metres.
         clipped: Whether the subgoal was clipped to the maze.
-        extended: Whether it was pushed out to ``min_subgoal_distance``.
+        extended: Whether it was pushed out to ``min_subgoal_distance_m``.
         low_obs: The low level's current goal observation.
         path: Body xy at the start and after every low-level step so far.
         success: Whether the final goal is reached.
@@ -136,10 +136,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         max_steps: Low-level step budget per episode.
         success_radius_m: How near the final goal counts as reached, metres. Default per body (ant 0.45,
             point 0.2). The low level's, for subgoals, is ``reach_kwargs["success_radius_m"]`` (same default).
-        position_noise: Start and goal offsets, uniform in ``±position_noise`` cells.
+        position_noise_cells: Start and goal offsets, cells: uniform in ``±position_noise_cells``.
         pixels_per_cell: Image resolution.
         clip_subgoals: Clip out-of-bounds subgoals (flagged in ``info``) instead of raising.
-        min_subgoal_distance: Subgoals nearer the body than this, metres, are pushed out to it along
+        min_subgoal_distance_m: Subgoals nearer the body than this, metres, are pushed out to it along
             the same heading, then clipped to the maze bounds (flagged in ``info``; near a border the
             clip can leave them nearer, which :class:`~antmaze_hirl.dagger.DAggerTrainer` catches).
             A subgoal inside the low level's success radius is "reached" in one step, so a learner (or a
@@ -175,10 +175,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         horizon: int | None = None,
         max_steps: int = DEFAULT_MAX_STEPS,
         success_radius_m: float | None = None,
-        position_noise: float = 0.25,
+        position_noise_cells: float = 0.25,
         pixels_per_cell: int = 8,
         clip_subgoals: bool = False,
-        min_subgoal_distance: float | None = None,
+        min_subgoal_distance_m: float | None = None,
         terminate_on_flip: bool = True,
         reach_kwargs: dict[str, Any] | None = None,
         render_mode: str | None = None,
@@ -201,10 +201,10 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
             horizon=horizon,
             max_steps=max_steps,
             success_radius_m=success_radius_m,
-            position_noise=position_noise,
+            position_noise_cells=position_noise_cells,
             pixels_per_cell=pixels_per_cell,
             clip_subgoals=clip_subgoals,
-            min_subgoal_distance=min_subgoal_distance,
+            min_subgoal_distance_m=min_subgoal_distance_m,
             terminate_on_flip=terminate_on_flip,
             reach_kwargs=reach_kwargs,
             render_mode=render_mode,
@@ -213,14 +213,14 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         spec = body_spec(body)
         if max_steps < 1:
             raise ValueError(f"max_steps must be >= 1, got {max_steps}")
-        if not 0 <= position_noise < 0.5:
-            raise ValueError(f"position_noise must lie in [0, 0.5) cells, got {position_noise}")
+        if not 0 <= position_noise_cells < 0.5:
+            raise ValueError(f"position_noise_cells must lie in [0, 0.5) cells, got {position_noise_cells}")
         check_render_settings(render_mode, render_view)
         self.body = body
         self.render_mode = render_mode
         self.max_steps = int(max_steps)
         self.success_radius_m = float(success_radius_m if success_radius_m is not None else spec.success_radius_m)
-        self.position_noise = float(position_noise)
+        self.position_noise_cells = float(position_noise_cells)
         self.clip_subgoals = clip_subgoals
         self.min_goal_cells = int(min_goal_cells)
         self.wall_fraction = float(wall_fraction)
@@ -233,13 +233,13 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         self.reach = ReachEnv(body, first_layout.to_maze_map(), horizon=horizon, **reach_kwargs)
         self.layout = first_layout
         self.geometry: MazeGeometry = self.reach.sim.geometry
-        self.min_subgoal_distance = float(
-            min_subgoal_distance if min_subgoal_distance is not None else 2 * self.reach.success_radius_m
+        self.min_subgoal_distance_m = float(
+            min_subgoal_distance_m if min_subgoal_distance_m is not None else 2 * self.reach.success_radius_m
         )
-        if not 0 <= self.min_subgoal_distance < self.geometry.scale:
+        if not 0 <= self.min_subgoal_distance_m < self.geometry.scale:
             raise ValueError(
-                f"min_subgoal_distance must lie in [0, {self.geometry.scale}) metres (one cell), "
-                f"got {self.min_subgoal_distance}"
+                f"min_subgoal_distance_m must lie in [0, {self.geometry.scale}) metres (one cell), "
+                f"got {self.min_subgoal_distance_m}"
             )
         self.renderer = BirdseyeRenderer(self.geometry, pixels_per_cell)
         self.frames = EpisodeFrames(render_mode, render_view, self.renderer)
@@ -388,19 +388,19 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         return self._get_obs(), float(success), success or walk.fell, truncated, info
 
     def is_no_op_subgoal(self, subgoal: np.ndarray) -> bool:
-        """Whether ``subgoal`` lies within :attr:`min_subgoal_distance` of the body's exact position.
+        """Whether ``subgoal`` lies within :attr:`min_subgoal_distance_m` of the body's exact position.
 
         The low level would "reach" such a subgoal without moving: :meth:`step` pushes it out, and the
         DAgger trainer replaces a mix that is still one after clipping by the expert's subgoal.
         """
-        return bool(np.linalg.norm(subgoal - self.agent_xy) < self.min_subgoal_distance)
+        return bool(np.linalg.norm(subgoal - self.agent_xy) < self.min_subgoal_distance_m)
 
     def _push_out(self, subgoal: np.ndarray) -> tuple[np.ndarray, bool]:
         offset = subgoal - self.agent_xy
         distance = float(np.linalg.norm(offset))
         if not self.is_no_op_subgoal(subgoal) or distance == 0.0:
             return subgoal, False
-        pushed = self.agent_xy + offset * (self.min_subgoal_distance / distance)
+        pushed = self.agent_xy + offset * (self.min_subgoal_distance_m / distance)
         return np.clip(pushed, self.action_space.low, self.action_space.high), True
 
     def render(self) -> np.ndarray | list[np.ndarray] | None:
@@ -456,11 +456,11 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         return Task(layout, goal_xy, start_xy)
 
     def noisy_cell_centre(self, cell: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
-        """The centre of ``cell`` plus uniform ``±position_noise`` cells of noise from ``rng``.
+        """The centre of ``cell`` plus uniform noise in ``±position_noise_cells`` (cells) from ``rng``.
 
         This is how :meth:`sample_task` places starts and goals.
         """
-        noise = rng.uniform(-self.position_noise, self.position_noise, size=2)
+        noise = rng.uniform(-self.position_noise_cells, self.position_noise_cells, size=2)
         return self.geometry.cell_to_xy(cell) + noise * self.geometry.scale
 
     def _goal_reached(self) -> bool:

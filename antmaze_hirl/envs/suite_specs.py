@@ -20,7 +20,7 @@ SUITE_VERSION = 0
 
 LOW_LEVEL_STEPS_PER_SUBGOAL = 5
 """The spec's ``max_episode_steps`` (subgoals) is a task's largest low-level step limit over this: a subgoal
-closer than the env's ``min_subgoal_distance`` is pushed out, so no subgoal takes fewer low-level steps in
+closer than the env's ``min_subgoal_distance_m`` is pushed out, so no subgoal takes fewer low-level steps in
 practice, and the low-level limit stays the binding one (the oracle uses 4-21 subgoals per episode)."""
 
 

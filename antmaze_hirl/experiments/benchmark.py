@@ -241,8 +241,8 @@ def resolve_policy(
         from antmaze_hirl.experiments.config import BODY_DEFAULTS
         from antmaze_hirl.experts import PathOracle
 
-        reach = BODY_DEFAULTS[spec.body]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
-        return PathOracle.for_env(env, subgoal_reach_m=reach, clearance=clearance_m), "oracle"
+        reach = BODY_DEFAULTS[spec.body]["subgoal_reach_m"] if subgoal_reach_m is None else subgoal_reach_m
+        return PathOracle.for_env(env, subgoal_reach_m=reach, clearance_m=clearance_m), "oracle"
     if policy == "random":
         space = env.action_space
         return RandomSubgoalPolicy(space.low, space.high, seed), "random"
@@ -446,7 +446,7 @@ def score_policy(
         "num_envs": num_envs,
         "task_ids": "all" if task_ids is None else ids,
         **(
-            {"oracle_subgoal_reach_m": acting.subgoal_reach_m, "oracle_clearance_m": acting.clearance}
+            {"oracle_subgoal_reach_m": acting.subgoal_reach_m, "oracle_clearance_m": acting.clearance_m}
             if policy == "oracle"
             else {}
         ),

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
@@ -19,15 +21,15 @@ class BodyDefaults(TypedDict):
 
     Attributes:
         maze_size: Free cells per side of the random layouts.
-        expert_max_distance: The oracle's farthest subgoal, metres; ``None``: one cell.
+        subgoal_reach_m: The oracle's farthest subgoal, metres; ``None``: one cell.
     """
 
     maze_size: int
-    expert_max_distance: float | None
+    subgoal_reach_m: float | None
 
 
 BODY_DEFAULTS: dict[str, BodyDefaults] = {
-    body: {"maze_size": profile.maze_size, "expert_max_distance": profile.subgoal_reach_m}
+    body: {"maze_size": profile.maze_size, "subgoal_reach_m": profile.subgoal_reach_m}
     for body, profile in BODY_PROFILES.items()
 }
 """Maze size and oracle subgoal distance each body can do: the ant experiment's settings and the demo's
@@ -41,7 +43,7 @@ always in 500 steps (docs/results/ant-in-mazes.md)."""
 
 
 def body_settings(
-    body: str, *, held_out_layouts: bool = False, maze_size: int | None = None, expert_max_distance: float | None = None
+    body: str, *, held_out_layouts: bool = False, maze_size: int | None = None, subgoal_reach_m: float | None = None
 ) -> BodyDefaults:
     """A body's maze size and oracle reach, each replaced by its argument when that is not ``None``.
 
@@ -57,9 +59,38 @@ def body_settings(
         settings["maze_size"] = HELD_OUT_MAZE_SIZE[body]
     if maze_size is not None:
         settings["maze_size"] = maze_size
-    if expert_max_distance is not None:
-        settings["expert_max_distance"] = expert_max_distance
+    if subgoal_reach_m is not None:
+        settings["subgoal_reach_m"] = subgoal_reach_m
     return BodyDefaults(**settings)
+
+
+RENAMED_KEYS: dict[str, str] = {"subgoal_reach_m": "expert_max_distance"}
+"""Settings that files written up to 0.2.0 hold under an older key, each field with its old key (as
+``study.logs.RENAMED_KEYS``): a results folder's ``config.json`` (the committed ones, protocol 2's runs) and a
+study's ``settings.json``. Files are written with the fields' names and read through :func:`current_keys`."""
+
+
+def current_keys(recorded: Mapping[str, Any], source: str | Path) -> dict[str, Any]:
+    """A settings file's object with each old key of :data:`RENAMED_KEYS` replaced, in place, by its field's name.
+
+    A file holding one setting under both keys with one value reads as holding it once.
+
+    Raises:
+        ValueError: One line naming ``source``: not a JSON object, or both keys of a setting with different values.
+    """
+    if not isinstance(recorded, Mapping):
+        raise ValueError(f"{source} holds a {type(recorded).__name__}, not an object of settings")
+    for key, old_key in RENAMED_KEYS.items():
+        if key in recorded and old_key in recorded and recorded[key] != recorded[old_key]:
+            raise ValueError(
+                f"{source}: {key!r} and its old name {old_key!r} hold different values "
+                f"({recorded[key]!r} against {recorded[old_key]!r})"
+            )
+    fields_by_old_key = {old_key: key for key, old_key in RENAMED_KEYS.items()}
+    settings: dict[str, Any] = {}
+    for key, value in recorded.items():
+        settings.setdefault(fields_by_old_key.get(key, key), value)
+    return settings
 
 
 SELECTION_SEED = SEEDS.selection
@@ -68,32 +99,55 @@ range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evalua
 the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
 
 
-@dataclass(frozen=True)
-class ExperimentConfig:
-    """Settings shared by every (method, seed) trial.
+@dataclass(frozen=True, kw_only=True)
+class TrialSettings:
+    """The settings of a trial that the experiment and the user study share, whoever labels.
+
+    :class:`ExperimentConfig` and :class:`~antmaze_hirl.study.settings.StudySettings` are both these fields
+    plus their own, so the two cannot drift apart in a name, type or default; a study checks its settings with
+    the experiment's checks (:meth:`~antmaze_hirl.study.settings.StudySettings.experiment_config`).
 
     Attributes:
         body: ``"point"`` or ``"ant"`` (the ant uses its shipped low-level policy).
-        episodes: Training episodes per trial.
+        maze_size: Free cells per side of the random layouts.
+        subgoal_reach_m: The farthest subgoal, metres: the oracle's, and in the study the circle a participant
+            clicks in. ``None``: one cell. The ant's shipped low level reaches 2 m subgoals far more reliably
+            than 4 m ones (docs/results/ant-in-mazes.md).
         eval_every: M: learner-only evaluation every M episodes.
         eval_episodes: Held-out mazes per intermediate evaluation.
         final_eval_episodes: Held-out mazes at the end.
-        maze_size: Free cells per side of the random layouts.
         gradient_steps: N per update.
-        episodes_per_update: K.
         decay: d in ``beta <- beta / d``.
-        mixing: ``"blend"`` or ``"switch"``.
-        expert_max_distance: The oracle's farthest subgoal, metres. ``None``: one cell. The ant's
-            shipped low level reaches 2 m subgoals far more reliably than 4 m ones (docs/results/ant-in-mazes.md).
         held_out_layouts: Hold the evaluation mazes out by construction
             (:mod:`antmaze_hirl.envs.layout_splits`): training mazes come from the ``"train"`` part, the
             periodic evaluations from the ``"selection"`` part (seeds from :data:`SELECTION_SEED`: the
             same ``eval_episodes`` mazes every time, a fixed set; about 50 is the intended size), the
             final evaluation from the ``"eval"`` part (seeds from ``HELD_OUT_SEED``), so no evaluation
             maze shares its wall grid with a training maze and the two evaluation sets share none
-            either. ``False`` (the default, kept so that the committed results folders, which lack this
-            setting, still read as what they are): every maze is drawn from the whole family, held out
-            by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+            either. ``False`` (the default, kept so that the committed results folders and study folders,
+            which lack this setting, still read as what they are): every maze is drawn from the whole family,
+            held out by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+    """
+
+    body: str = "point"
+    maze_size: int = 5
+    subgoal_reach_m: float | None = None
+    eval_every: int = 10
+    eval_episodes: int = 20
+    final_eval_episodes: int = 100
+    gradient_steps: int = 200
+    decay: float = 2.0
+    held_out_layouts: bool = False
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExperimentConfig(TrialSettings):
+    """Settings shared by every (method, seed) trial: the :class:`TrialSettings` fields, and these.
+
+    Attributes:
+        episodes: Training episodes per trial.
+        episodes_per_update: K.
+        mixing: ``"blend"`` or ``"switch"``.
         protocol: How the curves are read. ``1`` (the default, so that the committed results folders,
             which lack this setting, read as what they are): a periodic set and a different final set, the untrained
             learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (needs ``held_out_layouts``;
@@ -117,18 +171,9 @@ class ExperimentConfig:
             time is in ``docs/guides/dagger.md``).
     """
 
-    body: str = "point"
     episodes: int = 100
-    eval_every: int = 10
-    eval_episodes: int = 20
-    final_eval_episodes: int = 100
-    maze_size: int = 5
-    gradient_steps: int = 200
     episodes_per_update: int = 1
-    decay: float = 2.0
     mixing: str = "blend"
-    expert_max_distance: float | None = None
-    held_out_layouts: bool = False
     step_gradient_steps: int | None = 20
     protocol: int = 1
     learner: str | None = None
@@ -147,8 +192,8 @@ class ExperimentConfig:
         ):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
-        if self.expert_max_distance is not None and not self.expert_max_distance > 0:
-            raise ValueError(f"expert_max_distance must be > 0 metres, got {self.expert_max_distance}")
+        if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
+            raise ValueError(f"subgoal_reach_m must be > 0 metres, got {self.subgoal_reach_m}")
         if self.mixing not in ("blend", "switch"):
             raise ValueError(f"mixing must be 'blend' or 'switch', got {self.mixing!r}")
         if self.step_gradient_steps is not None and self.step_gradient_steps < 1:

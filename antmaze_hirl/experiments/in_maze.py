@@ -451,7 +451,7 @@ def run(
     after another, as committed results were made).
     """
     row_names(low_levels, smoothing)
-    subgoal_reach_m = BODY_DEFAULTS["ant"]["expert_max_distance"] if subgoal_reach_m is None else subgoal_reach_m
+    subgoal_reach_m = BODY_DEFAULTS["ant"]["subgoal_reach_m"] if subgoal_reach_m is None else subgoal_reach_m
     tasks = [
         (path, alpha, family, seeds, subgoal_reach_m, num_envs)
         for path in low_levels

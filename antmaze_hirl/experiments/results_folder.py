@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
-from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.config import ExperimentConfig, current_keys
 from antmaze_hirl.experiments.outcomes import EVALUATION_COLUMNS, EVALUATION_TEXT_COLUMNS
 from antmaze_hirl.experiments.provenance import check_same_code
 from antmaze_hirl.experiments.summary import summarise
@@ -223,8 +223,12 @@ def rows_to_csv(rows: Sequence[dict[str, Any]], columns: Sequence[str] = COLUMNS
 def read_summary(folder: str | Path) -> dict[str, Any]:
     """The ``summary.json`` of a paper-experiment results folder, checked to be one.
 
+    Its ``config`` (the folder's ``config.json``) is read with the current keys
+    (:func:`~antmaze_hirl.experiments.config.current_keys`), so summaries from before 0.2.0 compare with new ones.
+
     Raises:
-        ValueError: One line naming the file: no ``summary.json``, not JSON, or no ``methods`` object.
+        ValueError: One line naming the file: no ``summary.json``, not JSON, no ``methods`` object, or a
+            setting in ``config`` under its old and new keys with two values.
     """
     path = Path(folder) / "summary.json"
     if not path.is_file():
@@ -235,6 +239,8 @@ def read_summary(folder: str | Path) -> dict[str, Any]:
         raise ValueError(f"{path} is not JSON: {error}") from None
     if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
         raise ValueError(f"{path} has no 'methods' object: not a paper-experiment summary")
+    if isinstance(summary.get("config"), dict):
+        summary["config"] = current_keys(summary["config"], path)
     return summary
 
 
@@ -287,7 +293,8 @@ def check_resumable(
     """
     if not (out_dir / "config.json").exists() or not any((out_dir / "trials").glob("*.csv")):
         return []
-    saved = json.loads((out_dir / "config.json").read_text())
+    # A folder written before 0.2.0 names some settings by their old keys (RENAMED_KEYS).
+    saved = current_keys(json.loads((out_dir / "config.json").read_text()), out_dir / "config.json")
     saved_low_level = saved.pop("low_level", "not recorded (a folder from before low levels were recorded)")
     # Settings added since the folder was written count at their defaults.
     saved = {**asdict(ExperimentConfig(body=config.body)), **saved}

@@ -178,7 +178,7 @@ def make_trainer(
     streams = trial_streams(seed)
     # The learner's reach is its teacher's (the ant's oracle gives 2 m subgoals in 4 m cells): a next-cell
     # head reads its labels and pulls its subgoals back by it (HighLevelPolicy.cell_steps).
-    reach = {} if config.expert_max_distance is None else {"subgoal_reach_m": config.expert_max_distance}
+    reach = {} if config.subgoal_reach_m is None else {"subgoal_reach_m": config.subgoal_reach_m}
     learner = trial_learner(config)
     if learner is not None:
         policy_settings = {**learner_settings(learner, config.maze_size), **(policy_settings or {})}
@@ -235,9 +235,7 @@ def run_trial_with_evaluations(
     """
     envs = TrialEnvs(config, low_level)
     env = envs.train
-    trainer = make_trainer(
-        method, seed, config, env, PathOracle.for_env(env, subgoal_reach_m=config.expert_max_distance)
-    )
+    trainer = make_trainer(method, seed, config, env, PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m))
     rows: list[dict[str, Any]] = []
     evaluations: list[dict[str, Any]] = []
     schedule = set(evaluation_schedule(config))

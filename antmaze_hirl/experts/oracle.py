@@ -20,13 +20,13 @@ def plan_subgoal(
     goal_xy: np.ndarray,
     *,
     subgoal_reach_m: float,
-    clearance: float,
+    clearance_m: float,
 ) -> np.ndarray:
     """The farthest point along the shortest path that a straight walk from the agent reaches.
 
     Waypoints are the centres of the path's cells, then the goal itself. The subgoal is the last
-    waypoint before the first one hidden behind a wall (the segment to it must keep ``clearance``
-    metres from walls), pulled back to at most ``subgoal_reach_m`` from the agent.
+    waypoint before the first one hidden behind a wall (the segment to it must keep ``clearance_m``
+    from walls), pulled back to at most ``subgoal_reach_m`` from the agent.
 
     Raises:
         ValueError: If the goal cannot be reached from the agent's cell.
@@ -38,7 +38,7 @@ def plan_subgoal(
     waypoints = [geometry.cell_to_xy(cell) for cell in cells[1:-1]] + [np.asarray(goal_xy, dtype=float)]
     target = geometry.cell_to_xy(agent_cell)  # own cell centre: always reachable in a straight line
     for waypoint in waypoints:
-        if not geometry.segment_is_free(walls, agent_xy, waypoint, clearance):
+        if not geometry.segment_is_free(walls, agent_xy, waypoint, clearance_m):
             break
         target = waypoint
     offset = target - agent_xy
@@ -70,7 +70,7 @@ class PathOracle:
         pixels_per_cell: The env's image resolution.
         subgoal_reach_m: Farthest subgoal from the agent, metres ("towards the target but not too far").
             Default one cell.
-        clearance: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
+        clearance_m: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
         noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
         rng: Source of the noise (required when ``noise_std > 0``).
 
@@ -82,7 +82,7 @@ class PathOracle:
         *,
         pixels_per_cell: int = 8,
         subgoal_reach_m: float | None = None,
-        clearance: float | None = None,
+        clearance_m: float | None = None,
         noise_std: float = 0.0,
         rng: np.random.Generator | None = None,
     ) -> None:
@@ -95,7 +95,7 @@ class PathOracle:
         self.subgoal_reach_m = float(subgoal_reach_m if subgoal_reach_m is not None else geometry.scale)
         if self.subgoal_reach_m <= 0:
             raise ValueError(f"subgoal_reach_m must be > 0, got {subgoal_reach_m}")
-        self.clearance = float(clearance if clearance is not None else 0.2 * geometry.scale)
+        self.clearance_m = float(clearance_m if clearance_m is not None else 0.2 * geometry.scale)
         self.noise_std = float(noise_std)
         self.rng = rng
 
@@ -119,7 +119,7 @@ class PathOracle:
             STATE_LAYOUT.agent_xy(state),
             STATE_LAYOUT.goal_xy(state),
             subgoal_reach_m=self.subgoal_reach_m,
-            clearance=self.clearance,
+            clearance_m=self.clearance_m,
         )
         if self.noise_std > 0:
             subgoal = subgoal + self.rng.normal(0.0, self.noise_std, size=2)

@@ -71,7 +71,7 @@ def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> No
         "--subgoal-reach-m",
         type=float,
         default=None,
-        help="radius of the click circle, metres: the setting expert_max_distance "
+        help="radius of the click circle, metres: the setting subgoal_reach_m "
         "(default: per body, ant 2, point one cell)",
     )
     renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
@@ -101,7 +101,7 @@ def _run_init(args: argparse.Namespace) -> int:
     if args.maze_size is not None:
         overrides["maze_size"] = args.maze_size
     if args.subgoal_reach_m is not None:
-        overrides["expert_max_distance"] = args.subgoal_reach_m
+        overrides["subgoal_reach_m"] = args.subgoal_reach_m
     settings = StudySettings.for_body(args.body, **overrides)
     save_plan(plan, args.dir)
     save_settings(settings, args.dir)

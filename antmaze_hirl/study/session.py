@@ -321,7 +321,7 @@ class ParticipantSession:
     @property
     def subgoal_reach_m(self) -> float:
         """The circle around the agent: the farthest subgoal the expert is asked to click, metres."""
-        distance = self.settings.expert_max_distance
+        distance = self.settings.subgoal_reach_m
         return float(distance if distance is not None else self._env.unwrapped.geometry.scale)
 
     # ---------------------------------------------------------------------------------- actions

@@ -9,50 +9,31 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings, body_settings, current_keys
 
 SETTINGS_FILE = "settings.json"
 
 
-@dataclass(frozen=True)
-class StudySettings:
+@dataclass(frozen=True, kw_only=True)
+class StudySettings(TrialSettings):
     """Settings shared by every trial of a study (the method and seed come from the plan).
 
-    The fields it shares with :class:`~antmaze_hirl.experiments.config.ExperimentConfig` (:data:`EXPERIMENT_FIELDS`)
-    take their defaults from it, so that a default changed there changes here; their names are the keys of a
-    study's ``settings.json``, so they stay as they are.
+    The :class:`~antmaze_hirl.experiments.config.TrialSettings` fields (:data:`EXPERIMENT_FIELDS`: the
+    experiment's names, types and defaults; ``subgoal_reach_m`` is the radius of the circle a participant clicks
+    in) and the page's. Their names are the keys of a study's ``settings.json`` (files from before 0.2.0 hold
+    some under older keys, read through :func:`~antmaze_hirl.experiments.config.current_keys`).
+    ``held_out_layouts`` is ``False`` by default, as in the experiment, so that a study folder written before
+    the setting existed reads as what it ran; ``study init`` (:meth:`for_body`) sets it.
 
     Attributes:
-        body: ``"point"`` or ``"ant"``.
-        maze_size: Free cells per side of the random mazes.
-        expert_max_distance: Farthest subgoal a participant may click from the agent, metres (the
-            circle on the page); ``None``: one cell.
-        eval_every: Learner-only evaluation every this many episodes (the paper's M).
-        eval_episodes: Held-out mazes per intermediate evaluation.
-        final_eval_episodes: Held-out mazes after a trial's last episode.
-        gradient_steps: Gradient steps per learner update (N).
-        decay: ``d`` in ``beta <- beta / d``.
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
-        held_out_layouts: Training and evaluation mazes from disjoint wall grids
-            (:attr:`~antmaze_hirl.experiments.config.ExperimentConfig.held_out_layouts`). ``False`` by
-            default, as there, so that a study folder written before the setting existed reads as what it ran;
-            ``study init`` (:meth:`for_body`) sets it.
     """
 
-    body: str = ExperimentConfig.body
-    maze_size: int = ExperimentConfig.maze_size
-    expert_max_distance: float | None = ExperimentConfig.expert_max_distance
-    eval_every: int = ExperimentConfig.eval_every
-    eval_episodes: int = ExperimentConfig.eval_episodes
-    final_eval_episodes: int = ExperimentConfig.final_eval_episodes
-    gradient_steps: int = ExperimentConfig.gradient_steps
-    decay: float = ExperimentConfig.decay
     show_learner_subgoal: bool = True
-    held_out_layouts: bool = ExperimentConfig.held_out_layouts
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
-        for name in ("expert_max_distance", "decay"):  # never NaN or Infinity in settings.json (not JSON)
+        for name in ("subgoal_reach_m", "decay"):  # never NaN or Infinity in settings.json (not JSON)
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
@@ -82,11 +63,10 @@ class StudySettings:
         return ExperimentConfig(episodes=episodes, **{name: getattr(self, name) for name in EXPERIMENT_FIELDS})
 
 
-EXPERIMENT_FIELDS: tuple[str, ...] = tuple(
-    field.name for field in fields(StudySettings) if field.name in {shared.name for shared in fields(ExperimentConfig)}
-)
-"""The :class:`StudySettings` fields that are :class:`~antmaze_hirl.experiments.config.ExperimentConfig`'s too:
-their defaults are the experiment's, and :meth:`StudySettings.experiment_config` passes them on."""
+EXPERIMENT_FIELDS: tuple[str, ...] = tuple(field.name for field in fields(TrialSettings))
+"""The :class:`StudySettings` fields that are :class:`~antmaze_hirl.experiments.config.ExperimentConfig`'s too
+(the :class:`~antmaze_hirl.experiments.config.TrialSettings` fields): :meth:`StudySettings.experiment_config`
+passes them on."""
 
 
 STUDY_SPLITS = ("train", "selection", "eval")
@@ -138,12 +118,13 @@ def load_settings(study_dir: str | Path) -> StudySettings:
 
     Raises:
         FileNotFoundError: If the study has no settings file (not made by ``antmaze-hirl study init``).
-        ValueError: If the file is not valid settings (names the file).
+        ValueError: If the file is not valid settings, or holds a setting under its old and new keys with two
+            values (names the file).
     """
     path = Path(study_dir) / SETTINGS_FILE
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found: create the study with 'antmaze-hirl study init {study_dir}'")
     try:
-        return StudySettings(**json.loads(path.read_text()))
+        return StudySettings(**current_keys(json.loads(path.read_text()), path))
     except (json.JSONDecodeError, TypeError, ValueError) as error:
         raise ValueError(f"{path} holds no valid study settings: {error}") from error

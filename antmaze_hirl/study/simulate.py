@@ -120,7 +120,7 @@ def oracle_click(state: dict[str, Any]) -> np.ndarray:
         np.asarray(state["agent"], dtype=np.float64),
         np.asarray(state["goal"], dtype=np.float64),
         subgoal_reach_m=state["subgoal_reach_m"],
-        clearance=0.2 * geometry.scale,  # the oracle's default, as in the experiments
+        clearance_m=0.2 * geometry.scale,  # the oracle's default, as in the experiments
     )
     inner_low = geometry.low + geometry.scale
     return np.clip(subgoal, inner_low, -inner_low)
