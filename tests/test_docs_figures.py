@@ -22,7 +22,7 @@ def percent(value):
 
 def interval(successes, trials):
     low, high = wilson_interval(successes, trials)
-    return f"[{percent(low)}, {percent(high)}]".replace("100.0]", "100]")
+    return f"[{percent(low)}, {percent(high)}]"
 
 
 def headline_figures():
@@ -31,7 +31,7 @@ def headline_figures():
     for body in ("point", "ant"):
         pooled = low_level[body]
         successes = round(pooled["pooled_success_rate"] * pooled["pooled_episodes"])
-        rate = f"{100 * pooled['pooled_success_rate']:g}"
+        rate = percent(pooled["pooled_success_rate"])  # 800 episodes: one decimal
         figures.append(
             f"{successes} of {pooled['pooled_episodes']}: {rate}% {interval(successes, pooled['pooled_episodes'])}"
         )
