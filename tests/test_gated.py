@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from conftest import make_point_trainer, point_maze
+from script_helpers import load_script
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import (
@@ -21,6 +22,8 @@ from antmaze_hirl.dagger.strategies import METHODS
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experiments.runner import check_methods
+
+learning_margins = load_script("scripts/learning_margins.py")  # each learning check's figure, one per seed
 
 
 def drive_by_hand(trainer, episodes):
@@ -320,14 +323,12 @@ def test_method_names_compose_and_bad_ones_are_refused():
 
 
 def test_risk_model_learns_which_subgoals_fail():
-    rng = np.random.default_rng(0)
-    features = rng.normal(size=(400, 6)).astype(np.float32)
-    failed = features[:, 0] > 0.5
-    model = RiskModel(rng=np.random.default_rng(1))
-    assert np.all(model.predict(features) == 0)  # no evidence before the first fit
-    model.fit(features, failed, steps=300)
-    predicted = model.predict(features) > 0.5
-    assert np.mean(predicted == failed) > 0.9
+    features, _ = learning_margins.risk_problem(0)
+    assert np.all(RiskModel(rng=np.random.default_rng(1)).predict(features) == 0)  # no evidence before the first fit
+    # Failed where the first of 6 normal features is above 0.5; 300 steps. Over seeds 0-9 at 96ae2e5 the
+    # accuracy was 0.965-0.988 (median 0.974, sd 0.008; `python scripts/learning_margins.py risk_model
+    # --seeds 0-9`): the bound 0.9 sits 0.065 under the lowest seed, ~9 sd under the mean.
+    assert learning_margins.risk_model_accuracy(0) > 0.9
 
 
 # --- end to end ---

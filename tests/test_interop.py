@@ -1,55 +1,34 @@
 import numpy as np
 import pytest
-import torch as th
 
 pytest.importorskip("imitation", reason="the imitation extra is not installed")
 
 from conftest import point_maze
-from imitation.algorithms import bc
+from script_helpers import load_script
 
 from antmaze_hirl import PathOracle
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, RewardBasedQuery
+from antmaze_hirl.dagger import DAggerTrainer, RewardBasedQuery
 from antmaze_hirl.dagger.interop import BCLearner, to_transitions
+
+learning_margins = load_script("scripts/learning_margins.py")  # the BC check's figure, one per seed
 
 
 def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
-    env = point_maze()
-    rng = np.random.default_rng(0)
-    trainer = DAggerTrainer(
-        env=env,
-        expert=PathOracle.for_env(env),
-        learner=HighLevelPolicy.for_env(env, rng=rng),
-        rng=rng,
-        gradient_steps=2,
-    )
-    trainer.train(2)
+    trainer = learning_margins.exported_labels(0)  # two DAgger episodes on a 3x3 point maze
+    env = trainer.env
     transitions = to_transitions(trainer.dataset)
     assert len(transitions) == len(trainer.dataset)
     np.testing.assert_array_equal(transitions.acts, trainer.dataset.subgoals().astype(np.float32))
     assert transitions.obs.get("image").shape == (len(trainer.dataset), *env.observation_space["image"].shape)
     assert transitions.dones.sum() == 2  # one episode end per training episode
     np.testing.assert_array_equal(transitions.next_obs.get("state")[0], transitions.obs.get("state")[1])
-    th.manual_seed(0)  # BC builds its policy from torch's global RNG
-    cloner = bc.BC(
-        observation_space=env.observation_space,
-        action_space=env.action_space,
-        rng=rng,
-        demonstrations=transitions,
-        batch_size=4,  # two short point episodes give ~6 labels
-    )
-
-    def negative_log_likelihood():
-        observations = {key: transitions.obs.get(key) for key in ("image", "state")}
-        obs_tensor, _ = cloner.policy.obs_to_tensor(observations)
-        with th.no_grad():
-            _, log_prob, _ = cloner.policy.evaluate_actions(obs_tensor, th.as_tensor(transitions.acts))
-        return float(-log_prob.mean())
-
-    before = negative_log_likelihood()
-    cloner.train(n_batches=60, progress_bar=False)
-    # BC fitted the exported labels: their likelihood under its policy rose (a loss on anything else would not).
-    after = negative_log_likelihood()
-    assert after < before - 0.3, (before, after)
+    # BC fitted the exported labels: their negative log-likelihood under its policy fell after 60 batches.
+    # One seed is no test: over seeds 0-15 at 96ae2e5 the drop was 0.29-0.90 (median 0.55), the mean of 3
+    # consecutive seeds 0.37-0.67; trained on random subgoals at the same states instead, BC raised it
+    # (drop -0.85-0.10, means of 3 -0.63 to -0.03). The bound 0.2 on the mean of seeds 0-2 sits between:
+    # `python scripts/learning_margins.py bc_nll --seeds 0-15 --window 3` (and bc_nll_random_labels).
+    drops = [learning_margins.bc_nll_drop(seed) for seed in range(3)]
+    assert np.mean(drops) > 0.2, drops
 
 
 def test_bc_serves_as_dagger_learner_with_reward_based_filtering():
