@@ -233,6 +233,9 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
     ],
 )
 def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
+    # Seed 0 alone is a test here: over seeds 0-7 at 4e2220a the gain was 0.80-0.97 (median 0.88, sd 0.06),
+    # so the bound 0.4 sits 0.4 under the lowest seed: `python scripts/learning_margins.py dagger_end_to_end
+    # --seeds 0-7` (the same computation).
     trainer = make_point_trainer(seed=0, policy_settings=settings, gradient_steps=300)
     eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
     untrained = evaluate_high_level(trainer.learner, eval_env, episodes=30)
