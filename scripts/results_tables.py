@@ -125,6 +125,16 @@ def rate_cell_of(rate: float, trials: int) -> str:
     return rate_cell(count(rate, trials), trials)
 
 
+def times(ratio: float) -> str:
+    """``"2.05x"``: a speed or throughput ratio, two decimals."""
+    return f"{ratio:.2f}x"
+
+
+def median_range(spread: dict[str, float]) -> str:
+    """``"89% (80%-91%)"``: a per-seed spread's median and its min-max, as success rates on 100 mazes."""
+    return f"{percent(spread['median'], 100)} ({percent(spread['min'], 100)}-{percent(spread['max'], 100)})"
+
+
 def share(value: float) -> str:
     """A share of subgoals or steps, in percent with two decimals (flip rates are small)."""
     return f"{100 * value:.2f}%"
@@ -533,12 +543,11 @@ def headline(links_from: str = "docs/results") -> str:
     ):
         final = ant.get("methods", method, "final_success")
         labels = ant.get("methods", method, "total_labels", "median")
-        ratio = "" if method == "dagger" else f" ({labels / dagger_labels:.2f}x DAgger's)"
+        ratio = "" if method == "dagger" else f" ({times(labels / dagger_labels)} DAgger's)"
         rows.append(
             [
                 what,
-                f"{percent(final['median'], 100)} ({percent(final['min'], 100)}-{percent(final['max'], 100)}), "
-                f"{labels:.0f} labels per trial{ratio}",
+                f"{median_range(final)}, {labels:.0f} labels per trial{ratio}",
                 "`paper_experiment/ant/summary.json`",
                 page("paper experiment"),
             ]
@@ -947,11 +956,6 @@ def sweeps() -> str:
 # --- the guides -----------------------------------------------------------------------------------------------
 
 
-def times(ratio: float) -> str:
-    """``"2.05x"``: a speed or throughput ratio, two decimals."""
-    return f"{ratio:.2f}x"
-
-
 def lockstep_agreement() -> str:
     """Serial against lockstep evaluation on the same mazes: agreement, successes, time; then what differed."""
     results = load("lockstep_agreement/lockstep_agreement.json")
@@ -1291,10 +1295,6 @@ def protocol2_interim() -> str:
         seeds = [spec["seeds"] for spec in methods.values()]
         dagger, gated, aggrevate = (results.get("methods", name) for name in ("dagger", "gated", "aggrevate"))
 
-        def final(spec: dict[str, Any]) -> str:
-            success = spec["final_success"]
-            return f"{percent(success['median'], 100)} ({percent(success['min'], 100)}-{percent(success['max'], 100)})"
-
         untrained = dagger["untrained_success"]
         mazes = untrained["pooled"]["mazes"]
         lines.append(
@@ -1303,10 +1303,10 @@ def protocol2_interim() -> str:
                 f"{min(seeds)}-{max(seeds)}",
                 f"{percent(untrained['pooled']['rate'])} ({count(min(untrained['per_seed']), mazes)}-"
                 f"{count(max(untrained['per_seed']), mazes)} of {mazes} mazes per seed)",
-                f"{final(dagger)}, {dagger['total_labels']['median']:.0f} labels",
-                f"{final(gated)}, {gated['total_labels']['median']:.0f} labels "
-                f"({gated['total_labels']['median'] / dagger['total_labels']['median']:.2f}x DAgger's)",
-                final(aggrevate),
+                f"{median_range(dagger['final_success'])}, {dagger['total_labels']['median']:.0f} labels",
+                f"{median_range(gated['final_success'])}, {gated['total_labels']['median']:.0f} labels "
+                f"({times(gated['total_labels']['median'] / dagger['total_labels']['median'])} DAgger's)",
+                median_range(aggrevate["final_success"]),
             ]
         )
     return table(
