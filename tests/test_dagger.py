@@ -223,25 +223,15 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    ("settings", "gain", "least"),
-    [
-        ({"head": "heading", "planning_iterations": 0, "block_walls": False}, 0.4, 0.0),
-        # Not the point's default planning learner: it solves these 3x3 mazes untrained (30 of 30), and training
-        # can lower it (25 of 30 after 20 episodes on seed 0 since the random streams of 0.2.0). That drop is
-        # issue 32's "strong prior" finding, reported by the protocol's ablation, not a property to assert here.
-    ],
-)
-def test_dagger_learns_small_mazes_end_to_end(settings, gain, least):
-    # Seed 0 alone is a test here: over seeds 0-7 at 4e2220a the gain was 0.80-0.97 (median 0.88, sd 0.06),
-    # so the bound 0.4 sits 0.4 under the lowest seed: `python scripts/learning_margins.py dagger_end_to_end
-    # --seeds 0-7` (the same computation).
-    trainer = make_point_trainer(seed=0, policy_settings=settings, gradient_steps=300)
-    eval_env = gym.make("antmaze_hirl/PointMaze-v0", maze_size=3, min_goal_cells=2, low_level=PointGoToController())
-    untrained = evaluate_high_level(trainer.learner, eval_env, episodes=30)
-    trainer.train(20)
-    trained = evaluate_high_level(trainer.learner, eval_env, episodes=30)
-    assert trained["success_rate"] >= max(untrained["success_rate"] + gain, least), (untrained, trained)
+def test_dagger_learns_small_mazes_end_to_end():
+    # The heading head without planning, 20 episodes: the success gain on 30 held-out 3x3 mazes. Seed 0 alone is
+    # a test here: over seeds 0-7 at 4e2220a the gain was 0.80-0.97 (median 0.88, sd 0.06), so the bound 0.4 sits
+    # 0.4 under the lowest seed: `python scripts/learning_margins.py dagger_end_to_end --seeds 0-7`, whose
+    # function this calls. Not the point's default planning learner: it solves these mazes untrained (30 of 30),
+    # and training can lower it (25 of 30 after 20 episodes on seed 0 since the random streams of 0.2.0), the
+    # protocol's "strong prior" finding, reported by its ablation, not a property to assert here.
+    gain = learning_margins.dagger_end_to_end_gain(0)
+    assert gain >= 0.4, gain
 
 
 @pytest.mark.parametrize(
