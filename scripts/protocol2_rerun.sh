@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The 10-seed protocol-2 rerun (docs/guides/protocol.md), run in the background across sessions from a frozen clone.
 #
-#   scripts/protocol2_rerun.sh start BODY        # restore the committed checkpoint if need be, then resume
+#   [PROTOCOL2_JOBS=2] scripts/protocol2_rerun.sh start BODY   # restore the committed checkpoint if need be, then resume
 #   scripts/protocol2_rerun.sh checkpoint BODY   # pack the finished trials into the committed checkpoint
 #   scripts/protocol2_rerun.sh restore BODY      # unpack the checkpoint where no trials are (start does this)
 #   scripts/protocol2_rerun.sh status            # trials done per body
@@ -15,6 +15,8 @@ set -euo pipefail
 COMMIT=36dafd8a03dc0a9cd5a6de794f67b44a7536914e
 METHODS=dagger,noise,multi_policy,reward,reward_per_step,aggrevate,gated
 SEEDS=10
+# Trials at once: the backend changes no number (each trial is seeded by its own rng), only the wall time.
+JOBS="${PROTOCOL2_JOBS:-1}"
 MAIN="$(cd "$(dirname "$0")/.." && pwd)"
 WORK="${PROTOCOL2_WORK:-/work/p2runs}"
 CLONE="${PROTOCOL2_CLONE:-/work/frozen-p2}"
@@ -48,6 +50,11 @@ case "${1:-}" in
   start)
     check_body "${2:-}"
     body=$2
+    case "$JOBS" in
+      1) backend="--backend serial" ;;
+      [2-9] | [1-9][0-9]) backend="--backend processes --jobs $JOBS" ;;
+      *) echo "PROTOCOL2_JOBS must be an integer from 1 to 99, got '$JOBS'" >&2; exit 2 ;;
+    esac
     out="$(folder "$body")"
     # One writer per folder: a second start (another session, say) would run the same trials beside it.
     if [ -f "$WORK/$body.pid" ] && kill -0 "$(cat "$WORK/$body.pid")" 2>/dev/null; then
@@ -68,10 +75,18 @@ case "${1:-}" in
     restore "$body"
     # PYTHONPATH first: the venv's editable install points at main, the trials must run the clone's code.
     # setsid and no inherited stdin: the caller (a shell tool, a CI step) must not wait on the trials.
-    (cd "$CLONE" && PYTHONPATH="$CLONE" setsid nohup "$MAIN/.venv/bin/python" benchmarks/paper_experiment.py \
-      --body "$body" --seeds "$SEEDS" --methods "$METHODS" --out "$out" --backend serial --cpus-per-trial 1 \
-      < /dev/null >> "$WORK/$body.log" 2>&1 & echo $! > "$WORK/$body.pid")
-    echo "started $body: log $WORK/$body.log, folder $out"
+    # The pid file must hold the experiment's own pid, not setsid's (which can fork and exit at once, and
+    # then the "already running" check above sees nothing): the inner shell writes its pid, then execs.
+    # The redirections are on the whole subshell: the shell forked for "cd && ... &" would otherwise keep
+    # the caller's stdout open, and a caller reading that pipe would wait on the trials.
+    rm -f "$WORK/$body.pid"
+    # shellcheck disable=SC2016  # $$, $0 and $@ are the inner shell's
+    (cd "$CLONE" && PYTHONPATH="$CLONE" setsid nohup bash -c 'echo $$ > "$0.tmp" && mv "$0.tmp" "$0" && exec "$@"' \
+      "$WORK/$body.pid" "$MAIN/.venv/bin/python" benchmarks/paper_experiment.py \
+      --body "$body" --seeds "$SEEDS" --methods "$METHODS" --out "$out" $backend --cpus-per-trial 1 &) \
+      < /dev/null >> "$WORK/$body.log" 2>&1
+    for _ in $(seq 50); do [ -f "$WORK/$body.pid" ] && break; sleep 0.1; done
+    echo "started $body (pid $(cat "$WORK/$body.pid" 2>/dev/null || echo unknown)): log $WORK/$body.log, folder $out"
     ;;
   checkpoint)
     check_body "${2:-}"

@@ -72,3 +72,52 @@ def test_start_refuses_while_the_bodys_rerun_is_running(tmp_path):
         assert f"the point rerun is already running (pid {alive.pid})" in result.stderr
     finally:
         alive.kill()
+
+
+@pytest.mark.parametrize("jobs", ["0", "two", "-1", "100"])
+def test_start_refuses_a_bad_job_count_before_touching_anything(tmp_path, jobs):
+    env = {
+        **os.environ,
+        "PROTOCOL2_WORK": str(tmp_path / "work"),
+        "PROTOCOL2_CHECKPOINTS": str(tmp_path / "ckpt"),
+        "PROTOCOL2_CLONE": str(tmp_path / "clone"),
+        "PROTOCOL2_JOBS": jobs,
+    }
+    result = subprocess.run(["bash", str(SCRIPT), "start", "ant"], env=env, capture_output=True, text=True, check=False)
+    assert result.returncode == 2
+    assert result.stderr == f"PROTOCOL2_JOBS must be an integer from 1 to 99, got '{jobs}'\n"
+    assert not (tmp_path / "clone").exists() and not (tmp_path / "work").exists()
+
+
+def test_start_records_the_experiments_own_pid_and_passes_the_job_count(tmp_path):
+    """The pid file is what stops a second start, so it must name the live experiment, not a launcher."""
+    repo = SCRIPT.parents[1]
+    commit = next(line for line in SCRIPT.read_text().splitlines() if line.startswith("COMMIT=")).split("=")[1]
+    if subprocess.run(["git", "-C", str(repo), "cat-file", "-e", commit], capture_output=True).returncode != 0:
+        pytest.skip(f"this checkout lacks the rerun's commit {commit[:7]} (a shallow clone)")
+    clone = tmp_path / "clone"
+    subprocess.run(["git", "clone", "-q", "--shared", "--no-checkout", str(repo), str(clone)], check=True)
+    main = tmp_path / "main"  # a stand-in main checkout whose venv python only sleeps
+    (main / "scripts").mkdir(parents=True)
+    (main / "scripts" / "protocol2_rerun.sh").write_text(SCRIPT.read_text())
+    subprocess.run(["git", "-C", str(clone), "checkout", "-q", commit], check=True)  # before the timed start
+    (main / ".venv" / "bin").mkdir(parents=True)
+    fake = main / ".venv" / "bin" / "python"
+    fake.write_text('#!/bin/bash\necho "args: $*"\nexec sleep 30\n')
+    fake.chmod(0o755)
+    work = tmp_path / "work"
+    env = {**os.environ, "PROTOCOL2_WORK": str(work), "PROTOCOL2_CLONE": str(clone), "PROTOCOL2_JOBS": "2"}
+    env["PROTOCOL2_CHECKPOINTS"] = str(tmp_path / "ckpt")
+    start = [str(main / "scripts" / "protocol2_rerun.sh"), "start", "ant"]
+    # capture_output pipes stdout: start must return without waiting on the (30 s) experiment behind it.
+    first = subprocess.run(["bash", *start], env=env, capture_output=True, text=True, check=False, timeout=20)
+    assert first.returncode == 0, first.stderr
+    pid = int((work / "ant.pid").read_text())
+    try:
+        assert Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")[:2] == [b"sleep", b"30"]
+        second = subprocess.run(["bash", *start], env=env, capture_output=True, text=True, check=False)
+        assert second.returncode == 1
+        assert f"the ant rerun is already running (pid {pid})" in second.stderr
+    finally:
+        os.kill(pid, 9)
+    assert "--backend processes --jobs 2 --cpus-per-trial 1" in (work / "ant.log").read_text()
