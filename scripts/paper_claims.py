@@ -49,9 +49,13 @@ RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
 FOLDERS = [RESULTS / "point", RESULTS / "ant"]
 
 
-def _folder_line(body: Body) -> str:
+def _seed_range(body: Body) -> str:
     low, high = body.seeds
-    seeds = f"{low}" if low == high else f"{low}-{high}"
+    return f"{low}" if low == high else f"{low}-{high}"
+
+
+def _folder_line(body: Body) -> str:
+    seeds = _seed_range(body)
     state = f"INTERIM: fewer than {FULL_SEEDS} seeds, no verdict is final" if body.interim else "complete"
     return f"- {body.name}: `{body.folder}`, {seeds} seeds per method ({state})"
 
@@ -82,6 +86,21 @@ def markdown(report: ClaimsReport) -> str:
     lines += ["| # | the paper's claim | this project's measurement (protocol 2) | verdict |", "|---|---|---|---|"]
     lines += [f"| {row.number} | {row.claim} | {row.measurement} | **{row.printed}** |" for row in report.verdicts]
     return "\n".join([*lines, "", FOOTNOTE])
+
+
+def brief_markdown(report: ClaimsReport) -> str:
+    """The claims table in brief, for the README: each body's headline figures and the verdict."""
+    state = " INTERIM (fewer than 10 seeds in some method): no verdict is final." if report.interim else ""
+    seeds = ", ".join(f"{body.name} {_seed_range(body)}" for body in report.bodies)
+    lines = [
+        "| # | the paper's claim | measured: median over seeds, paired Wilcoxon p against DAgger | verdict |",
+        "|---|---|---|---|",
+        *(f"| {row.number} | {row.claim} | {row.brief} | **{row.printed}** |" for row in report.verdicts),
+        "",
+        f"Protocol 2, seeds per method: {seeds}.{state} Each figure's interval and seed count, and the verdict "
+        "rules: [docs/paper-claims.md](docs/paper-claims.md).",
+    ]
+    return "\n".join(lines)
 
 
 def protocol2_json(report: ClaimsReport) -> dict[str, Any]:
@@ -115,8 +134,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument(
         "--protocol2", nargs=2, type=Path, metavar=("POINT_FOLDER", "ANT_FOLDER"), help="protocol 2: the claims table"
     )
+    parser.add_argument("--brief", action="store_true", help="protocol 2: the README's short table")
     parser.add_argument("--json", type=Path, default=None, help="also write what is printed, as JSON, to this file")
     args = parser.parse_args(argv)
+    if args.brief and args.protocol2 is None:
+        parser.error("--brief is the protocol-2 table's short form: give --protocol2 POINT_FOLDER ANT_FOLDER")
     if args.protocol2 is not None:
         if args.folders is not None:
             parser.error("--folders names protocol-1 folders; --protocol2 takes its two folders itself")
@@ -124,7 +146,7 @@ def main(argv: Sequence[str] | None = None) -> None:
             report = evaluate_folders(*args.protocol2)
         except ValueError as error:
             parser.error(str(error))
-        print(markdown(report))
+        print(brief_markdown(report) if args.brief else markdown(report))
         output: Any = protocol2_json(report)
     else:
         folders = FOLDERS if args.folders is None else [Path(f) for f in args.folders.split(",")]

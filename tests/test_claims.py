@@ -324,3 +324,29 @@ def test_protocol_1_bad_folders_are_one_line_errors_naming_them(tmp_path, capsys
         pc.main(["--folders", str(tmp_path / "nowhere")])
     lines = capsys.readouterr().err.strip().splitlines()
     assert lines[-1].endswith(f": error: no summary.json in {tmp_path / 'nowhere'} (a paper-experiment results folder)")
+
+
+def test_the_readmes_brief_table_carries_each_bodys_figures_and_the_same_verdicts(tmp_path, capsys):
+    bodies = [body(name, gain={"reward": 0.15}) for name in cl.BODIES]
+    report = cl.ClaimsReport(tuple(bodies), tuple(cl.judge_claims(bodies)))
+    brief = pc.brief_markdown(report).splitlines()
+    rows = [line for line in brief if line.startswith("| ") and line[2].isdigit()]
+    assert len(rows) == 7
+    # One verdict per claim, the full table's; the figures are per body, the medians the full table quotes.
+    for line, verdict in zip(rows, report.verdicts, strict=True):
+        assert line.endswith(f"| **{verdict.printed}** |")
+    reward = bodies[0].method("reward")["final_success"]["median"]
+    dagger = bodies[0].method("dagger")["final_success"]["median"]
+    assert f"point: `reward` {100 * reward:.0f}% vs {100 * dagger:.0f}%, p = " in rows[0]
+    assert "<br>ant: `reward` " in rows[0] and reward > dagger
+    assert "Protocol 2, seeds per method: point 10, ant 10." in brief[-1] and "INTERIM" not in brief[-1]
+    assert "no people took part" in rows[6]
+
+
+def test_brief_needs_the_protocol_2_folders(capsys):
+    pc.main(["--protocol2", str(INTERIM / "point"), str(INTERIM / "ant"), "--brief"])
+    out = capsys.readouterr().out
+    assert out.startswith("| # | the paper's claim |") and "INTERIM (fewer than 10 seeds" in out
+    with pytest.raises(SystemExit):
+        pc.main(["--brief"])
+    assert "--brief is the protocol-2 table's short form" in capsys.readouterr().err

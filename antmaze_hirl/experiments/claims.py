@@ -242,11 +242,13 @@ class Finding:
         outcome: ``supports``, ``contradicts``, ``undecided`` or ``untestable``.
         toward: +1 if the data point the claimed way, -1 the other way, 0 neither (for the interim leaning).
         text: The measurement, in words.
+        brief: The measurement in a few words, for the README's table (``""``: none).
     """
 
     outcome: str
     toward: int
     text: str
+    brief: str = ""
 
 
 def combine_bodies(findings: Sequence[Finding]) -> tuple[str, int]:
@@ -423,6 +425,10 @@ def _test_text(comparison: Comparison, unit: Callable[[float], str]) -> str:
     )
 
 
+def _p_text(comparison: Comparison) -> str:
+    return "no test" if comparison.p_value is None else f"p = {comparison.p_value:.2g}"
+
+
 def _points(value: float) -> str:
     return f"{100 * value:+.1f} pts"
 
@@ -442,7 +448,8 @@ def _success_finding(body: Body, name: str, direction: int, alpha: float) -> Fin
         f"{body.name} `{name}`: {_spread(method['final_success'])} vs DAgger {_spread(dagger['final_success'])}; "
         + _test_text(comparison, _points)
     )
-    return Finding(comparison.outcome, comparison.toward, text)
+    ours, theirs = (_pct(m["final_success"].get("median")) for m in (method, dagger))
+    return Finding(comparison.outcome, comparison.toward, text, f"`{name}` {ours} vs {theirs}, {_p_text(comparison)}")
 
 
 def _higher_success(body: Body, name: str, alpha: float) -> Finding:
@@ -480,6 +487,14 @@ def label_differences(body: Body, name: str, scale: float = 1.0) -> list[float]:
     return differences
 
 
+def _labels_to_match_brief(method: dict[str, Any]) -> str:
+    paired = method.get(PAIRED)
+    if paired is not None:
+        return "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x"
+    median = method.get("labels_to_match_dagger", {}).get("median")
+    return "never" if median is None else f"{median:.0f}"
+
+
 def _labels_to_match(method: dict[str, Any]) -> str:
     paired = method.get(PAIRED)
     if paired is not None:
@@ -502,7 +517,9 @@ def _fewer_labels(body: Body, name: str, alpha: float) -> Finding:
         f"{body.name} `{name}`: labels to DAgger's {target} {_labels_to_match(method)} vs DAgger "
         f"{_labels_to_match(dagger)}; " + _test_text(comparison, _labels)
     )
-    return Finding(comparison.outcome, comparison.toward, text)
+    ours, theirs = _labels_to_match_brief(method), _labels_to_match_brief(dagger)
+    brief = f"`{name}` {ours} vs {theirs} labels, {_p_text(comparison)}"
+    return Finding(comparison.outcome, comparison.toward, text, brief)
 
 
 def _sixty_finding(body: Body, name: str, alpha: float) -> Finding:
@@ -514,7 +531,7 @@ def _sixty_finding(body: Body, name: str, alpha: float) -> Finding:
     start = untrained.get("pooled", {}).get("rate")
     prefix = f"{body.name} `{name}`: untrained {_pct(start, 1)} pooled ({_spread(untrained)} per seed)"
     if untrained.get("median") is not None and untrained["median"] >= TARGET_SUCCESS:
-        return Finding(UNTESTABLE, 0, f"{prefix}: at 60% before its first label")
+        return Finding(UNTESTABLE, 0, f"{prefix}: at 60% before its first label", f"`{name}` at 60% untrained")
     reached = method["cost_to_60_percent"]
     labels = "never" if reached["median"] is None else f"{reached['median']:.0f} labels"
     if body.episodes_to_target is None:
@@ -532,6 +549,7 @@ def _sixty_finding(body: Body, name: str, alpha: float) -> Finding:
             toward,
             f"{prefix}; {within} of {seeds} seeds pass 60% within the {body.summary['config']['episodes']}-episode "
             f"trial, median {labels}{about}; no episodes.csv, so no episode counts: {outcome}",
+            f"`{name}` {within} of {seeds} seeds within the trial (no episode counts)",
         )
     episodes = body.episodes_to_target.get(name, {})
     passed = sum(count is not None and count < EPISODE_LIMIT for count in episodes.values())
@@ -545,6 +563,7 @@ def _sixty_finding(body: Body, name: str, alpha: float) -> Finding:
         f"{prefix}; first >= 60% after {after} episodes, median {labels}; {passed} of {len(episodes)} seeds "
         f"under {EPISODE_LIMIT} episodes, sign test P(X >= {passed}) = {upper:.3g}, "
         f"P(X <= {passed}) = {lower:.3g}: {outcome}",
+        f"`{name}` {passed} of {len(episodes)} seeds, median {after} episodes",
     )
 
 
@@ -569,7 +588,8 @@ def _saving_finding(body: Body, name: str, alpha: float) -> Finding:
     toward = 0 if theirs is None else -1 if ratio is None else int(np.sign(SAVING_RATIO - ratio) or 1)
     shown = "n/a" if ratio is None else f"{ratio:.2f}x"
     p_value = "n/a" if test.p_value is None else f"{test.p_value:.3g}"
-    return Finding(outcome, toward, f"`{name}` {_labels_to_match(method)}, {shown}, p = {p_value}: {outcome}")
+    text = f"`{name}` {_labels_to_match(method)}, {shown}, p = {p_value}: {outcome}"
+    return Finding(outcome, toward, text, f"`{name}` {shown}")
 
 
 # ---------------------------------------------------------------- protocol 2: the claims
@@ -589,6 +609,7 @@ class ClaimVerdict:
             followed by `` (<note>)`` when there is a note; ``""`` until :func:`judge_claims` sets it.
         note: Why a verdict is bounded or untestable (``""`` if it needs no note).
         outcomes: ``{reading: {body: outcome}}``.
+        brief: The measurement in a few words per body (markdown, ``<br>`` between bodies), for the README.
     """
 
     number: int
@@ -599,6 +620,7 @@ class ClaimVerdict:
     printed: str = ""
     note: str = ""
     outcomes: dict[str, dict[str, str]] = field(default_factory=dict)
+    brief: str = ""
 
 
 Judge = Callable[[Body, str, float], Finding]
@@ -631,6 +653,14 @@ class PaperClaim:
         return self.rule(self, bodies)
 
 
+def _brief_by_body(bodies: Sequence[Body], findings: Sequence[Sequence[Finding]]) -> str:
+    """One line per body: its findings' briefs, ``findings[i]`` being body ``i``'s."""
+    return "<br>".join(
+        f"{body.name}: " + "; ".join(finding.brief for finding in found)
+        for body, found in zip(bodies, findings, strict=True)
+    )
+
+
 def _by_readings(judge: Judge) -> Callable[[PaperClaim, Sequence[Body]], ClaimVerdict]:
     """The rule that tries ``judge`` on every reading and body and combines them (the module's rules)."""
 
@@ -643,7 +673,10 @@ def _by_readings(judge: Judge) -> Callable[[PaperClaim, Sequence[Body]], ClaimVe
             for reading, found in findings.items()
         }
         measurement = f"threshold p < {claim.alpha:.3g}<br>{text}"
-        return ClaimVerdict(claim.number, claim.statement, measurement, verdict, leaning, outcomes=outcomes)
+        brief = _brief_by_body(bodies, [[found[i] for found in findings.values()] for i in range(len(bodies))])
+        return ClaimVerdict(
+            claim.number, claim.statement, measurement, verdict, leaning, outcomes=outcomes, brief=brief
+        )
 
     return rule
 
@@ -672,7 +705,7 @@ def _bounded_by_dense_q(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdi
 
 def _saving(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
     """Claim 6: a body supports it when some active method does, contradicts it when every one does."""
-    per_body, texts = [], []
+    per_body, texts, briefs = [], [], []
     outcomes: dict[str, dict[str, str]] = {name: {} for name in claim.readings}
     for body in bodies:
         found = {name: _saving_finding(body, name, claim.alpha) for name in claim.readings}
@@ -681,6 +714,7 @@ def _saving(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
         towards = [finding.toward for finding in found.values()]
         toward = 1 if 1 in towards else -1 if all(t < 0 for t in towards) else 0
         per_body.append(Finding(outcome, toward, ""))
+        briefs.append(list(found.values()))
         for name, finding in found.items():
             outcomes[name][body.name] = finding.outcome
         dagger = body.method(BASELINE)
@@ -690,8 +724,15 @@ def _saving(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
         )
     verdict, leaning = combine_readings([combine_bodies(per_body)])
     measurement = f"threshold p < {claim.alpha:.3g}; median labels (seeds reaching), ratio to DAgger's, paired p<br>"
+    brief = "labels to DAgger's final success, median ratio to DAgger's:<br>" + _brief_by_body(bodies, briefs)
     return ClaimVerdict(
-        claim.number, claim.statement, measurement + "<br>".join(texts), verdict, leaning, outcomes=outcomes
+        claim.number,
+        claim.statement,
+        measurement + "<br>".join(texts),
+        verdict,
+        leaning,
+        outcomes=outcomes,
+        brief=brief,
     )
 
 
@@ -708,7 +749,13 @@ def _needs_people(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
     """Claim 7: it needs participants, so no results folder tests it."""
     del bodies  # oracle runs hold no person's answers
     return ClaimVerdict(
-        claim.number, claim.statement, STUDY_MEASURES, NOT_TESTABLE, NOT_TESTABLE, note="it needs participants"
+        claim.number,
+        claim.statement,
+        STUDY_MEASURES,
+        NOT_TESTABLE,
+        NOT_TESTABLE,
+        note="it needs participants",
+        brief="no people took part; the study kit measures NASA-TLX workload, seconds per label and labels",
     )
 
 
