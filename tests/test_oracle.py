@@ -85,16 +85,16 @@ def test_oracle_noise_is_seeded():
     env = gym.make("antmaze_hirl/PointMaze-v0")
     obs, _ = env.reset(seed=0)
     clean = PathOracle.for_env(env).label(obs)
-    noisy = [PathOracle.for_env(env, noise_std=0.1, rng=np.random.default_rng(5)).label(obs) for _ in range(2)]
+    noisy = [PathOracle.for_env(env, noise_std_m=0.1, rng=np.random.default_rng(5)).label(obs) for _ in range(2)]
     np.testing.assert_array_equal(noisy[0], noisy[1])
     assert 0 < np.linalg.norm(noisy[0] - clean) < 0.6
 
 
 def test_oracle_rejects_bad_settings():
     geometry = MazeGeometry(7, 7, 1.0)
-    with pytest.raises(ValueError, match="noise_std must be >= 0"):
-        PathOracle(geometry, noise_std=-1.0)
-    with pytest.raises(ValueError, match="noise_std > 0 needs an explicit rng"):
-        PathOracle(geometry, noise_std=0.1)
+    with pytest.raises(ValueError, match="noise_std_m must be >= 0"):
+        PathOracle(geometry, noise_std_m=-1.0)
+    with pytest.raises(ValueError, match="noise_std_m > 0 needs an explicit rng"):
+        PathOracle(geometry, noise_std_m=0.1)
     with pytest.raises(ValueError, match="subgoal_reach_m must be > 0"):
         PathOracle(geometry, subgoal_reach_m=0.0)

@@ -71,8 +71,8 @@ class PathOracle:
         subgoal_reach_m: Farthest subgoal from the agent, metres ("towards the target but not too far").
             Default one cell.
         clearance_m: Distance the straight walk to a subgoal keeps from walls, metres. Default 0.2 cell.
-        noise_std: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
-        rng: Source of the noise (required when ``noise_std > 0``).
+        noise_std_m: Std of Gaussian noise added to each subgoal, metres, to imitate a human's clicks.
+        rng: Source of the noise (required when ``noise_std_m > 0``).
 
     """
 
@@ -83,20 +83,20 @@ class PathOracle:
         pixels_per_cell: int = 8,
         subgoal_reach_m: float | None = None,
         clearance_m: float | None = None,
-        noise_std: float = 0.0,
+        noise_std_m: float = 0.0,
         rng: np.random.Generator | None = None,
     ) -> None:
-        if noise_std < 0:
-            raise ValueError(f"noise_std must be >= 0, got {noise_std}")
-        if noise_std > 0 and rng is None:
-            raise ValueError("noise_std > 0 needs an explicit rng (np.random.Generator) so labels are reproducible")
+        if noise_std_m < 0:
+            raise ValueError(f"noise_std_m must be >= 0, got {noise_std_m}")
+        if noise_std_m > 0 and rng is None:
+            raise ValueError("noise_std_m > 0 needs an explicit rng (np.random.Generator) so labels are reproducible")
         self.geometry = geometry
         self.renderer = BirdseyeRenderer(geometry, pixels_per_cell)
         self.subgoal_reach_m = float(subgoal_reach_m if subgoal_reach_m is not None else geometry.scale)
         if self.subgoal_reach_m <= 0:
             raise ValueError(f"subgoal_reach_m must be > 0, got {subgoal_reach_m}")
         self.clearance_m = float(clearance_m if clearance_m is not None else 0.2 * geometry.scale)
-        self.noise_std = float(noise_std)
+        self.noise_std_m = float(noise_std_m)
         self.rng = rng
 
     @classmethod
@@ -121,8 +121,8 @@ class PathOracle:
             subgoal_reach_m=self.subgoal_reach_m,
             clearance_m=self.clearance_m,
         )
-        if self.noise_std > 0:
-            subgoal = subgoal + self.rng.normal(0.0, self.noise_std, size=2)
+        if self.noise_std_m > 0:
+            subgoal = subgoal + self.rng.normal(0.0, self.noise_std_m, size=2)
         inner_low = self.geometry.low + self.geometry.scale
         return np.clip(subgoal, inner_low, -inner_low)
 
