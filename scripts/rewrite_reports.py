@@ -7,9 +7,11 @@ needs the reports rewritten, not the trials rerun. This copies the folder's ``co
 ``provenance.json`` and trials into ``OUT`` (the source is never written: it may be a running experiment's),
 rewrites the reports there, and records this code beside the trials' in ``summary.json``
 (``reports_provenance``). ``evaluations.csv`` can be left gzipped (``--gzip``) for committing: one protocol-2
-trial's per-maze outcomes are about 160 KB, 8 KB gzipped.
+trial's per-maze outcomes are about 160 KB, 8 KB gzipped. ``--without-trials`` leaves the copied trials out of
+``OUT`` once the reports are written: for a folder whose trials are committed elsewhere already (protocol 2's
+``results/protocol2/runs/<body>.tar.gz``), so that git holds each trial's rows once.
 
-Usage: python scripts/rewrite_reports.py FOLDER OUT [--methods m1,m2,...] [--seeds N] [--gzip]
+Usage: python scripts/rewrite_reports.py FOLDER OUT [--methods m1,m2,...] [--seeds N] [--gzip] [--without-trials]
        (default methods and seeds: those of the trials on disk)
 """
 
@@ -93,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", default=None, help="comma-separated (default: those with trials on disk)")
     parser.add_argument("--seeds", type=int, default=None, help="seeds 0..N-1 (default: up to the largest on disk)")
     parser.add_argument("--gzip", action="store_true", help="leave evaluations.csv as evaluations.csv.gz")
+    parser.add_argument("--without-trials", action="store_true", help="remove OUT/trials once the reports are written")
     args = parser.parse_args(argv)
     if args.seeds is not None and args.seeds < 1:
         parser.error(f"--seeds must be >= 1, got {args.seeds}")
@@ -106,6 +109,8 @@ def main(argv: list[str] | None = None) -> int:
         # mtime=0: the same outcomes give the same bytes, so a rewrite that changes nothing shows no diff.
         atomic_write_bytes(evaluations.with_suffix(".csv.gz"), gzip.compress(evaluations.read_bytes(), mtime=0))
         evaluations.unlink()
+    if args.without_trials:
+        shutil.rmtree(args.out / "trials")
     done = {method: figures.get("seeds", 0) for method, figures in summary["methods"].items()}
     written = sorted(path.name for path in args.out.iterdir() if path.is_file() and path.name not in COPIED)
     print(f"rewrote {', '.join(written)} in {args.out}: seeds per method {done}")

@@ -23,6 +23,19 @@ def test_rewritten_reports_equal_the_runs_own_and_record_this_code(finished_prot
     assert set(new["reports_provenance"]) == {"git_commit", "git_dirty", "source_sha256"}
     assert gzip.decompress((out / "evaluations.csv.gz").read_bytes()) == files["evaluations.csv"]
     assert (out / "episodes.csv").read_bytes() == files["episodes.csv"]
+    assert (out / "trials" / "dagger_seed0.csv").is_file()
+
+
+def test_without_trials_writes_the_same_reports_and_drops_the_copied_trials(finished_protocol2, tmp_path):
+    source, _ = finished_protocol2
+    kept, dropped = tmp_path / "kept", tmp_path / "dropped"
+    assert rewrite_reports.main([str(source), str(kept), "--gzip"]) == 0
+    assert rewrite_reports.main([str(source), str(dropped), "--gzip", "--without-trials"]) == 0
+    assert not (dropped / "trials").exists() and (source / "trials").is_dir()
+    reports = ("episodes.csv", "evaluations.csv.gz", "config.json")
+    assert all((dropped / name).read_bytes() == (kept / name).read_bytes() for name in reports)
+    summaries = [json.loads((folder / "summary.json").read_text()) for folder in (kept, dropped)]
+    assert summaries[0]["methods"] == summaries[1]["methods"]
 
 
 def settings_without_trials(tmp):
