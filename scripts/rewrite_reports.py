@@ -6,8 +6,9 @@ from them. A figure added to the summary after the trials ran (``labels_to_match
 needs the reports rewritten, not the trials rerun. This copies the folder's ``config.json``,
 ``provenance.json`` and trials into ``OUT`` (the source is never written: it may be a running experiment's),
 rewrites the reports there, and records this code beside the trials' in ``summary.json``
-(``reports_provenance``). ``evaluations.csv`` can be left gzipped (``--gzip``) for committing: one protocol-2
-trial's per-maze outcomes are about 160 KB, 8 KB gzipped. ``--without-trials`` leaves the copied trials out of
+(``reports_provenance``). The source summary's ``oracle_success`` (measured apart from the trials) is kept.
+``evaluations.csv`` can be left gzipped (``--gzip``) for committing: one protocol-2 trial's per-maze outcomes
+are about 160 KB, 8 KB gzipped. ``--without-trials`` leaves the copied trials out of
 ``OUT`` once the reports are written: for a folder whose trials are committed elsewhere already (protocol 2's
 ``results/protocol2/runs/<body>.tar.gz``), so that git holds each trial's rows once.
 
@@ -33,6 +34,9 @@ from antmaze_hirl.experiments.results_folder import write_reports
 
 COPIED = ("config.json", "provenance.json", "eval_layouts.csv")
 """The settings files copied from the source folder as they are (the trials are copied too)."""
+KEPT = ("oracle_success",)
+"""Figures of the source's ``summary.json`` that no trial holds, kept as they are: the oracle's own success on
+the final mazes is a measurement of its own (``scripts/paper_experiment.py`` adds it), not a report."""
 
 
 def trials_on_disk(folder: Path) -> list[tuple[str, int]]:
@@ -45,13 +49,29 @@ def trials_on_disk(folder: Path) -> list[tuple[str, int]]:
     return found
 
 
+def kept_figures(folder: Path) -> dict:
+    """The :data:`KEPT` figures of ``folder/summary.json`` (none without one).
+
+    Raises:
+        ValueError: One line naming the file if it is there but not JSON.
+    """
+    path = folder / "summary.json"
+    if not path.is_file():
+        return {}
+    try:
+        source = json.loads(path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path} is not JSON: {error}") from None
+    return {key: source[key] for key in KEPT if key in source}
+
+
 def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: int | None = None) -> dict:
     """Copies ``folder``'s settings and trials into ``out`` and writes the reports there; returns the summary.
 
     Raises:
-        ValueError: One line naming the folder: no ``config.json``, one that is not JSON or holds a setting
-            under its old and new keys with two values, no finished trial, a method in ``methods`` without
-            finished trials, or ``out`` not empty.
+        ValueError: One line naming the folder: no ``config.json``, a ``config.json`` or ``summary.json`` that
+            is not JSON, a setting under its old and new keys with two values, no finished trial, a method in
+            ``methods`` without finished trials, or ``out`` not empty.
     """
     if not (folder / "config.json").is_file():
         raise ValueError(f"no config.json in {folder}: not an experiment results folder")
@@ -59,6 +79,7 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
         recorded = json.loads((folder / "config.json").read_text())
     except json.JSONDecodeError as error:
         raise ValueError(f"{folder / 'config.json'} is not JSON: {error}") from None
+    kept = kept_figures(folder)
     found = trials_on_disk(folder)
     if not found:
         raise ValueError(f"no finished trial in {folder / 'trials'}")
@@ -80,6 +101,7 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
     settings = current_keys(recorded, folder / "config.json")  # a folder from before 0.2.0: its old keys
     config = ExperimentConfig(**{key: value for key, value in settings.items() if key in known})
     summary = write_reports(out, methods, seeds, config)
+    summary.update(kept)
     summary["reports_provenance"] = {
         key: value for key, value in code_provenance().items() if key in ("git_commit", "git_dirty", "source_sha256")
     }

@@ -5,6 +5,7 @@ import json
 from pathlib import Path
 
 import pytest
+from conftest import copy_results
 from script_helpers import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -86,3 +87,21 @@ def test_a_config_that_is_not_json_is_one_line_naming_the_file(tmp_path, capsys)
     error = capsys.readouterr().err.strip().splitlines()[-1]
     assert str(folder / "config.json") in error and "not JSON" in error
     assert not (tmp_path / "out").exists()
+
+
+def test_the_sources_oracle_success_is_kept_and_a_torn_summary_is_refused(finished_protocol2, tmp_path, capsys):
+    source, _ = finished_protocol2
+    folder = tmp_path / "source"
+    copy_results(source, folder)
+    summary = json.loads((folder / "summary.json").read_text())
+    oracle = {"success_rate": 0.97, "episodes": 100, "wilson_95": [0.915, 0.99]}
+    (folder / "summary.json").write_text(json.dumps({**summary, "oracle_success": oracle, "goals": {"stale": 1}}))
+    assert rewrite_reports.main([str(folder), str(tmp_path / "out")]) == 0
+    rewritten = json.loads((tmp_path / "out" / "summary.json").read_text())
+    # The oracle's run is a measurement no trial holds; the goals are figures of the old code, so rewritten or gone.
+    assert rewritten["oracle_success"] == oracle and "goals" not in rewritten
+    (folder / "summary.json").write_text('{"methods": ')
+    with pytest.raises(SystemExit):
+        rewrite_reports.main([str(folder), str(tmp_path / "torn")])
+    assert f"{folder / 'summary.json'} is not JSON" in capsys.readouterr().err
+    assert not (tmp_path / "torn").exists()
