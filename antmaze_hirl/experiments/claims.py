@@ -488,11 +488,14 @@ def label_differences(body: Body, name: str, scale: float = 1.0) -> list[float]:
 
 
 def _labels_to_match_brief(method: dict[str, Any]) -> str:
+    """Labels to DAgger's final success in a few words: the paired ratio where the summary has it, else labels."""
     paired = method.get(PAIRED)
     if paired is not None:
-        return "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x"
-    median = method.get("labels_to_match_dagger", {}).get("median")
-    return "never" if median is None else f"{median:.0f}"
+        ratio = "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x DAgger's"
+        return f"{ratio} ({paired['seeds_reached']} of {paired['seeds']} seeds)"
+    match = method.get("labels_to_match_dagger", {})
+    median = "never" if match.get("median") is None else f"{match['median']:.0f} labels"
+    return f"{median} ({match.get('seeds_reached')} of {method['seeds']} seeds)"
 
 
 def _labels_to_match(method: dict[str, Any]) -> str:
@@ -517,8 +520,9 @@ def _fewer_labels(body: Body, name: str, alpha: float) -> Finding:
         f"{body.name} `{name}`: labels to DAgger's {target} {_labels_to_match(method)} vs DAgger "
         f"{_labels_to_match(dagger)}; " + _test_text(comparison, _labels)
     )
-    ours, theirs = _labels_to_match_brief(method), _labels_to_match_brief(dagger)
-    brief = f"`{name}` {ours} vs {theirs} labels, {_p_text(comparison)}"
+    # Paired by seed, DAgger's own figure is 1x on every seed: only the method's is worth a word.
+    theirs = "" if PAIRED in method else f" vs DAgger {_labels_to_match_brief(dagger)}"
+    brief = f"`{name}` {_labels_to_match_brief(method)}{theirs}, {_p_text(comparison)}"
     return Finding(comparison.outcome, comparison.toward, text, brief)
 
 
@@ -589,7 +593,7 @@ def _saving_finding(body: Body, name: str, alpha: float) -> Finding:
     shown = "n/a" if ratio is None else f"{ratio:.2f}x"
     p_value = "n/a" if test.p_value is None else f"{test.p_value:.3g}"
     text = f"`{name}` {_labels_to_match(method)}, {shown}, p = {p_value}: {outcome}"
-    return Finding(outcome, toward, text, f"`{name}` {shown}")
+    return Finding(outcome, toward, text, f"`{name}` {_labels_to_match_brief(method)}")
 
 
 # ---------------------------------------------------------------- protocol 2: the claims
@@ -724,7 +728,7 @@ def _saving(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
         )
     verdict, leaning = combine_readings([combine_bodies(per_body)])
     measurement = f"threshold p < {claim.alpha:.3g}; median labels (seeds reaching), ratio to DAgger's, paired p<br>"
-    brief = "labels to DAgger's final success, median ratio to DAgger's:<br>" + _brief_by_body(bodies, briefs)
+    brief = "labels to DAgger's final success, median (seeds reaching it):<br>" + _brief_by_body(bodies, briefs)
     return ClaimVerdict(
         claim.number,
         claim.statement,
