@@ -21,7 +21,7 @@ Learners (:data:`LEARNERS`):
   mazes untrained; the ant's next-cell CNN).
 
 Usage: python scripts/benchmark_dagger.py [--body point|ant] [--learner generic|protocol|default]
-    [--method dagger|noise|...] [--labels 100,300,1000] [--seed 0] [--num-envs 8]
+    [--method dagger|noise|...] [--labels 100,300,1000] [--seed 0] [--num-envs 8] [--max-episodes 1000]
 Writes results/leaderboard/<suite>_<method>_<learner>_s<seed>_<labels>.json (:func:`report_name`) and the
 learners under --out.
 """
@@ -128,6 +128,12 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     )
     parser.add_argument("--labels", default="100,300,1000", help="comma-separated label counts to score at")
     parser.add_argument("--seed", type=int, default=0, help="the learner's and the trainer's seed")
+    parser.add_argument(
+        "--max-episodes",
+        type=int,
+        default=1000,
+        help="stop training here even short of a label target (a method such as gated stops asking)",
+    )
     parser.add_argument("--num-envs", type=int, default=DEFAULT_NUM_ENVS, help="suite mazes scored in lockstep")
     parser.add_argument("--tasks", type=int, default=None, help="score only the first N tasks (a quick check)")
     parser.add_argument("--out", type=Path, default=Path("runs/benchmark_dagger"), help="folder for the learners")
@@ -139,6 +145,8 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         parser.error(str(error))
     if args.num_envs < 1:
         parser.error(f"--num-envs must be >= 1, got {args.num_envs}")
+    if args.max_episodes < 1:
+        parser.error(f"--max-episodes must be >= 1, got {args.max_episodes}")
     if args.tasks is not None and args.tasks < 1:
         parser.error(f"--tasks must be >= 1, got {args.tasks}")
     return args
@@ -159,10 +167,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     training_seconds = 0.0
     for target in [0, *args.targets]:
         started = time.perf_counter()
-        while trainer.total_expert_cost < target:
+        while trainer.total_expert_cost < target and trainer.episodes_done < args.max_episodes:
             trainer.run_episode()
         training_seconds += time.perf_counter() - started
         labels = trainer.total_expert_cost
+        # Short of the target after --max-episodes: scored and recorded as it stands, and the last one scored.
+        short = labels < target
         name = report_name(args.body, args.learner, args.seed, target, args.method)
         stem = Path(name).stem
         path = trainer.learner.save(args.out / f"{stem}.zip")
@@ -176,6 +186,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             "subgoal_reach_m": config.subgoal_reach_m,
             "labels": labels,
             "episodes": trainer.episodes_done,
+            "label_target": target,
+            "stopped_short_at_max_episodes": short,
             "training_split": "train",
             "training_seconds": round(training_seconds, 1),
             "num_envs": args.num_envs,
@@ -187,9 +199,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(
             f"{labels} labels ({trainer.episodes_done} episodes, {training_seconds:.0f} s training, "
             f"{report['seconds']:.0f} s scoring): {report['successes']}/{report['episodes']} "
-            f"[{low:.1%}, {high:.1%}] -> {out}",
+            f"[{low:.1%}, {high:.1%}] -> {out}" + (f" (short of {target}: --max-episodes)" if short else ""),
             flush=True,
         )
+        if short:
+            break
     env.close()
     return 0
 

@@ -18,6 +18,7 @@ script = load_script("scripts/benchmark_dagger.py")
         (["--labels", "0,100"], "'0,100'"),
         (["--num-envs", "0"], "--num-envs must be >= 1, got 0"),
         (["--tasks", "0"], "--tasks must be >= 1, got 0"),
+        (["--max-episodes", "0"], "--max-episodes must be >= 1, got 0"),
     ],
 )
 def test_a_bad_argument_exits_with_one_line_naming_it(capsys, argv, named):
@@ -88,3 +89,14 @@ def test_a_tiny_run_scores_the_untrained_and_the_trained_learner(tmp_path):
         assert report["suite"] == "point5" and report["episodes"] == 2 and report["num_envs"] == 2
         assert report["training"]["learner_settings"]["head"] == "next_cell"
     assert (tmp_path / "learners" / "point5_dagger_protocol_s0_1.zip").is_file()
+    assert trained["training"]["label_target"] == 1 and not trained["training"]["stopped_short_at_max_episodes"]
+
+
+@pytest.mark.integration  # ~5-15 s, as above
+def test_a_target_out_of_reach_in_max_episodes_is_scored_short_and_ends_the_run(tmp_path):
+    # One episode asks about 8 labels: 1,000 are out of reach, so the run stops after it, scored and flagged.
+    argv = ["--labels", "1000,2000", "--learner", "protocol", "--tasks", "2", "--num-envs", "2", "--max-episodes", "1"]
+    assert script.main([*argv, "--out", str(tmp_path / "learners"), "--results", str(tmp_path)]) == 0
+    short = json.loads((tmp_path / "point5_dagger_protocol_s0_1000.json").read_text())["training"]
+    assert short["episodes"] == 1 and 0 < short["labels"] < 1000 and short["stopped_short_at_max_episodes"]
+    assert not (tmp_path / "point5_dagger_protocol_s0_2000.json").exists()
