@@ -17,8 +17,8 @@ computes every verdict; the table's footnote summarises them.
 
 Usage:
   python scripts/paper_claims.py                       # protocol 1, the committed folders
-  python scripts/paper_claims.py --protocol2 results/protocol2/interim/point \\
-      results/protocol2/interim/ant --json claims.json
+  python scripts/paper_claims.py --protocol2 results/protocol2/point results/protocol2/ant \\
+      [--json claims.json] [--brief]
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def brief_markdown(report: ClaimsReport) -> str:
         *(f"| {row.number} | {row.claim} | {row.brief} | **{row.printed}** |" for row in report.verdicts),
         "",
         f"Protocol 2, seeds per method: {seeds}.{state} Each figure's interval and seed count, and the verdict "
-        "rules: [docs/paper-claims.md](docs/paper-claims.md).",
+        "rules: the paper's claims page (`docs/paper-claims.md`).",
     ]
     return "\n".join(lines)
 

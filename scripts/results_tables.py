@@ -475,7 +475,7 @@ def env_throughput() -> str:
 HEADLINE_PAGES = {
     "low level": "results/low-level.md",
     "the ant in mazes": "results/ant-in-mazes.md",
-    "paper experiment": "results/paper-experiment.md",
+    "the paper's question": "results/protocol2.md",
     "user study": "guides/user-study.md",
 }
 """The page each headline row links to, relative to ``docs/``."""
@@ -485,6 +485,27 @@ def misses(family: dict[str, Any]) -> str:
     """``"2 flips, 1 timeout"``: how an in-maze family's failed episodes ended (empty when none failed)."""
     plural = {"flips": ("flip", "flips"), "frozen": ("frozen", "frozen"), "timeouts": ("timeout", "timeouts")}
     return ", ".join(f"{family[key]} {words[family[key] > 1]}" for key, words in plural.items() if family[key])
+
+
+def protocol2_headline(body: str) -> list[str]:
+    """One body's protocol-2 headline: what was run, the untrained and DAgger figures and the oracle's, the file."""
+    results = load(f"protocol2/{body}/summary.json")
+    dagger = results.get("methods", "dagger")
+    untrained = dagger["untrained_success"]["pooled"]
+    low, high = untrained["cluster_bootstrap_95"]
+    oracle = results.get("oracle_success")
+    config = results.get("config")
+    what = (
+        f"protocol 2, {body}: {dagger['seeds']} seeds x {config['episodes']} episodes, scored on "
+        f"{untrained['mazes']} held-out {config['maze_size']}x{config['maze_size']} mazes: the untrained learner "
+        "(pooled, cluster bootstrap), then DAgger's final success, median (min-max); the oracle on the same mazes"
+    )
+    figure = (
+        f"{percent(untrained['rate'], 1000)} [{100 * low:.1f}, {100 * high:.1f}] → "
+        f"{median_range(dagger['final_success'])}, {dagger['total_labels']['median']:.0f} labels per trial; "
+        f"oracle {rate_cell_of(oracle['success_rate'], oracle['episodes'])}"
+    )
+    return [what, figure, f"`protocol2/{body}/summary.json`"]
 
 
 def headline(links_from: str = "docs/results") -> str:
@@ -531,27 +552,8 @@ def headline(links_from: str = "docs/results") -> str:
                 page("the ant in mazes"),
             ]
         )
-    ant = load("paper_experiment/ant/summary.json")
-    seeds = ant.get("methods", "dagger", "seeds")
-    dagger_labels = ant.get("methods", "dagger", "total_labels", "median")
-    for method, what in (
-        (
-            "dagger",
-            f"ant paper experiment (protocol 1), {seeds} seeds x 100 episodes: DAgger final success, median (min-max)",
-        ),
-        ("gated", "the same, `gated`: final success and labels per trial"),
-    ):
-        final = ant.get("methods", method, "final_success")
-        labels = ant.get("methods", method, "total_labels", "median")
-        ratio = "" if method == "dagger" else f" ({times(labels / dagger_labels)} DAgger's)"
-        rows.append(
-            [
-                what,
-                f"{median_range(final)}, {labels:.0f} labels per trial{ratio}",
-                "`paper_experiment/ant/summary.json`",
-                page("paper experiment"),
-            ]
-        )
+    for body in ("point", "ant"):
+        rows.append([*protocol2_headline(body), page("the paper's question")])
     latency = load("study_latency/study_latency.json").get("bodies", "ant", "all", "server", "p95_ms")
     rows.append(
         [
@@ -1286,39 +1288,80 @@ def learner_selection() -> str:
     )
 
 
-def protocol2_interim() -> str:
-    """The lost protocol-2 run's mid-run summaries: untrained success, DAgger, gated and aggrevate per body."""
-    lines = []
-    for body in ("point", "ant"):
-        results = load(f"protocol2/interim/{body}/summary.json")
-        methods = results.get("methods")
-        seeds = [spec["seeds"] for spec in methods.values()]
-        dagger, gated, aggrevate = (results.get("methods", name) for name in ("dagger", "gated", "aggrevate"))
+PROTOCOL2_BODIES = ("point", "ant")
+UNTRAINED_GOAL = 0.2
+"""Protocol 2's learner must fail before its first label: untrained success at most 20% on the evaluation set."""
+ORACLE_GAP_GOAL = 0.03
+"""On the ant, the best method's final learner-only success within 3 points of the oracle's on the same mazes."""
 
-        untrained = dagger["untrained_success"]
-        mazes = untrained["pooled"]["mazes"]
-        lines.append(
-            [
-                body,
-                f"{min(seeds)}-{max(seeds)}",
-                f"{percent(untrained['pooled']['rate'])} ({count(min(untrained['per_seed']), mazes)}-"
-                f"{count(max(untrained['per_seed']), mazes)} of {mazes} mazes per seed)",
-                f"{median_range(dagger['final_success'])}, {dagger['total_labels']['median']:.0f} labels",
-                f"{median_range(gated['final_success'])}, {gated['total_labels']['median']:.0f} labels "
-                f"({times(gated['total_labels']['median'] / dagger['total_labels']['median'])} DAgger's)",
-                median_range(aggrevate["final_success"]),
-            ]
+
+SAVING_WORDS = {
+    "supports": "the paired test passes",
+    "contradicts": "the paired interval of labels - 0.3x DAgger's lies above 0",
+    "undecided": "the paired test does not decide",
+}
+"""Claim 6's outcome on one method and body, in words (``antmaze_hirl.experiments.claims``)."""
+
+
+def protocol2_goals() -> str:
+    """Protocol 2's three goals, each body's measured figure beside it, met or missed, from the final folders."""
+    from antmaze_hirl.experiments import claims
+
+    summaries = {body: load(f"protocol2/{body}/summary.json") for body in PROTOCOL2_BODIES}
+    report = claims.evaluate_folders(*(RESULTS / "protocol2" / body for body in PROTOCOL2_BODIES))
+    rows = []
+    untrained = {body: summaries[body].get("methods", "dagger", "untrained_success", "pooled") for body in summaries}
+    cells = [
+        f"{percent(figure['rate'], 1000)} [{100 * figure['cluster_bootstrap_95'][0]:.1f}, "
+        f"{100 * figure['cluster_bootstrap_95'][1]:.1f}]"
+        for figure in untrained.values()
+    ]
+    met = all(figure["cluster_bootstrap_95"][1] <= UNTRAINED_GOAL for figure in untrained.values())
+    rows.append(["the untrained learner scores <= 20% (pooled, upper bound of the cluster bootstrap)", *cells, met])
+    cells, gaps = [], {}
+    for body, summary in summaries.items():
+        finals = {name: spec["final_success"]["median"] for name, spec in summary.get("methods").items()}
+        best = max(finals, key=finals.get)
+        oracle = summary.get("oracle_success")
+        gaps[body] = oracle["success_rate"] - finals[best]
+        aside = "" if body == "ant" else " (not a goal)"
+        cells.append(
+            f"`{best}` {percent(finals[best], 100)} vs the oracle's {percent(oracle['success_rate'], 100)}: "
+            f"{100 * gaps[body]:.0f} points{aside}"
         )
-    return table(
+    rows.append(
         [
-            "body",
-            "seeds per method",
-            "untrained (DAgger's seeds), pooled",
-            "DAgger: final success, median (min-max); labels per trial, median",
-            "`gated`",
-            "`aggrevate`",
-        ],
-        lines,
+            "on the ant, the best method's final learner-only success (median of seeds) within 3 points of the "
+            "oracle's on the same mazes",
+            *cells,
+            gaps["ant"] <= ORACLE_GAP_GOAL + 1e-9,  # rates are whole percents on 100 mazes: 3 points is 0.03
+        ]
+    )
+    saving = report.verdicts[5]  # claim 6: DAgger's final success at <= 0.3x its labels, paired test
+    cells = []
+    for body in PROTOCOL2_BODIES:
+        ratios = {name: summaries[body].get("methods", name, claims.PAIRED) for name in claims.ACTIVE}
+        reached = {name: paired for name, paired in ratios.items() if paired["median_ratio"] is not None}
+        if not reached:
+            cells.append("no active method's median seed reaches it")
+            continue
+        name = min(reached, key=lambda method: reached[method]["median_ratio"])
+        paired = reached[name]
+        cells.append(
+            f"`{name}` {times(paired['median_ratio'])} DAgger's labels ({paired['seeds_reached']} of "
+            f"{paired['seeds']} seeds): {SAVING_WORDS[saving.outcomes[name][body]]}"
+        )
+    rows.append(
+        [
+            "the best active method reaches DAgger's final success with <= 0.3x its labels (median of 10 seeds, "
+            "paired by seed), and a paired test supports it",
+            *cells,
+            saving.verdict == claims.HOLDS,
+        ]
+    )
+    return table(
+        ["goal", "point", "ant", "met"],
+        [[*row[:-1], "**met**" if row[-1] else "**missed**"] for row in rows],
     )
 
 
@@ -1423,7 +1466,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     # docs/guides/protocol.md
     "untrained-learners": untrained_learners,
     "learner-selection": learner_selection,
-    "protocol2-interim": protocol2_interim,
+    "protocol2-goals": protocol2_goals,
     # docs/ray.md
     "ray-sweep": ray_sweep,
 }

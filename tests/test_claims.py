@@ -15,7 +15,7 @@ pc = load_script("scripts/paper_claims.py")
 CLAIM = {claim.number: claim for claim in cl.CLAIMS}
 
 ROOT = Path(__file__).resolve().parents[1]
-INTERIM = ROOT / "results" / "protocol2" / "interim"
+FOLDERS = ROOT / "results" / "protocol2"
 JITTER = [0.0, 0.01, -0.01, 0.02, -0.02, 0.0, 0.01, -0.01, 0.02, -0.02]
 
 
@@ -165,28 +165,29 @@ def test_the_interval_inverts_the_signed_rank_test():
         signed_rank_interval([1.0, 2.0], confidence=1.5)
 
 
-def test_the_committed_interim_folders_print_an_interim_table(tmp_path, capsys):
+def test_the_committed_folders_print_a_complete_table_with_a_verdict_per_claim(tmp_path, capsys):
     out = tmp_path / "claims.json"
-    pc.main(["--protocol2", str(INTERIM / "point"), str(INTERIM / "ant"), "--json", str(out)])
+    pc.main(["--protocol2", str(FOLDERS / "point"), str(FOLDERS / "ant"), "--json", str(out)])
     table = capsys.readouterr().out
-    assert table.startswith("Protocol 2 claims (INTERIM: not a result):")
-    assert table.count("(INTERIM: fewer than 10 seeds, no verdict is final)") == 2
+    assert table.startswith("Protocol 2 claims:")
+    assert table.count("10 seeds per method (complete)") == 2
     written = json.loads(out.read_text())
-    assert written["interim"] and [row["number"] for row in written["claims"]] == list(range(1, 8))
-    for row in written["claims"][:6]:
-        assert row["printed"].startswith("interim: leaning "), row
+    assert not written["interim"] and [row["number"] for row in written["claims"]] == list(range(1, 8))
+    verdicts = (cl.HOLDS, cl.DOES_NOT_HOLD, cl.INCONCLUSIVE, cl.NOT_TESTABLE)
+    for row in written["claims"]:
+        assert row["verdict"] in verdicts and row["printed"].startswith(row["verdict"]), row
         assert f"**{row['printed']}** |" in table
 
 
 def test_bad_folders_are_one_line_errors(tmp_path, capsys):
     with pytest.raises(SystemExit):
-        pc.main(["--protocol2", str(INTERIM / "ant"), str(INTERIM / "point")])
+        pc.main(["--protocol2", str(FOLDERS / "ant"), str(FOLDERS / "point")])
     assert "is of body 'ant', but it was passed as the point folder" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        pc.main(["--protocol2", str(ROOT / "results" / "paper_experiment" / "point"), str(INTERIM / "ant")])
+        pc.main(["--protocol2", str(ROOT / "results" / "paper_experiment" / "point"), str(FOLDERS / "ant")])
     assert "has config.protocol 1, not 2: read it without --protocol2" in capsys.readouterr().err
     with pytest.raises(SystemExit):
-        pc.main(["--protocol2", str(tmp_path), str(INTERIM / "ant")])
+        pc.main(["--protocol2", str(tmp_path), str(FOLDERS / "ant")])
     assert f"no summary.json in {tmp_path}" in capsys.readouterr().err
 
 
@@ -311,8 +312,9 @@ def test_protocol_1_bad_folders_are_one_line_errors_naming_them(tmp_path, capsys
     with pytest.raises(ValueError, match=f"^no summary.json in {tmp_path} "):
         cl.protocol1_figures(tmp_path)
     # A summary without episodes.csv beside it.
-    with pytest.raises(ValueError, match=f"^no episodes.csv in {INTERIM / 'point'} "):
-        cl.protocol1_figures(INTERIM / "point")
+    bare = _write_folder(tmp_path / "bare", body("point"))
+    with pytest.raises(ValueError, match=f"^no episodes.csv in {bare} "):
+        cl.protocol1_figures(bare)
     # A summary from before total_labels (as the stage-1 ant's was), with its episodes.csv.
     older = body("ant")
     del older.summary["methods"]["dagger"]["total_labels"]
@@ -344,9 +346,10 @@ def test_the_readmes_brief_table_carries_each_bodys_figures_and_the_same_verdict
 
 
 def test_brief_needs_the_protocol_2_folders(capsys):
-    pc.main(["--protocol2", str(INTERIM / "point"), str(INTERIM / "ant"), "--brief"])
+    pc.main(["--protocol2", str(FOLDERS / "point"), str(FOLDERS / "ant"), "--brief"])
     out = capsys.readouterr().out
-    assert out.startswith("| # | the paper's claim |") and "INTERIM (fewer than 10 seeds" in out
+    assert out.startswith("| # | the paper's claim |") and "Protocol 2, seeds per method: point 10, ant 10." in out
+    assert "INTERIM" not in out
     with pytest.raises(SystemExit):
         pc.main(["--brief"])
     assert "--brief is the protocol-2 table's short form" in capsys.readouterr().err
