@@ -43,9 +43,10 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "best active method (protocol 2), 100 / 300 / 1,000 labels",
-        "`python scripts/benchmark_dagger.py --learner protocol --method METHOD --seed 0` (and 1, 2), METHOD the "
-        "best of protocol 2's rerun, which is not finished",
+        "`gated` (protocol 2's fastest learner per label), 1,000 labels; seeds 3 and up",
+        "`python scripts/benchmark_dagger.py --learner protocol --method gated --labels 100,300,1000 --seed 0`: "
+        "seeds 0-2 ran to 300 labels; `gated` asks few labels per episode (2.1 on the point in protocol 2), so "
+        "1,000 labels take several hundred episodes",
     ),
     (
         "point5",
@@ -153,34 +154,45 @@ def results_table() -> str:
     return "\n".join(lines)
 
 
-DAGGER_ROW = re.compile(r"(?P<suite>[a-z0-9]+)_dagger_(?P<learner>[a-z]+)_s(?P<seed>\d+)_(?P<target>\d+)\.json")
-"""A DAgger row's file name (``scripts/benchmark_dagger.py``): suite, learner, seed and label target."""
+DAGGER_ROW = re.compile(
+    r"(?P<suite>[a-z0-9]+)_(?P<method>[a-z_]+?)_(?P<learner>generic|protocol|default)_s(?P<seed>\d+)_(?P<target>\d+)\.json"
+)
+"""A DAgger row's file name (``scripts/benchmark_dagger.py``): suite, method, learner, seed and label target."""
+TRAINED_ROWS = ("*_*_generic_s*_*.json", "*_*_protocol_s*_*.json", "*_*_default_s*_*.json")
+"""The file patterns of rows trained by ``scripts/benchmark_dagger.py``, plain DAgger or an active method."""
 
 
 def spread_table() -> str:
-    """DAgger's rows across seeds: per suite, learner and label target, each seed's successes, mean and range.
+    """DAgger's rows across seeds: per suite, method, learner and label target, each seed's successes, mean, range.
 
     One seed's row is one draw of the training run; this table shows how far seeds disagree at each budget.
     The label count of a row is the first evaluation at or past its target, so it varies a little by seed.
     """
-    groups: dict[tuple[str, str, int], dict[int, dict]] = {}
-    for path in sorted(RESULTS.glob("*_dagger_*.json")):
+    groups: dict[tuple[str, str, str, int], dict[int, dict]] = {}
+    # Every plain-DAgger file must parse (a misnamed one is an error); active methods are found by their learner.
+    paths = sorted(
+        {path for pattern in TRAINED_ROWS for path in RESULTS.glob(pattern)} | set(RESULTS.glob("*_dagger_*"))
+    )
+    for path in paths:
         match = DAGGER_ROW.fullmatch(path.name)
         if match is None:
-            raise SystemExit(f"error: {path}: a DAgger row's name must be SUITE_dagger_LEARNER_sSEED_TARGET.json")
-        key = (match["suite"], match["learner"], int(match["target"]))
+            raise SystemExit(f"error: {path}: a DAgger row's name must be SUITE_METHOD_LEARNER_sSEED_TARGET.json")
+        key = (match["suite"], match["method"], match["learner"], int(match["target"]))
         groups.setdefault(key, {})[int(match["seed"])] = load_report(path)
     order = list(SUITE_SPECS)
     lines = [
-        "| suite | learner | label target | seeds | labels per seed | successes per seed (of 100) | mean | range |",
-        "|---|---|---|---|---|---|---|---|",
+        "| suite | method | learner | label target | seeds | labels per seed | successes per seed (of 100) | mean | "
+        "range |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
-    for (suite, learner, target), by_seed in sorted(groups.items(), key=lambda kv: (order.index(kv[0][0]), kv[0][1:])):
+    # Plain DAgger first in each suite, then the active methods by name.
+    ranked = sorted(groups.items(), key=lambda kv: (order.index(kv[0][0]), kv[0][1] != "dagger", kv[0][1:]))
+    for (suite, method, learner, target), by_seed in ranked:
         seeds = sorted(by_seed)
         rates = [100 * by_seed[seed]["success_rate"] for seed in seeds]
         labels = [str(by_seed[seed].get("training", {}).get("labels", 0)) for seed in seeds]
         lines.append(
-            f"| `{suite}` | {learner} | {target} | {', '.join(map(str, seeds))} | {', '.join(labels)} | "
+            f"| `{suite}` | `{method}` | {learner} | {target} | {', '.join(map(str, seeds))} | {', '.join(labels)} | "
             f"{', '.join(f'{rate:.0f}' for rate in rates)} | {sum(rates) / len(rates):.1f} | "
             f"{min(rates):.0f}-{max(rates):.0f} |"
         )

@@ -278,8 +278,12 @@ def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeyp
     assert len(rows) == 2
     for row, target in zip(rows, (0, 1000), strict=True):
         rates = [100 * report["success_rate"] for report in expected[target]]
-        assert row.startswith(f"| `ant4` | protocol | {target} | 0, 1 |")
+        assert row.startswith(f"| `ant4` | `dagger` | protocol | {target} | 0, 1 |")
         assert f"| {sum(rates) / 2:.1f} | {min(rates):.0f}-{max(rates):.0f} |" in row
+    # An active method's rows (scripts/benchmark_dagger.py --method) make their own rows, after plain DAgger's.
+    shutil.copy(source / "ant4_dagger_protocol_s0_1000.json", tmp_path / "ant4_reward_per_step_protocol_s0_1000.json")
+    rows = leaderboard.spread_table().splitlines()[2:]
+    assert len(rows) == 3 and rows[2].startswith("| `ant4` | `reward_per_step` | protocol | 1000 | 0 |")
     (tmp_path / "ant4_dagger_protocol_seed2.json").write_text("{}")
     with pytest.raises(SystemExit, match=r"ant4_dagger_protocol_seed2\.json: a DAgger row.s name must be"):
         leaderboard.spread_table()
