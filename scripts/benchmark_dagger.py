@@ -132,7 +132,7 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "--max-episodes",
         type=int,
         default=1000,
-        help="stop training here even short of a label target (a method such as gated stops asking)",
+        help="stop training here even short of a label target (a method may ask few labels per episode, or none)",
     )
     parser.add_argument("--num-envs", type=int, default=DEFAULT_NUM_ENVS, help="suite mazes scored in lockstep")
     parser.add_argument("--tasks", type=int, default=None, help="score only the first N tasks (a quick check)")

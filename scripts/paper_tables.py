@@ -126,7 +126,11 @@ def per_label_table(summary: dict[str, Any]) -> str:
     smoothed = bool(counts)
     lines = [
         f"| method | {budgets} | {auc} | labels to match DAgger, median (seeds reaching) | ratio to DAgger |"
-        + (" ratio to DAgger paired by seed, median (seeds reaching) |" if paired else "")
+        + (
+            " ratio to DAgger paired by seed, median (seeds reaching; Wilcoxon p of the paired labels) |"
+            if paired
+            else ""
+        )
         + (f" paired, target the mean of DAgger's last {'/'.join(map(str, counts))} evaluations |" if smoothed else ""),
         "|---|" + "---|" * (len(LABEL_BUDGETS) + 3 + paired + smoothed),
     ]
@@ -165,11 +169,26 @@ def per_label_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+NEVER_LABELS = 1e9
+"""A seed that never reaches its target, in the paired test: more labels than any count (it ranks last)."""
+
+
 def _paired_ratio(figure: dict[str, Any] | None) -> str:
+    """The median per-seed ratio, the seeds reaching their target, and the paired Wilcoxon p of labels.
+
+    The test pairs each seed's labels to its target with DAgger's own labels to it; a seed that never gets
+    there counts as :data:`NEVER_LABELS`.
+    """
     if figure is None:  # DAgger, the baseline itself
         return "1.00x"
     median = "n/a" if figure["median_ratio"] is None else f"{figure['median_ratio']:.2f}x"
-    return f"{median} ({figure['seeds_reached']} of {figure['seeds']})"
+    differences = [
+        NEVER_LABELS if seed["labels"] is None else seed["labels"] - seed["baseline_labels"]
+        for seed in figure["per_seed"]
+    ]
+    test = paired_comparison(differences, [0.0] * len(differences))
+    p_value = "" if test["wilcoxon_p"] is None else f", p = {test['wilcoxon_p']:.3g}"
+    return f"{median} ({figure['seeds_reached']} of {figure['seeds']}{p_value})"
 
 
 def effort_table(summary: dict[str, Any]) -> str:

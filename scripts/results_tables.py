@@ -125,6 +125,11 @@ def rate_cell_of(rate: float, trials: int) -> str:
     return rate_cell(count(rate, trials), trials)
 
 
+def exact_percent(rate: float) -> str:
+    """``"90.5%"``: ``rate`` in percent to one decimal, the decimal dropped when it is 0 (no half-even rounding)."""
+    return f"{100 * rate:.1f}".removesuffix(".0") + "%"
+
+
 def times(ratio: float) -> str:
     """``"2.05x"``: a speed or throughput ratio, two decimals."""
     return f"{ratio:.2f}x"
@@ -1326,8 +1331,8 @@ def protocol2_goals() -> str:
         gaps[body] = oracle["success_rate"] - finals[best]
         aside = "" if body == "ant" else " (not a goal)"
         cells.append(
-            f"`{best}` {percent(finals[best], 100)} vs the oracle's {percent(oracle['success_rate'], 100)}: "
-            f"{100 * gaps[body]:.0f} points{aside}"
+            f"`{best}` {exact_percent(finals[best])} vs the oracle's {exact_percent(oracle['success_rate'])}: "
+            f"{exact_percent(gaps[body]).removesuffix('%')} points{aside}"
         )
     rows.append(
         [

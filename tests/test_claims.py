@@ -339,7 +339,8 @@ def test_the_readmes_brief_table_carries_each_bodys_figures_and_the_same_verdict
         assert line.endswith(f"| **{verdict.printed}** |")
     reward = bodies[0].method("reward")["final_success"]["median"]
     dagger = bodies[0].method("dagger")["final_success"]["median"]
-    assert f"point: `reward` {100 * reward:.0f}% vs {100 * dagger:.0f}%, p = " in rows[0]
+    shown = [f"{100 * rate:.1f}".removesuffix(".0") for rate in (reward, dagger)]
+    assert f"point: `reward` {shown[0]}% vs {shown[1]}%, p = " in rows[0]
     assert "<br>ant: `reward` " in rows[0] and reward > dagger
     assert "Protocol 2, seeds per method: point 10, ant 10." in brief[-1] and "INTERIM" not in brief[-1]
     assert "no people took part" in rows[6]

@@ -37,7 +37,8 @@ def test_the_folders_are_complete_and_the_goals_quote_them(body):
     text = results_tables.SECTIONS[SECTION]()
     assert f"{100 * untrained['rate']:.1f}% [" in text
     oracle = summary["oracle_success"]["success_rate"]
-    assert f"`{best}` {100 * finals[best]:.0f}% vs the oracle's {100 * oracle:.0f}%: " in text
+    exact = [f"{100 * rate:.1f}".removesuffix(".0") for rate in (finals[best], oracle, oracle - finals[best])]
+    assert f"`{best}` {exact[0]}% vs the oracle's {exact[1]}%: {exact[2]} points" in text
 
 
 def _summary(untrained, best_final, oracle, ratio):

@@ -405,6 +405,11 @@ def _pct(value: float | None, decimals: int = 0) -> str:
     return "n/a" if value is None else f"{100 * value:.{decimals}f}%"
 
 
+def _exact_pct(value: float | None) -> str:
+    """A median success in percent to one decimal where it has one (0.905: "90.5%", not a half-even "90%")."""
+    return "n/a" if value is None else f"{100 * value:.1f}".removesuffix(".0") + "%"
+
+
 def _spread(figure: dict[str, Any]) -> str:
     if figure.get("median") is None:
         return "n/a"
@@ -426,7 +431,10 @@ def _test_text(comparison: Comparison, unit: Callable[[float], str]) -> str:
 
 
 def _p_text(comparison: Comparison) -> str:
-    return "no test" if comparison.p_value is None else f"p = {comparison.p_value:.2g}"
+    """The paired p in a few words, saying so when the median points against the claim (p alone reads as support)."""
+    if comparison.p_value is None:
+        return "no test"
+    return f"p = {comparison.p_value:.2g}" + (", the other way" if comparison.toward < 0 else "")
 
 
 def _points(value: float) -> str:
@@ -448,7 +456,7 @@ def _success_finding(body: Body, name: str, direction: int, alpha: float) -> Fin
         f"{body.name} `{name}`: {_spread(method['final_success'])} vs DAgger {_spread(dagger['final_success'])}; "
         + _test_text(comparison, _points)
     )
-    ours, theirs = (_pct(m["final_success"].get("median")) for m in (method, dagger))
+    ours, theirs = (_exact_pct(m["final_success"].get("median")) for m in (method, dagger))
     return Finding(comparison.outcome, comparison.toward, text, f"`{name}` {ours} vs {theirs}, {_p_text(comparison)}")
 
 
@@ -677,7 +685,8 @@ def _by_readings(judge: Judge) -> Callable[[PaperClaim, Sequence[Body]], ClaimVe
             for reading, found in findings.items()
         }
         measurement = f"threshold p < {claim.alpha:.3g}<br>{text}"
-        brief = _brief_by_body(bodies, [[found[i] for found in findings.values()] for i in range(len(bodies))])
+        by_body = _brief_by_body(bodies, [[found[i] for found in findings.values()] for i in range(len(bodies))])
+        brief = f"threshold p < {claim.alpha:.3g}<br>{by_body}"
         return ClaimVerdict(
             claim.number, claim.statement, measurement, verdict, leaning, outcomes=outcomes, brief=brief
         )
@@ -728,7 +737,10 @@ def _saving(claim: PaperClaim, bodies: Sequence[Body]) -> ClaimVerdict:
         )
     verdict, leaning = combine_readings([combine_bodies(per_body)])
     measurement = f"threshold p < {claim.alpha:.3g}; median labels (seeds reaching), ratio to DAgger's, paired p<br>"
-    brief = "labels to DAgger's final success, median (seeds reaching it):<br>" + _brief_by_body(bodies, briefs)
+    brief = (
+        f"threshold p < {claim.alpha:.3g}; labels to DAgger's final success, median (seeds reaching it):<br>"
+        + _brief_by_body(bodies, briefs)
+    )
     return ClaimVerdict(
         claim.number,
         claim.statement,
