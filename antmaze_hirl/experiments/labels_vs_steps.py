@@ -65,7 +65,10 @@ def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
             seed = report["policy"].split("seed ")[1].split(",")[0]
             # One series per learner and seed: the learners differ in prior, so their curves are not pooled.
             learner = training.get("learner", "generic")
-            series, x, kind = f"DAgger (plain), {learner} learner, seed {seed}", training["labels"], "labels"
+            # An active method's curve is its own series (reports from before --method are plain DAgger's).
+            method = training.get("method", "dagger")
+            trainer = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}`"
+            series, x, kind = f"{trainer}, {learner} learner, seed {seed}", training["labels"], "labels"
         elif "algorithm" in training:
             x = training.get("steps_reached", training.get("high_level_steps"))
             if training["algorithm"] == "flat-sac-her":
