@@ -39,13 +39,20 @@ def headline_figures():
     for family in ("ant4", "large"):
         row = families[family]
         figures.append(f"{100 * row['success_rate']:g}% {interval(row['successes'], row['episodes'])}")
-    methods = load("paper_experiment/ant/summary.json")["methods"]
-    for method in ("dagger", "gated"):
-        final = methods[method]["final_success"]
-        figures.append(f"{final['median']:.0%} ({final['min']:.0%}-{final['max']:.0%})")
-        figures.append(f"{methods[method]['total_labels']['median']:.0f} labels")
-    ratio = methods["gated"]["total_labels"]["median"] / methods["dagger"]["total_labels"]["median"]
-    figures.append(f"({ratio:.2f}x DAgger's)")
+    for body in ("point", "ant"):
+        summary = load(f"protocol2/{body}/summary.json")
+        dagger = summary["methods"]["dagger"]
+        untrained = dagger["untrained_success"]["pooled"]
+        low, high = untrained["cluster_bootstrap_95"]
+        final = dagger["final_success"]
+        oracle = summary["oracle_success"]
+        successes = round(oracle["success_rate"] * oracle["episodes"])
+        figures.append(
+            f"{percent(untrained['rate'])}% [{percent(low)}, {percent(high)}] → "
+            f"{final['median']:.0%} ({final['min']:.0%}-{final['max']:.0%}), "
+            f"{dagger['total_labels']['median']:.0f} labels per trial; "
+            f"oracle {100 * oracle['success_rate']:g}% {interval(successes, oracle['episodes'])}"
+        )
     figures.append(f"{load('study_latency/study_latency.json')['bodies']['ant']['all']['server']['p95_ms']} ms")
     return figures
 
