@@ -495,25 +495,31 @@ def label_differences(body: Body, name: str, scale: float = 1.0) -> list[float]:
     return differences
 
 
-def _labels_to_match_brief(method: dict[str, Any]) -> str:
-    """Labels to DAgger's final success in a few words: the paired ratio where the summary has it, else labels."""
+def _match_figure(method: dict[str, Any], unit: str) -> tuple[bool, str, Any, Any]:
+    """Labels to DAgger's final success: paired, the figure in words, seeds reaching it, seeds.
+
+    The figure is the median paired ratio where the summary has it, else the median labels followed by ``unit``.
+    """
     paired = method.get(PAIRED)
     if paired is not None:
         ratio = "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x DAgger's"
-        return f"{ratio} ({paired['seeds_reached']} of {paired['seeds']} seeds)"
+        return True, ratio, paired["seeds_reached"], paired["seeds"]
     match = method.get("labels_to_match_dagger", {})
-    median = "never" if match.get("median") is None else f"{match['median']:.0f} labels"
-    return f"{median} ({match.get('seeds_reached')} of {method['seeds']} seeds)"
+    median = "never" if match.get("median") is None else f"{match['median']:.0f}{unit}"
+    return False, median, match.get("seeds_reached"), method["seeds"]
+
+
+def _labels_to_match_brief(method: dict[str, Any]) -> str:
+    """Labels to DAgger's final success in a few words: the paired ratio where the summary has it, else labels."""
+    _, figure, reached, seeds = _match_figure(method, " labels")
+    return f"{figure} ({reached} of {seeds} seeds)"
 
 
 def _labels_to_match(method: dict[str, Any]) -> str:
-    paired = method.get(PAIRED)
-    if paired is not None:
-        ratio = "never" if paired["median_ratio"] is None else f"{paired['median_ratio']:.2f}x DAgger's"
-        return f"paired by seed: median {ratio} ({paired['seeds_reached']} of {paired['seeds']} seeds reach it)"
-    match = method.get("labels_to_match_dagger", {})
-    median = "never" if match.get("median") is None else f"{match['median']:.0f}"
-    return f"{median} ({match.get('seeds_reached')} of {method['seeds']} reach it)"
+    paired, figure, reached, seeds = _match_figure(method, "")
+    if paired:
+        return f"paired by seed: median {figure} ({reached} of {seeds} seeds reach it)"
+    return f"{figure} ({reached} of {seeds} reach it)"
 
 
 def _fewer_labels(body: Body, name: str, alpha: float) -> Finding:
