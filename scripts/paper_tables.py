@@ -22,6 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from antmaze_hirl.experiments.claims import NEVER
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range
@@ -169,22 +170,17 @@ def per_label_table(summary: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-NEVER_LABELS = 1e9
-"""A seed that never reaches its target, in the paired test: more labels than any count (it ranks last)."""
-
-
 def _paired_ratio(figure: dict[str, Any] | None) -> str:
     """The median per-seed ratio, the seeds reaching their target, and the paired Wilcoxon p of labels.
 
     The test pairs each seed's labels to its target with DAgger's own labels to it; a seed that never gets
-    there counts as :data:`NEVER_LABELS`.
+    there counts as ``claims.NEVER`` labels, as in the claims' own label tests.
     """
     if figure is None:  # DAgger, the baseline itself
         return "1.00x"
     median = "n/a" if figure["median_ratio"] is None else f"{figure['median_ratio']:.2f}x"
     differences = [
-        NEVER_LABELS if seed["labels"] is None else seed["labels"] - seed["baseline_labels"]
-        for seed in figure["per_seed"]
+        NEVER if seed["labels"] is None else seed["labels"] - seed["baseline_labels"] for seed in figure["per_seed"]
     ]
     test = paired_comparison(differences, [0.0] * len(differences))
     p_value = "" if test["wilcoxon_p"] is None else f", p = {test['wilcoxon_p']:.3g}"
