@@ -21,8 +21,16 @@ gives the steps reached (``training.steps_reached``), never the steps asked for.
 untrained model (where each curve starts; ``point5_<algo>_rl_untrained.json``). ``--score-only`` scores a
 saved model again (with its training record) without training.
 
+Long runs outlive a session. Every ``--checkpoint-every`` steps the model (and an off-policy model's replay
+buffer) is written atomically under ``--out``, with a record of the steps and the training seconds so far;
+``--resume`` continues from the last one after a stop or a ``kill -9``. A resumed run is not bit-identical to
+an unbroken one (a PPO rollout cut by the stop is collected again, and the envs are reseeded), and its record
+lists the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
+``point5_<algo>_rl_at_<steps>.json``: the points of the learning curve.
+
 Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
-       [--num-envs 8] [--seed 0] [--score-num-envs 8]
+       [--num-envs 8] [--seed 0] [--score-num-envs 8] [--checkpoint-every 25000] [--resume]
+       [--score-only] [--score-checkpoints]
 Writes the model and its training record under --out, and results/leaderboard/point5_<algo>_rl.json.
 """
 
@@ -43,7 +51,7 @@ from stable_baselines3 import PPO, SAC, HerReplayBuffer
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_with
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.sb3_ext.shipped import make_maze_env, make_maze_vector_env
@@ -80,6 +88,53 @@ class WallClockCap(BaseCallback):
     def _on_step(self) -> bool:
         self.capped = time.perf_counter() - self.started >= self.seconds
         return not self.capped
+
+
+class Checkpoints(BaseCallback):
+    """Writes the model every ``every`` steps as ``<folder>/<steps>.zip`` with ``<steps>.json``, its record.
+
+    The record holds the steps and the training seconds so far (``seconds_before`` plus this run's); an
+    off-policy model's replay buffer is written to ``<folder>/replay_buffer.pkl`` first, and ``latest.json``
+    names the checkpoint last, so a run killed at any point resumes from a complete checkpoint.
+    """
+
+    def __init__(self, folder: Path, every: int, seconds_before: float, resumed_at: list[int]) -> None:
+        super().__init__()
+        self.folder = folder
+        self.every = every
+        self.seconds_before = seconds_before
+        self.resumed_at = resumed_at
+        self.started = time.perf_counter()
+        self.next_steps = every
+
+    def _on_training_start(self) -> None:
+        self.next_steps = (self.model.num_timesteps // self.every + 1) * self.every
+
+    def _on_step(self) -> bool:
+        if self.model.num_timesteps >= self.next_steps:
+            self.save()
+            self.next_steps = (self.model.num_timesteps // self.every + 1) * self.every
+        return True
+
+    def seconds(self) -> float:
+        """Training seconds so far, over every run of this model."""
+        return self.seconds_before + time.perf_counter() - self.started
+
+    def save(self) -> dict[str, Any]:
+        """Writes one checkpoint now and returns its record."""
+        steps = int(self.model.num_timesteps)
+        if getattr(self.model, "replay_buffer", None) is not None:
+            atomic_write_with(self.folder / "replay_buffer.pkl", self.model.save_replay_buffer)
+        atomic_write_with(self.folder / f"{steps}.zip", self.model.save)
+        record = {"steps": steps, "training_seconds": round(self.seconds(), 1), "resumed_at": self.resumed_at}
+        atomic_write_json(self.folder / f"{steps}.json", record)
+        atomic_write_json(self.folder / "latest.json", {**record, "model": f"{steps}.zip"})
+        return record
+
+
+def checkpoint_folder(model_path: Path) -> Path:
+    """Where a model's checkpoints live: beside it, ``<model stem>_checkpoints/``."""
+    return model_path.with_name(f"{model_path.stem}_checkpoints")
 
 
 def _no_low_level(observation: dict[str, np.ndarray]) -> np.ndarray:
@@ -136,27 +191,54 @@ def high_level_vec_env(num_envs: int) -> GymnasiumVecEnv:
     return GymnasiumVecEnv(venv)
 
 
+def training_env(algo: str, num_envs: int) -> Any:
+    """The SB3 VecEnv ``algo`` trains on."""
+    return DummyVecEnv([FlatMazeEnv]) if algo == "flat-sac-her" else high_level_vec_env(num_envs)
+
+
 def make_model(algo: str, num_envs: int, seed: int) -> Any:
     """The untrained SB3 model of ``algo`` on its training env."""
     settings = dict(SETTINGS[algo])
     if algo == "flat-sac-her":
         settings["replay_buffer_class"] = HerReplayBuffer
-        venv = DummyVecEnv([FlatMazeEnv])
-        return SAC("MultiInputPolicy", venv, seed=seed, device="cpu", **settings)
     algorithm = PPO if algo == "ppo" else SAC
-    return algorithm("MultiInputPolicy", high_level_vec_env(num_envs), seed=seed, device="cpu", **settings)
+    return algorithm("MultiInputPolicy", training_env(algo, num_envs), seed=seed, device="cpu", **settings)
+
+
+def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str, Any]]:
+    """The model of the last checkpoint in ``folder`` (with its replay buffer) on a fresh env, and its record."""
+    latest = json.loads((folder / "latest.json").read_text())
+    algorithm = PPO if args.algo == "ppo" else SAC
+    env = training_env(args.algo, args.num_envs)
+    # The seed is offset by the steps so far: the resumed envs draw other mazes than the first run's start.
+    model = algorithm.load(folder / latest["model"], env=env, device="cpu", seed=args.seed + latest["steps"])
+    if args.algo != "ppo":
+        model.load_replay_buffer(folder / "replay_buffer.pkl")
+    return model, latest
 
 
 def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict[str, Any]:
-    """Trains, saves the model, and writes (and returns) the training record."""
-    model = make_model(args.algo, args.num_envs, args.seed)
+    """Trains (or resumes with ``args.resume``), saves the model, and writes (and returns) the training record."""
+    folder = checkpoint_folder(model_path)
+    resume = getattr(args, "resume", False) and (folder / "latest.json").is_file()
+    if resume:
+        model, latest = resume_model(args, folder)
+        print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
+        seconds_before, resumed_at = latest["training_seconds"], [*latest["resumed_at"], latest["steps"]]
+    else:
+        model, seconds_before, resumed_at = make_model(args.algo, args.num_envs, args.seed), 0.0, []
     cap = WallClockCap(60 * args.max_minutes)
-    started = time.perf_counter()
-    if args.steps > 0:  # --steps 0: the untrained model, where a learning curve starts
-        model.learn(total_timesteps=args.steps, callback=cap, progress_bar=False)
-    seconds = time.perf_counter() - started
+    checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
+    remaining = args.steps - model.num_timesteps
+    if remaining > 0:  # --steps 0: the untrained model, where a learning curve starts
+        # reset_num_timesteps=False: SB3 then counts `remaining` on from the checkpoint's steps.
+        model.learn(
+            total_timesteps=remaining, callback=[cap, checkpoints], progress_bar=False, reset_num_timesteps=not resume
+        )
+        checkpoints.save()  # where a --resume continues, even when the cap stopped it between checkpoints
+    seconds = checkpoints.seconds()
     model_path.parent.mkdir(parents=True, exist_ok=True)
-    model.save(model_path)
+    atomic_write_with(model_path, model.save)
     model.get_env().close()
     step_kind = "low-level steps (body actions)" if args.algo == "flat-sac-her" else "high-level steps (subgoals)"
     record = {
@@ -170,6 +252,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "num_envs": 1 if args.algo == "flat-sac-her" else args.num_envs,
         "training_split": "train",
         "training_seconds": round(seconds, 1),
+        "resumed_at": resumed_at,
         "seed": args.seed,
         "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]]),
     }
@@ -177,8 +260,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     return record
 
 
-def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) -> dict[str, Any]:
-    """Scores the saved model on ``point5`` and writes the leaderboard's results file."""
+def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *, suffix: str = "") -> dict[str, Any]:
+    """Scores the saved model on ``point5`` and writes the leaderboard's results file (its name ends ``suffix``)."""
     # Imported here, after training: the scorer is read as it stands when scoring starts.
     from antmaze_hirl.experiments.benchmark import score_policy
 
@@ -197,11 +280,22 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) ->
     report["policy"] = f"{what}, seed {args.seed}"
     report["training"] = record
     untrained = "_untrained" if record["steps_reached"] == 0 else ""
-    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl{untrained}.json"
+    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl{untrained}{suffix}.json"
     atomic_write_json(out, report)
     low, high = report["wilson_95"]
     print(f"{report['policy']}: {report['successes']}/{report['episodes']} [{low:.1%}, {high:.1%}] -> {out}")
     return report
+
+
+def score_checkpoints(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) -> None:
+    """Scores each checkpoint short of the final model (``record``'s steps) as ``..._rl_at_<steps>.json``."""
+    folder = checkpoint_folder(model_path)
+    steps = sorted(int(path.stem) for path in folder.glob("*.zip") if path.stem.isdigit())
+    for step in (step for step in steps if step < record["steps_reached"]):
+        checkpoint = json.loads((folder / f"{step}.json").read_text())
+        at = {**record, **checkpoint, "steps_reached": step, "stopped_by": f"checkpoint of {model_path.name}"}
+        del at["steps"]
+        score(args, folder / f"{step}.zip", at, suffix=f"_at_{step}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -216,9 +310,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("runs/rl_baselines"), help="folder for models")
     parser.add_argument("--score-only", action="store_true", help="score the saved model again; no training")
+    parser.add_argument("--checkpoint-every", type=int, default=25_000, help="steps between checkpoints")
+    parser.add_argument("--resume", action="store_true", help="continue from the last checkpoint, if there is one")
+    parser.add_argument(
+        "--score-checkpoints", action="store_true", help="also score every checkpoint short of the final model"
+    )
     args = parser.parse_args(argv)
     if args.steps < 0 or args.num_envs < 1 or args.score_num_envs < 1 or not args.max_minutes > 0:
         parser.error(f"--steps must be >= 0, --num-envs and --score-num-envs >= 1 and --max-minutes > 0, got {args}")
+    if args.checkpoint_every < 1:
+        parser.error(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
     torch.set_num_threads(1)
     model_path = args.out / f"{SUITE}_{args.algo}_seed{args.seed}{'_untrained' if args.steps == 0 else ''}.zip"
     record_path = model_path.with_suffix(".training.json")
@@ -228,6 +329,8 @@ def main(argv: list[str] | None = None) -> int:
         record = train(args, model_path, record_path)
         print(f"trained {record['steps_reached']} steps in {record['training_seconds']} s ({record['stopped_by']})")
     score(args, model_path, record)
+    if args.score_checkpoints:
+        score_checkpoints(args, model_path, record)
     return 0
 
 

@@ -4,6 +4,7 @@ import argparse
 import json
 
 import numpy as np
+import pytest
 from gymnasium.utils.env_checker import check_env
 from script_helpers import load_script
 
@@ -41,3 +42,39 @@ def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached
     assert record["stopped_by"] == "wall-time cap" and record["steps_reached"] == 2  # one vector step of 2 mazes
     assert json.loads((tmp_path / "m.training.json").read_text()) == record
     assert (tmp_path / "m.zip").is_file()
+
+
+def _args(algo, steps, **kw):
+    return argparse.Namespace(
+        algo=algo, steps=steps, max_minutes=60.0, num_envs=2, seed=0, checkpoint_every=4, resume=True, **kw
+    )
+
+
+@pytest.fixture
+def small_settings(monkeypatch):
+    """PPO rollouts of 4 steps per maze and SAC learning from its first step: a few seconds of training."""
+    monkeypatch.setitem(rl_baselines.SETTINGS, "ppo", {"n_steps": 4, "batch_size": 8, "n_epochs": 1})
+    monkeypatch.setitem(rl_baselines.SETTINGS, "sac", {"buffer_size": 100, "learning_starts": 0, "batch_size": 8})
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac"])
+def test_a_run_checkpoints_and_a_resumed_run_continues_from_the_last_checkpoint(tmp_path, algo, small_settings):
+    model_path = tmp_path / "m.zip"
+    first = rl_baselines.train(_args(algo, 8), model_path, tmp_path / "m.training.json")
+    folder = rl_baselines.checkpoint_folder(model_path)
+    assert first["steps_reached"] == 8 and first["resumed_at"] == []
+    assert sorted(path.name for path in folder.glob("*.zip")) == ["4.zip", "8.zip"]  # every 4 steps of 2 mazes
+    assert json.loads((folder / "latest.json").read_text())["model"] == "8.zip"
+    assert (folder / "replay_buffer.pkl").is_file() == (algo == "sac")
+    second = rl_baselines.train(_args(algo, 16), model_path, tmp_path / "m.training.json")
+    assert second["steps_reached"] == 16 and second["resumed_at"] == [8]  # 8 more steps, not 16 from scratch
+    assert second["training_seconds"] >= first["training_seconds"]  # seconds add up over the runs
+    model = (rl_baselines.PPO if algo == "ppo" else rl_baselines.SAC).load(model_path, device="cpu")
+    assert model.num_timesteps == 16
+
+
+def test_a_run_without_resume_starts_again_from_zero(tmp_path, small_settings):
+    model_path = tmp_path / "m.zip"
+    rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
+    fresh = argparse.Namespace(**{**vars(_args("ppo", 4)), "resume": False})
+    assert rl_baselines.train(fresh, model_path, tmp_path / "r.json")["resumed_at"] == []
