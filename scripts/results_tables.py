@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from antmaze_hirl.experiments.claims import exact_percent
 from antmaze_hirl.experiments.uncertainty import wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -123,11 +124,6 @@ def rate_cell(successes: int, trials: int) -> str:
 def rate_cell_of(rate: float, trials: int) -> str:
     """:func:`rate_cell` of a recorded ``rate`` on ``trials`` episodes."""
     return rate_cell(count(rate, trials), trials)
-
-
-def exact_percent(rate: float) -> str:
-    """``"90.5%"``: ``rate`` in percent to one decimal, the decimal dropped when it is 0 (no half-even rounding)."""
-    return f"{100 * rate:.1f}".removesuffix(".0") + "%"
 
 
 def times(ratio: float) -> str:

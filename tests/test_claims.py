@@ -354,3 +354,7 @@ def test_brief_needs_the_protocol_2_folders(capsys):
     with pytest.raises(SystemExit):
         pc.main(["--brief"])
     assert "--brief is the protocol-2 table's short form" in capsys.readouterr().err
+
+
+def test_exact_percent_keeps_the_half_point_that_a_rounded_percent_loses():
+    assert [cl.exact_percent(rate) for rate in (0.905, 0.9, 0.015, None)] == ["90.5%", "90%", "1.5%", "n/a"]

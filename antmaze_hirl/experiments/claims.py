@@ -405,8 +405,11 @@ def _pct(value: float | None, decimals: int = 0) -> str:
     return "n/a" if value is None else f"{100 * value:.{decimals}f}%"
 
 
-def _exact_pct(value: float | None) -> str:
-    """A median success in percent to one decimal where it has one (0.905: "90.5%", not a half-even "90%")."""
+def exact_percent(value: float | None) -> str:
+    """A success rate in percent to one decimal where it has one (0.905: "90.5%", not a half-even "90%").
+
+    ``None`` (no figure) reads "n/a". ``scripts/results_tables.py`` formats its exact figures with it too.
+    """
     return "n/a" if value is None else f"{100 * value:.1f}".removesuffix(".0") + "%"
 
 
@@ -456,7 +459,7 @@ def _success_finding(body: Body, name: str, direction: int, alpha: float) -> Fin
         f"{body.name} `{name}`: {_spread(method['final_success'])} vs DAgger {_spread(dagger['final_success'])}; "
         + _test_text(comparison, _points)
     )
-    ours, theirs = (_exact_pct(m["final_success"].get("median")) for m in (method, dagger))
+    ours, theirs = (exact_percent(m["final_success"].get("median")) for m in (method, dagger))
     return Finding(comparison.outcome, comparison.toward, text, f"`{name}` {ours} vs {theirs}, {_p_text(comparison)}")
 
 
