@@ -26,11 +26,12 @@ buffer) is written atomically under ``--out``, with a record of the steps and th
 ``--resume`` continues from the last one after a stop or a ``kill -9``. A resumed run is not bit-identical to
 an unbroken one (a PPO rollout cut by the stop is collected again, and the envs are reseeded), and its record
 lists the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
-``point5_<algo>_rl_at_<steps>.json``: the points of the learning curve.
+``point5_<algo>_rl_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs SB3's
+training curves (episode reward and length, losses) there; a resumed run continues the same log.
 
 Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
        [--num-envs 8] [--seed 0] [--score-num-envs 8] [--checkpoint-every 25000] [--resume]
-       [--score-only] [--score-checkpoints]
+       [--score-only] [--score-checkpoints] [--tensorboard DIR]
 Writes the model and its training record under --out, and results/leaderboard/point5_<algo>_rl.json.
 """
 
@@ -196,13 +197,14 @@ def training_env(algo: str, num_envs: int) -> Any:
     return DummyVecEnv([FlatMazeEnv]) if algo == "flat-sac-her" else high_level_vec_env(num_envs)
 
 
-def make_model(algo: str, num_envs: int, seed: int) -> Any:
-    """The untrained SB3 model of ``algo`` on its training env."""
+def make_model(algo: str, num_envs: int, seed: int, tensorboard_log: str | None = None) -> Any:
+    """The untrained SB3 model of ``algo`` on its training env (logging to TensorBoard under ``tensorboard_log``)."""
     settings = dict(SETTINGS[algo])
     if algo == "flat-sac-her":
         settings["replay_buffer_class"] = HerReplayBuffer
     algorithm = PPO if algo == "ppo" else SAC
-    return algorithm("MultiInputPolicy", training_env(algo, num_envs), seed=seed, device="cpu", **settings)
+    env = training_env(algo, num_envs)
+    return algorithm("MultiInputPolicy", env, seed=seed, device="cpu", tensorboard_log=tensorboard_log, **settings)
 
 
 def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str, Any]]:
@@ -211,7 +213,13 @@ def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str,
     algorithm = PPO if args.algo == "ppo" else SAC
     env = training_env(args.algo, args.num_envs)
     # The seed is offset by the steps so far: the resumed envs draw other mazes than the first run's start.
-    model = algorithm.load(folder / latest["model"], env=env, device="cpu", seed=args.seed + latest["steps"])
+    model = algorithm.load(
+        folder / latest["model"],
+        env=env,
+        device="cpu",
+        seed=args.seed + latest["steps"],
+        tensorboard_log=getattr(args, "tensorboard", None),
+    )
     if args.algo != "ppo":
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     return model, latest
@@ -226,7 +234,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
         seconds_before, resumed_at = latest["training_seconds"], [*latest["resumed_at"], latest["steps"]]
     else:
-        model, seconds_before, resumed_at = make_model(args.algo, args.num_envs, args.seed), 0.0, []
+        model = make_model(args.algo, args.num_envs, args.seed, getattr(args, "tensorboard", None))
+        seconds_before, resumed_at = 0.0, []
     cap = WallClockCap(60 * args.max_minutes)
     checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
     remaining = args.steps - model.num_timesteps
@@ -311,6 +320,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("runs/rl_baselines"), help="folder for models")
     parser.add_argument("--score-only", action="store_true", help="score the saved model again; no training")
     parser.add_argument("--checkpoint-every", type=int, default=25_000, help="steps between checkpoints")
+    parser.add_argument("--tensorboard", help="folder for TensorBoard logs (SB3's tensorboard_log); none by default")
     parser.add_argument("--resume", action="store_true", help="continue from the last checkpoint, if there is one")
     parser.add_argument(
         "--score-checkpoints", action="store_true", help="also score every checkpoint short of the final model"

@@ -78,3 +78,9 @@ def test_a_run_without_resume_starts_again_from_zero(tmp_path, small_settings):
     rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
     fresh = argparse.Namespace(**{**vars(_args("ppo", 4)), "resume": False})
     assert rl_baselines.train(fresh, model_path, tmp_path / "r.json")["resumed_at"] == []
+
+
+def test_tensorboard_logs_the_training_run(tmp_path, small_settings):
+    args = argparse.Namespace(**{**vars(_args("ppo", 8)), "tensorboard": str(tmp_path / "tb")})
+    rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "r.json")
+    assert list((tmp_path / "tb").rglob("events.out.tfevents.*"))
