@@ -1,24 +1,26 @@
-"""Leaderboard rows for reward alone on ``point5``: SB3 on the high level, and a flat SAC+HER without hierarchy.
+"""Leaderboard rows for reward alone on ``point5`` (or ``ant4``): SB3 on the high level, and a flat SAC+HER.
 
-Three baselines, each trained on the held-out protocol's training mazes (random 5x5 point mazes of the
-layout partition's ``train`` part only, sparse reward 1 at the final goal) and scored on ``point5``
-exactly as ``antmaze-hirl benchmark point5`` scores any policy:
+Three baselines, each trained on the held-out protocol's training mazes (random mazes of the body family's
+layout-partition ``train`` part only: 5x5 for the point, 4x4 for the ant with ``--body ant``; sparse reward
+1 at the final goal) and scored on the family's suite (``point5`` or ``ant4``) exactly as
+``antmaze-hirl benchmark SUITE`` scores any policy:
 
 * ``ppo`` and ``sac``: SB3's ``MultiInputPolicy`` picks subgoals on the lockstep high-level vector env
   (:class:`~antmaze_hirl.envs.vector.HighLevelVectorEnv`, ``--num-envs`` mazes, ``"SameStep"`` autoreset),
-  the shipped point low level walking to each subgoal; ``clip_subgoals=True`` (Gaussian actions leave the
+  the body's shipped low level walking to each subgoal; ``clip_subgoals=True`` (Gaussian actions leave the
   maze). The episode ends at the goal or after 500 low-level steps (the suite's budget).
-* ``flat-sac-her``: SB3 SAC with a ``HerReplayBuffer`` drives the point directly, every low-level step,
+* ``flat-sac-her``: SB3 SAC with a ``HerReplayBuffer`` drives the body directly, every low-level step,
   with the episode's final goal as its goal (:class:`FlatMazeEnv`): no subgoals, no map in the observation
-  (the body's velocities, its xy and the goal xy, as the low level sees). Scored on ``point5`` as the low
+  (the body's state and the goal xy, as the low level sees). Scored on the suite as the low
   level of a high-level policy that always proposes the final goal (:class:`FinalGoalPolicy`): the
-  hierarchy then only re-issues the goal every 50 low-level steps, so the body's actions are the flat
-  policy's (a goal nearer than 0.4 m at such a re-issue is pushed out along the same line, which the
-  walk crosses on its way; ``mean subgoals`` of that row counts re-issues).
+  hierarchy then only re-issues the goal every H low-level steps (the body's horizon: 50 for the point,
+  100 for the ant), so the body's actions are the flat policy's (a goal nearer than twice the success
+  radius at such a re-issue, 0.4 m for the point, is pushed out along the same line, which the walk
+  crosses on its way; ``mean subgoals`` of that row counts re-issues).
 
 Training stops at ``--steps`` or after ``--max-minutes`` of wall time, whichever comes first; the report
 gives the steps reached (``training.steps_reached``), never the steps asked for. ``--steps 0`` scores the
-untrained model (where each curve starts; ``point5_<algo>_rl_untrained.json``). ``--score-only`` scores a
+untrained model (where each curve starts; ``<suite>_<algo>_rl_untrained.json``). ``--score-only`` scores a
 saved model again (with its training record) without training.
 
 Long runs outlive a session. Every ``--checkpoint-every`` steps the model (and an off-policy model's replay
@@ -26,13 +28,13 @@ buffer) is written atomically under ``--out``, with a record of the steps and th
 ``--resume`` continues from the last one after a stop or a ``kill -9``. A resumed run is not bit-identical to
 an unbroken one (a PPO rollout cut by the stop is collected again, and the envs are reseeded), and its record
 lists the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
-``point5_<algo>_rl_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs SB3's
+``<suite>_<algo>_rl_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs SB3's
 training curves (episode reward and length, losses) there; a resumed run continues the same log.
 
-Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--steps N] [--max-minutes 20]
-       [--num-envs 8] [--seed 0] [--score-num-envs 8] [--checkpoint-every 25000] [--resume]
+Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--body point|ant] [--steps N]
+       [--max-minutes 20] [--num-envs 8] [--seed 0] [--score-num-envs 8] [--checkpoint-every 25000] [--resume]
        [--score-only] [--score-checkpoints] [--tensorboard DIR]
-Writes the model and its training record under --out, and results/leaderboard/point5_<algo>_rl.json.
+Writes the model and its training record under --out, and results/leaderboard/<suite>_<algo>_rl.json.
 """
 
 from __future__ import annotations
@@ -59,8 +61,13 @@ from antmaze_hirl.sb3_ext.shipped import make_maze_env, make_maze_vector_env
 from antmaze_hirl.sb3_ext.vec_env import GymnasiumVecEnv
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
-SUITE = "point5"
-FLAT_STEPS = SUITE_SPECS[SUITE].max_low_level_steps
+SUITES = {
+    body: next(spec.name for spec in SUITE_SPECS.values() if spec.body == body and spec.source == "random")
+    for body in ("point", "ant")
+}
+"""Each body's suite: its random family, whose ``train`` part the baselines train on (``point5``, ``ant4``)."""
+FLAT_STEPS = SUITE_SPECS["point5"].max_low_level_steps
+assert all(SUITE_SPECS[suite].max_low_level_steps == FLAT_STEPS for suite in SUITES.values())  # one budget: 500
 SETTINGS: dict[str, dict[str, Any]] = {
     # Rollouts of 256 high-level steps per maze, so every update sees whole episodes of 8 mazes.
     "ppo": {"n_steps": 256, "batch_size": 64, "n_epochs": 4},
@@ -138,20 +145,28 @@ def checkpoint_folder(model_path: Path) -> Path:
     return model_path.with_name(f"{model_path.stem}_checkpoints")
 
 
+def family_size(body: str) -> int:
+    """Free cells per side of the body's suite family (5 for the point, 4 for the ant): the training mazes' size."""
+    return SUITE_SPECS[SUITES[body]].maze_size
+
+
 def _no_low_level(observation: dict[str, np.ndarray]) -> np.ndarray:
     raise RuntimeError("FlatMazeEnv drives the body itself; its high-level env never walks")
 
 
 class FlatMazeEnv(gym.Env):
-    """The point in a random ``train``-part 5x5 maze, goal-conditioned on the episode's final goal (a GoalEnv).
+    """The body in a random ``train``-part maze of its family, goal-conditioned on the final goal (a GoalEnv).
 
     Each reset draws a task as the high-level training env does (start corner, goal >= 3 grid steps away,
     +-0.25 cell of noise) and the body then acts every step for up to 500 steps; the episode ends at the goal
-    (within the point's 0.2 m) or is truncated. Observation and reward are :class:`~antmaze_hirl.envs.reach.ReachEnv`'s.
+    (within the body's reach radius) or is truncated. Observation and reward are
+    :class:`~antmaze_hirl.envs.reach.ReachEnv`'s.
     """
 
-    def __init__(self) -> None:
-        self.high = make_maze_env("point", low_level=_no_low_level, split="train", horizon=FLAT_STEPS)
+    def __init__(self, body: str = "point") -> None:
+        self.high = make_maze_env(
+            body, low_level=_no_low_level, split="train", horizon=FLAT_STEPS, maze_size=family_size(body)
+        )
         self.reach = self.high.reach
         self.observation_space = self.reach.observation_space
         self.action_space = self.reach.action_space
@@ -163,7 +178,7 @@ class FlatMazeEnv(gym.Env):
         return self.reach._get_obs(), {"is_success": False}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
-        """One point step; terminated at the goal, truncated after 500 steps."""
+        """One body step; terminated at the goal, truncated after 500 steps."""
         obs, reward, _, truncated, info = self.reach.step(action)
         return obs, reward, bool(info["is_success"]), truncated, info
 
@@ -186,24 +201,28 @@ class FinalGoalPolicy:
         return STATE_LAYOUT.goal_xy(np.asarray(observation["state"]))
 
 
-def high_level_vec_env(num_envs: int) -> GymnasiumVecEnv:
-    """``num_envs`` ``train``-part point mazes in lockstep behind one shipped low level, as an SB3 VecEnv."""
-    venv = make_maze_vector_env(num_envs, "point", split="train", autoreset_mode="SameStep", clip_subgoals=True)
+def high_level_vec_env(num_envs: int, body: str = "point") -> GymnasiumVecEnv:
+    """``num_envs`` ``train``-part mazes in lockstep behind the body's shipped low level, as an SB3 VecEnv."""
+    venv = make_maze_vector_env(
+        num_envs, body, split="train", autoreset_mode="SameStep", clip_subgoals=True, maze_size=family_size(body)
+    )
     return GymnasiumVecEnv(venv)
 
 
-def training_env(algo: str, num_envs: int) -> Any:
+def training_env(algo: str, num_envs: int, body: str = "point") -> Any:
     """The SB3 VecEnv ``algo`` trains on."""
-    return DummyVecEnv([FlatMazeEnv]) if algo == "flat-sac-her" else high_level_vec_env(num_envs)
+    if algo == "flat-sac-her":
+        return DummyVecEnv([lambda: FlatMazeEnv(body)])
+    return high_level_vec_env(num_envs, body)
 
 
-def make_model(algo: str, num_envs: int, seed: int, tensorboard_log: str | None = None) -> Any:
+def make_model(algo: str, num_envs: int, seed: int, tensorboard_log: str | None = None, body: str = "point") -> Any:
     """The untrained SB3 model of ``algo`` on its training env (logging to TensorBoard under ``tensorboard_log``)."""
     settings = dict(SETTINGS[algo])
     if algo == "flat-sac-her":
         settings["replay_buffer_class"] = HerReplayBuffer
     algorithm = PPO if algo == "ppo" else SAC
-    env = training_env(algo, num_envs)
+    env = training_env(algo, num_envs, body)
     return algorithm("MultiInputPolicy", env, seed=seed, device="cpu", tensorboard_log=tensorboard_log, **settings)
 
 
@@ -211,7 +230,7 @@ def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str,
     """The model of the last checkpoint in ``folder`` (with its replay buffer) on a fresh env, and its record."""
     latest = json.loads((folder / "latest.json").read_text())
     algorithm = PPO if args.algo == "ppo" else SAC
-    env = training_env(args.algo, args.num_envs)
+    env = training_env(args.algo, args.num_envs, args.body)
     # The seed is offset by the steps so far: the resumed envs draw other mazes than the first run's start.
     model = algorithm.load(
         folder / latest["model"],
@@ -234,7 +253,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
         seconds_before, resumed_at = latest["training_seconds"], [*latest["resumed_at"], latest["steps"]]
     else:
-        model = make_model(args.algo, args.num_envs, args.seed, getattr(args, "tensorboard", None))
+        model = make_model(args.algo, args.num_envs, args.seed, getattr(args, "tensorboard", None), args.body)
         seconds_before, resumed_at = 0.0, []
     cap = WallClockCap(60 * args.max_minutes)
     checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
@@ -259,6 +278,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "stopped_by": "wall-time cap" if cap.capped else "step budget" if args.steps else "untrained (--steps 0)",
         "max_minutes": args.max_minutes,
         "num_envs": 1 if args.algo == "flat-sac-her" else args.num_envs,
+        "body": args.body,
         "training_split": "train",
         "training_seconds": round(seconds, 1),
         "resumed_at": resumed_at,
@@ -270,7 +290,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
 
 
 def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *, suffix: str = "") -> dict[str, Any]:
-    """Scores the saved model on ``point5`` and writes the leaderboard's results file (its name ends ``suffix``)."""
+    """Scores the saved model on the body's suite and writes the leaderboard's results file (name ending ``suffix``)."""
     # Imported here, after training: the scorer is read as it stands when scoring starts.
     from antmaze_hirl.experiments.benchmark import score_policy
 
@@ -281,15 +301,15 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *,
             device="cpu",
             custom_objects={"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1},
         )
-        report = score_policy(SUITE, FinalGoalPolicy(), low_level=low_level, **scoring)
+        report = score_policy(SUITES[args.body], FinalGoalPolicy(), low_level=low_level, **scoring)
         what = f"flat SAC+HER (no hierarchy), {record['steps_reached']:,} body steps"
     else:
-        report = score_policy(SUITE, str(model_path), **scoring)
+        report = score_policy(SUITES[args.body], str(model_path), **scoring)
         what = f"SB3 {args.algo.upper()} on the high level, {record['steps_reached']:,} high-level steps"
     report["policy"] = f"{what}, seed {args.seed}"
     report["training"] = record
     untrained = "_untrained" if record["steps_reached"] == 0 else ""
-    out = RESULTS / f"{SUITE}_{args.algo.replace('-', '_')}_rl{untrained}{suffix}.json"
+    out = RESULTS / f"{SUITES[args.body]}_{args.algo.replace('-', '_')}_rl{untrained}{suffix}.json"
     atomic_write_json(out, report)
     low, high = report["wilson_95"]
     print(f"{report['policy']}: {report['successes']}/{report['episodes']} [{low:.1%}, {high:.1%}] -> {out}")
@@ -311,6 +331,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--algo", choices=sorted(SETTINGS), required=True)
     parser.add_argument(
+        "--body", choices=sorted(SUITES), default="point", help="the body; its family's suite is scored"
+    )
+    parser.add_argument(
         "--steps", type=int, default=200_000, help="step budget (high-level steps, or body steps); 0: untrained"
     )
     parser.add_argument("--max-minutes", type=float, default=20.0, help="wall-time cap on training")
@@ -331,7 +354,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.checkpoint_every < 1:
         parser.error(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
     torch.set_num_threads(1)
-    model_path = args.out / f"{SUITE}_{args.algo}_seed{args.seed}{'_untrained' if args.steps == 0 else ''}.zip"
+    model_path = (
+        args.out / f"{SUITES[args.body]}_{args.algo}_seed{args.seed}{'_untrained' if args.steps == 0 else ''}.zip"
+    )
     record_path = model_path.with_suffix(".training.json")
     if args.score_only:
         record = json.loads(record_path.read_text())

@@ -37,7 +37,7 @@ def test_the_final_goal_policy_proposes_the_goal():
 
 
 def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached(tmp_path):
-    args = argparse.Namespace(algo="ppo", steps=10_000, max_minutes=1e-9, num_envs=2, seed=0)
+    args = argparse.Namespace(algo="ppo", body="point", steps=10_000, max_minutes=1e-9, num_envs=2, seed=0)
     record = rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "m.training.json")
     assert record["stopped_by"] == "wall-time cap" and record["steps_reached"] == 2  # one vector step of 2 mazes
     assert json.loads((tmp_path / "m.training.json").read_text()) == record
@@ -46,7 +46,15 @@ def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached
 
 def _args(algo, steps, **kw):
     return argparse.Namespace(
-        algo=algo, steps=steps, max_minutes=60.0, num_envs=2, seed=0, checkpoint_every=4, resume=True, **kw
+        algo=algo,
+        body="point",
+        steps=steps,
+        max_minutes=60.0,
+        num_envs=2,
+        seed=0,
+        checkpoint_every=4,
+        resume=True,
+        **kw,
     )
 
 
@@ -84,3 +92,12 @@ def test_tensorboard_logs_the_training_run(tmp_path, small_settings):
     args = argparse.Namespace(**{**vars(_args("ppo", 8)), "tensorboard": str(tmp_path / "tb")})
     rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "r.json")
     assert list((tmp_path / "tb").rglob("events.out.tfevents.*"))
+
+
+def test_the_ant_baselines_train_on_the_ant_family_and_score_on_its_suite():
+    assert rl_baselines.SUITES == {"point": "point5", "ant": "ant4"}
+    env = rl_baselines.FlatMazeEnv("ant")
+    obs, _ = env.reset(seed=0)
+    assert env.high.layout.walls.shape == (6, 6)  # a 4x4 maze of the ant family's train part
+    assert env.action_space.shape == (8,)  # the ant's eight joints, driven directly
+    env.close()
