@@ -31,9 +31,11 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    figure, axes = plt.subplots(figsize=(8, 4.8))
+    figure, axes = plt.subplots(figsize=(12, 5.2))
     markers = {"labels": "o", "high-level steps": "s", "body steps": "^"}
-    for series in dict.fromkeys(point.series for point in points):
+    # tab20, not the default 10-colour cycle: with more than 10 series two curves would share a colour.
+    colours = plt.get_cmap("tab20").colors
+    for index, series in enumerate(dict.fromkeys(point.series for point in points)):
         mine = [point for point in points if point.series == series]
         xs = [point.x for point in mine]
         ys = [point.successes / point.episodes for point in mine]
@@ -42,10 +44,17 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
         errors.append([max(point.high - y, 0.0) for y, point in zip(ys, mine, strict=True)])
         kind = mine[0].x_kind
         # The untrained point (x = 0) sits in symlog's linear part: joined by a dotted line, not the curve's.
-        bars = axes.errorbar(
-            xs, ys, yerr=errors, marker=markers[kind], capsize=3, linestyle="none", label=f"{series} (x: {kind})"
+        colour = colours[index % len(colours)]
+        axes.errorbar(
+            xs,
+            ys,
+            yerr=errors,
+            marker=markers[kind],
+            capsize=3,
+            linestyle="none",
+            color=colour,
+            label=f"{series} (x: {kind})",
         )
-        colour = bars.lines[0].get_color()
         trained = [(x, y) for x, y in zip(xs, ys, strict=True) if x > 0]
         if trained:
             axes.plot(*zip(*trained, strict=True), color=colour)
@@ -60,7 +69,8 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
     axes.set_xlabel("expert labels (imitation) / training environment steps (reward), log scale")
     axes.set_ylabel("success on point5 (100 held-out tasks)")
     axes.set_title("point5: success against expert labels and against environment steps (95% Wilson)")
-    axes.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0.0, 0.93))
+    # Beside the axes, not on them: inside, it hid the DAgger curves.
+    axes.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
     axes.grid(True, which="major", alpha=0.3)
     figure.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -97,7 +97,7 @@ def test_tensorboard_logs_the_training_run(tmp_path, small_settings):
 def test_the_ant_baselines_train_on_the_ant_family_and_score_on_its_suite():
     assert rl_baselines.SUITES == {"point": "point5", "ant": "ant4"}
     env = rl_baselines.FlatMazeEnv("ant")
-    obs, _ = env.reset(seed=0)
+    env.reset(seed=0)
     assert env.high.layout.walls.shape == (6, 6)  # a 4x4 maze of the ant family's train part
     assert env.action_space.shape == (8,)  # the ant's eight joints, driven directly
     env.close()
