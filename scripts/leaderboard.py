@@ -61,15 +61,29 @@ NOT_RUN: list[tuple[str, str, str]] = [
         "seeds 0-3 ran",
     ),
     (
+        "ant4",
+        "`gated` on seeds 1 and up; the other active methods",
+        "`python scripts/benchmark_dagger.py --body ant --learner protocol --method gated --seed 1`: seed 0 ran "
+        "(27 min of training to 1,000 labels)",
+    ),
+    (
+        "ant4",
+        "SB3 PPO and SAC on the high level, flat SAC+HER",
+        "`python scripts/rl_baselines.py --body ant --algo ppo --steps 200000 --max-minutes 100 --resume "
+        "--score-checkpoints`: the ant's high-level env took about 10 random subgoals a second on 8 mazes beside "
+        "two jobs (the point's: 150, alone), so 200k steps is several sessions of resumed runs",
+    ),
+    (
         "ant suites",
-        "active methods, PPO/SAC on the ant; any learner on `u`, `medium`, `large`, `giant`",
+        "any learner on `u`, `medium`, `large`, `giant`",
         "not run: `benchmark_dagger.py` trains only on a random family's `train` part (`ant4`'s); the fixed "
         "maps need their own training protocol",
     ),
     (
         "point5",
         "flat SAC+HER (no hierarchy) beyond 20 minutes",
-        "`python scripts/rl_baselines.py --algo flat-sac-her --max-minutes 1000`",
+        "`python scripts/rl_baselines.py --algo flat-sac-her --steps 1000000 --max-minutes 100 --resume "
+        "--score-checkpoints`",
     ),
 ]
 """Baselines not measured yet: (suite, what, the command that would fill the row)."""
