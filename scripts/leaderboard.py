@@ -52,8 +52,9 @@ NOT_RUN: list[tuple[str, str, str]] = [
         "point5",
         "SB3 SAC on the high level to 200k high-level steps; PPO and SAC on seeds 1 and up",
         "`python scripts/rl_baselines.py --algo sac --steps 200000 --max-minutes 100 --resume --score-checkpoints`: "
-        "SAC's run stopped at 42,760 steps (50-minute cap) and resumes from its checkpoint; PPO reached 200,704 "
-        "on seed 0 (`--seed 1` for another)",
+        "add `--out /work/rl_runs`, where SAC's run stopped at 42,760 steps (50-minute cap) and left its "
+        "checkpoint (on the machine that ran it, not in the repository); PPO reached 200,704 on seed 0 "
+        "(`--seed 1` for another)",
     ),
     (
         "ant4",
@@ -63,9 +64,9 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "ant4",
-        "`gated` on seeds 1 and up; the other active methods",
-        "`python scripts/benchmark_dagger.py --body ant --learner protocol --method gated --seed 1`: seed 0 ran "
-        "(27 min of training to 1,000 labels)",
+        "`gated` on seeds 2 and up; the other active methods",
+        "`python scripts/benchmark_dagger.py --body ant --learner protocol --method gated --seed 2`: seeds 0 and 1 "
+        "ran (27 and 26 min of training to 1,000 labels)",
     ),
     (
         "ant4",

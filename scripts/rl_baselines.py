@@ -26,7 +26,8 @@ saved model again (with its training record) without training.
 Long runs outlive a session. Every ``--checkpoint-every`` steps the model (and an off-policy model's replay
 buffer) is written atomically under ``--out``, with a record of the steps and the training seconds so far;
 ``--resume`` continues from the last one after a stop or a ``kill -9``. A resumed run is not bit-identical to
-an unbroken one (a PPO rollout cut by the stop is collected again, and the envs are reseeded), and its record
+an unbroken one (a PPO rollout cut by the stop is dropped, though counted in the steps, and the envs are
+reseeded), and its record
 lists the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
 ``<suite>_<algo>_rl_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs SB3's
 training curves (episode reward and length, losses) there; a resumed run continues the same log.
