@@ -103,8 +103,9 @@ class Checkpoints(BaseCallback):
     """Writes the model every ``every`` steps as ``<folder>/<steps>.zip`` with ``<steps>.json``, its record.
 
     The record holds the steps and the training seconds so far (``seconds_before`` plus this run's); an
-    off-policy model's replay buffer is written to ``<folder>/replay_buffer.pkl`` first, and ``latest.json``
-    names the checkpoint last, so a run killed at any point resumes from a complete checkpoint.
+    off-policy model's replay buffer is written first, as ``<folder>/replay_buffer_<steps>.pkl``, and
+    ``latest.json`` names the model and its buffer last, so a run killed at any point resumes from a model
+    and the buffer saved with it.
     """
 
     def __init__(self, folder: Path, every: int, seconds_before: float, resumed_at: list[int]) -> None:
@@ -132,12 +133,19 @@ class Checkpoints(BaseCallback):
     def save(self) -> dict[str, Any]:
         """Writes one checkpoint now and returns its record."""
         steps = int(self.model.num_timesteps)
+        latest: dict[str, Any] = {"model": f"{steps}.zip"}
         if getattr(self.model, "replay_buffer", None) is not None:
-            atomic_write_with(self.folder / "replay_buffer.pkl", self.model.save_replay_buffer)
+            # One buffer per checkpoint, named in latest.json: a kill between the writes never pairs a model
+            # with a newer buffer. The older buffers (about 1 GB each for SAC) go once latest.json names this one.
+            latest["replay_buffer"] = f"replay_buffer_{steps}.pkl"
+            atomic_write_with(self.folder / latest["replay_buffer"], self.model.save_replay_buffer)
         atomic_write_with(self.folder / f"{steps}.zip", self.model.save)
         record = {"steps": steps, "training_seconds": round(self.seconds(), 1), "resumed_at": self.resumed_at}
         atomic_write_json(self.folder / f"{steps}.json", record)
-        atomic_write_json(self.folder / "latest.json", {**record, "model": f"{steps}.zip"})
+        atomic_write_json(self.folder / "latest.json", {**record, **latest})
+        for old in self.folder.glob("replay_buffer*.pkl"):
+            if old.name != latest.get("replay_buffer"):
+                old.unlink()
         return record
 
 
@@ -241,7 +249,8 @@ def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str,
         tensorboard_log=getattr(args, "tensorboard", None),
     )
     if args.algo != "ppo":
-        model.load_replay_buffer(folder / "replay_buffer.pkl")
+        # Checkpoints from before per-checkpoint buffers name none: theirs is replay_buffer.pkl.
+        model.load_replay_buffer(folder / latest.get("replay_buffer", "replay_buffer.pkl"))
     return model, latest
 
 
