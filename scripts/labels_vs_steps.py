@@ -17,11 +17,36 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, Point, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
+
+
+FAMILY_COLOURMAPS = ("Blues", "Greens", "Oranges", "Purples", "Reds", "Greys", "RdPu", "YlOrBr", "BuGn")
+"""One sequential colour map per method (a series less its seed); its seeds are shades of it."""
+
+
+def series_colours(series: list[str], plt: Any) -> dict[str, Any]:
+    """A colour per series: each method (the series less ``, seed N``) its own hue, each seed a shade of it.
+
+    A shared qualitative map (tab20) paired hues across methods, so one method's seed looked like another's.
+    """
+    families: dict[str, list[str]] = {}
+    for name in dict.fromkeys(series):
+        families.setdefault(name.split(", seed ")[0], []).append(name)
+    colours = {}
+    for index, members in enumerate(families.values()):
+        colourmap = plt.get_cmap(FAMILY_COLOURMAPS[index % len(FAMILY_COLOURMAPS)])
+        # Shades from mid to dark: the palest end of a sequential map is too light on white.
+        shades = np.linspace(0.55, 0.95, len(members)) if len(members) > 1 else [0.8]
+        for shade, name in zip(shades, members, strict=True):
+            colours[name] = colourmap(float(shade))
+    return colours
 
 
 def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
@@ -33,9 +58,8 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
 
     figure, axes = plt.subplots(figsize=(12, 5.2))
     markers = {"labels": "o", "high-level steps": "s", "body steps": "^"}
-    # tab20, not the default 10-colour cycle: with more than 10 series two curves would share a colour.
-    colours = plt.get_cmap("tab20").colors
-    for index, series in enumerate(dict.fromkeys(point.series for point in points)):
+    colours = series_colours([point.series for point in points], plt)
+    for series in dict.fromkeys(point.series for point in points):
         mine = [point for point in points if point.series == series]
         xs = [point.x for point in mine]
         ys = [point.successes / point.episodes for point in mine]
@@ -44,7 +68,7 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
         errors.append([max(point.high - y, 0.0) for y, point in zip(ys, mine, strict=True)])
         kind = mine[0].x_kind
         # The untrained point (x = 0) sits in symlog's linear part: joined by a dotted line, not the curve's.
-        colour = colours[index % len(colours)]
+        colour = colours[series]
         axes.errorbar(
             xs,
             ys,

@@ -19,23 +19,25 @@ layout-partition ``train`` part only: 5x5 for the point, 4x4 for the ant with ``
   crosses on its way; ``mean subgoals`` of that row counts re-issues).
 
 Training stops at ``--steps`` or after ``--max-minutes`` of wall time, whichever comes first; the report
-gives the steps reached (``training.steps_reached``), never the steps asked for. ``--steps 0`` scores the
-untrained model (where each curve starts; ``<suite>_<algo>_rl_untrained.json``). ``--score-only`` scores a
-saved model again (with its training record) without training.
+gives the steps reached (``training.steps_reached``), never the steps asked for: the steps trained on, with a
+rollout cut by the cap left out (``training.steps_dropped``). ``--steps 0`` scores the untrained model (where
+each curve starts; ``<suite>_<algo>_rl_s<seed>_untrained.json``). ``--score-only`` scores a saved model again
+(with its training record) without training.
 
-Long runs outlive a session. Every ``--checkpoint-every`` steps the model (and an off-policy model's replay
-buffer) is written atomically under ``--out``, with a record of the steps and the training seconds so far;
-``--resume`` continues from the last one after a stop or a ``kill -9``. A resumed run is not bit-identical to
-an unbroken one (a PPO rollout cut by the stop is dropped, though counted in the steps, and the envs are
-reseeded), and its record
-lists the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
-``<suite>_<algo>_rl_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs SB3's
-training curves (episode reward and length, losses) there; a resumed run continues the same log.
+Long runs outlive a session. Every ``--checkpoint-every`` steps, at the next rollout start, the model (and an
+off-policy model's replay buffer) is written atomically under ``--out``, with a record of the steps and the
+training seconds so far; ``--resume`` continues from the last one after a stop or a ``kill -9``. A fresh run
+refuses a checkpoint folder that holds files (pass ``--resume``, or remove it), and ``--resume`` on a run
+already at ``--steps`` trains nothing and leaves its record as it was. A resumed run is not bit-identical to
+an unbroken one (the envs are reseeded, and a rollout cut by a kill is collected again), and its record lists
+the steps it resumed at. ``--score-checkpoints`` scores every checkpoint short of the final model as
+``<suite>_<algo>_rl_s<seed>_at_<steps>.json``: the points of the learning curve. ``--tensorboard DIR`` logs
+SB3's training curves (episode reward and length, losses) there; a resumed run continues the same log.
 
 Usage: python scripts/rl_baselines.py --algo ppo|sac|flat-sac-her [--body point|ant] [--steps N]
        [--max-minutes 20] [--num-envs 8] [--seed 0] [--score-num-envs 8] [--checkpoint-every 25000] [--resume]
        [--score-only] [--score-checkpoints] [--tensorboard DIR]
-Writes the model and its training record under --out, and results/leaderboard/<suite>_<algo>_rl.json.
+Writes the model and its training record under --out, and results/leaderboard/<suite>_<algo>_rl_s<seed>.json.
 """
 
 from __future__ import annotations
@@ -99,8 +101,18 @@ class WallClockCap(BaseCallback):
         return not self.capped
 
 
+class StaleCheckpoints(RuntimeError):
+    """A fresh run's checkpoint folder already holds another run's checkpoints."""
+
+
 class Checkpoints(BaseCallback):
     """Writes the model every ``every`` steps as ``<folder>/<steps>.zip`` with ``<steps>.json``, its record.
+
+    A checkpoint is taken when a rollout starts (SB3's ``on_rollout_start``), once ``every`` steps have passed
+    since the last: there the model has been updated on every step counted and an off-policy buffer holds
+    every transition counted, so ``<steps>`` is the steps trained on, for PPO (whose rollouts are
+    ``n_steps`` x mazes long, so its checkpoints fall on whole rollouts) and SAC alike. :attr:`trained_steps` is
+    the count at the last rollout start, what a run cut mid-rollout has trained on.
 
     The record holds the steps and the training seconds so far (``seconds_before`` plus this run's); an
     off-policy model's replay buffer is written first, as ``<folder>/replay_buffer_<steps>.pkl``, and
@@ -116,14 +128,19 @@ class Checkpoints(BaseCallback):
         self.resumed_at = resumed_at
         self.started = time.perf_counter()
         self.next_steps = every
+        self.trained_steps = 0
 
     def _on_training_start(self) -> None:
         self.next_steps = (self.model.num_timesteps // self.every + 1) * self.every
+        self.trained_steps = int(self.model.num_timesteps)
+
+    def _on_rollout_start(self) -> None:
+        self.trained_steps = int(self.model.num_timesteps)
+        if self.trained_steps >= self.next_steps:
+            self.save()
+            self.next_steps = (self.trained_steps // self.every + 1) * self.every
 
     def _on_step(self) -> bool:
-        if self.model.num_timesteps >= self.next_steps:
-            self.save()
-            self.next_steps = (self.model.num_timesteps // self.every + 1) * self.every
         return True
 
     def seconds(self) -> float:
@@ -168,7 +185,7 @@ class FlatMazeEnv(gym.Env):
 
     Each reset draws a task as the high-level training env does (start corner, goal >= 3 grid steps away,
     +-0.25 cell of noise) and the body then acts every step for up to 500 steps; the episode ends at the goal
-    (within the body's reach radius) or is truncated. Observation and reward are
+    (within the body's reach radius) or when the ant flips, or is truncated. Observation and reward are
     :class:`~antmaze_hirl.envs.reach.ReachEnv`'s.
     """
 
@@ -187,9 +204,11 @@ class FlatMazeEnv(gym.Env):
         return self.reach._get_obs(), {"is_success": False}
 
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
-        """One body step; terminated at the goal, truncated after 500 steps."""
-        obs, reward, _, truncated, info = self.reach.step(action)
-        return obs, reward, bool(info["is_success"]), truncated, info
+        """One body step; terminated at the goal or when the ant flips (a failure), truncated after 500 steps."""
+        # The reach env terminates on a flip (the high-level env's terminate_on_flip, on by default): a flipped
+        # ant ends its episode as it does in the hierarchy, not after 500 steps on its back.
+        obs, reward, flipped, truncated, info = self.reach.step(action)
+        return obs, reward, bool(info["is_success"]) or bool(flipped), truncated, info
 
     def compute_reward(self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Any) -> np.ndarray:
         """The reach env's sparse reward (HER relabels with it)."""
@@ -249,32 +268,67 @@ def resume_model(args: argparse.Namespace, folder: Path) -> tuple[Any, dict[str,
         tensorboard_log=getattr(args, "tensorboard", None),
     )
     if args.algo != "ppo":
-        # Checkpoints from before per-checkpoint buffers name none: theirs is replay_buffer.pkl.
+        # Checkpoints from before per-checkpoint buffers name none: theirs is replay_buffer.pkl. A HER buffer's
+        # unfinished episode is truncated on load (SB3's default, with a warning): the resumed env starts anew.
         model.load_replay_buffer(folder / latest.get("replay_buffer", "replay_buffer.pkl"))
     return model, latest
 
 
+def refuse_stale_checkpoints(folder: Path, resume: bool) -> None:
+    """Raises :class:`StaleCheckpoints` if a fresh run would write into ``folder`` over another run's files.
+
+    A fresh run (no ``--resume``, or ``--resume`` with no ``latest.json`` to resume from) must start from an
+    empty folder: otherwise ``--score-checkpoints`` would score the old run's checkpoints as this run's, and a
+    later ``--resume`` after a kill before this run's first checkpoint would continue the old run.
+    """
+    if resume and (folder / "latest.json").is_file():
+        return
+    leftovers = sorted(path.name for path in folder.glob("*")) if folder.is_dir() else []
+    if leftovers:
+        raise StaleCheckpoints(
+            f"{folder} holds another run's checkpoints ({', '.join(leftovers[:3])}{', ...' * (len(leftovers) > 3)}): "
+            f"pass --resume to continue it{' (it has no latest.json)' * resume}, or remove the folder"
+        )
+
+
 def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict[str, Any]:
-    """Trains (or resumes with ``args.resume``), saves the model, and writes (and returns) the training record."""
+    """Trains (or resumes with ``args.resume``), saves the model, and writes (and returns) the training record.
+
+    Raises:
+        StaleCheckpoints: If a fresh run's checkpoint folder holds files (:func:`refuse_stale_checkpoints`).
+    """
     folder = checkpoint_folder(model_path)
+    refuse_stale_checkpoints(folder, getattr(args, "resume", False))
     resume = getattr(args, "resume", False) and (folder / "latest.json").is_file()
     if resume:
         model, latest = resume_model(args, folder)
-        print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
-        seconds_before, resumed_at = latest["training_seconds"], [*latest["resumed_at"], latest["steps"]]
+        seconds_before, resumed_at = latest["training_seconds"], list(latest["resumed_at"])
     else:
         model = make_model(args.algo, args.num_envs, args.seed, getattr(args, "tensorboard", None), args.body)
         seconds_before, resumed_at = 0.0, []
+    remaining = args.steps - model.num_timesteps
+    if resume and remaining > 0:
+        print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
+        resumed_at.append(latest["steps"])
+    elif resume:  # a finished run: scored again as it stands, its record unchanged
+        print(f"already trained to {latest['steps']} steps, at or past --steps {args.steps}: not training")
     cap = WallClockCap(60 * args.max_minutes)
     checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
-    remaining = args.steps - model.num_timesteps
+    dropped = 0
     if remaining > 0:  # --steps 0: the untrained model, where a learning curve starts
         # reset_num_timesteps=False: SB3 then counts `remaining` on from the checkpoint's steps.
         model.learn(
             total_timesteps=remaining, callback=[cap, checkpoints], progress_bar=False, reset_num_timesteps=not resume
         )
+        if cap.capped:
+            # The cap cut a rollout: its steps were neither trained on (PPO) nor stored (SAC's last vector
+            # step), so they are not counted. A resume collects them again.
+            dropped = int(model.num_timesteps) - checkpoints.trained_steps
+            model.num_timesteps = checkpoints.trained_steps
         checkpoints.save()  # where a --resume continues, even when the cap stopped it between checkpoints
-    seconds = checkpoints.seconds()
+        seconds = checkpoints.seconds()
+    else:
+        seconds = seconds_before
     model_path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_with(model_path, model.save)
     model.get_env().close()
@@ -284,6 +338,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "settings": SETTINGS[args.algo],
         "steps_asked": args.steps,
         "steps_reached": int(model.num_timesteps),
+        "steps_dropped": dropped,
         "step_kind": step_kind,
         "stopped_by": "wall-time cap" if cap.capped else "step budget" if args.steps else "untrained (--steps 0)",
         "max_minutes": args.max_minutes,
@@ -297,6 +352,12 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     }
     atomic_write_json(record_path, record)
     return record
+
+
+def report_name(body: str, algo: str, seed: int, steps: int, suffix: str = "") -> str:
+    """A report's file name: ``<suite>_<algo>_rl_s<seed>[_untrained]<suffix>.json`` (``-`` in ``algo`` as ``_``)."""
+    untrained = "_untrained" if steps == 0 else ""
+    return f"{SUITES[body]}_{algo.replace('-', '_')}_rl_s{seed}{untrained}{suffix}.json"
 
 
 def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *, suffix: str = "") -> dict[str, Any]:
@@ -318,8 +379,7 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *,
         what = f"SB3 {args.algo.upper()} on the high level, {record['steps_reached']:,} high-level steps"
     report["policy"] = f"{what}, seed {args.seed}"
     report["training"] = record
-    untrained = "_untrained" if record["steps_reached"] == 0 else ""
-    out = RESULTS / f"{SUITES[args.body]}_{args.algo.replace('-', '_')}_rl{untrained}{suffix}.json"
+    out = RESULTS / report_name(args.body, args.algo, args.seed, record["steps_reached"], suffix)
     atomic_write_json(out, report)
     low, high = report["wilson_95"]
     print(f"{report['policy']}: {report['successes']}/{report['episodes']} [{low:.1%}, {high:.1%}] -> {out}")
@@ -327,7 +387,7 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *,
 
 
 def score_checkpoints(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) -> None:
-    """Scores each checkpoint short of the final model (``record``'s steps) as ``..._rl_at_<steps>.json``."""
+    """Scores each checkpoint short of the final model (``record``'s steps) as ``..._rl_s<seed>_at_<steps>.json``."""
     folder = checkpoint_folder(model_path)
     steps = sorted(int(path.stem) for path in folder.glob("*.zip") if path.stem.isdigit())
     for step in (step for step in steps if step < record["steps_reached"]):
@@ -371,7 +431,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.score_only:
         record = json.loads(record_path.read_text())
     else:
-        record = train(args, model_path, record_path)
+        try:
+            record = train(args, model_path, record_path)
+        except StaleCheckpoints as error:
+            parser.error(str(error))
         print(f"trained {record['steps_reached']} steps in {record['training_seconds']} s ({record['stopped_by']})")
     score(args, model_path, record)
     if args.score_checkpoints:

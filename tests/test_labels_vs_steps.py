@@ -1,5 +1,6 @@
 """antmaze_hirl.experiments.labels_vs_steps: the leaderboard figure's points, one series per trainer and seed."""
 
+import json
 import shutil
 from pathlib import Path
 
@@ -18,3 +19,15 @@ def test_an_active_methods_curve_is_its_own_series_beside_plain_daggers(tmp_path
     ]
     assert all(point.x_kind == "labels" and 100 <= point.x <= 110 for point in points)
     assert set(lines) == {"oracle"}
+
+
+def test_each_rl_seed_is_its_own_series(tmp_path):
+    report = json.loads((LEADERBOARD / "point5_ppo_rl_s0.json").read_text())
+    for seed in (0, 1):
+        report["training"]["seed"] = seed
+        (tmp_path / f"point5_ppo_rl_s{seed}.json").write_text(json.dumps(report))
+    points, _ = figure_points(tmp_path)
+    assert [point.series for point in points] == [
+        "SB3 PPO on the high level, 8 mazes, seed 0",
+        "SB3 PPO on the high level, 8 mazes, seed 1",
+    ]

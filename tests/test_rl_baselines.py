@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+import torch
 from gymnasium.utils.env_checker import check_env
 from script_helpers import load_script
 
@@ -39,7 +40,9 @@ def test_the_final_goal_policy_proposes_the_goal():
 def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached(tmp_path):
     args = argparse.Namespace(algo="ppo", body="point", steps=10_000, max_minutes=1e-9, num_envs=2, seed=0)
     record = rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "m.training.json")
-    assert record["stopped_by"] == "wall-time cap" and record["steps_reached"] == 2  # one vector step of 2 mazes
+    assert record["stopped_by"] == "wall-time cap"
+    # The cap cut the first rollout after one vector step of 2 mazes: never trained on, so not counted.
+    assert record["steps_reached"] == 0 and record["steps_dropped"] == 2
     assert json.loads((tmp_path / "m.training.json").read_text()) == record
     assert (tmp_path / "m.zip").is_file()
 
@@ -60,8 +63,8 @@ def _args(algo, steps, **kw):
 
 @pytest.fixture
 def small_settings(monkeypatch):
-    """PPO rollouts of 4 steps per maze and SAC learning from its first step: a few seconds of training."""
-    monkeypatch.setitem(rl_baselines.SETTINGS, "ppo", {"n_steps": 4, "batch_size": 8, "n_epochs": 1})
+    """PPO rollouts of 2 steps per maze (4 of 2 mazes) and SAC learning from its first step: seconds of training."""
+    monkeypatch.setitem(rl_baselines.SETTINGS, "ppo", {"n_steps": 2, "batch_size": 4, "n_epochs": 1})
     monkeypatch.setitem(rl_baselines.SETTINGS, "sac", {"buffer_size": 100, "learning_starts": 0, "batch_size": 8})
 
 
@@ -76,18 +79,74 @@ def test_a_run_checkpoints_and_a_resumed_run_continues_from_the_last_checkpoint(
     buffers = sorted(path.name for path in folder.glob("replay_buffer*.pkl"))
     assert buffers == (["replay_buffer_8.pkl"] if algo == "sac" else [])  # the latest one only, the 4-step one gone
     assert json.loads((folder / "latest.json").read_text()).get("replay_buffer") == (buffers or [None])[0]
+    saved = (rl_baselines.PPO if algo == "ppo" else rl_baselines.SAC).load(folder / "8.zip", device="cpu")
+    restored, _ = rl_baselines.resume_model(_args(algo, 16), folder)
+    for name, tensor in saved.policy.state_dict().items():  # the resumed model is the checkpoint's, not a new one
+        assert torch.equal(tensor, restored.policy.state_dict()[name]), name
+    if algo == "sac":  # the buffer holds every one of the 8 steps counted (4 vector steps of 2 mazes), no fewer
+        assert restored.replay_buffer.size() * restored.n_envs == 8
+    restored.get_env().close()
     second = rl_baselines.train(_args(algo, 16), model_path, tmp_path / "m.training.json")
     assert second["steps_reached"] == 16 and second["resumed_at"] == [8]  # 8 more steps, not 16 from scratch
-    assert second["training_seconds"] >= first["training_seconds"]  # seconds add up over the runs
+    assert second["training_seconds"] > first["training_seconds"]  # seconds add up over the runs
     model = (rl_baselines.PPO if algo == "ppo" else rl_baselines.SAC).load(model_path, device="cpu")
     assert model.num_timesteps == 16
 
 
-def test_a_run_without_resume_starts_again_from_zero(tmp_path, small_settings):
+def test_resuming_a_finished_run_trains_nothing_and_keeps_its_record(tmp_path, small_settings):
+    model_path = tmp_path / "m.zip"
+    first = rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
+    again = rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
+    assert again["resumed_at"] == [] and again["steps_reached"] == 8
+    assert again["training_seconds"] == first["training_seconds"] and again["stopped_by"] == "step budget"
+
+
+def test_a_fresh_run_refuses_a_folder_holding_another_runs_checkpoints(tmp_path, small_settings, capsys):
     model_path = tmp_path / "m.zip"
     rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
     fresh = argparse.Namespace(**{**vars(_args("ppo", 4)), "resume": False})
-    assert rl_baselines.train(fresh, model_path, tmp_path / "r.json")["resumed_at"] == []
+    with pytest.raises(rl_baselines.StaleCheckpoints, match="m_checkpoints holds another run's checkpoints"):
+        rl_baselines.train(fresh, model_path, tmp_path / "r.json")
+    leftovers = rl_baselines.checkpoint_folder(tmp_path / "out" / "point5_ppo_seed0.zip")
+    leftovers.mkdir(parents=True)
+    (leftovers / "4.zip").write_bytes(b"")  # a kill before latest.json: --resume has nothing to resume either
+    for extra in ([], ["--resume"]):
+        with pytest.raises(SystemExit) as stop:
+            rl_baselines.main(["--algo", "ppo", "--out", str(tmp_path / "out"), *extra])
+        assert stop.value.code == 2
+        error = capsys.readouterr().err.strip().splitlines()[-1]
+        assert "point5_ppo_seed0_checkpoints holds another run's checkpoints (4.zip)" in error
+
+
+def test_report_names_carry_the_seed():
+    assert rl_baselines.report_name("point", "flat-sac-her", 3, 4_514) == "point5_flat_sac_her_rl_s3.json"
+    assert rl_baselines.report_name("ant", "ppo", 0, 0) == "ant4_ppo_rl_s0_untrained.json"
+    assert rl_baselines.report_name("point", "sac", 1, 50, "_at_25000") == "point5_sac_rl_s1_at_25000.json"
+
+
+def test_every_checkpoint_short_of_the_final_model_is_scored_at_its_own_steps(tmp_path, small_settings, monkeypatch):
+    model_path = tmp_path / "m.zip"
+    record = rl_baselines.train(_args("ppo", 12), model_path, tmp_path / "r.json")
+    scored = []
+    monkeypatch.setattr(rl_baselines, "score", lambda args, path, at, suffix: scored.append((path.name, at, suffix)))
+    rl_baselines.score_checkpoints(_args("ppo", 12), model_path, record)
+    assert [(name, suffix) for name, _, suffix in scored] == [("4.zip", "_at_4"), ("8.zip", "_at_8")]
+    assert [at["steps_reached"] for _, at, _ in scored] == [4, 8] and all("steps" not in at for _, at, _ in scored)
+
+
+def test_flat_sac_her_resumes_with_its_her_buffer(tmp_path, monkeypatch):
+    # Collection only (learning would start after a whole 500-step episode): the HER buffer is what resumes.
+    settings = {**rl_baselines.SETTINGS["flat-sac-her"], "buffer_size": 1_000, "learning_starts": 10_000}
+    monkeypatch.setitem(rl_baselines.SETTINGS, "flat-sac-her", settings)
+    model_path = tmp_path / "flat.zip"
+    rl_baselines.train(_args("flat-sac-her", 8), model_path, tmp_path / "r.json")
+    folder = rl_baselines.checkpoint_folder(model_path)
+    restored, latest = rl_baselines.resume_model(_args("flat-sac-her", 16), folder)
+    assert latest["replay_buffer"] == "replay_buffer_8.pkl"
+    assert isinstance(restored.replay_buffer, rl_baselines.HerReplayBuffer) and restored.replay_buffer.size() == 8
+    restored.get_env().close()
+    second = rl_baselines.train(_args("flat-sac-her", 16), model_path, tmp_path / "r.json")
+    assert second["steps_reached"] == 16 and second["resumed_at"] == [8]
 
 
 def test_tensorboard_logs_the_training_run(tmp_path, small_settings):
@@ -102,4 +161,15 @@ def test_the_ant_baselines_train_on_the_ant_family_and_score_on_its_suite():
     env.reset(seed=0)
     assert env.high.layout.walls.shape == (6, 6)  # a 4x4 maze of the ant family's train part
     assert env.action_space.shape == (8,)  # the ant's eight joints, driven directly
+    env.close()
+
+
+def test_a_flipped_ant_ends_its_flat_episode_as_a_failure():
+    env = rl_baselines.FlatMazeEnv("ant")
+    env.reset(seed=0)
+    data = env.reach.sim.data
+    data.qpos[2], data.qpos[3:7] = 0.6, (0.0, 1.0, 0.0, 0.0)  # the torso turned half over about x: on its back
+    data.qvel[:] = 0.0
+    _, _, terminated, truncated, info = env.step(np.zeros(8))
+    assert info["flipped"] and terminated and not truncated and not info["is_success"]
     env.close()

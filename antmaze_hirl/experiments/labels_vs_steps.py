@@ -71,11 +71,13 @@ def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
             series, x, kind = f"{trainer}, {learner} learner, seed {seed}", training["labels"], "labels"
         elif "algorithm" in training:
             x = training.get("steps_reached", training.get("high_level_steps"))
+            seed = training.get("seed", 0)  # one series per seed, as for DAgger: a run's curve is one draw
             if training["algorithm"] == "flat-sac-her":
-                series, kind = "flat SAC+HER, no hierarchy", "body steps"
+                series, kind = f"flat SAC+HER, no hierarchy, seed {seed}", "body steps"
             else:
                 mazes = training.get("num_envs", 1)  # the older PPO row trained on one maze at a time
-                series = f"SB3 {training['algorithm'].upper()} on the high level, {mazes} maze{'s' * (mazes > 1)}"
+                algorithm = training["algorithm"].upper()
+                series = f"SB3 {algorithm} on the high level, {mazes} maze{'s' * (mazes > 1)}, seed {seed}"
                 kind = "high-level steps"
         else:
             continue
