@@ -27,25 +27,26 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
 
 
-FAMILY_COLOURMAPS = ("Blues", "Greens", "Oranges", "Purples", "Reds", "Greys", "RdPu", "YlOrBr", "BuGn")
-"""One sequential colour map per method (a series less its seed); its seeds are shades of it."""
-
-
 def series_colours(series: list[str], plt: Any) -> dict[str, Any]:
-    """A colour per series: each method (the series less ``, seed N``) its own hue, each seed a shade of it.
+    """A colour per series: each method (the series less ``, seed N``) its own tab10 hue, each seed a shade of it.
 
-    A shared qualitative map (tab20) paired hues across methods, so one method's seed looked like another's.
+    Hues are tab10's ten, one per method in order of first appearance, so no two methods share or neighbour a
+    hue (a shared tab20 had paired hues across methods; sequential maps such as Reds and RdPu came out alike).
+    A method's seeds run from a darker to a lighter shade of its hue.
     """
     families: dict[str, list[str]] = {}
     for name in dict.fromkeys(series):
         families.setdefault(name.split(", seed ")[0], []).append(name)
+    hues = plt.get_cmap("tab10").colors
     colours = {}
     for index, members in enumerate(families.values()):
-        colourmap = plt.get_cmap(FAMILY_COLOURMAPS[index % len(FAMILY_COLOURMAPS)])
-        # Shades from mid to dark: the palest end of a sequential map is too light on white.
-        shades = np.linspace(0.55, 0.95, len(members)) if len(members) > 1 else [0.8]
-        for shade, name in zip(shades, members, strict=True):
-            colours[name] = colourmap(float(shade))
+        hue = np.asarray(hues[index % len(hues)])
+        # Negative: mixed with black; positive: mixed with white. Kept within +-0.35 so a shade stays its hue.
+        for mix, name in zip(
+            np.linspace(-0.35, 0.35, len(members)) if len(members) > 1 else [0.0], members, strict=True
+        ):
+            target = np.ones(3) if mix > 0 else np.zeros(3)
+            colours[name] = tuple(hue + abs(mix) * (target - hue))
     return colours
 
 

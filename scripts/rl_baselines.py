@@ -109,8 +109,9 @@ class Checkpoints(BaseCallback):
     """Writes the model every ``every`` steps as ``<folder>/<steps>.zip`` with ``<steps>.json``, its record.
 
     A checkpoint is taken when a rollout starts (SB3's ``on_rollout_start``), once ``every`` steps have passed
-    since the last: there the model has been updated on every step counted and an off-policy buffer holds
-    every transition counted, so ``<steps>`` is the steps trained on, for PPO (whose rollouts are
+    since the last: there the model has had every update due for the steps counted (none before
+    ``learning_starts``) and an off-policy buffer holds every transition counted (the last ``buffer_size`` once
+    it is full), so ``<steps>`` is the steps trained on, for PPO (whose rollouts are
     ``n_steps`` x mazes long, so its checkpoints fall on whole rollouts) and SAC alike. :attr:`trained_steps` is
     the count at the last rollout start, what a run cut mid-rollout has trained on.
 
@@ -191,7 +192,12 @@ class FlatMazeEnv(gym.Env):
 
     def __init__(self, body: str = "point") -> None:
         self.high = make_maze_env(
-            body, low_level=_no_low_level, split="train", horizon=FLAT_STEPS, maze_size=family_size(body)
+            body,
+            low_level=_no_low_level,
+            split="train",
+            horizon=FLAT_STEPS,
+            maze_size=family_size(body),
+            terminate_on_flip=True,  # step() ends the episode on the reach env's flip termination
         )
         self.reach = self.high.reach
         self.observation_space = self.reach.observation_space
@@ -294,12 +300,21 @@ def refuse_stale_checkpoints(folder: Path, resume: bool) -> None:
 def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict[str, Any]:
     """Trains (or resumes with ``args.resume``), saves the model, and writes (and returns) the training record.
 
+    With ``args.resume`` on a run whose last checkpoint is at or past ``args.steps`` and whose record exists,
+    nothing is trained or written: the stored record is returned as it is (its command, cap and stop reason
+    are the run's, not this call's).
+
     Raises:
         StaleCheckpoints: If a fresh run's checkpoint folder holds files (:func:`refuse_stale_checkpoints`).
     """
     folder = checkpoint_folder(model_path)
     refuse_stale_checkpoints(folder, getattr(args, "resume", False))
     resume = getattr(args, "resume", False) and (folder / "latest.json").is_file()
+    if resume and record_path.is_file() and model_path.is_file():
+        steps = json.loads((folder / "latest.json").read_text())["steps"]
+        if steps >= args.steps:
+            print(f"already trained to {steps} steps, at or past --steps {args.steps}: not training")
+            return json.loads(record_path.read_text())
     if resume:
         model, latest = resume_model(args, folder)
         seconds_before, resumed_at = latest["training_seconds"], list(latest["resumed_at"])
@@ -310,8 +325,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     if resume and remaining > 0:
         print(f"resuming at {latest['steps']} steps ({latest['training_seconds']} s of training so far)")
         resumed_at.append(latest["steps"])
-    elif resume:  # a finished run: scored again as it stands, its record unchanged
-        print(f"already trained to {latest['steps']} steps, at or past --steps {args.steps}: not training")
+    elif resume:  # killed after its last checkpoint, before its record: the record is written now
+        print(f"trained to {latest['steps']} steps, at or past --steps {args.steps}; writing its record")
     cap = WallClockCap(60 * args.max_minutes)
     checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
     dropped = 0
@@ -325,8 +340,9 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
             # step), so they are not counted. A resume collects them again.
             dropped = int(model.num_timesteps) - checkpoints.trained_steps
             model.num_timesteps = checkpoints.trained_steps
-        checkpoints.save()  # where a --resume continues, even when the cap stopped it between checkpoints
-        seconds = checkpoints.seconds()
+        # Where a --resume continues, even when the cap stopped it between checkpoints; its seconds are the
+        # record's, so a later resume and this record agree.
+        seconds = checkpoints.save()["training_seconds"]
     else:
         seconds = seconds_before
     model_path.parent.mkdir(parents=True, exist_ok=True)

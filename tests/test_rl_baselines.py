@@ -93,12 +93,38 @@ def test_a_run_checkpoints_and_a_resumed_run_continues_from_the_last_checkpoint(
     assert model.num_timesteps == 16
 
 
+@pytest.mark.parametrize(("algo", "expected"), [("ppo", [4, 8]), ("sac", [4, 6, 8])])
+def test_checkpoints_are_taken_at_rollout_starts(tmp_path, algo, expected, small_settings, monkeypatch):
+    # Every 3 steps: PPO's rollouts are 4 steps (2 per maze), so at rollout starts it can checkpoint only at 4
+    # and at the end (8), never mid-rollout at 6; SAC's are one vector step (2), so 4, 6 and the end.
+    seen = []
+    save = rl_baselines.Checkpoints.save
+
+    def spy(checkpoints):
+        model = checkpoints.model
+        buffer = getattr(model, "replay_buffer", None)
+        seen.append((model.num_timesteps, None if buffer is None else buffer.size() * model.n_envs))
+        return save(checkpoints)
+
+    monkeypatch.setattr(rl_baselines.Checkpoints, "save", spy)
+    args = argparse.Namespace(**{**vars(_args(algo, 8)), "checkpoint_every": 3})
+    rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "r.json")
+    folder = rl_baselines.checkpoint_folder(tmp_path / "m.zip")
+    assert sorted(int(path.stem) for path in folder.glob("*.zip")) == expected
+    # SAC's buffer holds every transition its checkpoint counts (on a step, it would lack the step's own).
+    assert all(stored in (None, steps) for steps, stored in seen), seen
+
+
 def test_resuming_a_finished_run_trains_nothing_and_keeps_its_record(tmp_path, small_settings):
     model_path = tmp_path / "m.zip"
     first = rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
-    again = rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
-    assert again["resumed_at"] == [] and again["steps_reached"] == 8
-    assert again["training_seconds"] == first["training_seconds"] and again["stopped_by"] == "step budget"
+    stamp = (tmp_path / "r.json").stat().st_mtime_ns, model_path.stat().st_mtime_ns
+    other_cap = argparse.Namespace(**{**vars(_args("ppo", 8)), "max_minutes": 5.0})
+    again = rl_baselines.train(other_cap, model_path, tmp_path / "r.json")
+    assert again == first  # the run's own record, not one rebuilt from this call's arguments
+    assert ((tmp_path / "r.json").stat().st_mtime_ns, model_path.stat().st_mtime_ns) == stamp  # nothing rewritten
+    latest = json.loads((rl_baselines.checkpoint_folder(model_path) / "latest.json").read_text())
+    assert latest["training_seconds"] == first["training_seconds"]  # the record and its checkpoint agree
 
 
 def test_a_fresh_run_refuses_a_folder_holding_another_runs_checkpoints(tmp_path, small_settings, capsys):
