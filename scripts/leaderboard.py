@@ -50,11 +50,10 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "SB3 SAC on the high level to 200k high-level steps; PPO and SAC on seeds 1 and up",
-        "`python scripts/rl_baselines.py --algo sac --steps 200000 --max-minutes 100 --resume --score-checkpoints`: "
-        "add `--out /work/rl_runs`, where SAC's run stopped at 42,760 steps (50-minute cap) and left its "
-        "checkpoint (on the machine that ran it, not in the repository); PPO reached 200,704 on seed 0 "
-        "(`--seed 1` for another)",
+        "SB3 SAC on the high level from 134,832 to 200k high-level steps; PPO seeds 2 and up; SAC seeds 1 and up",
+        "`python scripts/rl_baselines.py --algo sac --steps 200000 --max-minutes 100 --resume --score-checkpoints "
+        "--out /work/rl_runs`: SAC's checkpoint at 134,832 steps is there (on the machine that ran it, not in "
+        "the repository); PPO reached 200,704 on seeds 0 and 1 (`--algo ppo --seed 2` for another)",
     ),
     (
         "ant4",
