@@ -47,18 +47,19 @@ def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached
     assert (tmp_path / "m.zip").is_file()
 
 
-def _args(algo, steps, **kw):
-    return argparse.Namespace(
-        algo=algo,
-        body="point",
-        steps=steps,
-        max_minutes=60.0,
-        num_envs=2,
-        seed=0,
-        checkpoint_every=4,
-        resume=True,
-        **kw,
-    )
+def _args(algo, steps, **overrides):
+    """The script's arguments for a short test run; ``overrides`` replace or add keys."""
+    defaults = {
+        "algo": algo,
+        "body": "point",
+        "steps": steps,
+        "max_minutes": 60.0,
+        "num_envs": 2,
+        "seed": 0,
+        "checkpoint_every": 4,
+        "resume": True,
+    }
+    return argparse.Namespace(**{**defaults, **overrides})
 
 
 @pytest.fixture
@@ -107,7 +108,7 @@ def test_checkpoints_are_taken_at_rollout_starts(tmp_path, algo, expected, small
         return save(checkpoints)
 
     monkeypatch.setattr(rl_baselines.Checkpoints, "save", spy)
-    args = argparse.Namespace(**{**vars(_args(algo, 8)), "checkpoint_every": 3})
+    args = _args(algo, 8, checkpoint_every=3)
     rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "r.json")
     folder = rl_baselines.checkpoint_folder(tmp_path / "m.zip")
     assert sorted(int(path.stem) for path in folder.glob("*.zip")) == expected
@@ -119,7 +120,7 @@ def test_resuming_a_finished_run_trains_nothing_and_keeps_its_record(tmp_path, s
     model_path = tmp_path / "m.zip"
     first = rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
     stamp = (tmp_path / "r.json").stat().st_mtime_ns, model_path.stat().st_mtime_ns
-    other_cap = argparse.Namespace(**{**vars(_args("ppo", 8)), "max_minutes": 5.0})
+    other_cap = _args("ppo", 8, max_minutes=5.0)
     again = rl_baselines.train(other_cap, model_path, tmp_path / "r.json")
     assert again == first  # the run's own record, not one rebuilt from this call's arguments
     assert ((tmp_path / "r.json").stat().st_mtime_ns, model_path.stat().st_mtime_ns) == stamp  # nothing rewritten
@@ -130,7 +131,7 @@ def test_resuming_a_finished_run_trains_nothing_and_keeps_its_record(tmp_path, s
 def test_a_fresh_run_refuses_a_folder_holding_another_runs_checkpoints(tmp_path, small_settings, capsys):
     model_path = tmp_path / "m.zip"
     rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
-    fresh = argparse.Namespace(**{**vars(_args("ppo", 4)), "resume": False})
+    fresh = _args("ppo", 4, resume=False)
     with pytest.raises(rl_baselines.StaleCheckpoints, match="m_checkpoints holds another run's checkpoints"):
         rl_baselines.train(fresh, model_path, tmp_path / "r.json")
     leftovers = rl_baselines.checkpoint_folder(tmp_path / "out" / "point5_ppo_seed0.zip")
@@ -176,7 +177,7 @@ def test_flat_sac_her_resumes_with_its_her_buffer(tmp_path, monkeypatch):
 
 
 def test_tensorboard_logs_the_training_run(tmp_path, small_settings):
-    args = argparse.Namespace(**{**vars(_args("ppo", 8)), "tensorboard": str(tmp_path / "tb")})
+    args = _args("ppo", 8, tensorboard=str(tmp_path / "tb"))
     rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "r.json")
     assert list((tmp_path / "tb").rglob("events.out.tfevents.*"))
 
