@@ -101,6 +101,10 @@ class WallClockCap(BaseCallback):
         return not self.capped
 
 
+UNRECORDED_RUN = "not recorded: this checkpoint was written before checkpoints recorded their run's command"
+"""``command_note`` of a report on a checkpoint that predates per-checkpoint commands."""
+
+
 class StaleCheckpoints(RuntimeError):
     """A fresh run's checkpoint folder already holds another run's checkpoints."""
 
@@ -115,15 +119,20 @@ class Checkpoints(BaseCallback):
     ``n_steps`` x mazes long, so its checkpoints fall on whole rollouts) and SAC alike. :attr:`trained_steps` is
     the count at the last rollout start, what a run cut mid-rollout has trained on.
 
-    The record holds the steps and the training seconds so far (``seconds_before`` plus this run's); an
+    The record holds the steps and the training seconds so far (``seconds_before`` plus this run's) and
+    ``run``, the command and wall-time cap of the run that wrote it (a checkpoint scored by a later run is
+    reported with the run that trained it, :func:`score_checkpoints`); an
     off-policy model's replay buffer is written first, as ``<folder>/replay_buffer_<steps>.pkl``, and
     ``latest.json`` names the model and its buffer last, so a run killed at any point resumes from a model
     and the buffer saved with it.
     """
 
-    def __init__(self, folder: Path, every: int, seconds_before: float, resumed_at: list[int]) -> None:
+    def __init__(
+        self, folder: Path, every: int, seconds_before: float, resumed_at: list[int], run: dict[str, Any] | None = None
+    ) -> None:
         super().__init__()
         self.folder = folder
+        self.run = run or {}
         self.every = every
         self.seconds_before = seconds_before
         self.resumed_at = resumed_at
@@ -158,7 +167,12 @@ class Checkpoints(BaseCallback):
             latest["replay_buffer"] = f"replay_buffer_{steps}.pkl"
             atomic_write_with(self.folder / latest["replay_buffer"], self.model.save_replay_buffer)
         atomic_write_with(self.folder / f"{steps}.zip", self.model.save)
-        record = {"steps": steps, "training_seconds": round(self.seconds(), 1), "resumed_at": self.resumed_at}
+        record = {
+            "steps": steps,
+            "training_seconds": round(self.seconds(), 1),
+            "resumed_at": self.resumed_at,
+            **self.run,
+        }
         atomic_write_json(self.folder / f"{steps}.json", record)
         atomic_write_json(self.folder / "latest.json", {**record, **latest})
         for old in self.folder.glob("replay_buffer*.pkl"):
@@ -328,7 +342,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     elif resume:  # killed after its last checkpoint, before its record: the record is written now
         print(f"trained to {latest['steps']} steps, at or past --steps {args.steps}; writing its record")
     cap = WallClockCap(60 * args.max_minutes)
-    checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at)
+    run = {"max_minutes": args.max_minutes, "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]])}
+    checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at, run)
     dropped = 0
     if remaining > 0:  # --steps 0: the untrained model, where a learning curve starts
         # reset_num_timesteps=False: SB3 then counts `remaining` on from the checkpoint's steps.
@@ -357,14 +372,13 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         "steps_dropped": dropped,
         "step_kind": step_kind,
         "stopped_by": "wall-time cap" if cap.capped else "step budget" if args.steps else "untrained (--steps 0)",
-        "max_minutes": args.max_minutes,
         "num_envs": 1 if args.algo == "flat-sac-her" else args.num_envs,
         "body": args.body,
         "training_split": "train",
         "training_seconds": round(seconds, 1),
         "resumed_at": resumed_at,
         "seed": args.seed,
-        "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]]),
+        **run,
     }
     atomic_write_json(record_path, record)
     return record
@@ -403,11 +417,20 @@ def score(args: argparse.Namespace, model_path: Path, record: dict[str, Any], *,
 
 
 def score_checkpoints(args: argparse.Namespace, model_path: Path, record: dict[str, Any]) -> None:
-    """Scores each checkpoint short of the final model (``record``'s steps) as ``..._rl_s<seed>_at_<steps>.json``."""
+    """Scores each checkpoint short of the final model (``record``'s steps) as ``..._rl_s<seed>_at_<steps>.json``.
+
+    A checkpoint's report carries the command and cap of the run that wrote the checkpoint, which may be an
+    earlier run than ``record``'s. A checkpoint written before checkpoints recorded them takes ``record``'s
+    where that run wrote it (past the step it resumed at), and otherwise says it is not recorded
+    (``"command": null`` with ``command_note``) rather than borrow another run's.
+    """
     folder = checkpoint_folder(model_path)
     steps = sorted(int(path.stem) for path in folder.glob("*.zip") if path.stem.isdigit())
+    final_run_from = max(record["resumed_at"], default=0)  # the step the final model's run started at
     for step in (step for step in steps if step < record["steps_reached"]):
         checkpoint = json.loads((folder / f"{step}.json").read_text())
+        if "command" not in checkpoint and step <= final_run_from:
+            checkpoint |= {"command": None, "max_minutes": None, "command_note": UNRECORDED_RUN}
         at = {**record, **checkpoint, "steps_reached": step, "stopped_by": f"checkpoint of {model_path.name}"}
         del at["steps"]
         score(args, folder / f"{step}.zip", at, suffix=f"_at_{step}")

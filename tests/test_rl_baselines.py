@@ -161,6 +161,30 @@ def test_every_checkpoint_short_of_the_final_model_is_scored_at_its_own_steps(tm
     assert [at["steps_reached"] for _, at, _ in scored] == [4, 8] and all("steps" not in at for _, at, _ in scored)
 
 
+def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_settings, monkeypatch):
+    model_path = tmp_path / "m.zip"
+    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "60"])
+    rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
+    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "30", "--resume"])
+    record = rl_baselines.train(_args("ppo", 16, max_minutes=30.0), model_path, tmp_path / "r.json")
+    folder = rl_baselines.checkpoint_folder(model_path)
+    for step in (4, 12):  # as checkpoints were written before they recorded their run
+        old = json.loads((folder / f"{step}.json").read_text())
+        del old["command"], old["max_minutes"]
+        (folder / f"{step}.json").write_text(json.dumps(old))
+    scored = {}
+    monkeypatch.setattr(rl_baselines, "score", lambda args, path, at, suffix: scored.update({path.stem: at}))
+    rl_baselines.score_checkpoints(_args("ppo", 16, max_minutes=5.0), model_path, record)
+    assert sorted(scored, key=int) == ["4", "8", "12"]
+    first_run = "python scripts/rl_baselines.py --max-minutes 60"
+    assert (scored["8"]["command"], scored["8"]["max_minutes"]) == (first_run, 60.0)  # not the resume's 30
+    assert (scored["12"]["command"], scored["12"]["max_minutes"]) == (f"{first_run[:-2]}30 --resume", 30.0)
+    # Unrecorded: 4 is the first run's, so unknown; 12 is past the resume at 8, so the final run's.
+    assert scored["4"]["command"] is None and scored["4"]["command_note"] == rl_baselines.UNRECORDED_RUN
+    assert scored["12"]["command"] == record["command"] and "command_note" not in scored["12"]
+    assert record["command"].endswith("--max-minutes 30 --resume")  # the final model's run
+
+
 def test_flat_sac_her_resumes_with_its_her_buffer(tmp_path, monkeypatch):
     # Collection only (learning would start after a whole 500-step episode): the HER buffer is what resumes.
     settings = {**rl_baselines.SETTINGS["flat-sac-her"], "buffer_size": 1_000, "learning_starts": 10_000}
