@@ -128,11 +128,11 @@ class Checkpoints(BaseCallback):
     """
 
     def __init__(
-        self, folder: Path, every: int, seconds_before: float, resumed_at: list[int], run: dict[str, Any] | None = None
+        self, folder: Path, every: int, seconds_before: float, resumed_at: list[int], run: dict[str, Any]
     ) -> None:
         super().__init__()
         self.folder = folder
-        self.run = run or {}
+        self.run = run
         self.every = every
         self.seconds_before = seconds_before
         self.resumed_at = resumed_at
