@@ -316,7 +316,8 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
 
     With ``args.resume`` on a run whose last checkpoint is at or past ``args.steps`` and whose record exists,
     nothing is trained or written: the stored record is returned as it is (its command, cap and stop reason
-    are the run's, not this call's).
+    are the run's, not this call's). On a run killed after its last checkpoint but before its record, nothing
+    is trained either: the model and record are written now, naming the killed run's command and cap.
 
     Raises:
         StaleCheckpoints: If a fresh run's checkpoint folder holds files (:func:`refuse_stale_checkpoints`).
@@ -343,6 +344,9 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
         print(f"trained to {latest['steps']} steps, at or past --steps {args.steps}; writing its record")
     cap = WallClockCap(60 * args.max_minutes)
     run = {"max_minutes": args.max_minutes, "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]])}
+    if resume and remaining <= 0 and "command" in latest:
+        # Nothing is trained now: the model is the killed run's, so its record names that run, not this call.
+        run = {"max_minutes": latest["max_minutes"], "command": latest["command"]}
     checkpoints = Checkpoints(folder, getattr(args, "checkpoint_every", 25_000), seconds_before, resumed_at, run)
     dropped = 0
     if remaining > 0:  # --steps 0: the untrained model, where a learning curve starts

@@ -185,6 +185,18 @@ def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_s
     assert record["command"].endswith("--max-minutes 30 --resume")  # the final model's run
 
 
+def test_a_record_written_after_a_kill_names_the_run_that_trained_the_model(tmp_path, small_settings, monkeypatch):
+    model_path, record_path = tmp_path / "m.zip", tmp_path / "r.json"
+    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "60"])
+    trained = rl_baselines.train(_args("ppo", 8), model_path, record_path)
+    record_path.unlink(), model_path.unlink()  # killed after its last checkpoint, before its model and record
+    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "5", "--resume"])
+    record = rl_baselines.train(_args("ppo", 8, max_minutes=5.0), model_path, record_path)
+    assert (record["command"], record["max_minutes"]) == ("python scripts/rl_baselines.py --max-minutes 60", 60.0)
+    assert record == trained and json.loads(record_path.read_text()) == trained  # as the killed run would have
+    assert model_path.is_file()
+
+
 def test_flat_sac_her_resumes_with_its_her_buffer(tmp_path, monkeypatch):
     # Collection only (learning would start after a whole 500-step episode): the HER buffer is what resumes.
     settings = {**rl_baselines.SETTINGS["flat-sac-her"], "buffer_size": 1_000, "learning_starts": 10_000}
