@@ -8,12 +8,13 @@ Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|results|spread|figure
+Usage: python scripts/leaderboard.py --section suites|results|spread|paired|figure
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from collections.abc import Callable
@@ -34,7 +35,8 @@ NOT_RUN: list[tuple[str, str, str]] = [
     (
         "point5",
         "DAgger (plain), generic learner, seeds 2 and up",
-        "`python scripts/benchmark_dagger.py --seed 2` (and 3, ...): seeds 0 and 1 ran, two seeds are not a spread",
+        "`python scripts/benchmark_dagger.py --seed 2` (and 3, ...): seeds 0 and 1 ran (the spread table below "
+        "sets them side by side; two seeds are too few to read a spread from)",
     ),
     (
         "point5",
@@ -177,11 +179,11 @@ TRAINED_ROWS = ("*_*_generic_s*_*.json", "*_*_protocol_s*_*.json", "*_*_default_
 """The file patterns of rows trained by ``scripts/benchmark_dagger.py``, plain DAgger or an active method."""
 
 
-def spread_table() -> str:
-    """DAgger's rows across seeds: per suite, method, learner and label target, each seed's successes, mean, range.
+def dagger_groups() -> dict[tuple[str, str, str, int], dict[int, dict]]:
+    """The DAgger rows by (suite, method, learner, label target), each a dict of its reports by seed.
 
-    One seed's row is one draw of the training run; this table shows how far seeds disagree at each budget.
-    The label count of a row is the first evaluation at or past its target, so it varies a little by seed.
+    Raises:
+        SystemExit: If a plain-DAgger file's name does not parse (a misnamed row would silently drop out).
     """
     groups: dict[tuple[str, str, str, int], dict[int, dict]] = {}
     # Every plain-DAgger file must parse (a misnamed one is an error); active methods are found by their learner.
@@ -194,6 +196,16 @@ def spread_table() -> str:
             raise SystemExit(f"error: {path}: a DAgger row's name must be SUITE_METHOD_LEARNER_sSEED_TARGET.json")
         key = (match["suite"], match["method"], match["learner"], int(match["target"]))
         groups.setdefault(key, {})[int(match["seed"])] = load_report(path)
+    return groups
+
+
+def spread_table() -> str:
+    """DAgger's rows across seeds: per suite, method, learner and label target, each seed's successes, mean, range.
+
+    One seed's row is one draw of the training run; this table shows how far seeds disagree at each budget.
+    The label count of a row is the first evaluation at or past its target, so it varies a little by seed.
+    """
+    groups = dagger_groups()
     order = list(SUITE_SPECS)
     lines = [
         "| suite | method | learner | label target | seeds | labels per seed | successes per seed (of 100) | mean | "
@@ -214,6 +226,56 @@ def spread_table() -> str:
     return "\n".join(lines)
 
 
+def sign_test_p(ahead: int, behind: int) -> float:
+    """The two-sided exact sign test's p-value for ``ahead`` against ``behind`` paired outcomes (ties dropped)."""
+    n = ahead + behind
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, k) for k in range(min(ahead, behind) + 1)) / 2**n
+    return min(1.0, 2 * tail)
+
+
+def paired_table() -> str:
+    """Each active method against plain DAgger with the same learner, seed by seed, at each label target.
+
+    A seed is the unit: its two rows share the seed's untrained learner and the suite's evaluation tasks, so
+    its difference (the method's success rate minus plain DAgger's, in percentage points) is a paired one; each
+    row is the first evaluation at or past the target, so the two label counts differ by a few. The sign test
+    counts only how many seeds favour the method (ties dropped); with n seeds its smallest two-sided p is
+    2 / 2**n, so 4 seeds cannot reach 0.05 whatever they show. Untrained rows (target 0) are left out: both
+    methods' are the same learner.
+    """
+    groups = dagger_groups()
+    order = list(SUITE_SPECS)
+    lines = [
+        "| suite | method against plain DAgger | learner | label target | seeds | difference per seed (points) | "
+        "ahead / behind / tied | sign test, two-sided p | reading |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    pairs = sorted(
+        (key for key in groups if key[1] != "dagger" and key[3] > 0 and (key[0], "dagger", *key[2:]) in groups),
+        key=lambda key: (order.index(key[0]), key[1:]),
+    )
+    for suite, method, learner, target in pairs:
+        ours, plain = groups[(suite, method, learner, target)], groups[(suite, "dagger", learner, target)]
+        seeds = sorted(set(ours) & set(plain))
+        differences = [round(100 * (ours[seed]["success_rate"] - plain[seed]["success_rate"])) for seed in seeds]
+        ahead, behind = sum(d > 0 for d in differences), sum(d < 0 for d in differences)
+        p = sign_test_p(ahead, behind)
+        if p < 0.05:
+            reading = f"{'ahead' if ahead > behind else 'behind'} beyond chance (p < 0.05)"
+        elif ahead == len(seeds) or behind == len(seeds):
+            reading = f"{'ahead' if ahead else 'behind'} on every seed: a direction, not shown at 5%"
+        else:
+            reading = "mixed, not shown at 5%"
+        lines.append(
+            f"| `{suite}` | `{method}` | {learner} | {target} | {', '.join(map(str, seeds))} | "
+            f"{', '.join(f'{d:+d}' for d in differences)} | {ahead} / {behind} / {len(seeds) - ahead - behind} | "
+            f"{p:.3g} | {reading} |"
+        )
+    return "\n".join(lines)
+
+
 def figure_section() -> str:
     """The figure (drawn by ``scripts/labels_vs_steps.py``) and the table of its points."""
     points, _ = figure_points(RESULTS)
@@ -226,6 +288,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "suites": suites_table,
     "results": results_table,
     "spread": spread_table,
+    "paired": paired_table,
     "figure": figure_section,
 }
 """The page's generated sections, by the name ``--section`` takes."""

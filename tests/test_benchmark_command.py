@@ -287,3 +287,35 @@ def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeyp
     (tmp_path / "ant4_dagger_protocol_seed2.json").write_text("{}")
     with pytest.raises(SystemExit, match=r"ant4_dagger_protocol_seed2\.json: a DAgger row.s name must be"):
         leaderboard.spread_table()
+
+
+def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_path, monkeypatch):
+    from scipy.stats import binomtest
+    from script_helpers import load_script
+
+    leaderboard = load_script("scripts/leaderboard.py")
+    report = json.loads((leaderboard.RESULTS / "ant4_dagger_protocol_s0_1000.json").read_text())
+
+    def write(method, seed, target, successes):
+        row = {**report, "successes": successes, "success_rate": successes / 100}
+        (tmp_path / f"ant4_{method}_protocol_s{seed}_{target}.json").write_text(json.dumps(row))
+
+    # At 300 labels gated is ahead on six seeds; at 1,000 on three, behind on one, tied on one; the untrained
+    # rows and a seed only one method ran are left out.
+    for seed in range(6):
+        write("dagger", seed, 0, 1), write("gated", seed, 0, 1)
+        write("dagger", seed, 300, 60), write("gated", seed, 300, 70 + seed)
+    for seed, gated in enumerate((90, 91, 92, 80, 85)):
+        write("dagger", seed, 1000, 85), write("gated", seed, 1000, gated)
+    write("gated", 7, 1000, 99)
+    monkeypatch.setattr(leaderboard, "RESULTS", tmp_path)
+    rows = leaderboard.paired_table().splitlines()[2:]
+    assert rows == [
+        "| `ant4` | `gated` | protocol | 300 | 0, 1, 2, 3, 4, 5 | +10, +11, +12, +13, +14, +15 | 6 / 0 / 0 | "
+        "0.0312 | ahead beyond chance (p < 0.05) |",
+        "| `ant4` | `gated` | protocol | 1000 | 0, 1, 2, 3, 4 | +5, +6, +7, -5, +0 | 3 / 1 / 1 | 0.625 | "
+        "mixed, not shown at 5% |",
+    ]
+    for ahead, behind in ((4, 0), (5, 0), (3, 1), (6, 2), (0, 3)):
+        assert leaderboard.sign_test_p(ahead, behind) == pytest.approx(binomtest(ahead, ahead + behind).pvalue)
+    assert leaderboard.sign_test_p(0, 0) == 1.0
