@@ -72,10 +72,11 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "ant4",
-        "SB3 PPO and SAC on the high level, flat SAC+HER",
+        "SB3 PPO beyond 24,576 high-level steps; SAC on the high level; flat SAC+HER",
         "`python scripts/rl_baselines.py --body ant --algo ppo --steps 200000 --max-minutes 100 --resume "
-        "--score-checkpoints`: the ant's high-level env took about 10 random subgoals a second on 8 mazes beside "
-        "two jobs (the point's: 150, alone), so 200k steps is several sessions of resumed runs",
+        "--score-checkpoints` (or `--algo sac`, `--algo flat-sac-her`): PPO trained at about 9 subgoals a second "
+        "on 8 mazes beside one other job (the point's PPO: about 85, seeds 0-2), so 200k steps is about 6 hours "
+        "of resumed runs",
     ),
     (
         "ant suites",

@@ -435,7 +435,9 @@ def score_checkpoints(args: argparse.Namespace, model_path: Path, record: dict[s
         checkpoint = json.loads((folder / f"{step}.json").read_text())
         if "command" not in checkpoint and step <= final_run_from:
             checkpoint |= {"command": None, "max_minutes": None, "command_note": UNRECORDED_RUN}
-        at = {**record, **checkpoint, "steps_reached": step, "stopped_by": f"checkpoint of {model_path.name}"}
+        # A checkpoint falls on a rollout start, so no rollout was cut from its count, whatever the final run's.
+        at = {**record, **checkpoint, "steps_reached": step, "steps_dropped": 0}
+        at["stopped_by"] = f"checkpoint of {model_path.name}"
         del at["steps"]
         score(args, folder / f"{step}.zip", at, suffix=f"_at_{step}")
 

@@ -156,9 +156,11 @@ def test_every_checkpoint_short_of_the_final_model_is_scored_at_its_own_steps(tm
     record = rl_baselines.train(_args("ppo", 12), model_path, tmp_path / "r.json")
     scored = []
     monkeypatch.setattr(rl_baselines, "score", lambda args, path, at, suffix: scored.append((path.name, at, suffix)))
-    rl_baselines.score_checkpoints(_args("ppo", 12), model_path, record)
+    capped = {**record, "steps_dropped": 2}  # as if the cap had cut the final run's last rollout
+    rl_baselines.score_checkpoints(_args("ppo", 12), model_path, capped)
     assert [(name, suffix) for name, _, suffix in scored] == [("4.zip", "_at_4"), ("8.zip", "_at_8")]
     assert [at["steps_reached"] for _, at, _ in scored] == [4, 8] and all("steps" not in at for _, at, _ in scored)
+    assert [at["steps_dropped"] for _, at, _ in scored] == [0, 0]  # the final run's cut is not a checkpoint's
 
 
 def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_settings, monkeypatch):
