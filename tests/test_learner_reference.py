@@ -70,8 +70,12 @@ def test_a_fixed_seed_learner_gives_the_recorded_numbers(numbers, variant):
     recorded, now = json.loads(REFERENCE.read_text())[variant], numbers[variant]
     assert now["initial_weights_sha256"] == recorded["initial_weights_sha256"]  # same initialisation
     assert now["next_draw"] == recorded["next_draw"]  # the same number of draws from the learner's stream
-    for key in ("untrained_subgoals", "losses", "subgoals"):
+    for key in ("untrained_subgoals", "subgoals"):
         np.testing.assert_allclose(now[key], recorded[key], rtol=1e-5, atol=1e-7, err_msg=key)
+    # The planning variant's summed float32 loss moves in its fourth digit with the thread count and the CPU
+    # (191.06 at one thread and 191.10 at two on one AMD EPYC, 191.20 where recorded) while its subgoals
+    # agree to 1e-7; another seed's is 66.7. So 1% still sees any change of draws, not a change of kernels.
+    np.testing.assert_allclose(now["losses"], recorded["losses"], rtol=1e-2, err_msg="losses")
 
 
 def test_the_check_can_fail(numbers):
