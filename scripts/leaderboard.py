@@ -14,7 +14,6 @@ Usage: python scripts/leaderboard.py --section suites|results|spread|paired|figu
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import sys
 from collections.abc import Callable
@@ -22,6 +21,7 @@ from pathlib import Path
 
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -231,11 +231,8 @@ def spread_table() -> str:
 
 def sign_test_p(ahead: int, behind: int) -> float:
     """The two-sided exact sign test's p-value for ``ahead`` against ``behind`` paired outcomes (ties dropped)."""
-    n = ahead + behind
-    if n == 0:
-        return 1.0
-    tail = sum(math.comb(n, k) for k in range(min(ahead, behind) + 1)) / 2**n
-    return min(1.0, 2 * tail)
+    _, upper, lower = sign_test(ahead, ahead + behind, 0.05)  # the claims' one-sided tails, doubled
+    return min(1.0, 2 * min(upper, lower))
 
 
 def paired_table() -> str:
