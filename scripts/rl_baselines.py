@@ -343,7 +343,7 @@ def train(args: argparse.Namespace, model_path: Path, record_path: Path) -> dict
     elif resume:  # killed after its last checkpoint, before its record: the record is written now
         print(f"trained to {latest['steps']} steps, at or past --steps {args.steps}; writing its record")
     cap = WallClockCap(60 * args.max_minutes)
-    run = {"max_minutes": args.max_minutes, "command": shlex.join(["python", "scripts/rl_baselines.py", *sys.argv[1:]])}
+    run = {"max_minutes": args.max_minutes, "command": args.command}
     if resume and remaining <= 0 and "command" in latest:
         # Nothing is trained now: the model is the killed run's, so its record names that run, not this call.
         run = {"max_minutes": latest["max_minutes"], "command": latest["command"]}
@@ -464,6 +464,8 @@ def main(argv: list[str] | None = None) -> int:
         "--score-checkpoints", action="store_true", help="also score every checkpoint short of the final model"
     )
     args = parser.parse_args(argv)
+    # The record names the call that trained: main's argv when given, so a caller's run is not named sys.argv.
+    args.command = shlex.join(["python", "scripts/rl_baselines.py", *(sys.argv[1:] if argv is None else argv)])
     if args.steps < 0 or args.num_envs < 1 or args.score_num_envs < 1 or not args.max_minutes > 0:
         parser.error(f"--steps must be >= 0, --num-envs and --score-num-envs >= 1 and --max-minutes > 0, got {args}")
     if args.checkpoint_every < 1:

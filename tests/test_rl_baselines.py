@@ -38,7 +38,9 @@ def test_the_final_goal_policy_proposes_the_goal():
 
 
 def test_the_wall_time_cap_stops_training_and_the_record_gives_the_steps_reached(tmp_path):
-    args = argparse.Namespace(algo="ppo", body="point", steps=10_000, max_minutes=1e-9, num_envs=2, seed=0)
+    args = argparse.Namespace(
+        algo="ppo", body="point", steps=10_000, max_minutes=1e-9, num_envs=2, seed=0, command="python scripts/x"
+    )
     record = rl_baselines.train(args, tmp_path / "m.zip", tmp_path / "m.training.json")
     assert record["stopped_by"] == "wall-time cap"
     # The cap cut the first rollout after one vector step of 2 mazes: never trained on, so not counted.
@@ -58,6 +60,7 @@ def _args(algo, steps, **overrides):
         "seed": 0,
         "checkpoint_every": 4,
         "resume": True,
+        "command": "python scripts/rl_baselines.py",
     }
     return argparse.Namespace(**{**defaults, **overrides})
 
@@ -165,10 +168,10 @@ def test_every_checkpoint_short_of_the_final_model_is_scored_at_its_own_steps(tm
 
 def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_settings, monkeypatch):
     model_path = tmp_path / "m.zip"
-    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "60"])
-    rl_baselines.train(_args("ppo", 8), model_path, tmp_path / "r.json")
-    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "30", "--resume"])
-    record = rl_baselines.train(_args("ppo", 16, max_minutes=30.0), model_path, tmp_path / "r.json")
+    first_run = "python scripts/rl_baselines.py --max-minutes 60"
+    rl_baselines.train(_args("ppo", 8, command=first_run), model_path, tmp_path / "r.json")
+    resumed = _args("ppo", 16, max_minutes=30.0, command=f"{first_run[:-2]}30 --resume")
+    record = rl_baselines.train(resumed, model_path, tmp_path / "r.json")
     folder = rl_baselines.checkpoint_folder(model_path)
     for step in (4, 12):  # as checkpoints were written before they recorded their run
         old = json.loads((folder / f"{step}.json").read_text())
@@ -178,7 +181,6 @@ def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_s
     monkeypatch.setattr(rl_baselines, "score", lambda args, path, at, suffix: scored.update({path.stem: at}))
     rl_baselines.score_checkpoints(_args("ppo", 16, max_minutes=5.0), model_path, record)
     assert sorted(scored, key=int) == ["4", "8", "12"]
-    first_run = "python scripts/rl_baselines.py --max-minutes 60"
     assert (scored["8"]["command"], scored["8"]["max_minutes"]) == (first_run, 60.0)  # not the resume's 30
     assert (scored["12"]["command"], scored["12"]["max_minutes"]) == (f"{first_run[:-2]}30 --resume", 30.0)
     # Unrecorded: 4 is the first run's, so unknown; 12 is past the resume at 8, so the final run's.
@@ -189,14 +191,23 @@ def test_a_checkpoint_is_reported_with_the_run_that_trained_it(tmp_path, small_s
 
 def test_a_record_written_after_a_kill_names_the_run_that_trained_the_model(tmp_path, small_settings, monkeypatch):
     model_path, record_path = tmp_path / "m.zip", tmp_path / "r.json"
-    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "60"])
-    trained = rl_baselines.train(_args("ppo", 8), model_path, record_path)
+    first_run = "python scripts/rl_baselines.py --max-minutes 60"
+    trained = rl_baselines.train(_args("ppo", 8, command=first_run), model_path, record_path)
     record_path.unlink(), model_path.unlink()  # killed after its last checkpoint, before its model and record
-    monkeypatch.setattr(rl_baselines.sys, "argv", ["rl_baselines.py", "--max-minutes", "5", "--resume"])
-    record = rl_baselines.train(_args("ppo", 8, max_minutes=5.0), model_path, record_path)
+    resumed = _args("ppo", 8, max_minutes=5.0, command="python scripts/rl_baselines.py --max-minutes 5 --resume")
+    record = rl_baselines.train(resumed, model_path, record_path)
     assert (record["command"], record["max_minutes"]) == ("python scripts/rl_baselines.py --max-minutes 60", 60.0)
     assert record == trained and json.loads(record_path.read_text()) == trained  # as the killed run would have
     assert model_path.is_file()
+
+
+def test_the_record_names_mains_argv_not_the_processs(tmp_path, small_settings, monkeypatch):
+    monkeypatch.setattr(rl_baselines.sys, "argv", ["pytest", "-q"])
+    monkeypatch.setattr(rl_baselines, "score", lambda args, path, record: None)
+    argv = ["--algo", "ppo", "--steps", "0", "--num-envs", "2", "--out", str(tmp_path)]
+    assert rl_baselines.main(argv) == 0
+    record = json.loads((tmp_path / "point5_ppo_seed0_untrained.training.json").read_text())
+    assert record["command"] == "python scripts/rl_baselines.py " + " ".join(argv)
 
 
 def test_flat_sac_her_resumes_with_its_her_buffer(tmp_path, monkeypatch):
