@@ -1,6 +1,8 @@
-"""Prints one section of ``docs/leaderboard.md`` (the suites, the results or the figure) from the committed results.
+"""Prints one section of the leaderboard pages (suites, summary, results, figure, ...) from the committed results.
 
-Every row of the results table is one ``antmaze-hirl benchmark --json`` report in
+The summary (``docs/leaderboard.md``) is the leaderboard itself: one row per suite, entry and budget, the seeds
+of a trained entry pooled with a cluster bootstrap over seeds and tasks (every seed plays the same tasks).
+Every row of the results table (``docs/results/leaderboard-rows.md``) is one ``antmaze-hirl benchmark --json`` report in
 ``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
 figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
@@ -8,7 +10,7 @@ Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|results|spread|paired|figure
+Usage: python scripts/leaderboard.py --section suites|summary|results|spread|paired|figure|points
 """
 
 from __future__ import annotations
@@ -19,16 +21,20 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 from statsmodels.stats.multitest import multipletests
 
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
+from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
 PAGE = ROOT / "docs" / "leaderboard.md"
+ROWS_PAGE = ROOT / "docs" / "results" / "leaderboard-rows.md"
+"""The page of every row, one per results file, with the seeds side by side and the figure's points."""
 
 GOAL = 0.95
 """The success the oracle hierarchy should reach on every suite (the page's "oracle goal" column)."""
@@ -231,6 +237,145 @@ def spread_table() -> str:
     return "\n".join(lines)
 
 
+RL_ROW = re.compile(
+    r"(?P<suite>[a-z0-9]+)_(?P<algorithm>ppo|sac|flat_sac_her)_rl_s(?P<seed>\d+)(?P<untrained>_untrained)?\.json"
+)
+"""An RL baseline's final or untrained row (``scripts/rl_baselines.py``); its checkpoints (``_at_N``) are the curve."""
+RL_NAMES = {
+    "ppo": "SB3 PPO on the high level",
+    "sac": "SB3 SAC on the high level",
+    "flat_sac_her": "flat SAC+HER, no hierarchy",
+}
+"""The summary's name of each RL baseline, in the order it lists them."""
+
+
+def rl_groups() -> dict[tuple[str, str, bool], dict[int, dict]]:
+    """The RL baselines' final and untrained rows by (suite, algorithm, untrained), each a dict of reports by seed."""
+    groups: dict[tuple[str, str, bool], dict[int, dict]] = {}
+    for path in sorted(RESULTS.glob("*_rl_s*.json")):
+        match = RL_ROW.fullmatch(path.name)
+        if match is not None:
+            key = (match["suite"], match["algorithm"], bool(match["untrained"]))
+            groups.setdefault(key, {})[int(match["seed"])] = load_report(path)
+    return groups
+
+
+def outcome_table(reports: list[dict]) -> np.ndarray:
+    """The ``(seeds, tasks)`` success rates of reports that played the same tasks (one row per report).
+
+    Raises:
+        SystemExit: If the reports did not play the same tasks (they could not be pooled).
+    """
+    rows, tasks = [], None
+    for report in reports:
+        by_task: dict[int, list[bool]] = {}
+        for episode in report["episode_outcomes"]:
+            by_task.setdefault(episode["task_id"], []).append(bool(episode["success"]))
+        if tasks is None:
+            tasks = sorted(by_task)
+        elif sorted(by_task) != tasks:
+            raise SystemExit(f"error: {report['policy']}: its tasks differ from its group's, so it cannot be pooled")
+        rows.append([np.mean(by_task[task]) for task in tasks])
+    return np.array(rows)
+
+
+def _minutes(seconds: list[float]) -> str:
+    low, high = round(min(seconds) / 60), round(max(seconds) / 60)
+    return f"{low} min" if low == high else f"{low}-{high} min"
+
+
+def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -> str:
+    """One summary row: the entry's seeds, each seed's successes, the pooled rate and its interval, training time.
+
+    One seed's row carries its own 95% Wilson interval. Seeds pooled together played the same tasks, so their
+    outcomes are not independent draws: the interval is :func:`cluster_bootstrap`'s over seeds and tasks.
+    """
+    seeds = sorted(by_seed)
+    reports = [by_seed[seed] for seed in seeds]
+    per_seed = ", ".join(f"{report['successes']}" for report in reports)
+    episodes = reports[0]["episodes"]
+    if len(reports) == 1:
+        low, high = reports[0]["wilson_95"]
+        rate, kind = reports[0]["success_rate"], "Wilson"
+        if "task_bootstrap_95" in reports[0]:  # K episodes per task share its maze: Wilson alone is too narrow
+            task_low, task_high = reports[0]["task_bootstrap_95"]
+            kind += f"; over its {len(reports[0]['tasks'])} tasks [{_percent(task_low)}, {_percent(task_high)}]"
+    else:
+        pooled = cluster_bootstrap(outcome_table(reports))
+        (low, high), rate = pooled["cluster_bootstrap_95"], pooled["rate"]
+        kind = f"cluster bootstrap, {len(seeds)} seeds x {pooled['mazes']} tasks"
+    training = [report["training"]["training_seconds"] for report in reports if "training" in report]
+    time = _minutes(training) if training and max(training) > 0 else ""
+    seed_text = ", ".join(map(str, seeds)) if "training" in reports[0] else ""
+    return (
+        f"| `{suite}` | {entry} | {budget} | {seed_text} | {per_seed} (of {episodes}) | "
+        f"{_percent(rate)} [{_percent(low)}, {_percent(high)}] | {kind} | {time} |"
+    )
+
+
+def _reference_rows(suite: str, reports: list[dict]) -> list[str]:
+    """The oracle's and the random policy's rows of one suite: each its report with the most episodes."""
+    spec = SUITE_SPECS[suite]
+    rows = []
+    for policy in ("oracle", "random"):
+        candidates = [report for report in reports if report["policy"] == policy]
+        if candidates:
+            report = max(candidates, key=lambda report: report["episodes"])
+            budget = f"{report['episodes']} episodes"
+            if report["episodes"] < spec.n_tasks * spec.episodes_per_task:
+                budget += " (below the protocol's)"
+            verdict = goal_verdict(report)
+            entry = f"oracle (goal >= 95%: {verdict})" if verdict else policy
+            rows.append(summary_row(suite, entry, budget, {0: report}))
+    return rows
+
+
+def _label_budget(target: int, by_seed: dict[int, dict]) -> str:
+    if target == 0:
+        return "untrained (0 labels)"
+    labels = sorted(report["training"]["labels"] for report in by_seed.values())
+    spread = f"{labels[0]:,}" if labels[0] == labels[-1] else f"{labels[0]:,}-{labels[-1]:,}"
+    return f"{target:,} labels ({spread})"
+
+
+def _step_budget(by_seed: dict[int, dict], untrained: bool) -> str:
+    if untrained:
+        return "untrained (0 steps)"
+    training = [report["training"] for report in by_seed.values()]
+    steps = sorted({entry["steps_reached"] for entry in training})
+    kind = "body steps" if training[0]["algorithm"] == "flat-sac-her" else "high-level steps"
+    return f"{' / '.join(f'{step:,}' for step in steps)} {kind}"
+
+
+def summary_table() -> str:
+    """The leaderboard: per suite the oracle, the random policy, DAgger's entries by label target, the RL baselines.
+
+    A trained entry pools its seeds' final rows (one per seed) at one budget; the rows it pools are in the
+    results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries.
+    """
+    lines = [
+        "| suite | entry | budget | seeds | successes per seed | success [95% interval] | interval | "
+        "training time per seed |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    reports = [load_report(path) for path in sorted(RESULTS.glob("*.json"))]
+    dagger, rl = dagger_groups(), rl_groups()
+    for suite in SUITE_SPECS:
+        lines += _reference_rows(suite, [report for report in reports if report["suite"] == suite])
+        ranked = sorted((key for key in dagger if key[0] == suite), key=lambda key: (key[1] != "dagger", key[1:]))
+        for key in ranked:
+            _, method, learner, target = key
+            trained_by = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}` (active)"
+            entry = f"{trained_by}, {learner} learner"
+            lines.append(summary_row(suite, entry, _label_budget(target, dagger[key]), dagger[key]))
+        for algorithm, name in RL_NAMES.items():
+            for untrained in (True, False):
+                by_seed = rl.get((suite, algorithm, untrained))
+                if by_seed:
+                    lines.append(summary_row(suite, name, _step_budget(by_seed, untrained), by_seed))
+    return "\n".join(lines)
+
+
 def sign_test_p(ahead: int, behind: int) -> float:
     """The two-sided exact sign test's p-value for ``ahead`` against ``behind`` paired outcomes (ties dropped)."""
     _, upper, lower = sign_test(ahead, ahead + behind, 0.05)  # the claims' one-sided tails, doubled
@@ -286,21 +431,35 @@ def paired_table() -> str:
 
 
 def figure_section() -> str:
-    """The figure (drawn by ``scripts/labels_vs_steps.py``) and the table of its points."""
-    points, _ = figure_points(RESULTS)
+    """The figure, drawn by ``scripts/labels_vs_steps.py`` from the same reports (points: :func:`points_section`)."""
     image = (ROOT / FIGURE).relative_to(PAGE.parent).as_posix()
     alt = "point5: success against expert labels (DAgger) and against environment steps (RL baselines)"
-    return f"![{alt}]({image})\n\n{points_table(points)}"
+    return f"![{alt}]({image})"
+
+
+def points_section() -> str:
+    """The table of the figure's points."""
+    points, _ = figure_points(RESULTS)
+    return points_table(points)
 
 
 SECTIONS: dict[str, Callable[[], str]] = {
     "suites": suites_table,
+    "summary": summary_table,
     "results": results_table,
     "spread": spread_table,
     "paired": paired_table,
     "figure": figure_section,
+    "points": points_section,
 }
-"""The page's generated sections, by the name ``--section`` takes."""
+"""The pages' generated sections, by the name ``--section`` takes."""
+ON_ROWS_PAGE = ("results", "spread", "points")
+"""The sections on :data:`ROWS_PAGE`; the others are on :data:`PAGE`."""
+
+
+def page_of(section: str) -> Path:
+    """The page that holds ``section``'s generated block."""
+    return ROWS_PAGE if section in ON_ROWS_PAGE else PAGE
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -179,18 +179,19 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
     leaderboard = load_script("scripts/leaderboard.py")
 
     generate_docs = load_script("scripts/generate_docs.py")
-    page = leaderboard.PAGE.read_text()
-    blocks = {block.command: block.text for block in generate_docs.find_blocks(leaderboard.PAGE, page)}
     for name, section in leaderboard.SECTIONS.items():
-        # Each section is one generated block (generate_docs --check compares it; this names the stale one).
+        # Each section is one generated block of its page (generate_docs --check compares it; this names the stale one).
+        page = leaderboard.page_of(name)
+        blocks = {block.command: block.text for block in generate_docs.find_blocks(page, page.read_text())}
         command = f"python scripts/leaderboard.py --section {name}"
-        assert blocks[command] == section(), f"stale: run python scripts/generate_docs.py {leaderboard.PAGE}"
+        assert blocks[command] == section(), f"stale: run python scripts/generate_docs.py {page}"
     reports = sorted(leaderboard.RESULTS.glob("*.json"))
     assert reports
+    rows = leaderboard.ROWS_PAGE.read_text()
     for path in reports:
         report = load_report(path)
         assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
-        assert f"`{path.name}` |" in page
+        assert f"`{path.name}` |" in rows
 
 
 def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
@@ -324,3 +325,47 @@ def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_
     for ahead, behind in ((4, 0), (5, 0), (3, 1), (6, 2), (0, 3)):
         assert leaderboard.sign_test_p(ahead, behind) == pytest.approx(binomtest(ahead, ahead + behind).pvalue)
     assert leaderboard.sign_test_p(0, 0) == 1.0
+
+
+def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoints_out(tmp_path, monkeypatch):
+    import shutil
+
+    from script_helpers import load_script
+
+    from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+
+    leaderboard = load_script("scripts/leaderboard.py")
+    source = leaderboard.RESULTS
+    names = [f"ant4_dagger_protocol_s{seed}_1000.json" for seed in (0, 2)]
+    names += ["ant4_oracle.json", "ant4_ppo_rl_s0.json", "ant4_ppo_rl_s0_untrained.json"]
+    names += ["ant4_ppo_rl_s0_at_10240.json"]
+    for name in names:
+        shutil.copy(source / name, tmp_path / name)
+    monkeypatch.setattr(leaderboard, "RESULTS", tmp_path)
+    rows = leaderboard.summary_table().splitlines()[2:]
+    assert [row.split(" | ")[1] for row in rows] == [
+        "oracle (goal >= 95%: met by the rate; interval reaches below 95%)",
+        "DAgger (plain), protocol learner",
+        "SB3 PPO on the high level",
+        "SB3 PPO on the high level",
+    ]
+    seeds = [load_report(source / name) for name in names[:2]]
+    pooled = cluster_bootstrap(leaderboard.outcome_table(seeds))
+    low, high = pooled["cluster_bootstrap_95"]
+    assert pooled["rate"] == pytest.approx(sum(report["success_rate"] for report in seeds) / 2)
+    labels = sorted(report["training"]["labels"] for report in seeds)
+    assert rows[1].startswith(
+        f"| `ant4` | DAgger (plain), protocol learner | 1,000 labels ({labels[0]:,}-{labels[1]:,}) | 0, 2 | "
+        f"{seeds[0]['successes']}, {seeds[1]['successes']} (of 100) | {100 * pooled['rate']:.1f}% "
+        f"[{100 * low:.1f}%, {100 * high:.1f}%] | cluster bootstrap, 2 seeds x 100 tasks |"
+    )
+    # The untrained model first, then the final row at its steps; the checkpoint (_at_10240) is the curve's.
+    assert "| untrained (0 steps) |" in rows[2] and "| 24,576 high-level steps | 0 |" in rows[3]
+    assert all("10,240" not in row for row in rows)
+    # Seeds that played other tasks cannot be pooled: an error naming the row, not a silent mean.
+    report = json.loads((tmp_path / names[1]).read_text())
+    outcomes = report["episode_outcomes"]
+    report["episode_outcomes"] = [{**episode, "task_id": episode["task_id"] + 1} for episode in outcomes]
+    (tmp_path / names[1]).write_text(json.dumps(report))
+    with pytest.raises(SystemExit, match="its tasks differ from its group's"):
+        leaderboard.summary_table()
