@@ -1,27 +1,29 @@
-"""The leaderboard's figure: success on ``point5`` against expert labels (imitation) and environment steps (reward).
+"""The leaderboard's figures: success on ``point5`` and ``ant4`` against expert labels and environment steps.
 
 Every point is one committed ``antmaze-hirl benchmark --json`` report in ``results/leaderboard/``
 (nothing typed in): the DAgger rows at their labels (``training.labels``; 0 is the untrained learner), the
 RL rows at their training steps (``training.steps_reached``, or ``training.high_level_steps`` for the older
 PPO row): high-level steps (subgoals) for PPO and SAC on the high level, body steps for the flat SAC+HER.
-Each point carries its 95% Wilson interval over the 100 tasks. The random policy and the oracle are
+Each point carries its 95% Wilson interval over the suite's 100 tasks. The random policy and the oracle are
 horizontal lines. The x axis is logarithmic (``symlog``: linear below 1, so the 0-label learners show).
 
 One expert label and one high-level environment step are both one subgoal chosen in one maze state, which
 is why they share the axis; a body step is a 50th of a subgoal's walk or less.
 
-Usage: python scripts/labels_vs_steps.py   (writes docs/images/point5_labels_vs_steps.png)
+Usage: python scripts/labels_vs_steps.py [--suite point5|ant4]   (default both; writes
+docs/images/<suite>_labels_vs_steps.png and prints its points)
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.experiments.labels_vs_steps import FIGURE, Point, figure_points, points_table
+from antmaze_hirl.experiments.labels_vs_steps import SUITES, Point, figure_path, figure_points, points_table
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
@@ -50,8 +52,8 @@ def series_colours(series: list[str], plt: Any) -> dict[str, Any]:
     return colours
 
 
-def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
-    """Plots ``points`` (success with Wilson bars against a symlog x) and the reference lines into ``path``."""
+def draw(points: list[Point], lines: dict[str, float], path: Path, suite: str) -> None:
+    """Plots ``suite``'s ``points`` (success with Wilson bars against a symlog x) and reference lines into ``path``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -92,8 +94,8 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
     axes.set_xlim(0, 3 * max(point.x for point in points))
     axes.set_ylim(-0.02, 1.05)
     axes.set_xlabel("expert labels (imitation) / training environment steps (reward), log scale")
-    axes.set_ylabel("success on point5 (100 held-out tasks)")
-    axes.set_title("point5: success against expert labels and against environment steps (95% Wilson)")
+    axes.set_ylabel(f"success on {suite} (100 held-out tasks)")
+    axes.set_title(f"{suite}: success against expert labels and against environment steps (95% Wilson)")
     # Beside the axes, not on them: inside, it hid the DAgger curves.
     axes.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
     axes.grid(True, which="major", alpha=0.3)
@@ -103,11 +105,16 @@ def draw(points: list[Point], lines: dict[str, float], path: Path) -> None:
     plt.close(figure)
 
 
-def main() -> int:
-    points, lines = figure_points(RESULTS)
-    draw(points, lines, ROOT / FIGURE)
-    print(points_table(points))
-    print(f"wrote {ROOT / FIGURE}")
+def main(argv: list[str] | None = None) -> int:
+    """Draws the figure of each suite asked for and prints its points; returns the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--suite", choices=SUITES, default=None, help="one suite's figure (default: every suite's)")
+    args = parser.parse_args(argv)
+    for suite in [args.suite] if args.suite else SUITES:
+        points, lines = figure_points(RESULTS, suite)
+        draw(points, lines, ROOT / figure_path(suite), suite)
+        print(points_table(points))
+        print(f"wrote {ROOT / figure_path(suite)}")
     return 0
 
 

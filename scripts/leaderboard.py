@@ -5,7 +5,8 @@ of a trained entry pooled with a cluster bootstrap over seeds and tasks (every s
 Every row of the results table (``docs/results/leaderboard-rows.md``) is one ``antmaze-hirl benchmark --json`` report in
 ``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
-figure and lists its points (``scripts/labels_vs_steps.py``, which draws the PNG from the same reports).
+figures and the points section lists their points (``scripts/labels_vs_steps.py`` draws the PNGs from the
+same reports).
 Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
@@ -27,7 +28,8 @@ from statsmodels.stats.multitest import multipletests
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.claims import sign_test
-from antmaze_hirl.experiments.labels_vs_steps import FIGURE, figure_points, points_table
+from antmaze_hirl.experiments.labels_vs_steps import SUITES as FIGURE_SUITES
+from antmaze_hirl.experiments.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,7 +39,7 @@ ROWS_PAGE = ROOT / "docs" / "results" / "leaderboard-rows.md"
 """The page of every row, one per results file, with the seeds side by side and the figure's points."""
 
 GOAL = 0.95
-"""The success the oracle hierarchy should reach on every suite (the page's "oracle goal" column)."""
+"""The success the oracle hierarchy should reach on every suite (the verdict beside each oracle row)."""
 
 NOT_RUN: list[tuple[str, str, str]] = [
     (
@@ -241,6 +243,13 @@ RL_ROW = re.compile(
     r"(?P<suite>[a-z0-9]+)_(?P<algorithm>ppo|sac|flat_sac_her)_rl_s(?P<seed>\d+)(?P<untrained>_untrained)?\.json"
 )
 """An RL baseline's final or untrained row (``scripts/rl_baselines.py``); its checkpoints (``_at_N``) are the curve."""
+CHECKPOINT_ROW = re.compile(r".+_rl_s\d+_at_\d+\.json")
+"""A checkpoint of an RL run: a point of its curve (the figure's), not a leaderboard entry."""
+LEGACY_ROWS = ("point5_ppo_2048.json",)
+"""Rows kept as points of a curve only: the single-maze PPO row of ``scripts/benchmark_sb3_high.py``."""
+MIN_POOLED_SEEDS = 3
+"""Fewest seeds pooled with a bootstrap over seeds: resampling two rows gives only three distinct mixes, and
+understates the spread between seeds, so two seeds carry the envelope of their Wilson intervals instead."""
 RL_NAMES = {
     "ppo": "SB3 PPO on the high level",
     "sac": "SB3 SAC on the high level",
@@ -249,14 +258,19 @@ RL_NAMES = {
 """The summary's name of each RL baseline, in the order it lists them."""
 
 
-def rl_groups() -> dict[tuple[str, str, bool], dict[int, dict]]:
-    """The RL baselines' final and untrained rows by (suite, algorithm, untrained), each a dict of reports by seed."""
-    groups: dict[tuple[str, str, bool], dict[int, dict]] = {}
+def rl_groups() -> dict[tuple[str, str, int], dict[int, dict]]:
+    """The RL baselines' final and untrained rows by (suite, algorithm, steps reached), each a dict of reports by seed.
+
+    Seeds that reached different steps (a run stopped by its wall-time cap) are different budgets, so they
+    are different entries; an untrained row has 0 steps.
+    """
+    groups: dict[tuple[str, str, int], dict[int, dict]] = {}
     for path in sorted(RESULTS.glob("*_rl_s*.json")):
         match = RL_ROW.fullmatch(path.name)
         if match is not None:
-            key = (match["suite"], match["algorithm"], bool(match["untrained"]))
-            groups.setdefault(key, {})[int(match["seed"])] = load_report(path)
+            report = load_report(path)
+            steps = 0 if match["untrained"] else report["training"]["steps_reached"]
+            groups.setdefault((match["suite"], match["algorithm"], steps), {})[int(match["seed"])] = report
     return groups
 
 
@@ -280,21 +294,31 @@ def outcome_table(reports: list[dict]) -> np.ndarray:
 
 
 def _minutes(seconds: list[float]) -> str:
+    if max(seconds) < 60:
+        return f"{max(seconds):.0f} s" if len(seconds) == 1 else f"{min(seconds):.0f}-{max(seconds):.0f} s"
     low, high = round(min(seconds) / 60), round(max(seconds) / 60)
-    return f"{low} min" if low == high else f"{low}-{high} min"
+    low_text = f"{min(seconds) / 60:.1f}" if min(seconds) < 60 else str(low)
+    return f"{low_text} min" if low == high else f"{low_text}-{high} min"
 
 
 def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -> str:
     """One summary row: the entry's seeds, each seed's successes, the pooled rate and its interval, training time.
 
-    One seed's row carries its own 95% Wilson interval. Seeds pooled together played the same tasks, so their
-    outcomes are not independent draws: the interval is :func:`cluster_bootstrap`'s over seeds and tasks.
+    One seed's row carries its own 95% Wilson interval (it says nothing of another training seed). Seeds
+    pooled together played the same tasks, so their outcomes are not independent draws: from
+    :data:`MIN_POOLED_SEEDS` seeds the interval is :func:`cluster_bootstrap`'s over seeds and tasks; two seeds
+    give the envelope of their Wilson intervals.
     """
     seeds = sorted(by_seed)
     reports = [by_seed[seed] for seed in seeds]
     per_seed = ", ".join(f"{report['successes']}" for report in reports)
     episodes = reports[0]["episodes"]
-    if len(reports) == 1:
+    if 1 < len(reports) < MIN_POOLED_SEEDS:
+        outcome_table(reports)  # the same tasks, or an error
+        rate = sum(report["success_rate"] for report in reports) / len(reports)
+        low, high = min(report["wilson_95"][0] for report in reports), max(report["wilson_95"][1] for report in reports)
+        kind = f"envelope of its {len(reports)} seeds' Wilson intervals (too few seeds for a bootstrap)"
+    elif len(reports) == 1:
         low, high = reports[0]["wilson_95"]
         rate, kind = reports[0]["success_rate"], "Wilson"
         if "task_bootstrap_95" in reports[0]:  # K episodes per task share its maze: Wilson alone is too narrow
@@ -338,41 +362,58 @@ def _label_budget(target: int, by_seed: dict[int, dict]) -> str:
     return f"{target:,} labels ({spread})"
 
 
-def _step_budget(by_seed: dict[int, dict], untrained: bool) -> str:
-    if untrained:
+def _step_budget(by_seed: dict[int, dict], steps: int) -> str:
+    if steps == 0:
         return "untrained (0 steps)"
-    training = [report["training"] for report in by_seed.values()]
-    steps = sorted({entry["steps_reached"] for entry in training})
-    kind = "body steps" if training[0]["algorithm"] == "flat-sac-her" else "high-level steps"
-    return f"{' / '.join(f'{step:,}' for step in steps)} {kind}"
+    training = next(iter(by_seed.values()))["training"]
+    return f"{steps:,} {'body steps' if training['algorithm'] == 'flat-sac-her' else 'high-level steps'}"
+
+
+def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[str]:
+    """A row for each of ``suite``'s reports that no entry pools: a submitted row, named by its ``policy``."""
+    rows = []
+    for name, report in sorted(reports.items()):
+        if report["suite"] != suite or name in placed or name in LEGACY_ROWS or CHECKPOINT_ROW.fullmatch(name):
+            continue
+        if report["policy"] in ("oracle", "random"):
+            continue  # the suite's reference rows: the one with the most episodes is placed
+        seed = int(report.get("training", {}).get("seed", 0))
+        rows.append(summary_row(suite, report["policy"], "as its policy names it", {seed: report}))
+    return rows
 
 
 def summary_table() -> str:
-    """The leaderboard: per suite the oracle, the random policy, DAgger's entries by label target, the RL baselines.
+    """The leaderboard: per suite the oracle, the random policy, DAgger's entries by label target, the RL
+    baselines, then any other report (a submitted row, named by its ``policy``).
 
     A trained entry pools its seeds' final rows (one per seed) at one budget; the rows it pools are in the
-    results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries.
+    results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries, and an active
+    method's untrained rows are plain DAgger's untrained learner again, so only plain DAgger's is listed.
     """
     lines = [
         "| suite | entry | budget | seeds | successes per seed | success [95% interval] | interval | "
         "training time per seed |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    reports = [load_report(path) for path in sorted(RESULTS.glob("*.json"))]
+    reports = {path.name: load_report(path) for path in sorted(RESULTS.glob("*.json"))}
     dagger, rl = dagger_groups(), rl_groups()
+    placed = {
+        path.name for path in RESULTS.glob("*.json") if DAGGER_ROW.fullmatch(path.name) or RL_ROW.fullmatch(path.name)
+    }
     for suite in SUITE_SPECS:
-        lines += _reference_rows(suite, [report for report in reports if report["suite"] == suite])
+        lines += _reference_rows(suite, [report for report in reports.values() if report["suite"] == suite])
         ranked = sorted((key for key in dagger if key[0] == suite), key=lambda key: (key[1] != "dagger", key[1:]))
         for key in ranked:
             _, method, learner, target = key
+            if method != "dagger" and target == 0:
+                continue
             trained_by = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}` (active)"
             entry = f"{trained_by}, {learner} learner"
             lines.append(summary_row(suite, entry, _label_budget(target, dagger[key]), dagger[key]))
         for algorithm, name in RL_NAMES.items():
-            for untrained in (True, False):
-                by_seed = rl.get((suite, algorithm, untrained))
-                if by_seed:
-                    lines.append(summary_row(suite, name, _step_budget(by_seed, untrained), by_seed))
+            for key in sorted(key for key in rl if key[:2] == (suite, algorithm)):
+                lines.append(summary_row(suite, name, _step_budget(rl[key], key[2]), rl[key]))
+        lines += _other_rows(suite, reports, placed)
     return "\n".join(lines)
 
 
@@ -431,16 +472,22 @@ def paired_table() -> str:
 
 
 def figure_section() -> str:
-    """The figure, drawn by ``scripts/labels_vs_steps.py`` from the same reports (points: :func:`points_section`)."""
-    image = (ROOT / FIGURE).relative_to(PAGE.parent).as_posix()
-    alt = "point5: success against expert labels (DAgger) and against environment steps (RL baselines)"
-    return f"![{alt}]({image})"
+    """The figures, drawn by ``scripts/labels_vs_steps.py`` from the same reports (points: :func:`points_section`)."""
+    images = []
+    for suite in FIGURE_SUITES:
+        image = (ROOT / figure_path(suite)).relative_to(PAGE.parent).as_posix()
+        alt = f"{suite}: success against expert labels (DAgger) and against environment steps (RL baselines)"
+        images.append(f"![{alt}]({image})")
+    return "\n\n".join(images)
 
 
 def points_section() -> str:
-    """The table of the figure's points."""
-    points, _ = figure_points(RESULTS)
-    return points_table(points)
+    """The tables of the figures' points, one per suite."""
+    tables = []
+    for suite in FIGURE_SUITES:
+        points, _ = figure_points(RESULTS, suite)
+        tables.append(f"**`{suite}`**\n\n{points_table(points)}")
+    return "\n\n".join(tables)
 
 
 SECTIONS: dict[str, Callable[[], str]] = {

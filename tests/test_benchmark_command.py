@@ -336,32 +336,53 @@ def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoi
 
     leaderboard = load_script("scripts/leaderboard.py")
     source = leaderboard.RESULTS
-    names = [f"ant4_dagger_protocol_s{seed}_1000.json" for seed in (0, 2)]
+    names = [f"ant4_dagger_protocol_s{seed}_1000.json" for seed in (0, 2, 4)]
     names += ["ant4_oracle.json", "ant4_ppo_rl_s0.json", "ant4_ppo_rl_s0_untrained.json"]
-    names += ["ant4_ppo_rl_s0_at_10240.json"]
+    names += ["ant4_ppo_rl_s0_at_10240.json", "ant4_gated_protocol_s0_0.json"]
     for name in names:
         shutil.copy(source / name, tmp_path / name)
     monkeypatch.setattr(leaderboard, "RESULTS", tmp_path)
     rows = leaderboard.summary_table().splitlines()[2:]
+    # An active method's untrained row is plain DAgger's learner again: no entry of its own.
     assert [row.split(" | ")[1] for row in rows] == [
         "oracle (goal >= 95%: met by the rate; interval reaches below 95%)",
         "DAgger (plain), protocol learner",
         "SB3 PPO on the high level",
         "SB3 PPO on the high level",
     ]
-    seeds = [load_report(source / name) for name in names[:2]]
+    seeds = [load_report(source / name) for name in names[:3]]
     pooled = cluster_bootstrap(leaderboard.outcome_table(seeds))
     low, high = pooled["cluster_bootstrap_95"]
-    assert pooled["rate"] == pytest.approx(sum(report["success_rate"] for report in seeds) / 2)
+    assert pooled["rate"] == pytest.approx(sum(report["success_rate"] for report in seeds) / 3)
     labels = sorted(report["training"]["labels"] for report in seeds)
     assert rows[1].startswith(
-        f"| `ant4` | DAgger (plain), protocol learner | 1,000 labels ({labels[0]:,}-{labels[1]:,}) | 0, 2 | "
-        f"{seeds[0]['successes']}, {seeds[1]['successes']} (of 100) | {100 * pooled['rate']:.1f}% "
-        f"[{100 * low:.1f}%, {100 * high:.1f}%] | cluster bootstrap, 2 seeds x 100 tasks |"
+        f"| `ant4` | DAgger (plain), protocol learner | 1,000 labels ({labels[0]:,}-{labels[-1]:,}) | 0, 2, 4 | "
+        f"{', '.join(str(report['successes']) for report in seeds)} (of 100) | {100 * pooled['rate']:.1f}% "
+        f"[{100 * low:.1f}%, {100 * high:.1f}%] | cluster bootstrap, 3 seeds x 100 tasks |"
     )
     # The untrained model first, then the final row at its steps; the checkpoint (_at_10240) is the curve's.
     assert "| untrained (0 steps) |" in rows[2] and "| 24,576 high-level steps | 0 |" in rows[3]
     assert all("10,240" not in row for row in rows)
+    # Two seeds are too few for a bootstrap over seeds: they carry the envelope of their Wilson intervals.
+    (tmp_path / names[2]).unlink()
+    rows = leaderboard.summary_table().splitlines()[2:]
+    low, high = min(report["wilson_95"][0] for report in seeds[:2]), max(report["wilson_95"][1] for report in seeds[:2])
+    assert f"[{100 * low:.1f}%, {100 * high:.1f}%] | envelope of its 2 seeds' Wilson intervals" in rows[1]
+    # A submitted row (any other name) is its own entry, named by its policy; seeds of an RL baseline that
+    # reached other steps are other budgets, never pooled.
+    submitted = {**load_report(source / "ant4_oracle.json"), "policy": "my HRL agent, 1M steps"}
+    (tmp_path / "ant4_my_agent.json").write_text(json.dumps(submitted))
+    capped = json.loads((source / "ant4_ppo_rl_s0.json").read_text())
+    capped["training"] = {**capped["training"], "steps_reached": 20480, "seed": 1}
+    (tmp_path / "ant4_ppo_rl_s1.json").write_text(json.dumps(capped))
+    rows = leaderboard.summary_table().splitlines()[2:]
+    assert [row.split(" | ")[2] for row in rows[2:]] == [
+        "untrained (0 steps)",
+        "20,480 high-level steps",
+        "24,576 high-level steps",
+        "as its policy names it",
+    ]
+    assert rows[-1].startswith("| `ant4` | my HRL agent, 1M steps |")
     # Seeds that played other tasks cannot be pooled: an error naming the row, not a silent mean.
     report = json.loads((tmp_path / names[1]).read_text())
     outcomes = report["episode_outcomes"]

@@ -31,3 +31,17 @@ def test_each_rl_seed_is_its_own_series(tmp_path):
         "SB3 PPO on the high level, 8 mazes, seed 0",
         "SB3 PPO on the high level, 8 mazes, seed 1",
     ]
+
+
+def test_each_family_suite_has_its_own_figure_and_points(tmp_path):
+    import pytest
+
+    from antmaze_hirl.experiments.labels_vs_steps import figure_path
+
+    for name in ("point5_dagger_protocol_s0_100.json", "ant4_dagger_protocol_s0_100.json", "ant4_oracle.json"):
+        shutil.copy(LEADERBOARD / name, tmp_path / name)
+    points, lines = figure_points(tmp_path, "ant4")
+    assert [point.file for point in points] == ["ant4_dagger_protocol_s0_100.json"] and set(lines) == {"oracle"}
+    assert figure_path("ant4").name == "ant4_labels_vs_steps.png"
+    with pytest.raises(ValueError, match="suite 'u' has no labels-against-steps figure"):
+        figure_points(tmp_path, "u")

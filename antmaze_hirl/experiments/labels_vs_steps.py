@@ -1,7 +1,8 @@
-"""The points of the leaderboard's figure: success on ``point5`` against expert labels and environment steps.
+"""The points of the leaderboard's figures: success on a family suite against expert labels and environment steps.
 
-Read from committed ``antmaze-hirl benchmark --json`` reports (nothing typed in) by ``scripts/labels_vs_steps.py``,
-which draws the figure, and ``scripts/leaderboard.py``, which lists the points under it on ``docs/leaderboard.md``:
+One figure per suite of :data:`SUITES` (``point5`` and ``ant4``, the suites both DAgger and the RL baselines
+are scored on). Read from committed ``antmaze-hirl benchmark --json`` reports (nothing typed in) by
+``scripts/labels_vs_steps.py``, which draws the figures, and ``scripts/leaderboard.py``, which lists the points:
 the DAgger rows at their labels (``training.labels``; 0 is the untrained learner), the RL rows at their training
 steps (``training.steps_reached``, or ``training.high_level_steps`` for the older PPO row). The random policy and
 the oracle are reference lines.
@@ -14,10 +15,19 @@ from pathlib import Path
 
 from antmaze_hirl.experiments.benchmark import load_report
 
-SUITE = "point5"
-"""The suite the figure plots."""
-FIGURE = Path("docs") / "images" / "point5_labels_vs_steps.png"
-"""The figure's file, relative to the repository root."""
+SUITES = ("point5", "ant4")
+"""The suites with a figure: the held-out families both DAgger and the RL baselines train for."""
+
+
+def figure_path(suite: str) -> Path:
+    """The figure of ``suite``, relative to the repository root.
+
+    Raises:
+        ValueError: For a suite without a figure (not in :data:`SUITES`).
+    """
+    if suite not in SUITES:
+        raise ValueError(f"suite {suite!r} has no labels-against-steps figure; choose from {list(SUITES)}")
+    return Path("docs") / "images" / f"{suite}_labels_vs_steps.png"
 
 
 @dataclass(frozen=True)
@@ -45,17 +55,22 @@ class Point:
     file: str
 
 
-def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
-    """The points of the figure, and the reference lines (``{"random": rate, "oracle": rate}``) of ``point5``.
+def figure_points(reports: Path, suite: str = "point5") -> tuple[list[Point], dict[str, float]]:
+    """The points of ``suite``'s figure, and its reference lines (``{"random": rate, "oracle": rate}``).
 
     Args:
-        reports: The folder of committed ``antmaze-hirl benchmark --json`` reports; each ``point5_*.json`` of
+        reports: The folder of committed ``antmaze-hirl benchmark --json`` reports; each ``<suite>_*.json`` of
             100 episodes or more is a point or a line, the others are left out.
+        suite: A suite of :data:`SUITES`.
+
+    Raises:
+        ValueError: For a suite without a figure.
     """
+    figure_path(suite)  # validates the suite
     points, lines = [], {}
-    for path in sorted(reports.glob(f"{SUITE}_*.json")):
+    for path in sorted(reports.glob(f"{suite}_*.json")):
         report = load_report(path)
-        if report["suite"] != SUITE or report["episodes"] < 100:
+        if report["suite"] != suite or report["episodes"] < 100:
             continue
         if report["policy"] in ("oracle", "random"):
             lines[report["policy"]] = report["success_rate"]
@@ -88,7 +103,7 @@ def figure_points(reports: Path) -> tuple[list[Point], dict[str, float]]:
 
 
 def points_table(points: list[Point]) -> str:
-    """The plotted points as a Markdown table (the leaderboard page prints it under the figure)."""
+    """The plotted points as a Markdown table (``docs/results/leaderboard-rows.md`` prints one per suite)."""
     lines = ["| series | x | success [95% Wilson] | file |", "|---|---|---|---|"]
     for point in points:
         rate = point.successes / point.episodes
