@@ -98,6 +98,23 @@ def run_cli(capsys, *argv):
     return exit_info.value.code, capsys.readouterr()
 
 
+def test_policy_name_names_the_leaderboard_entry_and_is_recorded_in_the_command(tmp_path, capsys):
+    from antmaze_hirl.experiments.benchmark import save_report
+
+    out = tmp_path / "new" / "mine.json"
+    argv = ["benchmark", "point5", "--policy", "random", "--tasks", "0", "--no-progress", "--json", str(out)]
+    assert main([*argv, "--policy-name", "random subgoals, no training"]) == 0
+    report = load_report(out)
+    assert report["policy"] == "random subgoals, no training"
+    assert (
+        "--policy random" in report["command"] and "--policy-name 'random subgoals, no training'" in report["command"]
+    )
+    # save_report writes what load_report reads, and refuses what is no report.
+    assert load_report(save_report(report, tmp_path / "copy.json")) == report
+    with pytest.raises(ValueError, match=r"not a benchmark report: format None"):
+        save_report({"policy": "x"}, tmp_path / "bad.json")
+
+
 def test_the_command_prints_the_table_and_writes_the_report(tmp_path, capsys):
     out = tmp_path / "report.json"
     assert (
@@ -121,6 +138,7 @@ def test_the_command_prints_the_table_and_writes_the_report(tmp_path, capsys):
         (["point5", "--policy", "missing.zip"], r"no policy file at missing.zip; --policy takes oracle, random"),
         (["point5", "--policy", "random", "--tasks", "0,100"], r"task_id 100 is out of range for suite 'point5'"),
         (["point5", "--policy", "random", "--tasks", "a"], r"--tasks must be comma-separated integers, got 'a'"),
+        (["point5", "--policy", "random", "--tasks", "1,2,1"], r"task_ids repeat \[1\]: name each task once"),
         (["point5", "--policy", "random", "--episodes-per-task", "0"], r"--episodes-per-task must be >= 1, got 0"),
         (
             ["point5", "--policy", "random", "--num-envs", "0"],

@@ -236,7 +236,12 @@ def check_task_id(task_id: Any, n_tasks: int, suite: str) -> int:
     Raises:
         ValueError: Naming the value and the range, otherwise.
     """
-    if isinstance(task_id, bool) or not isinstance(task_id, int | np.integer) or not 0 <= task_id < n_tasks:
+    if isinstance(task_id, bool) or not isinstance(task_id, int | np.integer):
+        raise ValueError(
+            f"task_id {task_id!r} is not an integer ({type(task_id).__name__}); suite {suite!r} takes an integer "
+            f"in [0, {n_tasks - 1}]"
+        )
+    if not 0 <= task_id < n_tasks:
         raise ValueError(
             f"task_id {task_id!r} is out of range for suite {suite!r}: choose an integer in [0, {n_tasks - 1}]"
         )

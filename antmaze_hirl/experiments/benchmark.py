@@ -410,6 +410,10 @@ def score_policy(
     ids = list(range(spec.n_tasks)) if task_ids is None else [check_task_id(k, spec.n_tasks, suite) for k in task_ids]
     if not ids:
         raise ValueError("task_ids is empty: give at least one task")
+    repeated = sorted({k for k in ids if ids.count(k) > 1})
+    if repeated:
+        # A repeated task would replay the same seeded episode and count it as a second, independent one.
+        raise ValueError(f"task_ids repeat {repeated}: name each task once (--episodes-per-task sets its episodes)")
     make_env = _suite_env_factory(spec, low_level)
     if isinstance(policy, str | os.PathLike):
         probe = make_env()
@@ -534,6 +538,12 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--json", type=Path, default=None, help="write the report here, atomically (default: print only)"
     )
     parser.add_argument(
+        "--policy-name",
+        default=None,
+        help="the report's policy name, the leaderboard's entry (default: as --policy names it); state the "
+        "training budget in it, e.g. 'PPO, 200k high-level steps'",
+    )
+    parser.add_argument(
         "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -576,14 +586,35 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     command += ["--num-envs", str(args.num_envs)]
     command += [] if args.subgoal_reach_m is None else ["--subgoal-reach-m", f"{args.subgoal_reach_m:g}"]
     command += [] if args.clearance_m is None else ["--clearance-m", f"{args.clearance_m:g}"]
+    command += [] if args.policy_name is None else ["--policy-name", args.policy_name]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
+    if args.policy_name is not None:
+        report["policy"] = args.policy_name
     print(report_table(report, per_task=args.per_task or len(report["tasks"]) <= 10))
     if args.json is not None:
-        from antmaze_hirl.atomic_io import atomic_write_json
-
-        atomic_write_json(args.json, report)
+        save_report(report, args.json)
         print(f"wrote {args.json}")
     return 0
+
+
+def save_report(report: dict[str, Any], path: str | Path) -> Path:
+    """Writes a :func:`score_policy` report to ``path`` atomically (fsynced; the folder is made if missing).
+
+    A report scored from Python has no ``command``: set ``report["command"]`` (how to replay it) and
+    ``report["policy"]`` (the leaderboard's entry name, with the training budget) before saving it.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: If ``report`` is no benchmark report (its ``format`` is not this module's).
+    """
+    from antmaze_hirl.atomic_io import atomic_write_json
+
+    if report.get("format") != RESULTS_FORMAT:
+        raise ValueError(f"not a benchmark report: format {report.get('format')!r}, expected {RESULTS_FORMAT!r}")
+    atomic_write_json(Path(path), report)
+    return Path(path)
 
 
 def load_report(path: str | Path) -> dict[str, Any]:
