@@ -83,11 +83,13 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "ant4",
-        "SB3 PPO beyond 24,576 high-level steps; SAC on the high level; flat SAC+HER",
+        "SB3 PPO beyond 24,576 high-level steps, SAC beyond 18,592, flat SAC+HER beyond 126,848 body steps; "
+        "seeds 1 and up",
         "`python scripts/rl_baselines.py --body ant --algo ppo --steps 200000 --max-minutes 100 --resume "
-        "--score-checkpoints` (or `--algo sac`, `--algo flat-sac-her`): PPO trained at about 9 subgoals a second "
-        "on 8 mazes beside one other job (the point's PPO: about 85, seeds 0-2), so 200k steps is about 6 hours "
-        "of resumed runs",
+        "--score-checkpoints` (or `--algo sac`, `--algo flat-sac-her --steps 1000000`): PPO trained at about 9 "
+        "subgoals a second on 8 mazes beside one other job (the point's PPO: about 85, seeds 0-2), SAC at about 3 "
+        "beside two, so 200k steps is 6 hours or more of resumed runs; each run's checkpoints lived in "
+        "`/work/rl_runs` on the machine that ran it",
     ),
     (
         "ant suites",
@@ -97,9 +99,9 @@ NOT_RUN: list[tuple[str, str, str]] = [
     ),
     (
         "point5",
-        "flat SAC+HER (no hierarchy) beyond 20 minutes",
-        "`python scripts/rl_baselines.py --algo flat-sac-her --steps 1000000 --max-minutes 100 --resume "
-        "--score-checkpoints`",
+        "flat SAC+HER (no hierarchy) beyond 133,679 body steps; seeds 1 and up",
+        "`python scripts/rl_baselines.py --algo flat-sac-her --seed 1 --steps 1000000 --max-minutes 100 --resume "
+        "--score-checkpoints`: seed 0 reached 133,679 body steps in its 100 minutes",
     ),
 ]
 """Baselines not measured yet: (suite, what, the command that would fill the row)."""
