@@ -322,9 +322,9 @@ def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -
             if budget.endswith(" episodes")
             else f"; {episodes} episodes, below the protocol's"
         )
+    table = outcome_table(reports) if len(reports) > 1 else None  # the same tasks, or an error
     if 1 < len(reports) < MIN_POOLED_SEEDS:
-        outcome_table(reports)  # the same tasks, or an error
-        rate = sum(report["success_rate"] for report in reports) / len(reports)
+        rate = float(table.mean())
         low, high = min(report["wilson_95"][0] for report in reports), max(report["wilson_95"][1] for report in reports)
         kind = f"envelope of its {len(reports)} seeds' Wilson intervals (too few seeds for a bootstrap)"
     elif len(reports) == 1:
@@ -334,7 +334,7 @@ def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -
             task_low, task_high = reports[0]["task_bootstrap_95"]
             kind += f"; over its {len(reports[0]['tasks'])} tasks [{_percent(task_low)}, {_percent(task_high)}]"
     else:
-        pooled = cluster_bootstrap(outcome_table(reports))
+        pooled = cluster_bootstrap(table)
         (low, high), rate = pooled["cluster_bootstrap_95"], pooled["rate"]
         kind = f"cluster bootstrap, {len(seeds)} seeds x {pooled['mazes']} tasks"
     training = [report["training"]["training_seconds"] for report in reports if "training" in report]
@@ -403,9 +403,7 @@ def summary_table() -> str:
     ]
     reports = {path.name: load_report(path) for path in sorted(RESULTS.glob("*.json"))}
     dagger, rl = dagger_groups(), rl_groups()
-    placed = {
-        path.name for path in RESULTS.glob("*.json") if DAGGER_ROW.fullmatch(path.name) or RL_ROW.fullmatch(path.name)
-    }
+    placed = {name for name in reports if DAGGER_ROW.fullmatch(name) or RL_ROW.fullmatch(name)}
     for suite in SUITE_SPECS:
         lines += _reference_rows(suite, [report for report in reports.values() if report["suite"] == suite])
         ranked = sorted((key for key in dagger if key[0] == suite), key=lambda key: (key[1] != "dagger", key[1:]))
