@@ -90,6 +90,9 @@ class LearnerSettings:
             at the agent's cell.
         block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
             between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
+        value_floor: With the ``"next_cell"`` head's value iteration: a lower bound on the planner's values
+            (negative; :class:`~antmaze_hirl.dagger.network.CellValueIteration`). ``None``: unbounded, as
+            every learner before the planning learner. Needs ``planning_iterations > 0``.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -108,6 +111,7 @@ class LearnerSettings:
     hidden: int = 128
     head: str = "heading"
     block_walls: bool = False
+    value_floor: float | None = None
     learning_rate: float = 1e-3
     batch_size: int = 64
     augment_symmetries: bool = True
@@ -123,6 +127,12 @@ class LearnerSettings:
             raise ValueError(f"planning_iterations must be >= 0, got {self.planning_iterations}")
         if self.block_walls and (self.head != "next_cell" or self.planning_iterations == 0):
             raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
+        if self.value_floor is not None:
+            if self.head != "next_cell" or self.planning_iterations == 0:
+                raise ValueError("value_floor needs head='next_cell' and planning_iterations > 0")
+            if not self.value_floor < 0:
+                raise ValueError(f"value_floor must be < 0 or None, got {self.value_floor}")
+            object.__setattr__(self, "value_floor", float(self.value_floor))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -263,6 +273,7 @@ class HighLevelPolicy:
                     settings.hidden,
                     settings.planning_iterations,
                     block_walls=settings.block_walls,
+                    value_floor=settings.value_floor,
                 )
             else:
                 self.network = SubgoalNetwork(
@@ -435,6 +446,56 @@ class HighLevelPolicy:
         return HighLevelPolicy(
             self.geometry, pixels_per_cell=self.pixels_per_cell, body_dim=self.body_dim, rng=rng, settings=self.settings
         )
+
+    @property
+    def runs_on_any_map(self) -> bool:
+        """Whether the same weights act on a map of any size (:meth:`on_map`): the planning next-cell head.
+
+        Its planner's convolutions and the correction over the moves' Q-values have no layer whose shape
+        depends on the grid; the CNN heads end in a fully connected layer over the whole grid.
+        """
+        return self.settings.head == "next_cell" and self.settings.planning_iterations > 0
+
+    def on_map(
+        self, geometry: MazeGeometry, *, pixels_per_cell: int | None = None, rng: np.random.Generator | None = None
+    ) -> HighLevelPolicy:
+        """This learner's weights acting on another map (zero-shot), with planning rounds for that map.
+
+        A planning learner (:attr:`runs_on_any_map`) gets :func:`planning_rounds` of ``geometry``; a CNN
+        learner moves only to a map whose agent-centred grid has its own size.
+
+        Args:
+            geometry: The other map's placement; its cell side must be this learner's (the same body).
+            pixels_per_cell: The other env's image resolution (default: this learner's).
+            rng: The new learner's generator, if it trains on (default seed 0).
+
+        Raises:
+            ValueError: Naming both values, if the cell sides differ or a CNN learner's grid does not fit.
+        """
+        if geometry.scale != self.geometry.scale:
+            raise ValueError(
+                f"the map's cells are {geometry.scale} m but this learner's are {self.geometry.scale} m: another body"
+            )
+        settings = self.settings
+        if self.runs_on_any_map:
+            settings = settings.replace(planning_iterations=planning_rounds(geometry.n_rows, geometry.n_cols))
+        else:
+            size = 2 * max(geometry.n_rows, geometry.n_cols) - 1
+            if size != self.encoder.grid_size:
+                raise ValueError(
+                    f"a {self.settings.head} CNN learner sees a {self.encoder.grid_size}x{self.encoder.grid_size} grid "
+                    f"and cannot act on a {geometry.n_rows}x{geometry.n_cols} map (a {size}x{size} grid); "
+                    "only a planning learner runs on any map"
+                )
+        moved = HighLevelPolicy(
+            geometry,
+            pixels_per_cell=pixels_per_cell if pixels_per_cell is not None else self.pixels_per_cell,
+            body_dim=self.body_dim,
+            rng=rng if rng is not None else np.random.default_rng(0),
+            settings=settings,
+        )
+        moved.network.load_state_dict(self.network.state_dict())
+        return moved
 
     def config(self) -> dict[str, Any]:
         """What a saved file's ``config`` holds, by Python name.

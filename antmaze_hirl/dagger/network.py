@@ -172,17 +172,25 @@ class CellValueIteration(nn.Module):
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
+        value_floor: A lower bound on every cell's value (a negative number), which unreached cells start at;
+            ``None`` (the protocol-2 learners): unreached cells start at :data:`UNREACHED` and values are
+            unbounded. A bound keeps the logits within ``|value_floor|`` of each other.
 
     Raises:
-        ValueError: If ``iterations`` is below 1.
+        ValueError: If ``iterations`` is below 1 or ``value_floor`` is not negative.
     """
 
-    def __init__(self, iterations: int, channels: int = 16, *, block_walls: bool = False) -> None:
+    def __init__(
+        self, iterations: int, channels: int = 16, *, block_walls: bool = False, value_floor: float | None = None
+    ) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
+        if value_floor is not None and not value_floor < 0:
+            raise ValueError(f"value_floor must be < 0 or None, got {value_floor}")
         self.iterations = iterations
         self.block_walls = block_walls
+        self.value_floor = value_floor
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -196,11 +204,19 @@ class CellValueIteration(nn.Module):
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
-        value = UNREACHED * not_goal
         size = grids.shape[-1]
-        for _ in range(self.iterations - 1):
-            # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
-            value = (shifted(value, size) - cost).amax(dim=1) * not_goal
+        if self.value_floor is None:
+            value = UNREACHED * not_goal
+            for _ in range(self.iterations - 1):
+                # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
+                value = (shifted(value, size) - cost).amax(dim=1) * not_goal
+        else:
+            # Values bounded below: an unreached cell (or a wall's far side) reads the floor, not -1e3, so the
+            # logits stay within |floor| of each other and cross-entropy keeps a gradient on every move.
+            floor = self.value_floor
+            value = floor * not_goal
+            for _ in range(self.iterations - 1):
+                value = (shifted(value, size, fill=floor) - cost).amax(dim=1).clamp_min(floor) * not_goal
         centre = size // 2
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
@@ -231,6 +247,7 @@ class NextCellNetwork(nn.Module):
         hidden: Width of the fully connected layers.
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
+        value_floor: The planner's lower bound on values (:class:`CellValueIteration`); ``None``: unbounded.
     """
 
     def __init__(
@@ -242,12 +259,13 @@ class NextCellNetwork(nn.Module):
         planning_iterations: int = 0,
         *,
         block_walls: bool = False,
+        value_floor: float | None = None,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
         if planning_iterations > 0:
             self.planner: CellValueIteration | None = CellValueIteration(
-                planning_iterations, channels, block_walls=block_walls
+                planning_iterations, channels, block_walls=block_walls, value_floor=value_floor
             )
             self.head = nn.Sequential(nn.Linear(moves + vector_dim, hidden), nn.ReLU(), nn.Linear(hidden, moves))
             with th.no_grad():  # start as the planner's own readout
