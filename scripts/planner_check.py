@@ -31,13 +31,17 @@ from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 from antmaze_hirl.envs.layouts import shortest_path
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
+from antmaze_hirl.envs.suites import fixed_map
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, learner_settings
 from antmaze_hirl.experts.oracle import plan_subgoal
 from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
 
-def _env(body: str, *, split: str | None = None, maze_map: str | None = None, maze_size: int | None = None) -> Any:
+def _env(body: str, *, split: str | None = None, maze_map: Any = None, maze_size: int | None = None) -> Any:
     kwargs: dict[str, Any] = {"low_level": lambda *_: None}
+    if isinstance(maze_map, str) and maze_map in SUITE_SPECS:  # a fixed map by its suite name (giant included)
+        maze_map = fixed_map(SUITE_SPECS[maze_map])
     if split is not None:
         kwargs["split"] = split
     if maze_size is not None and maze_map is None:
@@ -128,6 +132,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--tasks", type=int, default=200)
     parser.add_argument("--maps", default="medium,large,giant")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--no-correction", action="store_true", help="screen only: logits are the planner's Q alone")
+    parser.add_argument("--rounds-factor", type=float, default=1.0, help="screen only: on_map rounds times this")
     args = parser.parse_args(argv)
     th.set_num_threads(1)
     settings_ = body_settings(args.body, held_out_layouts=True)
@@ -140,6 +146,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             rng = np.random.default_rng(seed)
             settings = learner_settings(variant, config.maze_size)
             policy = HighLevelPolicy.for_env(train, rng=rng, subgoal_reach_m=config.subgoal_reach_m, **settings)
+            if args.no_correction and policy.runs_on_any_map:
+                for parameter in policy.network.head.parameters():
+                    parameter.requires_grad_(False)  # stays zero: the correction starts at zero
             data = labelled_states(train, args.labels, policy.subgoal_reach_m, np.random.default_rng(1000 + seed))
             selection = _env(args.body, split="selection", maze_size=config.maze_size)
             row: dict[str, Any] = {"variant": variant, "seed": seed, "labels": args.labels, "steps": args.steps}
@@ -151,7 +160,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)
-                    row[name] = summary(grid_rollouts(moved_to(policy, other), other, args.tasks, 11))
+                    moved = moved_to(policy, other)
+                    if args.rounds_factor != 1.0 and moved.runs_on_any_map:
+                        moved.network.planner.iterations = int(moved.network.planner.iterations * args.rounds_factor)
+                    row[name] = summary(grid_rollouts(moved, other, args.tasks, 11))
                 except (ValueError, AttributeError) as error:
                     row[name] = {"error": str(error)}
             row["seconds"] = round(time.perf_counter() - start, 1)

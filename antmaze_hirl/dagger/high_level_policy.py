@@ -90,9 +90,9 @@ class LearnerSettings:
             at the agent's cell.
         block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
             between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
-        value_floor: With the ``"next_cell"`` head's value iteration: a lower bound on the planner's values
-            (negative; :class:`~antmaze_hirl.dagger.network.CellValueIteration`). ``None``: unbounded, as
-            every learner before the planning learner. Needs ``planning_iterations > 0``.
+        any_map: With the ``"next_cell"`` head's value iteration: the planning learner whose weights act on
+            any map (:class:`~antmaze_hirl.dagger.network.NextCellNetwork`'s ``any_map``: the planner's Q
+            alone, times a trust learnt from 0; :meth:`HighLevelPolicy.on_map`). Needs ``planning_iterations > 0``.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -111,7 +111,7 @@ class LearnerSettings:
     hidden: int = 128
     head: str = "heading"
     block_walls: bool = False
-    value_floor: float | None = None
+    any_map: bool = False
     learning_rate: float = 1e-3
     batch_size: int = 64
     augment_symmetries: bool = True
@@ -127,12 +127,9 @@ class LearnerSettings:
             raise ValueError(f"planning_iterations must be >= 0, got {self.planning_iterations}")
         if self.block_walls and (self.head != "next_cell" or self.planning_iterations == 0):
             raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
-        if self.value_floor is not None:
-            if self.head != "next_cell" or self.planning_iterations == 0:
-                raise ValueError("value_floor needs head='next_cell' and planning_iterations > 0")
-            if not self.value_floor < 0:
-                raise ValueError(f"value_floor must be < 0 or None, got {self.value_floor}")
-            object.__setattr__(self, "value_floor", float(self.value_floor))
+        if self.any_map and (self.head != "next_cell" or self.planning_iterations == 0):
+            raise ValueError("any_map needs head='next_cell' and planning_iterations > 0")
+        object.__setattr__(self, "any_map", bool(self.any_map))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -273,7 +270,7 @@ class HighLevelPolicy:
                     settings.hidden,
                     settings.planning_iterations,
                     block_walls=settings.block_walls,
-                    value_floor=settings.value_floor,
+                    any_map=settings.any_map,
                 )
             else:
                 self.network = SubgoalNetwork(
@@ -449,20 +446,21 @@ class HighLevelPolicy:
 
     @property
     def runs_on_any_map(self) -> bool:
-        """Whether the same weights act on a map of any size (:meth:`on_map`): the planning next-cell head.
+        """Whether the same weights act on a map of any size (:meth:`on_map`): ``settings.any_map``.
 
-        Its planner's convolutions and the correction over the moves' Q-values have no layer whose shape
-        depends on the grid; the CNN heads end in a fully connected layer over the whole grid.
+        The CNN heads end in a fully connected layer over the whole grid. The earlier planning heads take any
+        grid, but their correction reads the goal offset, which grows with the map beyond anything trained on
+        (zero-shot on ``large`` it cut grid-level success from 93% to 56%), so they are not moved either.
         """
-        return self.settings.head == "next_cell" and self.settings.planning_iterations > 0
+        return self.settings.any_map
 
     def on_map(
         self, geometry: MazeGeometry, *, pixels_per_cell: int | None = None, rng: np.random.Generator | None = None
     ) -> HighLevelPolicy:
         """This learner's weights acting on another map (zero-shot), with planning rounds for that map.
 
-        A planning learner (:attr:`runs_on_any_map`) gets :func:`planning_rounds` of ``geometry``; a CNN
-        learner moves only to a map whose agent-centred grid has its own size.
+        An ``any_map`` learner (:attr:`runs_on_any_map`) gets :func:`planning_rounds` of ``geometry``; any
+        other moves only to a map whose agent-centred grid has its own size.
 
         Args:
             geometry: The other map's placement; its cell side must be this learner's (the same body).
@@ -483,9 +481,9 @@ class HighLevelPolicy:
             size = 2 * max(geometry.n_rows, geometry.n_cols) - 1
             if size != self.encoder.grid_size:
                 raise ValueError(
-                    f"a {self.settings.head} CNN learner sees a {self.encoder.grid_size}x{self.encoder.grid_size} grid "
-                    f"and cannot act on a {geometry.n_rows}x{geometry.n_cols} map (a {size}x{size} grid); "
-                    "only a planning learner runs on any map"
+                    f"this learner (head {self.settings.head!r}, any_map False) sees a {self.encoder.grid_size}x"
+                    f"{self.encoder.grid_size} grid and cannot act on a {geometry.n_rows}x{geometry.n_cols} map "
+                    f"(a {size}x{size} grid); only an any_map planning learner runs on any map"
                 )
         moved = HighLevelPolicy(
             geometry,

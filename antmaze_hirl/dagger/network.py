@@ -172,25 +172,17 @@ class CellValueIteration(nn.Module):
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
-        value_floor: A lower bound on every cell's value (a negative number), which unreached cells start at;
-            ``None`` (the protocol-2 learners): unreached cells start at :data:`UNREACHED` and values are
-            unbounded. A bound keeps the logits within ``|value_floor|`` of each other.
 
     Raises:
-        ValueError: If ``iterations`` is below 1 or ``value_floor`` is not negative.
+        ValueError: If ``iterations`` is below 1.
     """
 
-    def __init__(
-        self, iterations: int, channels: int = 16, *, block_walls: bool = False, value_floor: float | None = None
-    ) -> None:
+    def __init__(self, iterations: int, channels: int = 16, *, block_walls: bool = False) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
-        if value_floor is not None and not value_floor < 0:
-            raise ValueError(f"value_floor must be < 0 or None, got {value_floor}")
         self.iterations = iterations
         self.block_walls = block_walls
-        self.value_floor = value_floor
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -204,19 +196,11 @@ class CellValueIteration(nn.Module):
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
+        value = UNREACHED * not_goal
         size = grids.shape[-1]
-        if self.value_floor is None:
-            value = UNREACHED * not_goal
-            for _ in range(self.iterations - 1):
-                # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
-                value = (shifted(value, size) - cost).amax(dim=1) * not_goal
-        else:
-            # Values bounded below: an unreached cell (or a wall's far side) reads the floor, not -1e3, so the
-            # logits stay within |floor| of each other and cross-entropy keeps a gradient on every move.
-            floor = self.value_floor
-            value = floor * not_goal
-            for _ in range(self.iterations - 1):
-                value = (shifted(value, size, fill=floor) - cost).amax(dim=1).clamp_min(floor) * not_goal
+        for _ in range(self.iterations - 1):
+            # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
+            value = (shifted(value, size) - cost).amax(dim=1) * not_goal
         centre = size // 2
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
@@ -247,7 +231,14 @@ class NextCellNetwork(nn.Module):
         hidden: Width of the fully connected layers.
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
-        value_floor: The planner's lower bound on values (:class:`CellValueIteration`); ``None``: unbounded.
+        any_map: The planning learner whose weights act on any map: the logits are the planner's Q alone,
+            times a learnt trust that starts at 0 (so the untrained learner has no preference among moves),
+            with no correction from the feature vector (whose goal offset grows with the map beyond anything
+            trained on; with it, zero-shot grid-level success on ``large`` fell from 93% to 56%, and a
+            correction from local inputs only still cost 52 points there: ``scripts/planner_check.py``).
+
+    Raises:
+        ValueError: If ``any_map`` is given without planning.
     """
 
     def __init__(
@@ -259,18 +250,27 @@ class NextCellNetwork(nn.Module):
         planning_iterations: int = 0,
         *,
         block_walls: bool = False,
-        value_floor: float | None = None,
+        any_map: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
+        if any_map and planning_iterations < 1:
+            raise ValueError("any_map needs planning_iterations > 0")
+        self.trust: nn.Parameter | None = None
+        self.head: nn.Module | None = None
         if planning_iterations > 0:
             self.planner: CellValueIteration | None = CellValueIteration(
-                planning_iterations, channels, block_walls=block_walls, value_floor=value_floor
+                planning_iterations, channels, block_walls=block_walls
             )
-            self.head = nn.Sequential(nn.Linear(moves + vector_dim, hidden), nn.ReLU(), nn.Linear(hidden, moves))
-            with th.no_grad():  # start as the planner's own readout
-                self.head[-1].weight.zero_()
-                self.head[-1].bias.zero_()
+            if any_map:
+                # How far the logits follow the planner, learnt from 0: untrained, every move is as likely (the
+                # planner's goal-seeking prior alone solved a third of the ant's mazes before any label).
+                self.trust = nn.Parameter(th.zeros(()))
+            else:
+                self.head = nn.Sequential(nn.Linear(moves + vector_dim, hidden), nn.ReLU(), nn.Linear(hidden, moves))
+                with th.no_grad():  # start as the planner's own readout
+                    self.head[-1].weight.zero_()
+                    self.head[-1].bias.zero_()
         else:
             self.planner = None
             self.head = SubgoalNetwork(grid_size, vector_dim, moves, channels, hidden)
@@ -278,8 +278,12 @@ class NextCellNetwork(nn.Module):
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
         """Logits ``(B, 9)`` over the next cell."""
         if self.planner is None:
+            assert self.head is not None
             return self.head(grids, vectors)[0]
         q = self.planner(grids)
+        if self.trust is not None:
+            return self.trust * q
+        assert self.head is not None
         # The correction sees Q relative to its best move: the scale of Q grows with the iterations.
         relative = q - q.max(dim=1, keepdim=True).values.detach()
         return q + self.head(th.cat([relative, vectors], dim=1))

@@ -258,10 +258,22 @@ def resolve_policy(
     except zipfile.BadZipFile:
         raise ValueError(f"{path} is not a zip (an SB3 model or a saved DAgger learner)") from None
     if "meta.json" in names:
-        return _load_learner(spec, path, env), f"dagger learner {path}"
+        learner = _load_learner(spec, path, env)
+        trained_on = read_policy_file_geometry(path)
+        here = [env.unwrapped.geometry.n_rows, env.unwrapped.geometry.n_cols]
+        zero_shot = "" if trained_on == here else f" (zero-shot: trained on {trained_on[0]}x{trained_on[1]} maps)"
+        return learner, f"dagger learner {path}{zero_shot}"
     if "data" in names:
         return _load_sb3(spec, path, env), f"sb3 {path}"
     raise ValueError(f"{path} is neither an SB3 model zip (no 'data') nor a saved DAgger learner (no 'meta.json')")
+
+
+def read_policy_file_geometry(path: Path) -> list[int]:
+    """``[rows, cols]`` of the maps a saved DAgger learner was made for (its ``config``'s geometry)."""
+    from antmaze_hirl.dagger.high_level_policy import read_policy_file
+
+    config, _ = read_policy_file(path)
+    return [int(config["geometry"][0]), int(config["geometry"][1])]
 
 
 def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
@@ -284,12 +296,16 @@ def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
             f"policy {path} reads {config['body_dim']} body values per state; suite {spec.name!r} ({spec.body}) "
             f"gives {body_dim}: a learner for another body"
         )
-    if (rows, cols) != (inner.geometry.n_rows, inner.geometry.n_cols):
+    learner = HighLevelPolicy.load(path)
+    if (rows, cols) == (inner.geometry.n_rows, inner.geometry.n_cols):
+        return learner
+    if not learner.runs_on_any_map:
         raise ValueError(
-            f"policy {path} is a learner for {rows}x{cols} maps; suite {spec.name!r} has "
-            f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps"
+            f"policy {path} is a CNN learner for {rows}x{cols} maps; suite {spec.name!r} has "
+            f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps (only a planning learner runs on any map)"
         )
-    return HighLevelPolicy.load(path)
+    # Zero-shot: the same weights, planning rounds for this map (the description says so).
+    return learner.on_map(inner.geometry, pixels_per_cell=inner.pixels_per_cell)
 
 
 def _sb3_algorithm(path: Path) -> Any:
