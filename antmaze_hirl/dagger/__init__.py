@@ -4,12 +4,12 @@ from antmaze_hirl.dagger.dataset import Demonstration, DemonstrationDataset
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED, evaluate_high_level
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, LearnerSettings
 from antmaze_hirl.dagger.protocols import Learner, OffsetLearner
-from antmaze_hirl.dagger.shipped import load_shipped_learner, shipped_learner_path, shipped_learner_record
 from antmaze_hirl.dagger.schedules import (
     BetaSchedule,
     InverseDecayBetaSchedule,
     LinearBetaSchedule,
 )
+from antmaze_hirl.dagger.shipped import load_shipped_learner, shipped_learner_path, shipped_learner_record
 from antmaze_hirl.dagger.strategies import (
     STRATEGIES,
     AggreVaTeQuery,

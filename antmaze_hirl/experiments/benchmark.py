@@ -220,8 +220,8 @@ def resolve_policy(
     body's experiment setting: one cell for the point, 2 m for the ant) and its straight walks ``clearance_m``
     from walls (default :class:`~antmaze_hirl.experts.PathOracle`'s, 0.2 cell); ``"random"``:
     :class:`RandomSubgoalPolicy` seeded with ``seed``; ``"planner"``: the planning learner shipped for the suite's
-    body (:mod:`antmaze_hirl.dagger.shipped`), zero-shot on a map it was not trained on; else a path to an SB3 zip of a high-level model (PPO,
-    A2C, SAC, TD3/DDPG) or to a saved DAgger learner
+    body (:mod:`antmaze_hirl.dagger.shipped`), zero-shot on a map it was not trained on; else a path to an SB3
+    zip of a high-level model (PPO, A2C, SAC, TD3/DDPG) or to a saved DAgger learner
     (:meth:`~antmaze_hirl.dagger.high_level_policy.HighLevelPolicy.save`, e.g. a study's ``learner.zip``).
 
     Raises:
@@ -534,8 +534,8 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     parser.add_argument(
         "--policy",
         required=True,
-        help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip of "
-        "a high-level model or a saved DAgger learner (required)",
+        help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip "
+        "of a high-level model or a saved DAgger learner (required)",
     )
     parser.add_argument(
         "--episodes-per-task",
