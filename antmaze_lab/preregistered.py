@@ -772,6 +772,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = args.preregistration.resolve()
     shown = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
     report["preregistration"] = {"path": str(shown), "commit": _git_commit(path)}
+    report["code_commit"] = _git_commit(Path(__file__))  # the last commit of this module
     report["command"] = "python -m antmaze_lab.preregistered " + " ".join(argv if argv is not None else sys.argv[1:])
     atomic_write_json(args.json, report)
     print(format_report(report))
