@@ -558,10 +558,12 @@ def read_folders(folders: Sequence[Path], spec: dict[str, Any]) -> dict[str, Any
     Raises:
         ValueError: One line naming a folder that is not of its body, or a file it lacks.
     """
+    for folder, name in zip(folders, spec["run"]["bodies"], strict=True):  # before the long read
+        summary = Path(folder) / "summary.json"
+        found = json.loads(summary.read_text())["config"]["body"] if summary.is_file() else None
+        if found != name:
+            raise ValueError(f"{folder} is of body {found!r}, but it was passed as the {name} folder")
     bodies = [read_body(Path(folder)) for folder in folders]
-    for body, name in zip(bodies, spec["run"]["bodies"], strict=True):
-        if body.body != name:
-            raise ValueError(f"{body.folder} is of body {body.body!r}, but it was passed as the {name} folder")
     protocol = {json.loads((b.folder / "config.json").read_text()).get("protocol") for b in bodies}
     targets = {b.body: fixed_targets(b, spec) for b in bodies}
     return {

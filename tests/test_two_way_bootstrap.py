@@ -126,3 +126,19 @@ def test_the_one_sided_signed_rank_test_ranks_never_above_every_count():
     assert signed_rank_p([0.0, 0.0], "greater") == 1.0 and signed_rank_p([1.0], "greater") is None
     with pytest.raises(ValueError, match="alternative"):
         signed_rank_p([1.0, 2.0], "bigger")
+
+
+@pytest.mark.parametrize(
+    "differences",
+    [
+        [0.1, 0.1, 0.2, -0.1, 0.3, 0.3, 0.0, 0.05, 0.1, -0.2],  # ties and a zero: scipy's permutation path
+        [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, -10.0],  # no ties: scipy's exact table
+        [0.02, -0.01, 0.02, 0.02, -0.03, 0.01],
+    ],
+)
+def test_the_enumerated_signed_rank_p_equals_scipys(differences):
+    from scipy.stats import wilcoxon
+
+    for alternative in ("greater", "less", "two-sided"):
+        expected = wilcoxon(differences, alternative=alternative).pvalue
+        assert signed_rank_p(differences, alternative) == pytest.approx(expected, rel=1e-9), alternative
