@@ -41,7 +41,6 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.uncertainty import (
     bootstrap_p,
-    cluster_bootstrap,
     holm,
     paired_comparison,
     paired_two_way_bootstrap,
@@ -479,23 +478,28 @@ def per_label_and_episode(body: BodyEvaluations, spec: dict[str, Any]) -> dict[s
     return out
 
 
-def success_by_path_length(body: BodyEvaluations) -> dict[str, Any]:
+def success_by_path_length(body: BodyEvaluations, spec: dict[str, Any]) -> dict[str, Any]:
     """Final success per shortest-path length (cells): mazes, task classes and each method's pooled rate.
 
-    The interval is :func:`~antmaze_hirl.experiments.uncertainty.cluster_bootstrap`'s, over seeds and the
-    mazes of that length.
+    The interval is the two-way bootstrap's, over seeds and the task classes of that length, as every
+    other interval of the readings.
     """
-    lengths = body.path_lengths
+    stats, lengths = spec["statistics"], body.path_lengths
     out = {}
     for length in sorted(set(lengths.tolist())):
         columns = lengths == length
-        row: dict[str, Any] = {
-            "mazes": int(columns.sum()),
-            "task_classes": len({c for c, keep in zip(body.task_classes, columns, strict=True) if keep}),
-        }
+        classes = [c for c, keep in zip(body.task_classes, columns, strict=True) if keep]
+        row: dict[str, Any] = {"mazes": int(columns.sum()), "task_classes": len(set(classes))}
         for name, method in body.methods.items():
-            pooled = cluster_bootstrap(method.outcomes[:, -1][:, columns])
-            row[name] = {"rate": pooled["rate"], "interval_95": pooled["cluster_bootstrap_95"]}
+            table = method.outcomes[:, -1][:, columns].astype(float)
+
+            def mean(rows: np.ndarray, weights: np.ndarray, table: np.ndarray = table) -> float:
+                return float((table[rows] @ weights).sum() / (len(rows) * weights.sum()))
+
+            drawn = two_way_bootstrap(
+                mean, len(table), classes, resamples=stats["resamples"], seed=stats["bootstrap_seed"]
+            )
+            row[name] = {"rate": float(table.mean()), "interval_95": list(percentile_interval(drawn))}
         out[str(length)] = row
     return out
 
@@ -574,7 +578,7 @@ def read_folders(folders: Sequence[Path], spec: dict[str, Any]) -> dict[str, Any
         **read_claims(bodies, spec),
         "fixed_targets": targets,
         "per_label_and_episode": {b.body: per_label_and_episode(b, spec) for b in bodies},
-        "success_by_path_length": {b.body: success_by_path_length(b) for b in bodies},
+        "success_by_path_length": {b.body: success_by_path_length(b, spec) for b in bodies},
         "paired_success": {b.body: paired_success(b, spec) for b in bodies},
         "project_goals": project_goals(bodies, targets, spec),
     }

@@ -266,3 +266,15 @@ def test_the_committed_dry_run_is_labelled_and_its_table_is_what_the_page_shows(
     assert report["label"] == pre.DRY_RUN_LABEL
     assert all(check["disjoint"] for check in report["symmetry"].values())
     assert pre.format_report(report).startswith("**Protocol 2's data read with protocol 3's preregistered rules")
+
+
+def test_success_by_path_length_groups_the_final_outcomes_by_the_shortest_path(spec):
+    short, long = "11111/1S0G1/11111", "11111/1S001/11101/1G001/11111"  # 2 and 6 cells from start to goal
+    outcomes = np.zeros((2, len(EPISODES), 3), dtype=bool)
+    outcomes[:, -1] = [[True, True, False], [True, False, False]]
+    dagger = MethodEvaluations((0, 1), EPISODES.copy(), np.zeros((2, len(EPISODES))), outcomes)
+    crafted = BodyEvaluations(Path("/crafted"), "point", (short, short, long), ("a", "a", "b"), 1.0, {"dagger": dagger})
+    rows = pre.success_by_path_length(crafted, spec)
+    assert list(rows) == ["2", "6"]
+    assert (rows["2"]["mazes"], rows["2"]["task_classes"], rows["2"]["dagger"]["rate"]) == (2, 1, 0.75)
+    assert rows["6"]["dagger"] == {"rate": 0.0, "interval_95": [0.0, 0.0]}

@@ -391,8 +391,8 @@ def holm(p_values: Sequence[float]) -> list[float]:
 
     Written here, in a few lines, because scipy has no Holm correction (``scipy.stats.false_discovery_control``
     is Benjamini-Hochberg's) and statsmodels, which has it (``multipletests(method="holm")``), is only in the
-    ``study`` extra; a test checks the two agree where statsmodels is installed. A hypothesis is rejected at
-    level ``a`` when its adjusted p is <= ``a``.
+    ``study`` extra; a test checks the two agree where statsmodels is installed. The caller compares the
+    adjusted p-values with its level.
 
     Raises:
         ValueError: If a p-value lies outside [0, 1].
