@@ -113,6 +113,23 @@ def moved_to(policy: HighLevelPolicy, env: Any) -> HighLevelPolicy:
     return policy.on_map(maze.geometry, pixels_per_cell=maze.pixels_per_cell)
 
 
+def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int = 30) -> dict[str, float]:
+    """The planning learner's grid-level success on random 4x4 point mazes before and after ``labels`` labels.
+
+    The tests' learning check (``tests/test_planning_learner.py``), its spread measured by
+    ``scripts/learning_margins.py planner_gain``: one torch thread, every draw seeded by ``seed``.
+    """
+    env = _env("point", maze_size=4)
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **learner_settings("next_cell_plan", 4))
+    untrained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
+    data = labelled_states(env, labels, policy.subgoal_reach_m, np.random.default_rng(20_000 + seed))
+    batch = policy.encoder.encode(data["walls"], data["agents"], data["goals"], data["bodies"])
+    policy.fit(batch, policy.targets(np.stack(data["agents"]), np.stack(data["labels"])), steps)
+    trained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
+    env.close()
+    return {"untrained": untrained, "trained": trained, "gain": trained - untrained}
+
+
 def summary(results: dict[int, list[bool]]) -> dict[str, Any]:
     everything = [s for outcomes in results.values() for s in outcomes]
     return {
