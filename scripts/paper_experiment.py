@@ -47,7 +47,6 @@ from pathlib import Path
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
@@ -144,7 +143,6 @@ def main() -> None:
         default=None,
         help="the oracle's farthest subgoal, ExperimentConfig.subgoal_reach_m; default: BODY_DEFAULTS",
     )
-    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-episodes", type=int, default=None, help="mazes per periodic evaluation (default 20)")
     parser.add_argument("--held-out-layouts", action="store_true", help="ExperimentConfig.held_out_layouts")
     parser.add_argument(

@@ -9,9 +9,17 @@ from scipy.stats import wilcoxon
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments import ExperimentConfig, cost_to_reach, run_experiment, summarise
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
 TINY = ExperimentConfig(
-    body="point", episodes=3, eval_every=2, eval_episodes=2, final_eval_episodes=3, maze_size=3, gradient_steps=5
+    body="point",
+    episodes=3,
+    eval_every=2,
+    eval_episodes=2,
+    final_eval_episodes=3,
+    maze_size=3,
+    gradient_steps=5,
+    **SETTINGS_BEFORE_PROTOCOL_2,  # protocol 1 on 3x3 mazes: this file checks the runner, not the protocol
 )
 
 
@@ -90,7 +98,7 @@ def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path, methods, con
 def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="holds results made with"):
-        run_experiment(["dagger"], 1, ExperimentConfig(body="point", episodes=4), tmp_path, progress_bar=False)
+        run_experiment(["dagger"], 1, dataclasses.replace(TINY, episodes=4), tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="unknown method 'gail'"):
         run_experiment(["gail"], 1, TINY, tmp_path / "other", progress_bar=False)
     with pytest.raises(ValueError, match="subgoal_reach_m must be > 0 metres, got -1"):

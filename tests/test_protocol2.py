@@ -14,6 +14,7 @@ from antmaze_hirl.envs.layouts import canonical_wall_grid
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.config import evaluation_schedule, evaluation_sets
 from antmaze_hirl.experiments.curves import labels_to_reach, normalised_auc, success_curve
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.results_folder import read_rows
 from antmaze_hirl.experiments.summary import summarise
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
@@ -125,11 +126,16 @@ def test_cluster_bootstrap_matches_the_known_standard_errors():
 
 def test_protocol_settings_are_checked_and_the_schedule_includes_the_untrained_learner():
     assert evaluation_schedule(TINY2) == [0, 2, 3]
-    assert evaluation_schedule(ExperimentConfig(episodes=25, eval_every=10)) == [10, 20, 25]
+    assert evaluation_schedule(ExperimentConfig(episodes=25, eval_every=10)) == [0, 10, 20, 25]  # the default
+    assert evaluation_schedule(ExperimentConfig(episodes=25, eval_every=10, **SETTINGS_BEFORE_PROTOCOL_2)) == [
+        10,
+        20,
+        25,
+    ]
     sets = evaluation_sets(TINY2)
     assert sets["periodic"] == sets["final"] and sets["final"][0] == "eval" and sets["final"][2] == 4
     with pytest.raises(ValueError, match="protocol 2 needs held_out_layouts=True"):
-        ExperimentConfig(protocol=2)
+        ExperimentConfig(held_out_layouts=False)
     with pytest.raises(ValueError, match=r"protocol must be one of \[1, 2\], got 3"):
         ExperimentConfig(protocol=3, held_out_layouts=True)
 
@@ -209,7 +215,7 @@ def test_protocol_2_trains_the_generic_learner_and_protocol_1_the_body_default()
     generic = policy_config(TINY2)
     assert PROTOCOL_LEARNER == "next_cell_cnn" and generic["head"] == "next_cell"
     assert generic["planning_iterations"] == 0 and not generic["block_walls"]
-    old = policy_config(ExperimentConfig(body="point", maze_size=4, held_out_layouts=True))
+    old = policy_config(ExperimentConfig(body="point", maze_size=4, held_out_layouts=True, protocol=1))
     assert old["planning_iterations"] == 14 and old["block_walls"]  # the point's body default: the strong prior
     prior = policy_config(ExperimentConfig(**{**TINY2.__dict__, "learner": STRONG_PRIOR}))
     assert prior["planning_iterations"] == 14 and prior["block_walls"]

@@ -14,10 +14,18 @@ from antmaze_hirl.cli import main
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, RewardBasedQuery
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.tensorboard import SCALARS, DAggerTensorBoard, trial_log_dir
 
 TINY = ExperimentConfig(
-    body="point", episodes=3, eval_every=2, eval_episodes=1, final_eval_episodes=2, maze_size=3, gradient_steps=5
+    body="point",
+    episodes=3,
+    eval_every=2,
+    eval_episodes=1,
+    final_eval_episodes=2,
+    maze_size=3,
+    gradient_steps=5,
+    **SETTINGS_BEFORE_PROTOCOL_2,  # protocol 1 on 3x3 mazes, as these checks were made
 )
 
 

@@ -30,6 +30,7 @@ from antmaze_hirl.dagger.strategies import (
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.runner import run_trial
 
 GEOMETRY = MazeGeometry(5, 5, 1.0)
@@ -46,7 +47,14 @@ WALLS = np.array(
 )
 GOAL = GEOMETRY.cell_to_xy((1, 1))
 TINY = ExperimentConfig(
-    body="point", episodes=2, eval_every=2, eval_episodes=1, final_eval_episodes=1, maze_size=3, gradient_steps=2
+    body="point",
+    episodes=2,
+    eval_every=2,
+    eval_episodes=1,
+    final_eval_episodes=1,
+    maze_size=3,
+    gradient_steps=2,
+    **SETTINGS_BEFORE_PROTOCOL_2,  # protocol 1 on 3x3 mazes, as these checks were made
 )
 
 
