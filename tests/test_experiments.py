@@ -349,14 +349,6 @@ def test_curve_figures_reject_a_non_positive_label_count():
         normalised_auc(trial, -5)
 
 
-def test_the_written_out_95_percent_quantile_is_scipys():
-    from scipy.stats import norm
-
-    from antmaze_hirl.experiments.uncertainty import CONFIDENCE, Z_95
-
-    assert Z_95 == float(norm.ppf(1 - (1 - CONFIDENCE) / 2))  # bit for bit: committed intervals stay as they are
-
-
 def test_wilson_intervals_and_paired_test_against_known_values():
     from antmaze_hirl.experiments import paired_comparison, wilson_interval
 
