@@ -140,6 +140,7 @@ def test_protocol_settings_are_checked_and_the_schedule_includes_the_untrained_l
         ExperimentConfig(protocol=3, held_out_layouts=True)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(finished_protocol2):
     tmp_path, _ = finished_protocol2  # TINY2, 2 seeds, run once per session (read only)
     summary = json.loads((tmp_path / "summary.json").read_text())
@@ -169,6 +170,7 @@ def test_a_protocol_2_run_writes_per_maze_outcomes_on_one_held_out_set(finished_
     assert training.isdisjoint({grid_class(row["layout"]) for row in evaluations})
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_lockstep_evaluation_gives_the_serial_per_maze_outcomes_on_the_point(finished_protocol2, tmp_path):
     # The point's low level and learner are exact in lockstep (benchmarks/lockstep_agreement.py: 100/100):
     # evaluation_envs changes how the mazes are played, not which mazes or what happens in them. The serial
@@ -190,6 +192,7 @@ def test_evaluation_envs_is_checked():
         replace(TINY2, evaluation_envs=0)
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize("body", ["point", "ant"])
 def test_committed_protocol_1_folders_still_summarise_as_committed(body):
     folder = RESULTS / body
@@ -239,6 +242,7 @@ def test_the_success_curves_start_at_the_untrained_success():
     assert episodes.tolist() == [2.0, 4.0] and labels.tolist() == [20.0, 40.0] and success.shape == (2, 2)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_the_panels_of_a_protocol_2_run_start_at_the_untrained_success(finished_protocol2, tmp_path, monkeypatch):
     import antmaze_hirl.plotting as plotting
     from antmaze_hirl.experiments.results_folder import read_evaluations, write_reports

@@ -147,6 +147,7 @@ def damage_part(part, kind):
         part.write_text(damaged)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_a_protocol_2_record_holds_its_evaluations_part_and_older_records_still_load(finished2, tmp_path):
     folder, files = finished2
     path = trial_path(folder, "dagger", 0)
@@ -174,6 +175,7 @@ def damaged_part_folder(source, folder, kind):
     return rows_csv, part, (part.read_bytes() if part.exists() else None)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 @pytest.mark.parametrize("kind", sorted(PART_DAMAGE))
 def test_a_damaged_evaluations_part_is_named_and_the_old_reports_kept(finished2, tmp_path, kind):
     source, files = finished2
@@ -186,6 +188,7 @@ def test_a_damaged_evaluations_part_is_named_and_the_old_reports_kept(finished2,
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 @pytest.mark.parametrize("kind", integration_except("missing part", PART_DAMAGE))
 def test_a_damaged_evaluations_part_is_named_and_its_trial_rerun_on_resume(finished2, tmp_path, kind):
     source, files = finished2

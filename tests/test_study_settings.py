@@ -103,6 +103,7 @@ def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     assert loaded.experiment_config(5) == expected  # a study evaluates as protocol 1, one maze at a time
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_committed_studys_settings_load():
     settings = load_settings(Path(__file__).resolve().parents[1] / "results" / "study" / "simulated_point")
     assert (settings.body, settings.subgoal_reach_m, settings.eval_every) == ("point", None, 5)
