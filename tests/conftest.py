@@ -1,3 +1,7 @@
+import os
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -12,6 +16,28 @@ from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
+
+COMMITTED_RESULTS = str(Path(__file__).resolve().parents[1] / "results") + os.sep
+"""The lab's committed results, which the unit tier never reads (its checks are integration tests)."""
+UNIT_TIER_GUARD = False
+"""Whether this run refuses to open a file under :data:`COMMITTED_RESULTS`: a run that leaves out integration."""
+
+
+def _refuse_committed_results(event, args):
+    # An audit hook (sys.addaudithook): open() and its kin raise "open" before they touch the file.
+    if event == "open" and isinstance(args[0], (str, os.PathLike)):
+        path = os.path.abspath(os.fspath(args[0]))
+        if isinstance(path, str) and path.startswith(COMMITTED_RESULTS):
+            raise PermissionError(
+                f"the unit tier reads no committed results: {path}; mark the test integration (pyproject.toml)"
+            )
+
+
+def pytest_configure(config):
+    global UNIT_TIER_GUARD
+    if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
+        sys.addaudithook(_refuse_committed_results)  # for the rest of the process: a hook cannot be removed
+        UNIT_TIER_GUARD = True
 
 
 class StillController:
