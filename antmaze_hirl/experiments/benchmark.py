@@ -386,7 +386,7 @@ def score_policy(
         suite: A suite name (:data:`~antmaze_hirl.envs.suite_specs.SUITE_SPECS`).
         policy: ``"oracle"``, ``"random"``, a path (see :func:`resolve_policy`), or a callable
             ``observation -> subgoal`` / an object with ``predict`` (SB3 models included).
-        episodes_per_task: Episodes per task, K; default the suite's protocol (:attr:`SuiteSpec.episodes_per_task`).
+        episodes_per_task: Episodes per task, K; default the suite's (:attr:`SuiteSpec.episodes_per_task`).
         seed: Episode ``j`` of task ``k`` resets with ``seed + k * K + j``; the random policy draws from it.
         task_ids: A subset of tasks (default all), e.g. for a quick check; the report says which ran.
         low_level: The low-level controller (default: the body's shipped policy).
@@ -519,7 +519,7 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--episodes-per-task",
         type=int,
         default=None,
-        help="episodes per task, K (default: the suite's protocol, 1 on point5/ant4, 20 on the fixed maps)",
+        help="episodes per task, K (default: the suite's, 1 on point5/ant4, 20 on the fixed maps)",
     )
     parser.add_argument("--seed", type=int, default=0, help="episode j of task k resets with seed + k*K + j")
     parser.add_argument(
