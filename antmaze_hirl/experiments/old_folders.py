@@ -9,6 +9,8 @@ files written before then differ in two ways, and only here:
 * **Missing settings.** A ``config.json`` written before a setting existed was made with the value the code had
   then. For the settings whose default has changed since (:data:`SETTINGS_BEFORE_PROTOCOL_2`) that is not
   today's default: read as today's, a protocol-1 folder would claim to be protocol 2.
+* **A study's old record keys.** Up to 0.2.0 a study's ``clicks.jsonl``, ``demonstrations.npz`` and pickled
+  ``DemonstrationLog`` named both the label index and the high-level step ``step`` (:data:`OLD_STUDY_KEYS`).
 
 Why hand-written: the files are this project's own format, and no library reads them.
 """
@@ -18,6 +20,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 OLD_KEYS: dict[str, str] = {"expert_max_distance": "subgoal_reach_m"}
 """Each key an older version wrote, with the setting's name today."""
@@ -63,3 +67,45 @@ def experiment_settings(recorded: Mapping[str, Any], source: str | Path) -> dict
     """
     settings = current_settings(recorded, source)
     return {**settings, **{key: value for key, value in SETTINGS_BEFORE_PROTOCOL_2.items() if key not in settings}}
+
+
+OLD_STUDY_KEYS: dict[str, str] = {"label_index": "step", "high_level_step": "step"}
+"""Each key of a study's records with the name files up to 0.2.0 wrote it under: ``step`` held the label index in
+``clicks.jsonl`` and the high-level step in ``demonstrations.npz`` (two concepts under one name, so the map runs
+from today's name)."""
+
+
+def current_study_record(record: Mapping[str, Any], key: str, where: str) -> dict[str, Any]:
+    """A study record (a JSON line, an ``.npz``'s arrays, a pickled state) with ``key`` under today's name.
+
+    ``key`` (one of :data:`OLD_STUDY_KEYS`) takes the value under either name, and the old name is dropped. A
+    record with both names is read if they hold the same value (compared as arrays: ``.npz`` arrays and JSON
+    values alike).
+
+    Raises:
+        ValueError: If ``record`` has neither name, or both with different values (names ``where``, the key
+            and the first values that differ).
+    """
+    old_key = OLD_STUDY_KEYS[key]
+    if key not in record and old_key not in record:
+        raise ValueError(f"{where}: no {key!r} (nor its old name {old_key!r})")
+    if key in record and old_key in record:
+        new, old = np.asarray(record[key]), np.asarray(record[old_key])
+        if not np.array_equal(new, old):
+            raise ValueError(
+                f"{where}: {key!r} and its old name {old_key!r} hold different values ({_difference(new, old)})"
+            )
+    value = record[key] if key in record else record[old_key]
+    current = {name: item for name, item in record.items() if name != old_key}
+    current[key] = value
+    return current
+
+
+def _difference(new: np.ndarray, old: np.ndarray) -> str:
+    """Where two values differ, in a few words: the values, their shapes, or the first index and its values."""
+    if new.ndim == 0 and old.ndim == 0:
+        return f"{new.item()!r} against {old.item()!r}"
+    if new.shape != old.shape:
+        return f"shapes {new.shape} against {old.shape}"
+    index = int(np.flatnonzero(new.ravel() != old.ravel())[0])
+    return f"at index {index}: {new.ravel()[index].item()!r} against {old.ravel()[index].item()!r}"
