@@ -1,3 +1,4 @@
+import dataclasses
 import os
 import sys
 from pathlib import Path
@@ -13,6 +14,7 @@ from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
@@ -99,18 +101,24 @@ def reset_subgoals(env, seed=3, resets=3):
     return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]
 
 
-TINY_PROTOCOL2 = ExperimentConfig(
+TINY_PROTOCOL1 = ExperimentConfig(
     body="point",
     episodes=3,
     eval_every=2,
     eval_episodes=2,
-    final_eval_episodes=4,
-    maze_size=4,
+    final_eval_episodes=3,
+    maze_size=3,
     gradient_steps=5,
-    held_out_layouts=True,
-    protocol=2,
+    **SETTINGS_BEFORE_PROTOCOL_2,
 )
-"""A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation."""
+"""A protocol-1 experiment small enough for a unit test of the runner (not of the protocol): 3 episodes on 3x3
+point mazes held out by seed, evaluated one maze at a time. Tests that need other sizes ``replace`` it."""
+
+TINY_PROTOCOL2 = dataclasses.replace(
+    TINY_PROTOCOL1, final_eval_episodes=4, maze_size=4, held_out_layouts=True, protocol=2
+)
+"""A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation,
+played one after another (evaluation_envs 1: the serial run the lockstep tests compare with)."""
 
 
 def finished_experiment(tmp_path_factory, name, config, seeds=2, low_level=None):

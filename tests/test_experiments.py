@@ -5,22 +5,13 @@ import math
 
 import pytest
 import torch as th
+from conftest import TINY_PROTOCOL1
 from scipy.stats import wilcoxon
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments import ExperimentConfig, cost_to_reach, run_experiment, summarise
-from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
-TINY = ExperimentConfig(
-    body="point",
-    episodes=3,
-    eval_every=2,
-    eval_episodes=2,
-    final_eval_episodes=3,
-    maze_size=3,
-    gradient_steps=5,
-    **SETTINGS_BEFORE_PROTOCOL_2,  # protocol 1 on 3x3 mazes: this file checks the runner, not the protocol
-)
+TINY = TINY_PROTOCOL1  # protocol 1 on 3x3 mazes: this file checks the runner, not the protocol
 
 
 def row(method, seed, episode, cost, eval_success=math.nan, attempts=4):

@@ -4,24 +4,13 @@ import json
 import warnings
 
 import pytest
-from conftest import TINY_PROTOCOL2, copy_results, finished_experiment
+from conftest import TINY_PROTOCOL1, TINY_PROTOCOL2, copy_results, finished_experiment
 
 from antmaze_hirl.envs import PointGoToController
-from antmaze_hirl.experiments.config import ExperimentConfig
-from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path, trial_record, write_reports
 from antmaze_hirl.experiments.runner import run_experiment
 
-TINY = ExperimentConfig(
-    body="point",
-    episodes=3,
-    eval_every=2,
-    eval_episodes=2,
-    final_eval_episodes=3,
-    maze_size=3,
-    gradient_steps=5,
-    **SETTINGS_BEFORE_PROTOCOL_2,  # a protocol-1 folder
-)
+TINY = TINY_PROTOCOL1  # a protocol-1 folder
 GO_TO = PointGoToController()
 """The protocol-1 folder's low level: the scripted go-to (what is checked here is the folder, not the walking)."""
 

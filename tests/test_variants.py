@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from conftest import make_point_trainer
+from conftest import TINY_PROTOCOL1, make_point_trainer
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger import (
@@ -30,7 +30,6 @@ from antmaze_hirl.dagger.strategies import (
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig
-from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.runner import run_trial
 
 GEOMETRY = MazeGeometry(5, 5, 1.0)
@@ -46,16 +45,7 @@ WALLS = np.array(
     dtype=bool,
 )
 GOAL = GEOMETRY.cell_to_xy((1, 1))
-TINY = ExperimentConfig(
-    body="point",
-    episodes=2,
-    eval_every=2,
-    eval_episodes=1,
-    final_eval_episodes=1,
-    maze_size=3,
-    gradient_steps=2,
-    **SETTINGS_BEFORE_PROTOCOL_2,  # protocol 1 on 3x3 mazes, as these checks were made
-)
+TINY = dataclasses.replace(TINY_PROTOCOL1, episodes=2, eval_episodes=1, final_eval_episodes=1, gradient_steps=2)
 
 
 def test_new_methods_are_strategies():
