@@ -192,6 +192,18 @@ def test_evaluation_envs_is_checked():
         replace(TINY2, evaluation_envs=0)
 
 
+def to_12_digits(value):
+    # Numbers to 12 significant digits, at any depth: scipy's Wilson interval, which the summaries use since
+    # the committed ones were written, differs from the closed form they hold by at most 4e-16.
+    if isinstance(value, float):
+        return float(f"{value:.12g}")
+    if isinstance(value, dict):
+        return {key: to_12_digits(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [to_12_digits(item) for item in value]
+    return value
+
+
 @pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize("body", ["point", "ant"])
 def test_committed_protocol_1_folders_still_summarise_as_committed(body):
@@ -199,7 +211,7 @@ def test_committed_protocol_1_folders_still_summarise_as_committed(body):
     committed = json.loads((folder / "summary.json").read_text())["methods"]
     summary = summarise(read_rows(folder / "episodes.csv"), list(committed))
     for method, figures in committed.items():
-        assert summary[method]["final_success"] == figures["final_success"], method
+        assert to_12_digits(summary[method]["final_success"]) == to_12_digits(figures["final_success"]), method
         assert summary[method]["normalised_auc"] == figures["normalised_auc"], method
         assert "untrained_success" not in summary[method]
 
