@@ -22,12 +22,11 @@ from antmaze_hirl.experiments.config import (
     DEFAULT_METHODS,
     HELD_OUT_MAZE_SIZE,
     LEARNERS,
-    PROTOCOL_EVALUATION_ENVS,
     PROTOCOLS,
     ExperimentConfig,
     body_settings,
+    protocol_evaluation_envs,
 )
-from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.sb3_ext.config import ALGOS
 
 DESCRIPTION = "Active hierarchical imitation learning on the MuJoCo Ant maze."
@@ -372,7 +371,7 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         type=int,
         default=None,
         help=f"mazes each evaluation plays at once, in lockstep (default: {defaults.evaluation_envs} in protocol "
-        f"{CURRENT_PROTOCOL}; in protocol 1, {SETTINGS_BEFORE_PROTOCOL_2['evaluation_envs']}: one after another, as "
+        f"{CURRENT_PROTOCOL}; in protocol 1, {protocol_evaluation_envs(1)}: one after another, as "
         "its committed folders were made; ant outcomes differ between the two, see docs/guides/vector-envs.md)",
     )
     add_backend_arguments(parser)
@@ -405,8 +404,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
     held_out = args.held_out_layouts or int(args.protocol) >= 2  # protocol 2 evaluates on the held-out part
     evaluation_envs = args.evaluation_envs
     if evaluation_envs is None:  # each protocol's own: protocol 1's folders were evaluated one maze at a time
-        protocol_1 = int(args.protocol) == 1
-        evaluation_envs = SETTINGS_BEFORE_PROTOCOL_2["evaluation_envs"] if protocol_1 else PROTOCOL_EVALUATION_ENVS
+        evaluation_envs = protocol_evaluation_envs(int(args.protocol))
     config = ExperimentConfig(
         body=args.body,
         episodes=args.episodes,

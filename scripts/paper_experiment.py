@@ -56,6 +56,7 @@ from antmaze_hirl.experiments.config import (
     PROTOCOLS,
     body_settings,
     evaluation_sets,
+    protocol_evaluation_envs,
 )
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
@@ -63,9 +64,6 @@ from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
-PROTOCOL_2_EVALUATION_ENVS = 25
-"""Protocol 2's mazes evaluated at once: its 100-maze set in four lockstep chunks (no committed folder to
-replay, so the faster path is the protocol's; config.json records it)."""
 
 
 def goals(summary: dict, body: str) -> dict:
@@ -191,7 +189,7 @@ def main() -> None:
         episodes=args.episodes,
         held_out_layouts=args.held_out_layouts,
         protocol=args.protocol,
-        evaluation_envs=args.evaluation_envs or (PROTOCOL_2_EVALUATION_ENVS if args.protocol >= 2 else 1),
+        evaluation_envs=args.evaluation_envs or protocol_evaluation_envs(args.protocol),
         **settings,
     )
     if args.low_level is not None and not args.oracle_only:

@@ -80,6 +80,15 @@ PROTOCOL_EVALUATION_ENVS = 25
 several times faster than one maze after another (``benchmarks/paper_trial_speed.py``)."""
 
 
+def protocol_evaluation_envs(protocol: int) -> int:
+    """The ``evaluation_envs`` a protocol runs with unless told otherwise.
+
+    :data:`PROTOCOL_EVALUATION_ENVS` from protocol 2 on; in protocol 1, 1: one maze after another, as its
+    committed folders were made.
+    """
+    return PROTOCOL_EVALUATION_ENVS if protocol >= 2 else 1
+
+
 @dataclass(frozen=True, kw_only=True)
 class TrialSettings:
     """The settings of a trial that the experiment and the user study share, whoever labels.

@@ -23,10 +23,16 @@ from typing import Any
 
 import numpy as np
 
+from antmaze_hirl.experiments.config import protocol_evaluation_envs
+
 OLD_KEYS: dict[str, str] = {"expert_max_distance": "subgoal_reach_m"}
 """Each key an older version wrote, with the setting's name today."""
 
-SETTINGS_BEFORE_PROTOCOL_2: dict[str, Any] = {"protocol": 1, "held_out_layouts": False, "evaluation_envs": 1}
+SETTINGS_BEFORE_PROTOCOL_2: dict[str, Any] = {
+    "protocol": 1,
+    "held_out_layouts": False,
+    "evaluation_envs": protocol_evaluation_envs(1),
+}
 """The value of each setting whose default changed when the current protocol became the default, as the code
 had it before the setting was recorded: a ``config.json`` that lacks one of these was made with this value
 (the committed protocol-1 folders lack ``protocol`` and ``evaluation_envs``). A study's settings need none of
