@@ -13,17 +13,19 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import apply_bounds, renamed_option
+from antmaze_hirl.cli_validation import apply_bounds
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
     BODY_DEFAULTS,
+    CURRENT_PROTOCOL,
     DEFAULT_METHODS,
     HELD_OUT_MAZE_SIZE,
     LEARNERS,
     PROTOCOLS,
     ExperimentConfig,
     body_settings,
+    protocol_evaluation_envs,
 )
 from antmaze_hirl.sb3_ext.config import ALGOS
 
@@ -101,7 +103,6 @@ def _add_demo(subparsers: _Subparsers) -> None:
         default=None,
         help="the oracle's farthest subgoal, metres (default: per body, ant 2 m, point one cell)",
     )
-    renamed_option(parser, "--max-subgoal-distance", "--subgoal-reach-m")
     parser.set_defaults(handler=_run_demo)
 
 
@@ -215,7 +216,6 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
         default=None,
         help="largest distance of the subgoals drawn, metres: ReachEnv's sample_radius_m (default: one cell)",
     )
-    renamed_option(parser, "--max-distance", "--sample-radius-m")
     parser.add_argument(
         "--num-envs",
         type=int,
@@ -295,8 +295,10 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser = _add_parser(
         subparsers,
         "experiment",
-        "DAgger with active learning: the paper's protocol over methods and seeds",
-        "antmaze-hirl experiment --body ant --held-out-layouts --eval-episodes 50 --out runs/ant --jobs 2\n"
+        "DAgger with active learning over methods and seeds, by default in the current protocol "
+        f"(protocol {CURRENT_PROTOCOL}: held-out layouts, one fixed evaluation set scored from episode 0; "
+        "docs/guides/protocol.md)",
+        "antmaze-hirl experiment --body ant --out runs/ant --jobs 2\n"
         "  antmaze-hirl experiment --body point --out runs/point --backend ray --address head-node:6379",
     )
     parser.add_argument("--body", choices=_BODIES, default=defaults.body, help="body of the hierarchy")
@@ -313,17 +315,23 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     )
     parser.add_argument("--eval-every", type=int, default=defaults.eval_every, help="M: evaluate every M episodes")
     parser.add_argument(
-        "--eval-episodes", type=int, default=defaults.eval_episodes, help="held-out mazes per intermediate evaluation"
+        "--eval-episodes",
+        type=int,
+        default=defaults.eval_episodes,
+        help="protocol 1 only: held-out mazes per intermediate evaluation",
     )
     parser.add_argument(
-        "--final-eval-episodes", type=int, default=defaults.final_eval_episodes, help="held-out mazes at the end"
+        "--final-eval-episodes",
+        type=int,
+        default=defaults.final_eval_episodes,
+        help="held-out mazes at the end (protocol 2: the one set every evaluation plays)",
     )
     parser.add_argument(
         "--maze-size",
         type=int,
         default=None,
-        help=f"free cells per side (default: per body, {_per_body(_DEFAULT_SIZES)}; "
-        f"with --held-out-layouts {_per_body(HELD_OUT_MAZE_SIZE)})",
+        help=f"free cells per side (default: per body, {_per_body(HELD_OUT_MAZE_SIZE)}, the held-out families; "
+        f"in protocol 1 without --held-out-layouts {_per_body(_DEFAULT_SIZES)})",
     )
     parser.add_argument(
         "--gradient-steps", type=int, default=defaults.gradient_steps, help="N: gradient steps per update"
@@ -336,20 +344,21 @@ def _add_experiment(subparsers: _Subparsers) -> None:
         help="the oracle's farthest subgoal, metres: ExperimentConfig.subgoal_reach_m "
         "(default: per body, point one cell, ant 2 m)",
     )
-    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument(
         "--held-out-layouts",
         action="store_true",
-        help="draw the training mazes and both evaluation sets from disjoint sets of wall grids (see "
-        "antmaze_hirl.envs.layout_splits); without it mazes are held out by seed only, as in the committed results",
+        help="with --protocol 1: draw the training mazes and both evaluation sets from disjoint sets of wall grids "
+        "(see antmaze_hirl.envs.layout_splits), as the committed protocol-1 folders; without it protocol 1 holds "
+        "mazes out by seed only (protocol 2 always holds layouts out)",
     )
     parser.add_argument(
         "--protocol",
         choices=[str(protocol) for protocol in PROTOCOLS],
         default=str(defaults.protocol),
-        help="how mazes are held out and curves read: 1, as the committed results folders; 2, the corrected "
-        "protocol of docs/guides/protocol.md (implies --held-out-layouts: symmetry-closed held-out mazes, one "
-        "fixed evaluation set scored from episode 0, a learner without a planning prior)",
+        help=f"how mazes are held out and curves read: {CURRENT_PROTOCOL}, the current protocol of "
+        "docs/guides/protocol.md (held-out layouts, symmetry-closed; one fixed evaluation set scored from "
+        "episode 0; a learner without a planning prior); 1, the superseded protocol of the committed "
+        "results/paper_experiment folders",
     )
     parser.add_argument(
         "--learner",
@@ -360,9 +369,10 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser.add_argument(
         "--evaluation-envs",
         type=int,
-        default=defaults.evaluation_envs,
-        help="mazes each evaluation plays at once, in lockstep (several times faster; 1: one after another, as "
-        "the committed results were made; ant outcomes differ between the two, see docs/guides/vector-envs.md)",
+        default=None,
+        help=f"mazes each evaluation plays at once, in lockstep (default: {defaults.evaluation_envs} in protocol "
+        f"{CURRENT_PROTOCOL}; in protocol 1, {protocol_evaluation_envs(1)}: one after another, as "
+        "its committed folders were made; ant outcomes differ between the two, see docs/guides/vector-envs.md)",
     )
     add_backend_arguments(parser)
     parser.add_argument(
@@ -392,6 +402,9 @@ def _run_experiment(args: argparse.Namespace) -> int:
         raise ValueError(f"--seeds must be >= 1 (trials per method), got {args.seeds}")
     torch.set_num_threads(args.cpus_per_trial)
     held_out = args.held_out_layouts or int(args.protocol) >= 2  # protocol 2 evaluates on the held-out part
+    evaluation_envs = args.evaluation_envs
+    if evaluation_envs is None:  # each protocol's own: protocol 1's folders were evaluated one maze at a time
+        evaluation_envs = protocol_evaluation_envs(int(args.protocol))
     config = ExperimentConfig(
         body=args.body,
         episodes=args.episodes,
@@ -403,7 +416,7 @@ def _run_experiment(args: argparse.Namespace) -> int:
         held_out_layouts=held_out,
         protocol=int(args.protocol),
         learner=args.learner,
-        evaluation_envs=args.evaluation_envs,
+        evaluation_envs=evaluation_envs,
         **body_settings(
             args.body,
             held_out_layouts=held_out,

@@ -4,8 +4,7 @@
 ``int`` or ``float`` option a type that refuses values outside its bounds, NaN and infinity, with a
 one-line error and exit status 2, before a handler imports torch or writes a file. An option missing
 from :data:`INT_BOUNDS` / :data:`FLOAT_BOUNDS` is a programming error raised when the parser is built,
-so a new option cannot skip validation. :func:`renamed_option` turns an option 0.2.0 renamed into a one-line
-error naming its new spelling (the package's commands and the benchmark scripts use it).
+so a new option cannot skip validation.
 
 Bounds are sanity limits, not tuning advice: seeds fit a 31-bit word so that the ``seed + i`` that
 evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; counts stop well before a
@@ -131,33 +130,6 @@ def bounded_float(bounds: FloatBounds) -> Callable[[str], float]:
 
     parse.__name__ = "float"
     return parse
-
-
-class _RenamedOption(argparse.Action):
-    """An option 0.2.0 renamed: any use, with or without a value, stops parsing with one line naming the new one."""
-
-    def __init__(self, option_strings: list[str], dest: str, *, new: str, **kwargs: object) -> None:
-        super().__init__(option_strings, dest, **kwargs)  # type: ignore[arg-type]
-        self.new = new
-
-    def __call__(
-        self,
-        parser: argparse.ArgumentParser,
-        namespace: argparse.Namespace,
-        values: object,
-        option_string: str | None = None,
-    ) -> None:
-        parser.exit(2, f"{parser.prog}: error: {option_string} was renamed {self.new} in 0.2.0\n")
-
-
-def renamed_option(parser: argparse.ArgumentParser, old: str, new: str) -> None:
-    """Makes ``old`` (an option 0.2.0 renamed ``new``) a one-line usage error that names ``new``.
-
-    The option is hidden from ``--help`` and takes an optional value, so ``--old 2`` and ``--old`` both
-    stop with ``PROG: error: --old was renamed --new in 0.2.0`` and exit status 2; it is not an alias.
-    """
-    dest = "_renamed_" + old.lstrip("-").replace("-", "_")
-    parser.add_argument(old, nargs="?", action=_RenamedOption, new=new, help=argparse.SUPPRESS, dest=dest)
 
 
 def _shown(text: str, *, quote: bool = True) -> str:

@@ -41,12 +41,17 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.experiments import ExperimentConfig, runner
-from antmaze_hirl.experiments.config import CURRENT_PROTOCOL, body_settings, evaluation_schedule
+from antmaze_hirl.experiments.config import (
+    CURRENT_PROTOCOL,
+    PROTOCOL_EVALUATION_ENVS,
+    body_settings,
+    evaluation_schedule,
+)
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_trial_speed" / "paper_trial_speed.json"
 FULL_TRIAL_EPISODES = 100
-LOCKSTEP_ENVS = 25
-"""Protocol 2's ``evaluation_envs`` (``paper_experiment.PROTOCOL_2_EVALUATION_ENVS``)."""
+LOCKSTEP_ENVS = PROTOCOL_EVALUATION_ENVS
+"""Protocol 2's ``evaluation_envs``."""
 
 
 def trial_config(episodes: int, evaluation_envs: int, mazes: int = 100) -> ExperimentConfig:

@@ -70,6 +70,9 @@ def main() -> None:
         final_eval_episodes=3,
         maze_size=3,
         gradient_steps=20,
+        held_out_layouts=False,  # protocol 1's tiny 3x3 grid, as the committed timings ran
+        protocol=1,
+        evaluation_envs=1,
     )
     load_before = os.getloadavg()
     with tempfile.TemporaryDirectory() as folder:

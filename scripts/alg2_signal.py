@@ -243,7 +243,9 @@ def main() -> None:
         fitted_margin(args.seeds, args.out or RESULTS / "alg2_signal_fitted.json")
         return
     out = args.out or RESULTS / ("alg2_signal.json" if args.body == "point" else f"alg2_signal_{args.body}.json")
-    config = ExperimentConfig(body=args.body, held_out_layouts=True, **body_settings(args.body, held_out_layouts=True))
+    # protocol 1: the learner is GENERIC's, passed over the body's default, as the committed files ran
+    settings = body_settings(args.body, held_out_layouts=True)
+    config = ExperimentConfig(body=args.body, held_out_layouts=True, protocol=1, **settings)
     rows = []
     for method in methods:
         for seed in range(args.seeds):

@@ -97,6 +97,7 @@ def learner_setup(body: str, learner: str) -> tuple[ExperimentConfig, dict[str, 
     config = ExperimentConfig(
         body=body,
         held_out_layouts=True,
+        protocol=1,  # learner None is the body's default learner in protocol 1 (protocol 2 would give its own)
         learner=PROTOCOL_LEARNER if learner == "protocol" else None,
         **settings,
     )

@@ -54,7 +54,6 @@ from typing import Any
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experiments.in_maze import (
@@ -111,7 +110,6 @@ def main() -> None:
         help=f"the oracle's farthest subgoal, metres (default {BODY_DEFAULTS['ant']['subgoal_reach_m']}: "
         "the ant experiment's)",
     )
-    renamed_option(parser, "--subgoal-distance", "--subgoal-reach-m")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (chunks of --chunk-episodes episodes)")
     parser.add_argument("--chunk-episodes", type=int, default=25, help="episodes per worker task with --jobs > 1")
     parser.add_argument(

@@ -283,6 +283,7 @@ def main() -> None:
         body=args.body,
         episodes=args.episodes,
         held_out_layouts=True,
+        protocol=1,  # the periodic and final sets of protocol 1's held-out layouts, as the committed files ran
         eval_episodes=50,
         evaluation_envs=args.evaluation_envs,
         **body_settings(args.body, held_out_layouts=True),

@@ -47,7 +47,6 @@ from pathlib import Path
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.dagger import evaluate_high_level
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
@@ -57,6 +56,7 @@ from antmaze_hirl.experiments.config import (
     PROTOCOLS,
     body_settings,
     evaluation_sets,
+    protocol_evaluation_envs,
 )
 from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
@@ -64,9 +64,6 @@ from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
-PROTOCOL_2_EVALUATION_ENVS = 25
-"""Protocol 2's mazes evaluated at once: its 100-maze set in four lockstep chunks (no committed folder to
-replay, so the faster path is the protocol's; config.json records it)."""
 
 
 def goals(summary: dict, body: str) -> dict:
@@ -144,7 +141,6 @@ def main() -> None:
         default=None,
         help="the oracle's farthest subgoal, ExperimentConfig.subgoal_reach_m; default: BODY_DEFAULTS",
     )
-    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-episodes", type=int, default=None, help="mazes per periodic evaluation (default 20)")
     parser.add_argument("--held-out-layouts", action="store_true", help="ExperimentConfig.held_out_layouts")
     parser.add_argument(
@@ -193,7 +189,7 @@ def main() -> None:
         episodes=args.episodes,
         held_out_layouts=args.held_out_layouts,
         protocol=args.protocol,
-        evaluation_envs=args.evaluation_envs or (PROTOCOL_2_EVALUATION_ENVS if args.protocol >= 2 else 1),
+        evaluation_envs=args.evaluation_envs or protocol_evaluation_envs(args.protocol),
         **settings,
     )
     if args.low_level is not None and not args.oracle_only:

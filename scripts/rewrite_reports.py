@@ -28,7 +28,7 @@ from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json
 from antmaze_hirl.experiments import ExperimentConfig
-from antmaze_hirl.experiments.config import current_keys
+from antmaze_hirl.experiments.old_folders import experiment_settings
 from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.results_folder import write_reports
 
@@ -98,7 +98,7 @@ def rewrite(folder: Path, out: Path, methods: list[str] | None = None, seeds: in
             shutil.copy2(folder / name, out / name)
     shutil.copytree(folder / "trials", out / "trials")
     known = {field.name for field in fields(ExperimentConfig)}
-    settings = current_keys(recorded, folder / "config.json")  # a folder from before 0.2.0: its old keys
+    settings = experiment_settings(recorded, folder / "config.json")  # an older folder as what it was made with
     config = ExperimentConfig(**{key: value for key, value in settings.items() if key in known})
     summary = write_reports(out, methods, seeds, config)
     summary.update(kept)

@@ -1,3 +1,8 @@
+import dataclasses
+import os
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -9,9 +14,32 @@ from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
+
+COMMITTED_RESULTS = str(Path(__file__).resolve().parents[1] / "results") + os.sep
+"""The lab's committed results, which the unit tier never reads (its checks are integration tests)."""
+UNIT_TIER_GUARD = False
+"""Whether this run refuses to open a file under :data:`COMMITTED_RESULTS`: a run that leaves out integration."""
+
+
+def _refuse_committed_results(event, args):
+    # An audit hook (sys.addaudithook): open() and its kin raise "open" before they touch the file.
+    if event == "open" and isinstance(args[0], (str, os.PathLike)):
+        path = os.path.abspath(os.fspath(args[0]))
+        if isinstance(path, str) and path.startswith(COMMITTED_RESULTS):
+            raise PermissionError(
+                f"the unit tier reads no committed results: {path}; mark the test integration (pyproject.toml)"
+            )
+
+
+def pytest_configure(config):
+    global UNIT_TIER_GUARD
+    if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
+        sys.addaudithook(_refuse_committed_results)  # for the rest of the process: a hook cannot be removed
+        UNIT_TIER_GUARD = True
 
 
 class StillController:
@@ -73,18 +101,24 @@ def reset_subgoals(env, seed=3, resets=3):
     return [env.reset(seed=seed)[0]["desired_goal"]] + [env.reset()[0]["desired_goal"] for _ in range(resets)]
 
 
-TINY_PROTOCOL2 = ExperimentConfig(
+TINY_PROTOCOL1 = ExperimentConfig(
     body="point",
     episodes=3,
     eval_every=2,
     eval_episodes=2,
-    final_eval_episodes=4,
-    maze_size=4,
+    final_eval_episodes=3,
+    maze_size=3,
     gradient_steps=5,
-    held_out_layouts=True,
-    protocol=2,
+    **SETTINGS_BEFORE_PROTOCOL_2,
 )
-"""A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation."""
+"""A protocol-1 experiment small enough for a unit test of the runner (not of the protocol): 3 episodes on 3x3
+point mazes held out by seed, evaluated one maze at a time. Tests that need other sizes ``replace`` it."""
+
+TINY_PROTOCOL2 = dataclasses.replace(
+    TINY_PROTOCOL1, final_eval_episodes=4, maze_size=4, held_out_layouts=True, protocol=2
+)
+"""A protocol-2 experiment small enough for a unit test: 3 episodes, 4 held-out 4x4 point mazes per evaluation,
+played one after another (evaluation_envs 1: the serial run the lockstep tests compare with)."""
 
 
 def finished_experiment(tmp_path_factory, name, config, seeds=2, low_level=None):

@@ -205,6 +205,7 @@ def test_a_report_of_another_format_is_refused(tmp_path):
         load_report(path)
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
     from script_helpers import load_script
 
@@ -291,6 +292,7 @@ def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
         assert code == 2 and len(lines) == 1 and message in lines[0], lines
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeypatch):
     import shutil
 
@@ -322,6 +324,7 @@ def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeyp
         leaderboard.spread_table()
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_path, monkeypatch):
     from scipy.stats import binomtest
     from script_helpers import load_script
@@ -359,6 +362,7 @@ def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_
     assert leaderboard.sign_test_p(0, 0) == 1.0
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoints_out(tmp_path, monkeypatch):
     import shutil
 

@@ -165,6 +165,7 @@ def test_the_interval_inverts_the_signed_rank_test():
         signed_rank_interval([1.0, 2.0], confidence=1.5)
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_committed_folders_print_a_complete_table_with_a_verdict_per_claim(tmp_path, capsys):
     out = tmp_path / "claims.json"
     pc.main(["--protocol2", str(FOLDERS / "point"), str(FOLDERS / "ant"), "--json", str(out)])
@@ -179,6 +180,7 @@ def test_the_committed_folders_print_a_complete_table_with_a_verdict_per_claim(t
         assert f"**{row['printed']}** |" in table
 
 
+@pytest.mark.integration  # reads the committed results
 def test_bad_folders_are_one_line_errors(tmp_path, capsys):
     with pytest.raises(SystemExit):
         pc.main(["--protocol2", str(FOLDERS / "ant"), str(FOLDERS / "point")])
@@ -191,6 +193,7 @@ def test_bad_folders_are_one_line_errors(tmp_path, capsys):
     assert f"no summary.json in {tmp_path}" in capsys.readouterr().err
 
 
+@pytest.mark.integration  # reads the committed results
 def test_protocol_1_still_prints_the_figures_the_old_table_quotes():
     figures = cl.protocol1_figures(ROOT / "results" / "paper_experiment" / "ant")["methods"]["reward"]
     # docs/paper-claims.md: "Pruning removed 137 of `reward`'s 4,903 labels (2.8%)".
@@ -346,6 +349,7 @@ def test_the_readmes_brief_table_carries_each_bodys_figures_and_the_same_verdict
     assert "no people took part" in rows[6]
 
 
+@pytest.mark.integration  # reads the committed results
 def test_brief_needs_the_protocol_2_folders(capsys):
     pc.main(["--protocol2", str(FOLDERS / "point"), str(FOLDERS / "ant"), "--brief"])
     out = capsys.readouterr().out

@@ -1,5 +1,6 @@
 import argparse
 import base64
+import dataclasses
 import importlib.util
 import json
 import subprocess
@@ -15,7 +16,7 @@ from stable_baselines3 import PPO, SAC
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.experiments.config import DEFAULT_METHODS
+from antmaze_hirl.experiments.config import DEFAULT_METHODS, ExperimentConfig, body_settings
 from antmaze_hirl.sb3_ext import CheckpointError
 
 COMMANDS = ["demo", "train-low", "eval-low", "ensemble-low", "experiment", "study", "benchmark"]
@@ -50,7 +51,7 @@ def test_every_subcommand_help_shows_defaults_an_example_and_no_markup(command, 
     assert f"example:\n  antmaze-hirl {command} " in text
     subparser = build_parser()._subparsers._group_actions[0].choices[command]
     for action in subparser._actions:
-        if action.dest == "help" or action.help == argparse.SUPPRESS:  # help itself; options renamed in 0.2.0
+        if action.dest == "help" or action.help == argparse.SUPPRESS:  # help itself; hidden options
             continue
         assert action.help, f"{command} {action.option_strings} has no help line"
         # Every option says its default: argparse's "(default: X)", or "(required)" / its own "(default: ...)".
@@ -145,31 +146,32 @@ def test_bad_input_exits_with_one_line_naming_it(tmp_path, capsys):
         main(["--traceback", "train-low", "--body", "point", "--timesteps", "100", "--out", str(tmp_path), "--resume"])
 
 
-RENAMED_OPTIONS = [
-    (["demo"], "--max-subgoal-distance", "--subgoal-reach-m"),
-    (["eval-low", "--body", "point"], "--max-distance", "--sample-radius-m"),
-    (["experiment", "--out", "runs/x"], "--expert-max-distance", "--subgoal-reach-m"),
-    (
-        ["study", "init", "runs/study", "--body", "point", "--participants", "2"],
-        "--expert-max-distance",
-        "--subgoal-reach-m",
-    ),
-]
+@pytest.mark.parametrize(
+    ("argv", "body", "protocol", "held_out", "evaluation_envs"),
+    [
+        ([], "point", 2, True, 25),  # no options but --out: the current protocol
+        (["--body", "ant"], "ant", 2, True, 25),
+        (["--body", "ant", "--protocol", "1"], "ant", 1, False, 1),  # protocol 1 evaluates one maze at a time
+        (["--protocol", "1", "--held-out-layouts", "--evaluation-envs", "5"], "point", 1, True, 5),
+    ],
+)
+def test_experiment_runs_the_current_protocol_unless_told_otherwise(
+    argv, body, protocol, held_out, evaluation_envs, tmp_path, monkeypatch, capsys
+):
+    from antmaze_hirl.experiments import runner
 
-
-@pytest.mark.parametrize(("command", "old", "new"), RENAMED_OPTIONS, ids=[old for _, old, _ in RENAMED_OPTIONS])
-def test_an_option_renamed_in_0_2_0_stops_in_one_line_naming_the_new_one(command, old, new, capsys):
-    prog = "antmaze-hirl " + " ".join(command[:2] if command[0] == "study" else command[:1])
-    for tail in ([old, "2"], [old]):
-        with pytest.raises(SystemExit) as exit_info:
-            build_parser().parse_args([*command, *tail])
-        assert exit_info.value.code == 2
-        assert capsys.readouterr().err == f"{prog}: error: {old} was renamed {new} in 0.2.0\n"
-    assert getattr(build_parser().parse_args([*command, new, "2"]), new[2:].replace("-", "_")) == 2.0
-    with pytest.raises(SystemExit):
-        build_parser().parse_args([*command, "--help"])
-    shown = capsys.readouterr().out
-    assert new in shown and old not in shown  # hidden: not an alias
+    seen = []
+    monkeypatch.setattr(runner, "run_experiment", lambda *args, **_: seen.append(args[2]) or {"methods": {}})
+    assert main(["experiment", "--out", str(tmp_path), *argv]) == 0
+    settings = body_settings(body, held_out_layouts=held_out)
+    expected = ExperimentConfig(
+        body=body, protocol=protocol, held_out_layouts=held_out, evaluation_envs=evaluation_envs, **settings
+    )
+    assert seen == [expected]
+    if not argv:
+        assert seen == [dataclasses.replace(ExperimentConfig(), **settings)]  # the library's defaults
+    text = help_text(["experiment"], capsys)
+    assert "by default in the current protocol (protocol 2:" in " ".join(text.split())
 
 
 @pytest.mark.integration

@@ -57,6 +57,7 @@ def headline_figures():
     return figures
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize("page", PAGES, ids=lambda page: page.name)
 def test_the_headline_table_quotes_the_results_files(page):
     text = page.read_text()

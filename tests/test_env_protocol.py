@@ -18,6 +18,7 @@ from antmaze_hirl.envs.protocol import MAZE_ENV_MEMBERS, MazeEnvProtocol, maze_e
 from antmaze_hirl.envs.split_env import SplitMazeEnv
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments import ExperimentConfig
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.sb3_ext.shipped import make_maze_vector_env
 
@@ -59,7 +60,7 @@ def test_the_experiment_makes_every_env_with_gym_make_split_or_not():
     held_out = make_env(TINY_PROTOCOL2, PointGoToController(), split="train")
     assert isinstance(held_out, gym.Wrapper) and type(held_out.unwrapped) is SplitMazeEnv
     assert held_out.unwrapped.split == "train"
-    whole = make_env(ExperimentConfig(maze_size=3), PointGoToController(), split="train")
+    whole = make_env(ExperimentConfig(maze_size=3, **SETTINGS_BEFORE_PROTOCOL_2), PointGoToController(), split="train")
     assert isinstance(whole, gym.Wrapper) and type(whole.unwrapped) is HighLevelMazeEnv  # split ignored
     held_out.close()
     whole.close()

@@ -99,9 +99,9 @@ def test_the_names_removed_in_0_2_0_are_errors():
     obs, _ = reach.reset(seed=0, options={"subgoal_xy": [1.0, 1.0]})
     np.testing.assert_array_equal(obs["desired_goal"], [1.0, 1.0])
     np.testing.assert_array_equal(reach.subgoal_xy, [1.0, 1.0])
-    # The old keys are refused, not ignored: ignoring one would draw a random subgoal instead of the one given.
-    for key in ("goal", "goal_xy"):
-        message = rf"^ReachEnv's reset option '{key}' is now 'subgoal_xy' \(0.2.0\): got options\['{key}'\]="
+    # Other keys are refused, not ignored: ignoring one would draw a random subgoal instead of the one given.
+    for key in ("goal", "goal_xy", "subgoal"):
+        message = rf"^ReachEnv's reset options are \['start_xy', 'subgoal_xy'\]: got options\['{key}'\]=\[1.0, 1.0\]$"
         with pytest.raises(ValueError, match=message):
             reach.reset(seed=0, options={key: [1.0, 1.0]})
     assert not hasattr(reach, "goal") and not hasattr(reach, "set_goal")

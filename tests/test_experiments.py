@@ -5,14 +5,13 @@ import math
 
 import pytest
 import torch as th
+from conftest import TINY_PROTOCOL1
 from scipy.stats import wilcoxon
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments import ExperimentConfig, cost_to_reach, run_experiment, summarise
 
-TINY = ExperimentConfig(
-    body="point", episodes=3, eval_every=2, eval_episodes=2, final_eval_episodes=3, maze_size=3, gradient_steps=5
-)
+TINY = TINY_PROTOCOL1  # protocol 1 on 3x3 mazes: this file checks the runner, not the protocol
 
 
 def row(method, seed, episode, cost, eval_success=math.nan, attempts=4):
@@ -90,7 +89,7 @@ def test_parallel_trials_give_the_same_numbers_as_one_job(tmp_path, methods, con
 def test_experiment_refuses_mixed_settings_and_unknown_methods(tmp_path):
     run_experiment(["dagger"], 1, TINY, tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="holds results made with"):
-        run_experiment(["dagger"], 1, ExperimentConfig(body="point", episodes=4), tmp_path, progress_bar=False)
+        run_experiment(["dagger"], 1, dataclasses.replace(TINY, episodes=4), tmp_path, progress_bar=False)
     with pytest.raises(ValueError, match="unknown method 'gail'"):
         run_experiment(["gail"], 1, TINY, tmp_path / "other", progress_bar=False)
     with pytest.raises(ValueError, match="subgoal_reach_m must be > 0 metres, got -1"):
@@ -339,14 +338,6 @@ def test_curve_figures_reject_a_non_positive_label_count():
         success_at_labels(trial, 0)
     with pytest.raises(ValueError, match="label horizon must be > 0, got -5"):
         normalised_auc(trial, -5)
-
-
-def test_the_written_out_95_percent_quantile_is_scipys():
-    from scipy.stats import norm
-
-    from antmaze_hirl.experiments.uncertainty import CONFIDENCE, Z_95
-
-    assert Z_95 == float(norm.ppf(1 - (1 - CONFIDENCE) / 2))  # bit for bit: committed intervals stay as they are
 
 
 def test_wilson_intervals_and_paired_test_against_known_values():

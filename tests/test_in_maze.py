@@ -1,13 +1,11 @@
 """scripts/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
 
-import sys
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 from conftest import StillController
-from script_helpers import load_script
 
 from antmaze_hirl import rollout
 from antmaze_hirl.envs.layouts import validate_maze_map
@@ -175,17 +173,3 @@ def test_lockstep_plays_the_serial_episodes(monkeypatch):
     assert len(serial["outcomes"]) == 3
     del serial["seconds"], lockstep["seconds"]
     np.testing.assert_equal(lockstep, serial)  # NaN turns (standstills) count as equal
-
-
-@pytest.mark.parametrize(
-    ("script", "argv"),
-    [("in_maze", ["--subgoal-distance", "2"]), ("paper_experiment", ["--body", "ant", "--expert-max-distance", "2"])],
-)
-def test_a_benchmark_option_renamed_in_0_2_0_stops_in_one_line_naming_the_new_one(script, argv, monkeypatch, capsys):
-    module = load_script(f"scripts/{script}.py")
-    monkeypatch.setattr(sys, "argv", [f"{script}.py", *argv])
-    with pytest.raises(SystemExit) as exit_info:
-        module.main()
-    assert exit_info.value.code == 2
-    old = next(arg for arg in argv if arg not in ("--body", "ant", "2"))
-    assert capsys.readouterr().err == f"{script}.py: error: {old} was renamed --subgoal-reach-m in 0.2.0\n"

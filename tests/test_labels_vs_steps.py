@@ -4,9 +4,13 @@ import json
 import shutil
 from pathlib import Path
 
+import pytest
+
 from antmaze_hirl.experiments.labels_vs_steps import figure_points
 
 LEADERBOARD = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
+
+pytestmark = pytest.mark.integration  # every test reads the committed leaderboard reports
 
 
 def test_an_active_methods_curve_is_its_own_series_beside_plain_daggers(tmp_path):
@@ -34,8 +38,6 @@ def test_each_rl_seed_is_its_own_series(tmp_path):
 
 
 def test_each_family_suite_has_its_own_figure_and_points(tmp_path):
-    import pytest
-
     from antmaze_hirl.experiments.labels_vs_steps import figure_path
 
     for name in ("point5_dagger_protocol_s0_100.json", "ant4_dagger_protocol_s0_100.json", "ant4_oracle.json"):

@@ -229,6 +229,7 @@ def test_the_lab_is_not_in_the_wheel_and_the_package_never_imports_it():
 # ---------------------------------------------------------------- the committed files
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize(("name", "tasks", "grids"), [("point", 100, 98), ("ant", 93, 41)])
 def test_training_and_evaluation_are_disjoint_under_symmetry_in_the_committed_files(name, tasks, grids):
     check = symmetry_check(ROOT / "results" / "protocol2" / name)
@@ -251,6 +252,7 @@ def test_the_symmetry_check_names_an_evaluation_maze_that_is_a_training_mirror(t
     assert not check["disjoint"] and check["shared_wall_grids"] == 1 and check["shared_tasks"] == 1
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_command_refuses_a_missing_report_and_a_folder_of_another_body(tmp_path, capsys):
     assert pre.main(["table", str(tmp_path / "none.json")]) == 2
     assert capsys.readouterr().err.strip() == f"error: no report at {tmp_path / 'none.json'}"
@@ -261,6 +263,7 @@ def test_the_command_refuses_a_missing_report_and_a_folder_of_another_body(tmp_p
     assert not (tmp_path / "r.json").exists()
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_committed_dry_run_is_labelled_and_its_table_is_what_the_page_shows():
     report = json.loads((ROOT / "results" / "protocol2" / "preregistered_readings.json").read_text())
     assert report["label"] == pre.DRY_RUN_LABEL

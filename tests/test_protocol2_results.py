@@ -16,6 +16,7 @@ SECTION = "protocol2-goals"
 results_tables = load_script("scripts/results_tables.py")
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_page_and_the_readme_hold_the_generated_goals_and_claims():
     # Their text is checked against the commands by tests/test_generated_docs.py.
     page, readme = PAGE.read_text(), (ROOT / "README.md").read_text()
@@ -24,6 +25,7 @@ def test_the_page_and_the_readme_hold_the_generated_goals_and_claims():
     assert f"<!-- generated: {brief} -->" in page and f"<!-- generated: {brief} -->" in readme
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize("body", ["point", "ant"])
 def test_the_folders_are_complete_and_the_goals_quote_them(body):
     summary = json.loads((FOLDERS / body / "summary.json").read_text())

@@ -3,6 +3,7 @@
 Each test runs a 2 methods x 2 seeds point grid of 2 episodes on one shared local Ray instance of 2 CPUs.
 """
 
+import dataclasses
 import json
 import os
 import sys
@@ -11,15 +12,17 @@ import pytest
 
 ray = pytest.importorskip("ray", reason="the Ray extra is not installed (pip install -e .[ray])")
 
+from conftest import TINY_PROTOCOL1  # noqa: E402
+
 from antmaze_hirl.envs.controllers import PointGoToController  # noqa: E402
-from antmaze_hirl.experiments import ExperimentConfig, run_experiment  # noqa: E402
+from antmaze_hirl.experiments import run_experiment  # noqa: E402
 from antmaze_hirl.experiments import runner as runner_module  # noqa: E402
 
 # End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
 pytestmark = pytest.mark.integration
 
-SMALL = ExperimentConfig(
-    body="point", episodes=2, eval_every=1, eval_episodes=1, final_eval_episodes=2, maze_size=3, gradient_steps=10
+SMALL = dataclasses.replace(
+    TINY_PROTOCOL1, episodes=2, eval_every=1, eval_episodes=1, final_eval_episodes=2, gradient_steps=10
 )
 METHODS = ["dagger", "reward"]
 SEEDS = 2

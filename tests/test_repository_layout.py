@@ -43,6 +43,7 @@ def test_no_test_puts_a_folder_on_sys_path():
     assert editing == []
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_results_index_matches_the_results_tree():
     results_index = load_script("scripts/results_index.py")
     index = results_index.load_index()

@@ -4,16 +4,13 @@ import json
 import warnings
 
 import pytest
-from conftest import TINY_PROTOCOL2, copy_results, finished_experiment
+from conftest import TINY_PROTOCOL1, TINY_PROTOCOL2, copy_results, finished_experiment
 
 from antmaze_hirl.envs import PointGoToController
-from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.results_folder import DamagedTrial, check_trial, trial_path, trial_record, write_reports
 from antmaze_hirl.experiments.runner import run_experiment
 
-TINY = ExperimentConfig(
-    body="point", episodes=3, eval_every=2, eval_episodes=2, final_eval_episodes=3, maze_size=3, gradient_steps=5
-)
+TINY = TINY_PROTOCOL1  # a protocol-1 folder
 GO_TO = PointGoToController()
 """The protocol-1 folder's low level: the scripted go-to (what is checked here is the folder, not the walking)."""
 
@@ -139,6 +136,7 @@ def damage_part(part, kind):
         part.write_text(damaged)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_a_protocol_2_record_holds_its_evaluations_part_and_older_records_still_load(finished2, tmp_path):
     folder, files = finished2
     path = trial_path(folder, "dagger", 0)
@@ -166,6 +164,7 @@ def damaged_part_folder(source, folder, kind):
     return rows_csv, part, (part.read_bytes() if part.exists() else None)
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 @pytest.mark.parametrize("kind", sorted(PART_DAMAGE))
 def test_a_damaged_evaluations_part_is_named_and_the_old_reports_kept(finished2, tmp_path, kind):
     source, files = finished2
@@ -178,6 +177,7 @@ def test_a_damaged_evaluations_part_is_named_and_the_old_reports_kept(finished2,
     assert (folder / "summary.json").read_bytes() == files["summary.json"]
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 @pytest.mark.parametrize("kind", integration_except("missing part", PART_DAMAGE))
 def test_a_damaged_evaluations_part_is_named_and_its_trial_rerun_on_resume(finished2, tmp_path, kind):
     source, files = finished2

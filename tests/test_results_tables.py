@@ -82,6 +82,7 @@ def test_a_missing_file_or_field_is_a_one_line_error_naming_the_file(tiny_result
     assert capsys.readouterr().err == "error: no field 'successes' in results/in_maze/in_maze.json\n"
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize("section", list(results_tables.SECTIONS))
 def test_every_section_prints_a_table_from_the_committed_files(section, capsys):
     assert results_tables.main([section]) == 0
@@ -94,6 +95,7 @@ def test_an_unknown_section_is_refused_naming_it(capsys):
     assert "invalid choice: 'in-maze-stage7'" in capsys.readouterr().err
 
 
+@pytest.mark.integration  # reads the committed results
 def test_the_headline_rows_are_one_table_whose_links_resolve_from_the_readme_and_the_results_page():
     root = Path(results_tables.__file__).resolve().parent.parent
     docs, readme = results_tables.headline(), results_tables.headline(links_from=".")
@@ -126,6 +128,7 @@ GUIDE_FIGURES = {
 """One line each guide's section prints from the committed files, as the guides quote it."""
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize(("section", "line"), list(GUIDE_FIGURES.items()))
 def test_each_guide_section_prints_its_figures_from_the_committed_files(section, line, capsys):
     assert results_tables.main([section]) == 0
@@ -145,6 +148,7 @@ def without(data, keys):
     return data
 
 
+@pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize(
     ("section", "name", "keys", "error"),
     [

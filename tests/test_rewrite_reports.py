@@ -12,6 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 rewrite_reports = load_script("scripts/rewrite_reports.py")
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_rewritten_reports_equal_the_runs_own_and_record_this_code(finished_protocol2, tmp_path, capsys):
     source, files = finished_protocol2
     out = tmp_path / "rewritten"
@@ -27,6 +28,7 @@ def test_rewritten_reports_equal_the_runs_own_and_record_this_code(finished_prot
     assert (out / "trials" / "dagger_seed0.csv").is_file()
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_without_trials_writes_the_same_reports_and_drops_the_copied_trials(finished_protocol2, tmp_path):
     source, _ = finished_protocol2
     kept, dropped = tmp_path / "kept", tmp_path / "dropped"
@@ -58,6 +60,7 @@ def test_a_folder_without_settings_or_trials_is_one_line_naming_it(tmp_path, cap
     assert message in error and str(folder) in error
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_a_non_empty_output_folder_is_refused(finished_protocol2, tmp_path, capsys):
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "keep.txt").write_text("mine")
@@ -67,6 +70,7 @@ def test_a_non_empty_output_folder_is_refused(finished_protocol2, tmp_path, caps
     assert (tmp_path / "out" / "keep.txt").read_text() == "mine"
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_a_method_without_trials_is_one_line_naming_it_and_writes_nothing(finished_protocol2, tmp_path, capsys):
     # A misspelt --methods once wrote a folder of empty reports ("seeds per method {'dager': 0}").
     out = tmp_path / "out"
@@ -89,6 +93,7 @@ def test_a_config_that_is_not_json_is_one_line_naming_the_file(tmp_path, capsys)
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.integration  # runs a protocol-2 experiment (the finished_protocol2 fixture)
 def test_the_sources_oracle_success_is_kept_and_a_torn_summary_is_refused(finished_protocol2, tmp_path, capsys):
     source, _ = finished_protocol2
     folder = tmp_path / "source"

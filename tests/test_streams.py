@@ -8,6 +8,7 @@ from conftest import make_point_trainer, point_maze
 from antmaze_hirl.dagger import DAggerQuery, NoiseQuery, RewardBasedQuery
 from antmaze_hirl.dagger.streams import spawn_generators, trainer_streams, trial_streams
 from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 from antmaze_hirl.experiments.runner import make_trainer
 from antmaze_hirl.experts.oracle import PathOracle
 
@@ -65,7 +66,7 @@ def test_two_methods_on_one_seed_train_on_the_same_mazes_and_goals(method):
 
 
 def test_make_trainer_gives_every_method_the_same_untrained_learner_and_first_task():
-    config = ExperimentConfig(body="point", maze_size=3)
+    config = ExperimentConfig(body="point", maze_size=3, **SETTINGS_BEFORE_PROTOCOL_2)
     first = {}
     for method in ("dagger", "multi_policy"):
         env = point_maze()

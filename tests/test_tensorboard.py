@@ -1,24 +1,24 @@
 """TensorBoard logs of DAgger training: the scalars at the right steps, and no number of the results changed."""
 
 import csv
+import dataclasses
 import math
 from types import SimpleNamespace
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from conftest import TINY_PROTOCOL1
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
 from antmaze_hirl import PathOracle
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy, RewardBasedQuery
 from antmaze_hirl.envs import PointGoToController
-from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments import run_experiment
 from antmaze_hirl.experiments.tensorboard import SCALARS, DAggerTensorBoard, trial_log_dir
 
-TINY = ExperimentConfig(
-    body="point", episodes=3, eval_every=2, eval_episodes=1, final_eval_episodes=2, maze_size=3, gradient_steps=5
-)
+TINY = dataclasses.replace(TINY_PROTOCOL1, eval_episodes=1, final_eval_episodes=2)
 
 
 def scalars(log_dir):

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from conftest import make_point_trainer
+from conftest import TINY_PROTOCOL1, make_point_trainer
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger import (
@@ -45,9 +45,7 @@ WALLS = np.array(
     dtype=bool,
 )
 GOAL = GEOMETRY.cell_to_xy((1, 1))
-TINY = ExperimentConfig(
-    body="point", episodes=2, eval_every=2, eval_episodes=1, final_eval_episodes=1, maze_size=3, gradient_steps=2
-)
+TINY = dataclasses.replace(TINY_PROTOCOL1, episodes=2, eval_episodes=1, final_eval_episodes=1, gradient_steps=2)
 
 
 def test_new_methods_are_strategies():

@@ -49,23 +49,18 @@ def as_free_point(value: Any, geometry: MazeGeometry, walls: np.ndarray, name: s
     return point
 
 
-RENAMED_OPTIONS = ("goal", "goal_xy")
-"""Earlier keys of :class:`ReachEnv`'s ``"subgoal_xy"`` reset option (``"goal_xy"`` is the final goal of
-:class:`HighLevelMazeEnv`): refused, since silently ignoring one would draw a random subgoal."""
+RESET_OPTIONS = ("start_xy", "subgoal_xy")
+"""The keys of :class:`ReachEnv`'s reset ``options``. Any other is refused, since ignoring one (a misspelling, or
+``"goal_xy"``, the final goal of :class:`HighLevelMazeEnv`) would draw a random start or subgoal instead."""
 
 
-def _subgoal_option(options: dict[str, Any]) -> Any:
-    """The ``"subgoal_xy"`` reset option; ``None`` if not given.
-
-    Raises:
-        ValueError: For a key of :data:`RENAMED_OPTIONS`, naming it and its value.
-    """
-    for key in RENAMED_OPTIONS:
-        if key in options:
+def _check_options(options: dict[str, Any]) -> None:
+    """Raises ``ValueError`` naming the first key of ``options`` not in :data:`RESET_OPTIONS`, and its value."""
+    for key in options:
+        if key not in RESET_OPTIONS:
             raise ValueError(
-                f"ReachEnv's reset option {key!r} is now 'subgoal_xy' (0.2.0): got options[{key!r}]={options[key]!r}"
+                f"ReachEnv's reset options are {list(RESET_OPTIONS)}: got options[{key!r}]={options[key]!r}"
             )
-    return options.get("subgoal_xy")
 
 
 INFO_PENALTIES = ("flip_penalty", "tilt_penalty")
@@ -343,16 +338,17 @@ class ReachEnv(GoalEnv, EzPickle):
                 ±0.25 cell of noise) and ``"subgoal_xy"`` (exact subgoal xy; default sampled near the body).
 
         Raises:
-            ValueError: If a given start or subgoal is NaN, or outside the maze's free space, or the
-                option ``"goal"`` or ``"goal_xy"`` (``"subgoal_xy"`` since 0.2.0) is given.
+            ValueError: If a given start or subgoal is NaN, or outside the maze's free space, or ``options``
+                holds a key not in :data:`RESET_OPTIONS`.
 
         """
+        _check_options(options or {})
         super().reset(seed=seed)
         if self._chains(seed, options):
             return self.set_subgoal(self.sample_subgoal()), {"is_success": self._is_success()}
         self._smoother.reset()  # from rest: no previous torque to carry (a chained reset keeps it)
         options = options or {}
-        if all(options.get(key) is None for key in ("start_xy", "subgoal_xy", *RENAMED_OPTIONS)):
+        if all(options.get(key) is None for key in RESET_OPTIONS):
             self._draw_walls()  # only a free draw may move it to another maze: given positions are in this one
         self._started = True  # after the walls: a rebuild clears it
         geometry = self.sim.geometry
@@ -363,7 +359,7 @@ class ReachEnv(GoalEnv, EzPickle):
             cell = free[self.np_random.integers(len(free))]
             start = geometry.cell_to_xy(cell) + self.np_random.uniform(-0.25, 0.25, size=2) * geometry.scale
         self._body_obs, self._xy = self.sim.reset(start, seed=int(self.np_random.integers(2**31)))
-        subgoal = _subgoal_option(options)
+        subgoal = options.get("subgoal_xy")
         given = None if subgoal is None else as_free_point(subgoal, geometry, self.walls, "subgoal_xy")
         self.set_subgoal(self.sample_subgoal() if given is None else given)
         return self._get_obs(), {"is_success": self._is_success()}

@@ -37,7 +37,7 @@ class SuiteSpec:
         n_tasks: Tasks in the list.
         max_low_level_steps: The largest per-task low-level step limit.
         checksum: SHA-256 of the task list (:func:`antmaze_hirl.envs.suites.tasks_checksum`).
-        episodes_per_task: The protocol's episodes per task, K: 1 on a random family (100 mazes), 20 on a
+        episodes_per_task: The suite's episodes per task, K: 1 on a random family (100 mazes), 20 on a
             fixed map (100 episodes over 5 tasks; OGBench plays 50 per task), each with its own start and goal
             noise.
     """

@@ -25,7 +25,7 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``scripts/make_suit
   (the other maps' shapes differ from every family's; ``u`` has the 3x3 family's shape but 2 interior
   walls where that family places 3; both checked in the tests), whatever part the partition's hash gives
   the grid, and the start/goal pairs are fixed. A learner trained on the map itself is on OGBench's
-  protocol (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
+  footing (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
   Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))``
   (:func:`~antmaze_hirl.envs.profiles.path_scaled_step_limit`, ``scripts/in_maze.py``'s rule, a 0.5 m/s
   average).

@@ -387,7 +387,7 @@ def read_body(folder: Path, body: str) -> Body:
     path = folder / "summary.json"
     summary = read_summary(folder)
     config = summary.get("config", {})
-    protocol = config.get("protocol", 1)  # summaries from before protocol 2 have no such key
+    protocol = config.get("protocol")  # read_summary gives a folder from before protocol 2 its protocol, 1
     if protocol != 2:
         raise ValueError(f"{path} has config.protocol {protocol!r}, not 2: read it without --protocol2")
     if config.get("body") != body:

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, TypedDict
 
 from antmaze_hirl.envs.bodies import body_spec
@@ -64,39 +62,31 @@ def body_settings(
     return BodyDefaults(**settings)
 
 
-RENAMED_KEYS: dict[str, str] = {"subgoal_reach_m": "expert_max_distance"}
-"""Settings that files written up to 0.2.0 hold under an older key, each field with its old key (as
-``study.logs.RENAMED_KEYS``): a results folder's ``config.json`` (the committed ones, protocol 2's runs) and a
-study's ``settings.json``. Files are written with the fields' names and read through :func:`current_keys`."""
-
-
-def current_keys(recorded: Mapping[str, Any], source: str | Path) -> dict[str, Any]:
-    """A settings file's object with each old key of :data:`RENAMED_KEYS` replaced, in place, by its field's name.
-
-    A file holding one setting under both keys with one value reads as holding it once.
-
-    Raises:
-        ValueError: One line naming ``source``: not a JSON object, or both keys of a setting with different values.
-    """
-    if not isinstance(recorded, Mapping):
-        raise ValueError(f"{source} holds a {type(recorded).__name__}, not an object of settings")
-    for key, old_key in RENAMED_KEYS.items():
-        if key in recorded and old_key in recorded and recorded[key] != recorded[old_key]:
-            raise ValueError(
-                f"{source}: {key!r} and its old name {old_key!r} hold different values "
-                f"({recorded[key]!r} against {recorded[old_key]!r})"
-            )
-    fields_by_old_key = {old_key: key for key, old_key in RENAMED_KEYS.items()}
-    settings: dict[str, Any] = {}
-    for key, value in recorded.items():
-        settings.setdefault(fields_by_old_key.get(key, key), value)
-    return settings
-
-
 SELECTION_SEED = SEEDS.selection
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
 range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
 the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
+
+
+PROTOCOLS = (1, 2)
+"""The protocols of :attr:`ExperimentConfig.protocol`."""
+
+CURRENT_PROTOCOL = 2
+"""The current protocol (docs/guides/protocol.md): :attr:`ExperimentConfig.protocol`'s default, which
+``antmaze-hirl experiment`` and ``scripts/paper_experiment.py`` run unless told otherwise."""
+
+PROTOCOL_EVALUATION_ENVS = 25
+"""The current protocol's :attr:`ExperimentConfig.evaluation_envs`: its 100-maze set in four lockstep chunks,
+several times faster than one maze after another (``benchmarks/paper_trial_speed.py``)."""
+
+
+def protocol_evaluation_envs(protocol: int) -> int:
+    """The ``evaluation_envs`` a protocol runs with unless told otherwise.
+
+    :data:`PROTOCOL_EVALUATION_ENVS` from protocol 2 on; in protocol 1, 1: one maze after another, as its
+    committed folders were made.
+    """
+    return PROTOCOL_EVALUATION_ENVS if protocol >= 2 else 1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -124,9 +114,9 @@ class TrialSettings:
             same ``eval_episodes`` mazes every time, a fixed set; about 50 is the intended size), the
             final evaluation from the ``"eval"`` part (seeds from ``HELD_OUT_SEED``), so no evaluation
             maze shares its wall grid with a training maze and the two evaluation sets share none
-            either. ``False`` (the default, kept so that the committed results folders and study folders,
-            which lack this setting, still read as what they are): every maze is drawn from the whole family,
-            held out by seed only, and the periodic set is the first ``eval_episodes`` mazes of the final one.
+            either. ``False`` (a study's default; :class:`ExperimentConfig`'s is ``True``, the current
+            protocol's): every maze is drawn from the whole family, held out by seed only, and the periodic
+            set is the first ``eval_episodes`` mazes of the final one.
     """
 
     body: str = "point"
@@ -144,24 +134,30 @@ class TrialSettings:
 class ExperimentConfig(TrialSettings):
     """Settings shared by every (method, seed) trial: the :class:`TrialSettings` fields, and these.
 
+    The defaults are the current protocol, :data:`CURRENT_PROTOCOL` (docs/guides/protocol.md): held-out
+    layouts, one fixed evaluation set scored from episode 0, evaluated :data:`PROTOCOL_EVALUATION_ENVS` mazes
+    at once. Results folders written before then (protocol 1) read through
+    :mod:`antmaze_hirl.experiments.old_folders`.
+
     Attributes:
+        held_out_layouts: As :attr:`TrialSettings.held_out_layouts`; ``True`` here (protocol 2 needs it).
         episodes: Training episodes per trial.
         episodes_per_update: K.
         mixing: ``"blend"`` or ``"switch"``.
-        protocol: How the curves are read. ``1`` (the default, so that the committed results folders,
-            which lack this setting, read as what they are): a periodic set and a different final set, the untrained
-            learner not evaluated (its curve starts at ``(0, 0)``). ``2`` (needs ``held_out_layouts``;
+        protocol: How the curves are read. ``2`` (the default; needs ``held_out_layouts``;
             docs/guides/protocol.md): one fixed set, the ``final_eval_episodes`` mazes of the ``"eval"`` part
             (symmetry-disjoint from training and selection), scored before the first episode (the untrained learner),
             every ``eval_every`` episodes and after the last; ``eval_episodes`` is not used. Every evaluation also
-            writes its per-maze outcomes (``evaluations.csv``).
+            writes its per-maze outcomes (``evaluations.csv``). ``1`` (the committed
+            ``results/paper_experiment`` folders): a periodic set and a different final set, the untrained learner
+            not evaluated (its curve starts at ``(0, 0)``).
         learner: The high-level learner, one of :data:`LEARNERS`; ``None``: protocol 2's
             :data:`PROTOCOL_LEARNER`, or in protocol 1 the body's default (the planning learner
             :data:`STRONG_PRIOR` for the point, ``next_cell_cnn`` for the ant).
         evaluation_envs: Mazes an evaluation plays at once, in lockstep
-            (:func:`~antmaze_hirl.dagger.evaluation.evaluation_episodes`'s ``num_envs``). ``1`` (the default)
-            plays them one after another, as every committed results folder was made. More is several times
-            faster, and the mazes and seeds are the same, but batched products round differently, so ant
+            (:func:`~antmaze_hirl.dagger.evaluation.evaluation_episodes`'s ``num_envs``); the default is
+            :data:`PROTOCOL_EVALUATION_ENVS`. ``1`` plays them one after another, as the protocol-1 folders were
+            made. The mazes and seeds are the same either way, but batched products round differently, so ant
             outcomes are not replays of serial ones (``docs/guides/vector-envs.md``): a results folder is made
             with one setting, which ``config.json`` records.
         step_gradient_steps: Gradient steps after every labelled step for the strategies that update
@@ -175,9 +171,10 @@ class ExperimentConfig(TrialSettings):
     episodes_per_update: int = 1
     mixing: str = "blend"
     step_gradient_steps: int | None = 20
-    protocol: int = 1
+    protocol: int = CURRENT_PROTOCOL
     learner: str | None = None
-    evaluation_envs: int = 1
+    evaluation_envs: int = PROTOCOL_EVALUATION_ENVS
+    held_out_layouts: bool = True
 
     def __post_init__(self) -> None:
         body_spec(self.body)
@@ -263,13 +260,6 @@ def trial_learner(config: ExperimentConfig) -> str | None:
     if config.learner is not None:
         return config.learner
     return PROTOCOL_LEARNER if config.protocol >= 2 else None
-
-
-PROTOCOLS = (1, 2)
-"""The protocols of :attr:`ExperimentConfig.protocol`."""
-
-CURRENT_PROTOCOL = 2
-"""The protocol ``scripts/paper_experiment.py`` runs unless told otherwise."""
 
 
 def evaluation_schedule(config: ExperimentConfig) -> list[int]:

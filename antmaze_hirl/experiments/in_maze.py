@@ -328,7 +328,8 @@ def family_env(family: str, low_level: Any) -> MazeEpisodeRecorder:
         ValueError: For a family in neither :data:`FAMILIES` nor :data:`SELECTION_FAMILIES`.
     """
     if family == "ant3":
-        config = ExperimentConfig(body="ant", **BODY_DEFAULTS["ant"])
+        # The whole 3x3 family, held out by seed only (its few wall grids cannot be held out: protocol 1).
+        config = ExperimentConfig(body="ant", held_out_layouts=False, protocol=1, **BODY_DEFAULTS["ant"])
         return MazeEpisodeRecorder(make_env(config, low_level), scale_step_limit=False)
     if family == "ant4" or family in SELECTION_FAMILIES:
         settings = body_settings("ant", held_out_layouts=True, maze_size=SELECTION_FAMILIES.get(family))

@@ -26,7 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
-from antmaze_hirl.experiments.config import ExperimentConfig, current_keys
+from antmaze_hirl.experiments.config import ExperimentConfig
+from antmaze_hirl.experiments.old_folders import experiment_settings
 from antmaze_hirl.experiments.outcomes import EVALUATION_COLUMNS, EVALUATION_TEXT_COLUMNS
 from antmaze_hirl.experiments.provenance import check_same_code
 from antmaze_hirl.experiments.summary import summarise
@@ -223,8 +224,10 @@ def rows_to_csv(rows: Sequence[dict[str, Any]], columns: Sequence[str] = COLUMNS
 def read_summary(folder: str | Path) -> dict[str, Any]:
     """The ``summary.json`` of a paper-experiment results folder, checked to be one.
 
-    Its ``config`` (the folder's ``config.json``) is read with the current keys
-    (:func:`~antmaze_hirl.experiments.config.current_keys`), so summaries from before 0.2.0 compare with new ones.
+    Its ``config`` (the folder's ``config.json``) reads as today's settings
+    (:func:`~antmaze_hirl.experiments.old_folders.experiment_settings`: current keys, and a protocol-1 folder's
+    ``protocol``, ``held_out_layouts`` and ``evaluation_envs`` where it lacks them), so old summaries compare
+    with new ones.
 
     Raises:
         ValueError: One line naming the file: no ``summary.json``, not JSON, no ``methods`` object, or a
@@ -240,7 +243,7 @@ def read_summary(folder: str | Path) -> dict[str, Any]:
     if not isinstance(summary, dict) or not isinstance(summary.get("methods"), dict):
         raise ValueError(f"{path} has no 'methods' object: not a paper-experiment summary")
     if isinstance(summary.get("config"), dict):
-        summary["config"] = current_keys(summary["config"], path)
+        summary["config"] = experiment_settings(summary["config"], path)
     return summary
 
 
@@ -293,10 +296,10 @@ def check_resumable(
     """
     if not (out_dir / "config.json").exists() or not any((out_dir / "trials").glob("*.csv")):
         return []
-    # A folder written before 0.2.0 names some settings by their old keys (RENAMED_KEYS).
-    saved = current_keys(json.loads((out_dir / "config.json").read_text()), out_dir / "config.json")
+    # An older folder's keys and missing settings read as what it was made with (old_folders).
+    saved = experiment_settings(json.loads((out_dir / "config.json").read_text()), out_dir / "config.json")
     saved_low_level = saved.pop("low_level", "not recorded (a folder from before low levels were recorded)")
-    # Settings added since the folder was written count at their defaults.
+    # Other settings added since the folder was written count at their defaults, which have not changed.
     saved = {**asdict(ExperimentConfig(body=config.body)), **saved}
     settings = asdict(config)
     if saved != settings:

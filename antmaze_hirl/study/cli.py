@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from antmaze_hirl.cli_validation import renamed_option
 from antmaze_hirl.study.settings import StudySettings
 
 _DEFAULT_METHODS = "dagger,noise,multi_policy,reward"
@@ -74,7 +73,6 @@ def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> No
         help="radius of the click circle, metres: the setting subgoal_reach_m "
         "(default: per body, ant 2, point one cell)",
     )
-    renamed_option(parser, "--expert-max-distance", "--subgoal-reach-m")
     parser.add_argument("--eval-every", type=int, default=_STUDY_DEFAULTS.eval_every, help="evaluate every M episodes")
     parser.add_argument("--eval-episodes", type=int, default=_STUDY_DEFAULTS.eval_episodes, help="mazes per evaluation")
     parser.add_argument(

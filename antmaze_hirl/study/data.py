@@ -13,8 +13,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from antmaze_hirl.experiments.old_folders import current_study_record
 from antmaze_hirl.experiments.runner import COLUMNS
-from antmaze_hirl.study.logs import read_csv_rows, read_json_records, renamed_value
+from antmaze_hirl.study.logs import read_csv_rows, read_json_records
 from antmaze_hirl.study.plan import StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS, validate_answers
 
@@ -244,7 +245,7 @@ def _read_clicks(path: Path, plan: StudyPlan, participant: str) -> list[dict[str
     records = []
     for number, entry in read_json_records(path):
         where = f"{path}:{number}"
-        entry = {**entry, "label_index": renamed_value(entry, "label_index", where)}
+        entry = current_study_record(entry, "label_index", where)
         missing = [key for key in CLICK_COLUMNS if key not in entry]
         if missing:
             raise ValueError(f"{where}: the click lacks {missing}")

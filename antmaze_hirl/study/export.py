@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from antmaze_hirl.envs.profiles import maze_env_id
+from antmaze_hirl.experiments.old_folders import current_study_record
 from antmaze_hirl.study.data import participant_dir
-from antmaze_hirl.study.logs import RENAMED_KEYS, renamed_value
 from antmaze_hirl.study.plan import load_plan
 
 DATASET_ID_PATTERN = re.compile(r"[\w-]+(/[\w-]+)*/[\w.-]+?-v(0|[1-9][0-9]*)", re.ASCII)
@@ -82,8 +82,7 @@ def load_demonstrations(path: str | Path) -> dict[str, np.ndarray]:
             arrays = {name: npz[name] for name in npz.files}
     except (OSError, ValueError) as error:
         raise ValueError(f"{path} is not a readable .npz file: {error}") from None
-    arrays["high_level_step"] = renamed_value(arrays, "high_level_step", str(path))
-    arrays.pop(RENAMED_KEYS["high_level_step"], None)
+    arrays = current_study_record(arrays, "high_level_step", str(path))
     missing = sorted(set(_ARRAYS) - set(arrays))
     if missing:
         raise ValueError(f"{path} lacks the arrays {missing}")

@@ -21,8 +21,8 @@ that has one are read as they are, and a CSV whose header has no ``crc32`` colum
 to) without checksums. Such legacy lines are only as safe as they always were: a torn last line is still
 found, a changed value is not.
 
-A key renamed after 0.2.0 (:data:`RENAMED_KEYS`) is read under either name by :func:`renamed_value`, so
-files written before the rename keep loading.
+Files written up to 0.2.0 name some keys otherwise: they read through
+:func:`antmaze_hirl.experiments.old_folders.current_study_record`.
 """
 
 from __future__ import annotations
@@ -37,16 +37,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from antmaze_hirl.atomic_io import durable_append
 
 CHECKSUM_FIELD = "crc32"
 """Name of the checksum key (JSON lines) and column (CSV)."""
-
-RENAMED_KEYS: dict[str, str] = {"label_index": "step", "high_level_step": "step"}
-"""Keys of the study's files, each with the name 0.1.0 and 0.2.0 wrote it under (``clicks.jsonl``: the label
-index; ``demonstrations.npz``: the high-level step): both were ``step``, two concepts under one name."""
 
 _JSON_SEAL = re.compile(r'^(.*), "crc32": "([0-9a-f]{8})"}$', re.DOTALL)
 _CSV_SEAL = re.compile(r"^(.*),([0-9a-f]{8})$", re.DOTALL)
@@ -54,41 +48,6 @@ _CSV_SEAL = re.compile(r"^(.*),([0-9a-f]{8})$", re.DOTALL)
 
 class DamagedLog(ValueError):
     """A log line that is not what was written: the message names the file and the line number."""
-
-
-def renamed_value(record: Mapping[str, Any], key: str, where: str) -> Any:
-    """``record[key]``, or the value under its old name (:data:`RENAMED_KEYS`) in a file written before.
-
-    A record with both names is read if they hold the same value (compared as arrays: works for
-    ``.npz`` arrays and JSON values alike).
-
-    Raises:
-        ValueError: If ``record`` has neither name, or both with different values (names ``where``, the key
-            and the first values that differ).
-    """
-    old_key = RENAMED_KEYS[key]
-    if key in record and old_key in record:
-        new, old = np.asarray(record[key]), np.asarray(record[old_key])
-        if not np.array_equal(new, old):
-            raise ValueError(
-                f"{where}: {key!r} and its old name {old_key!r} hold different values ({_difference(new, old)})"
-            )
-        return record[key]
-    if key in record:
-        return record[key]
-    if old_key in record:
-        return record[old_key]
-    raise ValueError(f"{where}: no {key!r} (nor its old name {old_key!r})")
-
-
-def _difference(new: np.ndarray, old: np.ndarray) -> str:
-    """Where two values differ, in a few words: the values, their shapes, or the first index and its values."""
-    if new.ndim == 0 and old.ndim == 0:
-        return f"{new.item()!r} against {old.item()!r}"
-    if new.shape != old.shape:
-        return f"shapes {new.shape} against {old.shape}"
-    index = int(np.flatnonzero(new.ravel() != old.ravel())[0])
-    return f"at index {index}: {new.ravel()[index].item()!r} against {old.ravel()[index].item()!r}"
 
 
 def line_checksum(text: str) -> str:

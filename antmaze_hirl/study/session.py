@@ -47,17 +47,16 @@ from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.experiments.old_folders import current_study_record
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.logs import (
-    RENAMED_KEYS,
     DamagedLog,
     append_csv_row,
     append_json_record,
     csv_cell,
     read_csv_rows,
-    renamed_value,
 )
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
@@ -159,10 +158,7 @@ class DemonstrationLog:
         Raises:
             ValueError: If the state has neither name, or both with different values.
         """
-        state = dict(state)
-        state["high_level_step"] = renamed_value(state, "high_level_step", "the pickled DemonstrationLog")
-        state.pop(RENAMED_KEYS["high_level_step"], None)
-        self.__dict__.update(state)
+        self.__dict__.update(current_study_record(state, "high_level_step", "the pickled DemonstrationLog"))
 
 
 def _npz_bytes(arrays: dict[str, np.ndarray]) -> bytes:

@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings, body_settings, current_keys
+from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings, body_settings
+from antmaze_hirl.experiments.old_folders import current_settings
 
 SETTINGS_FILE = "settings.json"
 
@@ -21,8 +22,8 @@ class StudySettings(TrialSettings):
     The :class:`~antmaze_hirl.experiments.config.TrialSettings` fields (:data:`EXPERIMENT_FIELDS`: the
     experiment's names, types and defaults; ``subgoal_reach_m`` is the radius of the circle a participant clicks
     in) and the page's. Their names are the keys of a study's ``settings.json`` (files from before 0.2.0 hold
-    some under older keys, read through :func:`~antmaze_hirl.experiments.config.current_keys`).
-    ``held_out_layouts`` is ``False`` by default, as in the experiment, so that a study folder written before
+    some under older keys, read through :func:`~antmaze_hirl.experiments.old_folders.current_settings`).
+    ``held_out_layouts`` is ``False`` by default, as it always was, so that a study folder written before
     the setting existed reads as what it ran; ``study init`` (:meth:`for_body`) sets it.
 
     Attributes:
@@ -59,8 +60,13 @@ class StudySettings(TrialSettings):
         return cls(body=body, held_out_layouts=held_out, **{**family, **overrides})
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
-        """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
-        return ExperimentConfig(episodes=episodes, **{name: getattr(self, name) for name in EXPERIMENT_FIELDS})
+        """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code).
+
+        A study evaluates as protocol 1 does, one maze after another, as it always has: the experiment's defaults
+        are the current protocol's, which a study's settings do not record.
+        """
+        settings = {name: getattr(self, name) for name in EXPERIMENT_FIELDS}
+        return ExperimentConfig(episodes=episodes, protocol=1, evaluation_envs=1, **settings)
 
 
 EXPERIMENT_FIELDS: tuple[str, ...] = tuple(field.name for field in fields(TrialSettings))
@@ -125,6 +131,6 @@ def load_settings(study_dir: str | Path) -> StudySettings:
     if not path.is_file():
         raise FileNotFoundError(f"{path} not found: create the study with 'antmaze-hirl study init {study_dir}'")
     try:
-        return StudySettings(**current_keys(json.loads(path.read_text()), path))
+        return StudySettings(**current_settings(json.loads(path.read_text()), path))
     except (json.JSONDecodeError, TypeError, ValueError) as error:
         raise ValueError(f"{path} holds no valid study settings: {error}") from error
