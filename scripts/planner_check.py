@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import torch as th
 
-from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, planning_rounds
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 from antmaze_hirl.envs.layouts import shortest_path
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -107,10 +107,26 @@ def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> d
     return results
 
 
-def moved_to(policy: HighLevelPolicy, env: Any) -> HighLevelPolicy:
-    """The same weights on ``env``'s map: a learner shaped for its geometry, planning rounds for its size."""
+def moved_to(policy: HighLevelPolicy, env: Any, *, any_planner: bool = False) -> HighLevelPolicy:
+    """The same weights on ``env``'s map: a learner shaped for its geometry, planning rounds for its size.
+
+    ``any_planner`` also moves a planning learner that is not ``any_map`` (its correction reads the goal offset),
+    which :meth:`HighLevelPolicy.on_map` refuses: the screen's evidence for that refusal.
+    """
     maze = env.unwrapped
-    return policy.on_map(maze.geometry, pixels_per_cell=maze.pixels_per_cell)
+    settings = policy.settings
+    if not any_planner or policy.runs_on_any_map or settings.planning_iterations == 0:
+        return policy.on_map(maze.geometry, pixels_per_cell=maze.pixels_per_cell)
+    geometry = maze.geometry
+    moved = HighLevelPolicy(
+        geometry,
+        pixels_per_cell=maze.pixels_per_cell,
+        body_dim=policy.body_dim,
+        rng=np.random.default_rng(0),
+        settings=settings.replace(planning_iterations=planning_rounds(geometry.n_rows, geometry.n_cols)),
+    )
+    moved.network.load_state_dict(policy.network.state_dict())
+    return moved
 
 
 def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int = 30) -> dict[str, float]:
@@ -150,6 +166,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--maps", default="medium,large,giant")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--no-correction", action="store_true", help="screen only: logits are the planner's Q alone")
+    parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
     parser.add_argument("--rounds-factor", type=float, default=1.0, help="screen only: on_map rounds times this")
     args = parser.parse_args(argv)
     th.set_num_threads(1)
@@ -177,7 +194,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)
-                    moved = moved_to(policy, other)
+                    moved = moved_to(policy, other, any_planner=args.move_any_planner)
                     if args.rounds_factor != 1.0 and moved.runs_on_any_map:
                         moved.network.planner.iterations = int(moved.network.planner.iterations * args.rounds_factor)
                     row[name] = summary(grid_rollouts(moved, other, args.tasks, 11))
