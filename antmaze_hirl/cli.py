@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark.
+"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark, submit.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.
@@ -450,6 +450,12 @@ def _add_benchmark(subparsers: _Subparsers) -> None:
     add_benchmark_parser(subparsers, _HelpFormatter)
 
 
+def _add_submit(subparsers: _Subparsers) -> None:
+    from antmaze_hirl.experiments.submission import add_submit_parser  # light: no envs, no torch
+
+    add_submit_parser(subparsers, _HelpFormatter)
+
+
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
@@ -458,6 +464,7 @@ SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_experiment,
     _add_study,
     _add_benchmark,
+    _add_submit,
 )
 """The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
 
