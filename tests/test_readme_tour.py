@@ -37,6 +37,9 @@ def test_the_readme_has_its_tour_blocks():
 @pytest.mark.parametrize("code", readme_blocks())
 def test_a_readme_block_runs_as_written(code, tmp_path):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))}
+    # One OpenMP thread: on a shared CI machine two threads spin against the other jobs (SAC's 6,000 steps took
+    # 20x the CPU time at load 12 on 2 cores); a user's idle machine runs the snippets as they are.
+    env["OMP_NUM_THREADS"] = "1"
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900
