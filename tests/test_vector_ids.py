@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import threading
 import warnings
 
 import gymnasium as gym
@@ -128,3 +129,25 @@ def test_a_normalised_subgoal_is_the_metres_one_rescaled_to_the_maze_edges():
     assert venv.action_space == gym.spaces.Box(-1, 1, (2,), np.float32)
     assert len(venv.get_attr("body")) == 2  # the sub-envs are reached under the vector wrapper
     venv.close()
+
+
+class LockedController(PointGoToController):
+    """A low level holding a lock, as a model with a logger or a thread pool does: it cannot be deep-copied."""
+
+    def __init__(self):
+        super().__init__()
+        self.lock = threading.Lock()
+
+
+def test_ones_own_low_level_that_cannot_be_copied_plays_a_suite_in_lockstep_without_warnings():
+    from antmaze_hirl.dagger import evaluate_high_level
+    from antmaze_hirl.experiments.benchmark import score_policy
+    from antmaze_hirl.experts.oracle import PathOracle
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # Gymnasium warned "cannot pickle '_thread.lock'" copying the spec
+        report = score_policy("point5", "oracle", low_level=LockedController(), task_ids=[0, 1], num_envs=2)
+        env = gym.make(POINT_SUITE_ID, low_level=LockedController())
+        played = evaluate_high_level(PathOracle.for_env(env), env, episodes=2, num_envs=2)
+    assert report["episodes"] == 2 and played["episodes"] == 2
+    env.close()

@@ -138,7 +138,9 @@ def play_episodes(
             inner,
             resets,
             num_envs=num_envs,
-            max_subgoals=getattr(env.spec, "max_episode_steps", None),
+            # The unwrapped env's spec: a wrapper's ``spec`` deep-copies it, and with it a ``low_level`` that
+            # cannot be copied (a model holding a lock), which Gymnasium reports as a warning.
+            max_subgoals=getattr(inner.spec, "max_episode_steps", None),
             on_episode_end=None if bar is None else bar.update,
         )
     finally:
