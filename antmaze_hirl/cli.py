@@ -1,4 +1,4 @@
-"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark.
+"""The antmaze-hirl command line: demo, train-low, eval-low, ensemble-low, experiment, study, benchmark, submit.
 
 Each subcommand's handler imports what it needs when it runs, so that ``antmaze-hirl --help`` loads
 neither torch nor Stable-Baselines3.
@@ -390,6 +390,13 @@ def _add_experiment(subparsers: _Subparsers) -> None:
     parser.set_defaults(handler=_run_experiment)
 
 
+def _rounded(value: float | None, digits: int = 3, missing: str = "n/a") -> str:
+    """A summary figure for the terminal: rounded, and ``missing`` where there is none (``None``, NaN)."""
+    if value is None or value != value:  # None, or NaN (a median over no seed)
+        return missing
+    return f"{value:.{digits}f}"
+
+
 def _run_experiment(args: argparse.Namespace) -> int:
     import torch
 
@@ -440,12 +447,12 @@ def _run_experiment(args: argparse.Namespace) -> int:
         # Protocol 2 pools with a cluster bootstrap over seeds and mazes; protocol 1 with a Wilson interval.
         low, high = pooled.get("cluster_bootstrap_95") or pooled["wilson_95"]
         print(
-            f"{method}: final success median {final['median']} (min {final['min']}, max {final['max']}; "
-            f"pooled {pooled['rate']:.3f}, 95% CI {low:.3f}-{high:.3f}), "
-            f"normalised AUC median {figures['normalised_auc']['median']}, "
+            f"{method}: final success median {_rounded(final['median'])} (min {_rounded(final['min'])}, max "
+            f"{_rounded(final['max'])}; pooled {pooled['rate']:.3f}, 95% CI {low:.3f}-{high:.3f}), "
+            f"normalised AUC median {_rounded(figures['normalised_auc']['median'])}, "
             f"expert cost/episode {figures['mean_expert_cost_per_episode']:.1f}, "
             f"attempts/episode {figures['mean_attempts_per_episode']:.1f}, "
-            f"cost to 60% {figures['cost_to_60_percent']['median']}"
+            f"labels to 60% success {_rounded(figures['cost_to_60_percent']['median'], 0, 'not reached')}"
         )
     print(f"wrote {args.out / 'summary.json'}, {args.out / 'episodes.csv'}, {args.out / 'panels.png'}")
     return 0
@@ -463,6 +470,12 @@ def _add_benchmark(subparsers: _Subparsers) -> None:
     add_benchmark_parser(subparsers, _HelpFormatter)
 
 
+def _add_submit(subparsers: _Subparsers) -> None:
+    from antmaze_hirl.experiments.submission import add_submit_parser  # light: no envs, no torch
+
+    add_submit_parser(subparsers, _HelpFormatter)
+
+
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_demo,
     _add_train_low,
@@ -471,6 +484,7 @@ SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (
     _add_experiment,
     _add_study,
     _add_benchmark,
+    _add_submit,
 )
 """The ``_add_*`` functions that each add one subcommand, in the order ``--help`` lists them."""
 

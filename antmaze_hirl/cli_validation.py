@@ -64,6 +64,7 @@ _METRES = FloatBounds(0.0, 1000.0)
 
 INT_BOUNDS: dict[str, IntBounds] = {
     "seed": IntBounds(0, MAX_SEED),
+    "training_seed": IntBounds(0, MAX_SEED),
     "study init:seed": IntBounds(0, MAX_STUDY_SEED),
     "seeds": IntBounds(1, 10_000, "trials per method"),
     "episodes": _COUNT,

@@ -79,8 +79,10 @@ def plot_episode(
             ax.annotate(str(index), point, textcoords="offset points", xytext=(3, 3), fontsize=7, color="tab:orange")
     ax.scatter(*path[0], marker="o", s=80, color="tab:green", zorder=4, label="start")
     ax.scatter(*goal_xy, marker="*", s=200, color="tab:red", zorder=4, label="goal")
-    ax.set_xlim(low[0], high[0])
-    ax.set_ylim(low[1], high[1])
+    # Half of the border wall is enough to see it: the full cell (4 m on the ant) framed a 12 m maze in 20 m.
+    margin_m = geometry.scale / 2
+    ax.set_xlim(low[0] + margin_m, high[0] - margin_m)
+    ax.set_ylim(low[1] + margin_m, high[1] - margin_m)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

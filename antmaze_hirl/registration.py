@@ -11,13 +11,14 @@ from __future__ import annotations
 import gymnasium as gym
 
 from antmaze_hirl.envs.profiles import maze_env_id, reach_env_id
-from antmaze_hirl.envs.suite_specs import SUITE_ENTRY_POINT, SUITE_SPECS
+from antmaze_hirl.envs.suite_specs import SUITE_ENTRY_POINT, SUITE_SPECS, SUITE_VECTOR_ENTRY_POINT
 
 VECTOR_ENTRY_POINTS: dict[str, str] = {
     **{reach_env_id(body): "antmaze_hirl.envs.vector:make_reach_vector_env" for body in ("ant", "point")},
     **{maze_env_id(body): "antmaze_hirl.sb3_ext.shipped:make_maze_vector_env" for body in ("ant", "point")},
 }
-"""Each id's native vector env (``gym.make_vec(id, N)``, ``vectorization_mode="vector_entry_point"``)."""
+"""Each base id's native vector env (``gym.make_vec(id, N)``, ``vectorization_mode="vector_entry_point"``); the
+suite ids' is :data:`~antmaze_hirl.envs.suite_specs.SUITE_VECTOR_ENTRY_POINT`."""
 
 ENV_IDS: dict[str, tuple[str, dict[str, str]]] = {
     **{reach_env_id(body): ("antmaze_hirl.envs.reach:ReachEnv", {"body": body}) for body in ("ant", "point")},
@@ -38,4 +39,10 @@ def register_envs() -> None:
     for spec in SUITE_SPECS.values():
         if spec.env_id not in gym.registry:
             kwargs = {"suite": spec.name}
-            gym.register(spec.env_id, SUITE_ENTRY_POINT, max_episode_steps=spec.max_episode_steps, kwargs=kwargs)
+            gym.register(
+                spec.env_id,
+                SUITE_ENTRY_POINT,
+                vector_entry_point=SUITE_VECTOR_ENTRY_POINT,
+                max_episode_steps=spec.max_episode_steps,
+                kwargs=kwargs,
+            )

@@ -11,7 +11,7 @@ Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|summary|results|spread|paired|figure|points
+Usage: python scripts/leaderboard.py --section suites|leaderboard|summary|results|spread|paired|figure|points
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import argparse
 import re
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,7 @@ from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.labels_vs_steps import SUITES as FIGURE_SUITES
 from antmaze_hirl.experiments.labels_vs_steps import figure_path, figure_points, points_table
+from antmaze_hirl.experiments.submission import SubmissionError, check_submission
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,15 +112,15 @@ NOT_RUN: list[tuple[str, str, str]] = [
 def suites_table() -> str:
     """One row per suite: id, tasks, protocol episodes, step limits, checksum."""
     lines = [
-        "| suite | id | body | tasks | protocol episodes (K per task) | low-level step limit | "
+        "| suite | id | tasks | protocol episodes (K per task) | low-level step limit | "
         "`max_episode_steps` (subgoals) | task-list SHA-256 |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|",
     ]
     for spec in SUITE_SPECS.values():
         source = f"random {spec.maze_size}x{spec.maze_size}, eval part" if spec.source == "random" else spec.source
         limit = "500" if spec.source == "random" else f"scaled to the path, up to {spec.max_low_level_steps}"
         lines.append(
-            f"| `{spec.name}` | `{spec.env_id}` | {spec.body} | {spec.n_tasks} ({source}) | "
+            f"| `{spec.name}` | `{spec.env_id}` | {spec.n_tasks} ({source}) | "
             f"{spec.n_tasks * spec.episodes_per_task} ({spec.episodes_per_task}) | {limit} | "
             f"{spec.max_episode_steps} | `{spec.checksum[:16]}` |"
         )
@@ -303,8 +305,25 @@ def _minutes(seconds: list[float]) -> str:
     return f"{low_text} min" if low == high else f"{low_text}-{high} min"
 
 
-def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -> str:
-    """One summary row: the entry's seeds, each seed's successes, the pooled rate and its interval, training time.
+@dataclass(frozen=True)
+class Entry:
+    """One leaderboard entry: a suite's policy at one budget, its seeds pooled, with its figures."""
+
+    suite: str
+    name: str
+    budget: str
+    seeds: str
+    per_seed: str
+    episodes: int
+    rate: float
+    low: float
+    high: float
+    interval: str
+    training_time: str
+
+
+def pooled_entry(suite: str, name: str, budget: str, by_seed: dict[int, dict]) -> Entry:
+    """The entry of ``by_seed``'s reports: the seeds, each seed's successes, the pooled rate and its interval.
 
     One seed's row carries its own 95% Wilson interval (it says nothing of another training seed). Seeds
     pooled together played the same tasks, so their outcomes are not independent draws: from
@@ -339,15 +358,22 @@ def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -
         kind = f"cluster bootstrap, {len(seeds)} seeds x {pooled['mazes']} tasks"
     training = [report["training"]["training_seconds"] for report in reports if "training" in report]
     time = _minutes(training) if training and max(training) > 0 else ""
-    seed_text = ", ".join(map(str, seeds)) if "training" in reports[0] else ""
+    trained = "training" in reports[0] or "submission" in reports[0]
+    seed_text = ", ".join(map(str, seeds)) if trained else ""
+    return Entry(suite, name, budget, seed_text, per_seed, episodes, rate, low, high, kind, time)
+
+
+def summary_row(suite: str, entry: str, budget: str, by_seed: dict[int, dict]) -> str:
+    """One row of the full summary (the rows page): :func:`pooled_entry` with every figure and the training time."""
+    row = pooled_entry(suite, entry, budget, by_seed)
     return (
-        f"| `{suite}` | {entry} | {budget} | {seed_text} | {per_seed} (of {episodes}) | "
-        f"{_percent(rate)} [{_percent(low)}, {_percent(high)}] | {kind} | {time} |"
+        f"| `{suite}` | {row.name} | {row.budget} | {row.seeds} | {row.per_seed} (of {row.episodes}) | "
+        f"{_percent(row.rate)} [{_percent(row.low)}, {_percent(row.high)}] | {row.interval} | {row.training_time} |"
     )
 
 
-def _reference_rows(suite: str, reports: list[dict]) -> list[str]:
-    """The oracle's and the random policy's rows of one suite: each its report with the most episodes."""
+def _reference_entries(suite: str, reports: list[dict]) -> list[tuple[str, str, str, dict[int, dict]]]:
+    """The oracle's and the random policy's entries of one suite: each its report with the most episodes."""
     rows = []
     for policy in ("oracle", "random"):
         candidates = [report for report in reports if report["policy"] == policy]
@@ -356,7 +382,7 @@ def _reference_rows(suite: str, reports: list[dict]) -> list[str]:
             budget = f"{report['episodes']} episodes"
             verdict = goal_verdict(report)
             entry = f"oracle (goal >= 95%: {verdict})" if verdict else policy
-            rows.append(summary_row(suite, entry, budget, {0: report}))
+            rows.append((suite, entry, budget, {0: report}))
     return rows
 
 
@@ -375,50 +401,105 @@ def _step_budget(by_seed: dict[int, dict], steps: int) -> str:
     return f"{steps:,} {'body steps' if training['algorithm'] == 'flat-sac-her' else 'high-level steps'}"
 
 
-def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[str]:
-    """A row for each of ``suite``'s reports that no entry pools: a submitted row, named by its ``policy``."""
-    rows = []
+def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[tuple[str, str, dict[int, dict]]]:
+    """Each submitted entry of ``suite``: the reports no other entry pools, checked (``antmaze-hirl submit``)
+    and pooled by policy and budget, their seeds side by side.
+
+    Raises:
+        SystemExit: If a submitted report fails the check, naming its file and what is wrong.
+    """
+    entries: dict[tuple[str, str], dict[int, dict]] = {}
     for name, report in sorted(reports.items()):
         if report["suite"] != suite or name in placed or name in LEGACY_ROWS or CHECKPOINT_ROW.fullmatch(name):
             continue
         if report["policy"] in ("oracle", "random"):
             continue  # the suite's reference rows: the one with the most episodes is placed
-        seed = int(report.get("training", {}).get("seed", 0))
-        rows.append(summary_row(suite, report["policy"], "as its policy names it", {seed: report}))
-    return rows
+        try:
+            checked = check_submission(report, name=name)
+        except SubmissionError as error:
+            raise SystemExit(f"error: {error}") from None
+        row = checked["submission"]
+        entries.setdefault((checked["policy"], row["budget"]), {})[row["seed"]] = checked
+    return [(policy, budget, by_seed) for (policy, budget), by_seed in entries.items()]
 
 
-def summary_table() -> str:
-    """The leaderboard: per suite the oracle, the random policy, DAgger's entries by label target, the RL
-    baselines, then any other report (a submitted row, named by its ``policy``).
+def summary_entries() -> list[tuple[str, str, str, dict[int, dict]]]:
+    """Every leaderboard entry as (suite, name, budget, reports by seed): per suite the oracle, the random policy,
+    DAgger's entries by label target, the RL baselines, then the submitted entries.
 
     A trained entry pools its seeds' final rows (one per seed) at one budget; the rows it pools are in the
     results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries, and an active
     method's untrained rows are plain DAgger's untrained learner again, so only plain DAgger's is listed.
     """
-    lines = [
-        "| suite | entry | budget | seeds | successes per seed | success [95% interval] | interval | "
-        "training time per seed |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    entries = []
     reports = {path.name: load_report(path) for path in sorted(RESULTS.glob("*.json"))}
     dagger, rl = dagger_groups(), rl_groups()
     placed = {name for name in reports if DAGGER_ROW.fullmatch(name) or RL_ROW.fullmatch(name)}
     for suite in SUITE_SPECS:
-        lines += _reference_rows(suite, [report for report in reports.values() if report["suite"] == suite])
+        entries += _reference_entries(suite, [report for report in reports.values() if report["suite"] == suite])
         ranked = sorted((key for key in dagger if key[0] == suite), key=lambda key: (key[1] != "dagger", key[1:]))
         for key in ranked:
             _, method, learner, target = key
             if method != "dagger" and target == 0:
                 continue
             trained_by = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}` (active)"
-            entry = f"{trained_by}, {learner} learner"
-            lines.append(summary_row(suite, entry, _label_budget(target, dagger[key]), dagger[key]))
+            entries.append((suite, f"{trained_by}, {learner} learner", _label_budget(target, dagger[key]), dagger[key]))
         for algorithm, name in RL_NAMES.items():
             for key in sorted(key for key in rl if key[:2] == (suite, algorithm)):
-                lines.append(summary_row(suite, name, _step_budget(rl[key], key[2]), rl[key]))
-        lines += _other_rows(suite, reports, placed)
+                entries.append((suite, name, _step_budget(rl[key], key[2]), rl[key]))
+        entries += [(suite, *entry) for entry in _other_rows(suite, reports, placed)]
+    return entries
+
+
+def summary_table() -> str:
+    """Every entry of :func:`summary_entries` with all its figures: the rows page's full summary."""
+    lines = [
+        "| suite | entry | budget | seeds | successes per seed | success [95% interval] | interval | "
+        "training time per seed |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [summary_row(*entry) for entry in summary_entries()]
     return "\n".join(lines)
+
+
+def seed_ranges(seeds: str) -> str:
+    """``"0, 1, 2, 3, 5"`` as ``"0-3, 5"``: runs of consecutive seeds as ranges (blank stays blank)."""
+    numbers = [int(seed) for seed in seeds.split(", ")] if seeds else []
+    runs: list[list[int]] = []
+    for number in numbers:
+        if runs and number == runs[-1][-1] + 1:
+            runs[-1].append(number)
+        else:
+            runs.append([number])
+    return ", ".join(f"{run[0]}-{run[-1]}" if len(run) > 2 else ", ".join(map(str, run)) for run in runs)
+
+
+def leaderboard_tables() -> str:
+    """The leaderboard page's lead: one compact table per suite (entry, budget, seeds, success and interval).
+
+    Each seed's successes, the interval's kind and the training time are in :func:`summary_table`.
+    """
+    by_suite: dict[str, list[Entry]] = {}
+    for entry in summary_entries():
+        by_suite.setdefault(entry[0], []).append(pooled_entry(*entry))
+    parts = []
+    for suite, entries in by_suite.items():
+        spec = SUITE_SPECS[suite]
+        lines = [
+            f"### `{suite}`",
+            "",
+            f"`{spec.env_id}`: {spec.n_tasks * spec.episodes_per_task} episodes a row, unless its budget says less.",
+            "",
+            "| entry | budget | seeds | success [95% interval] |",
+            "|---|---|---|---|",
+        ]
+        lines += [
+            f"| {e.name} | {e.budget} | {seed_ranges(e.seeds)} | {_percent(e.rate)} [{100 * e.low:.1f}, "
+            f"{100 * e.high:.1f}] |"
+            for e in entries
+        ]
+        parts.append("\n".join(lines))
+    return "\n\n".join(parts)
 
 
 def sign_test_p(ahead: int, behind: int) -> float:
@@ -496,6 +577,7 @@ def points_section() -> str:
 
 SECTIONS: dict[str, Callable[[], str]] = {
     "suites": suites_table,
+    "leaderboard": leaderboard_tables,
     "summary": summary_table,
     "results": results_table,
     "spread": spread_table,
@@ -504,7 +586,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "points": points_section,
 }
 """The pages' generated sections, by the name ``--section`` takes."""
-ON_ROWS_PAGE = ("results", "spread", "points")
+ON_ROWS_PAGE = ("summary", "results", "spread", "points")
 """The sections on :data:`ROWS_PAGE`; the others are on :data:`PAGE`."""
 
 

@@ -233,10 +233,10 @@ def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
     leaderboard = load_script("scripts/leaderboard.py")
     assert leaderboard.main(["--section", "suites"]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("| suite | id | body |") and "| policy | budget |" not in printed
+    assert printed.startswith("| suite | id | tasks |") and "| policy | budget |" not in printed
     with pytest.raises(SystemExit):
-        leaderboard.main(["--section", "leaderboard"])
-    assert "invalid choice: 'leaderboard'" in capsys.readouterr().err
+        leaderboard.main(["--section", "board"])
+    assert "invalid choice: 'board'" in capsys.readouterr().err
 
 
 def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env):
@@ -404,9 +404,10 @@ def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoi
     rows = leaderboard.summary_table().splitlines()[2:]
     low, high = min(report["wilson_95"][0] for report in seeds[:2]), max(report["wilson_95"][1] for report in seeds[:2])
     assert f"[{100 * low:.1f}%, {100 * high:.1f}%] | envelope of its 2 seeds' Wilson intervals" in rows[1]
-    # A submitted row (any other name) is its own entry, named by its policy; seeds of an RL baseline that
-    # reached other steps are other budgets, never pooled.
-    submitted = {**load_report(source / "ant4_oracle.json"), "policy": "my HRL agent, 1M steps"}
+    # A submitted row (any other name) is its own entry, named by its policy, its budget and seed from the
+    # report (antmaze-hirl submit); seeds of an RL baseline that reached other steps are other budgets, never pooled.
+    submitted = {**load_report(source / "ant4_oracle.json"), "policy": "my HRL agent"}
+    submitted["submission"] = {"budget": "1M steps", "seed": 7}
     (tmp_path / "ant4_my_agent.json").write_text(json.dumps(submitted))
     capped = json.loads((source / "ant4_ppo_rl_s0.json").read_text())
     capped["training"] = {**capped["training"], "steps_reached": 20480, "seed": 1}
@@ -416,9 +417,14 @@ def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoi
         "untrained (0 steps)",
         "20,480 high-level steps",
         "24,576 high-level steps",
-        "as its policy names it",
+        "1M steps",
     ]
-    assert rows[-1].startswith("| `ant4` | my HRL agent, 1M steps |")
+    assert rows[-1].startswith("| `ant4` | my HRL agent | 1M steps | 7 | 99 (of 100) |")
+    # One that fails the check stops the tables, naming the file, rather than listing a row it cannot vouch for.
+    (tmp_path / "ant4_my_agent.json").write_text(json.dumps({**submitted, "suite_checksum": "0" * 64}))
+    with pytest.raises(SystemExit, match=r"ant4_my_agent\.json: suite checksum '0{16}' is not suite 'ant4'"):
+        leaderboard.summary_table()
+    (tmp_path / "ant4_my_agent.json").unlink()
     # Seeds that played other tasks cannot be pooled: an error naming the row, not a silent mean.
     report = json.loads((tmp_path / names[1]).read_text())
     outcomes = report["episode_outcomes"]

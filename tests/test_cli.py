@@ -19,7 +19,7 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.config import DEFAULT_METHODS, ExperimentConfig, body_settings
 from antmaze_hirl.sb3_ext import CheckpointError
 
-COMMANDS = ["demo", "train-low", "eval-low", "ensemble-low", "experiment", "study", "benchmark"]
+COMMANDS = ["demo", "train-low", "eval-low", "ensemble-low", "experiment", "study", "benchmark", "submit"]
 STUDY_COMMANDS = ["init", "serve", "simulate", "analyze", "export"]
 
 

@@ -24,6 +24,7 @@ REQUIRED = {
     "study serve": ["runs/x"],
     "study simulate": ["runs/x"],
     "benchmark": ["point5", "--policy", "random"],
+    "submit": ["report.json"],
 }
 """What each subcommand needs besides the option under test, so that an accepted value parses whole."""
 

@@ -2,6 +2,7 @@ import csv
 import dataclasses
 import json
 import math
+import re
 
 import pytest
 import torch as th
@@ -162,6 +163,7 @@ def test_experiment_cli(tmp_path, capsys):
     assert main([*args, "--out", str(tmp_path), "--no-progress"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("noise: final success median") and "summary.json" in out
+    assert "None" not in out and not re.search(r"\d\.\d{4,}", out), out  # rounded, and a missing figure named
 
 
 # --- issue 12: held-out layouts, learning per label, uncertainty, provenance, bad input ---

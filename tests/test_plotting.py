@@ -89,3 +89,18 @@ def test_importing_the_plotting_modules_keeps_the_users_backend():
 def test_the_old_experiments_plots_module_is_removed():
     with pytest.raises(ModuleNotFoundError, match=r"antmaze_hirl\.experiments\.plots"):
         importlib.import_module("antmaze_hirl.experiments.plots")
+
+
+def test_an_episode_plot_frames_the_maze_with_half_its_border_wall(tmp_path, monkeypatch):
+    from antmaze_hirl import plotting
+    from antmaze_hirl.envs.geometry import MazeGeometry
+
+    figures = []
+    monkeypatch.setattr(plotting, "save_figure", lambda figure, out_file, dpi: figures.append(figure) or out_file)
+    geometry = MazeGeometry(5, 5, 4.0)  # a 3x3 ant maze with its border: +-10 m, the free cells +-6 m
+    walls = np.ones((5, 5))
+    walls[1:-1, 1:-1] = 0
+    path = np.array([[-4.0, -4.0], [4.0, 4.0]])
+    plotting.plot_episode(walls, geometry, path, [path[1]], path[1], tmp_path / "episode.png")
+    axes = figures[0].axes[0]
+    assert axes.get_xlim() == (-8.0, 8.0) and axes.get_ylim() == (-8.0, 8.0)

@@ -168,3 +168,16 @@ def test_the_mujoco_view_is_an_rgb_array_where_egl_works(suite_id):
         """
     )
     assert "FRAMES" in run_under_egl(script)
+
+
+def test_the_subgoal_marker_is_small_and_faint_enough_not_to_hide_the_ant():
+    import mujoco
+
+    from antmaze_hirl.envs.simulator import MazeSimulator
+
+    sim = MazeSimulator("ant", np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], dtype=bool))
+    model = sim._mujoco_env.model
+    site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "target")
+    torso = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "torso_geom")
+    assert model.site_size[site, 0] < model.geom_size[torso, 0]  # gymnasium-robotics': 0.8 m, the torso 0.25 m
+    assert model.site_rgba[site, 3] <= 0.5

@@ -1,5 +1,6 @@
 import os
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -227,3 +228,21 @@ def test_the_dataset_records_the_env_spec_so_recover_environment_works(study, tm
         assert set(observation) == {"image", "state"}
     finally:
         env.close()
+
+
+def test_export_names_the_missing_provenance_in_one_warning_and_records_what_is_given(study):
+    study_dir, _ = study
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        export_minari(study_dir, "antmaze-hirl/bare-v0")
+    messages = [str(warning.message) for warning in caught]
+    assert messages == [
+        "Minari dataset antmaze-hirl/bare-v0 records no author, author_email, code_permalink "
+        "(give --author, --author-email, --code-permalink)"
+    ]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        export_minari(study_dir, "antmaze-hirl/full-v0", author="A. Person", author_email="a@b.c", code_permalink="x")
+    assert [str(warning.message) for warning in caught] == []
+    metadata = minari.load_dataset("antmaze-hirl/full-v0").storage.metadata
+    assert metadata["author"] == {"A. Person"} and metadata["code_permalink"] == "x"

@@ -103,7 +103,8 @@ def _lockstep_episodes(
 ) -> list[tuple[MazeLayout, dict[str, Any]]]:
     # The serial path plays the env as given, TimeLimit included; lockstep copies are unwrapped, so the limit
     # is applied here in the same way.
-    max_subgoals = getattr(getattr(env, "spec", None), "max_episode_steps", None)
+    # The unwrapped env's spec: a wrapper's deep-copies it, low_level too, and warns if that cannot be copied.
+    max_subgoals = getattr(getattr(getattr(env, "unwrapped", env), "spec", None), "max_episode_steps", None)
     played = play_on_copies(policy, env, range(seed, seed + episodes), num_envs=num_envs, max_subgoals=max_subgoals)
     return [(episode.layout, episode.info) for episode in played]
 

@@ -16,6 +16,11 @@ from antmaze_hirl.envs.layouts import walls_to_maze_map
 
 __all__ = ["BODY_SPECS", "Body", "BodySpec", "MazeSimulator", "body_spec"]
 
+TARGET_MARKER_RADIUS_CELLS = 0.06
+"""Radius of the red subgoal marker in the MuJoCo view, in cells (gymnasium-robotics draws 0.2)."""
+TARGET_MARKER_ALPHA = 0.5
+"""Its opacity (gymnasium-robotics: 0.7), so that the body shows through where they overlap."""
+
 
 def uprightness(quaternion: np.ndarray) -> float:
     """World z component of a body's up axis, ``1 - 2 (qx^2 + qy^2)`` for unit quaternion ``(qw, qx, qy, qz)``."""
@@ -53,6 +58,7 @@ class MazeSimulator:
             self._mujoco_env = self._maze_env.point_env
         # The model is compiled; the XML gymnasium-robotics wrote to the temp dir is no longer needed.
         os.remove(self._maze_env.tmp_xml_file_path)
+        self._shrink_target_marker()
         self.action_space = self._mujoco_env.action_space
         self.observation_dim = int(self._mujoco_env.observation_space.shape[0]) - 2
 
@@ -66,6 +72,18 @@ class MazeSimulator:
         """Advances one env step (``spec.dt`` seconds) and returns ``(observation, xy)``."""
         raw_obs = self._mujoco_env.step(action)[0]
         return self._split(raw_obs)
+
+    def _shrink_target_marker(self) -> None:
+        # gymnasium-robotics' red target sphere has a radius of 0.2 cell (0.8 m on the ant, three times the
+        # torso's) at 70% opacity, so in the MuJoCo view it hid the ant walking to it. A site is visual only:
+        # a smaller, fainter one changes no dynamics.
+        import mujoco
+
+        model = self._mujoco_env.model
+        site = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "target")
+        if site >= 0:
+            model.site_size[site, 0] = TARGET_MARKER_RADIUS_CELLS * self.spec.scale
+            model.site_rgba[site, 3] = TARGET_MARKER_ALPHA
 
     def show_target(self, xy: np.ndarray) -> None:
         """Moves the red target marker of the MuJoCo scene (visual only)."""

@@ -144,6 +144,9 @@ limits are those of ``benchmark_suites.json`` (``scripts/make_suites.py`` regene
 SUITE_ENTRY_POINT = "antmaze_hirl.sb3_ext.suite_envs:make_suite_env"
 """Entry point of every suite id: the suite env with the body's shipped low level unless one is given."""
 
+SUITE_VECTOR_ENTRY_POINT = "antmaze_hirl.sb3_ext.suite_envs:make_suite_vector_env"
+"""``vector_entry_point`` of every suite id: its episodes in lockstep (a string: this layer imports nothing above)."""
+
 
 def check_suite_name(name: str) -> SuiteSpec:
     """The spec of suite ``name``.

@@ -118,13 +118,21 @@ class HighLevelVectorEnv(VectorEnv):
             shared object: it is batched once for all (:func:`~antmaze_hirl.envs.controllers.as_batch_controller`).
             Sub-envs with controllers of their own are stepped one call per sub-env (with a warning).
         autoreset_mode: One of the above.
+        max_episode_steps: ``None`` for no limit, else the high-level steps (subgoals) after which an episode
+            is truncated, as Gymnasium's ``TimeLimit`` does for ``gym.make`` (the suite ids register one; the
+            sub-envs are unwrapped, so the vector env counts it itself).
 
     Raises:
-        ValueError: With no sub-env, sub-envs whose spaces differ, or an unknown ``autoreset_mode``.
+        ValueError: With no sub-env, sub-envs whose spaces differ, an unknown ``autoreset_mode`` or a
+            ``max_episode_steps`` below 1.
     """
 
     def __init__(
-        self, envs: Sequence[HighLevelMazeEnv], *, autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP
+        self,
+        envs: Sequence[HighLevelMazeEnv],
+        *,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        max_episode_steps: int | None = None,
     ) -> None:
         self.envs = list(envs)
         self.num_envs = check_num_envs(len(self.envs))
@@ -151,6 +159,10 @@ class HighLevelVectorEnv(VectorEnv):
             self.low_level = LoopBatchController(controllers)
         self._observations: list[dict[str, np.ndarray] | None] = [None] * self.num_envs
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
+        if max_episode_steps is not None and (isinstance(max_episode_steps, bool) or max_episode_steps < 1):
+            raise ValueError(f"max_episode_steps must be None or an integer >= 1, got {max_episode_steps!r}")
+        self.max_episode_steps = max_episode_steps
+        self._episode_steps = np.zeros(self.num_envs, dtype=np.int64)
 
     def reset(
         self, *, seed: int | Sequence[int | None] | None = None, options: dict[str, Any] | None = None
@@ -208,6 +220,9 @@ class HighLevelVectorEnv(VectorEnv):
         walk_in_lockstep(self.envs, walks, self.low_level)
         for index, walk in walks.items():
             obs, rewards[index], terminations[index], truncations[index], info = self.envs[index].end_subgoal(walk)
+            self._episode_steps[index] += 1
+            if self.max_episode_steps is not None and self._episode_steps[index] >= self.max_episode_steps:
+                truncations[index] = True  # as TimeLimit: truncated even when the step also terminated
             if self.autoreset_mode == AutoresetMode.SAME_STEP and (terminations[index] or truncations[index]):
                 infos = self._add_info(infos, {"final_obs": obs, "final_info": info}, index)
                 obs, info = self._reset_one(index, None, None)
@@ -221,6 +236,7 @@ class HighLevelVectorEnv(VectorEnv):
         self, index: int, seed: int | None, options: dict[str, Any] | None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         obs, info = self.envs[index].reset(seed=seed, options=options)
+        self._episode_steps[index] = 0
         self.low_level.reset(index)  # each sub-env's controller state starts afresh with its episode
         return obs, info
 

@@ -139,7 +139,9 @@ def play_episodes(
             inner,
             resets,
             num_envs=num_envs,
-            max_subgoals=getattr(env.spec, "max_episode_steps", None),
+            # The unwrapped env's spec: a wrapper's ``spec`` deep-copies it, and with it a ``low_level`` that
+            # cannot be copied (a model holding a lock), which Gymnasium reports as a warning.
+            max_subgoals=getattr(inner.spec, "max_episode_steps", None),
             on_episode_end=None if bar is None else bar.update,
         )
     finally:
@@ -582,8 +584,20 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     parser.add_argument(
         "--policy-name",
         default=None,
-        help="the report's policy name, the leaderboard's entry (default: as --policy names it); state the "
-        "training budget in it, e.g. 'PPO, 200k high-level steps'",
+        help="the report's policy name, the leaderboard's entry (default: as --policy names it), e.g. "
+        "'PPO on the high level'; its budget goes in --budget",
+    )
+    parser.add_argument(
+        "--budget",
+        default=None,
+        help="for a leaderboard submission: the policy's training budget, e.g. '200k high-level steps', "
+        "recorded in the report for antmaze-hirl submit (default: none)",
+    )
+    parser.add_argument(
+        "--training-seed",
+        type=int,
+        default=None,
+        help="for a leaderboard submission: the training run's seed (default: none)",
     )
     parser.add_argument(
         "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"
@@ -629,9 +643,14 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     command += [] if args.subgoal_reach_m is None else ["--subgoal-reach-m", f"{args.subgoal_reach_m:g}"]
     command += [] if args.clearance_m is None else ["--clearance-m", f"{args.clearance_m:g}"]
     command += [] if args.policy_name is None else ["--policy-name", args.policy_name]
+    command += [] if args.budget is None else ["--budget", args.budget]
+    command += [] if args.training_seed is None else ["--training-seed", str(args.training_seed)]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
     if args.policy_name is not None:
         report["policy"] = args.policy_name
+    submission = {"budget": args.budget, "seed": args.training_seed}
+    if any(value is not None for value in submission.values()):
+        report["submission"] = {key: value for key, value in submission.items() if value is not None}
     print(report_table(report, per_task=args.per_task or len(report["tasks"]) <= 10))
     if args.json is not None:
         save_report(report, args.json)

@@ -12,6 +12,12 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import VectorEnv
+from gymnasium.wrappers import RescaleAction
+from gymnasium.wrappers.vector import RescaleAction as VectorRescaleAction
+
 from antmaze_hirl.envs.controllers import PredictController
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
 from antmaze_hirl.envs.layout_splits import LayoutSplit
@@ -60,14 +66,34 @@ class ShippedPolicyController(PredictController):
         return type(self), (self.body,)
 
 
+UNIT_LOW = np.float32(-1.0)
+UNIT_HIGH = np.float32(1.0)
+
+
+def unit_actions(env: gym.Env) -> gym.Env:
+    """``env`` with its subgoal action space rescaled to ``[-1, 1]`` (Gymnasium's ``RescaleAction``).
+
+    ``-1`` and ``1`` are the maze's edges along each axis, so SB3's ``check_env`` finds the symmetric,
+    normalised ``Box`` it recommends. ``env.unwrapped`` still takes metres (and the oracle still labels in
+    metres). The bounds are float32, as the space's, so Gymnasium warns of no precision loss.
+    """
+    return RescaleAction(env, UNIT_LOW, UNIT_HIGH)
+
+
+def unit_vector_actions(env: VectorEnv) -> VectorEnv:
+    """The vector form of :func:`unit_actions` (Gymnasium's vector ``RescaleAction``)."""
+    return VectorRescaleAction(env, UNIT_LOW, UNIT_HIGH)
+
+
 def make_maze_env(
     body: Body = "point",
     maze_map: str | MazeMap | None = None,
     *,
     low_level: Any = None,
     split: LayoutSplit | None = None,
+    normalize_actions: bool = False,
     **kwargs: Any,
-) -> HighLevelMazeEnv:
+) -> HighLevelMazeEnv | RescaleAction:
     """Entry point of ``antmaze_hirl/AntMaze-v0`` and ``antmaze_hirl/PointMaze-v0``: the one factory of maze envs.
 
     Args:
@@ -79,6 +105,9 @@ def make_maze_env(
         split: ``None`` to draw layouts from the whole family, else the part of the layout partition to
             draw from (``"train"``, ``"selection"``, ``"eval"``: a
             :class:`~antmaze_hirl.envs.split_env.SplitMazeEnv`), e.g. ``gym.make(id, split="eval")``.
+        normalize_actions: Opt-in: subgoals in ``[-1, 1]`` (the maze's edges) instead of metres, for RL
+            libraries that expect a normalised action space (:func:`unit_actions`); e.g.
+            ``gym.make(id, normalize_actions=True)``.
         **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
 
     Raises:
@@ -92,7 +121,8 @@ def make_maze_env(
                 f"e.g. gym.make('{name}', low_level=model)"
             )
         low_level = ShippedPolicyController(body)
-    return _maze_env(body, maze_map, low_level, split, kwargs)
+    env = _maze_env(body, maze_map, low_level, split, kwargs)
+    return unit_actions(env) if normalize_actions else env
 
 
 def _maze_env(
@@ -112,8 +142,10 @@ def make_maze_vector_env(
     low_level: Any = None,
     split: LayoutSplit | None = None,
     autoreset_mode: str = "NextStep",
+    max_episode_steps: int | None = None,
+    normalize_actions: bool = False,
     **kwargs: Any,
-) -> HighLevelVectorEnv:
+) -> VectorEnv:
     """``vector_entry_point`` of the maze ids: ``num_envs`` mazes, their low levels in lockstep.
 
     ``gym.make_vec("antmaze_hirl/AntMaze-v0", num_envs=N, **kwargs)`` calls it. Every sub-env shares one
@@ -127,6 +159,8 @@ def make_maze_vector_env(
         low_level: As :func:`make_maze_env`; one object shared by every sub-env.
         split: As :func:`make_maze_env`.
         autoreset_mode: Gymnasium autoreset mode: ``"NextStep"`` (default), ``"SameStep"`` or ``"Disabled"``.
+        max_episode_steps: As :class:`~antmaze_hirl.envs.vector.HighLevelVectorEnv` (``None``: no limit).
+        normalize_actions: As :func:`make_maze_env` (:func:`unit_vector_actions`).
         **kwargs: More :class:`~antmaze_hirl.envs.high_level.HighLevelMazeEnv` keywords.
 
     Raises:
@@ -140,4 +174,15 @@ def make_maze_vector_env(
         return _maze_env(body, maze_map, shared, split, kwargs)
 
     envs = [first, *(another() for _ in range(num_envs - 1))]
-    return HighLevelVectorEnv(envs, autoreset_mode=autoreset_mode)
+    return lockstep_env(envs, autoreset_mode, max_episode_steps, normalize_actions)
+
+
+def lockstep_env(
+    envs: list[HighLevelMazeEnv], autoreset_mode: str, max_episode_steps: int | None, normalize_actions: bool
+) -> VectorEnv:
+    """The lockstep vector env over ``envs`` (one shared controller), its actions in ``[-1, 1]`` if asked.
+
+    The one tail of every id's ``vector_entry_point`` (the maze ids' and the suites').
+    """
+    venv = HighLevelVectorEnv(envs, autoreset_mode=autoreset_mode, max_episode_steps=max_episode_steps)
+    return unit_vector_actions(venv) if normalize_actions else venv

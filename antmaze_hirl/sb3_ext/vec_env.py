@@ -2,23 +2,27 @@
 
 SB3 does not take a Gymnasium :class:`~gymnasium.vector.VectorEnv`: its ``VecEnv`` resets a finished
 sub-env within the step that ended it and returns the last observation in ``infos[i]["terminal_observation"]``.
-That is Gymnasium's ``"SameStep"`` autoreset, so :func:`make_sb3_vec_env` makes the vector env in that mode::
+That is Gymnasium's ``"SameStep"`` autoreset, so :func:`make_sb3_vec_env` makes the vector env in that mode,
+and like SB3's own ``make_vec_env`` it seeds the sub-envs and wraps them in a ``VecMonitor``, so TensorBoard
+gets ``rollout/ep_rew_mean`` and ``rollout/ep_len_mean``::
 
     from stable_baselines3 import PPO
     from antmaze_hirl.sb3_ext.vec_env import make_sb3_vec_env
 
-    venv = make_sb3_vec_env("antmaze_hirl/PointMaze-v0", 8, maze_size=3)
-    PPO("MultiInputPolicy", venv, n_steps=64).learn(1_000)
+    venv = make_sb3_vec_env("antmaze_hirl/PointMaze-v0", 8, seed=0, maze_size=3, normalize_actions=True)
+    PPO("MultiInputPolicy", venv, n_steps=64, seed=0).learn(1_000)
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
+from stable_baselines3.common.vec_env import VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
 
@@ -88,7 +92,7 @@ class GymnasiumVecEnv(VecEnv):
         self.env.close()
 
     def _sub_envs(self, indices: VecEnvIndices) -> list[Any]:
-        envs = getattr(self.env, "envs", None)
+        envs = getattr(self.env.unwrapped, "envs", None)  # under any vector wrapper (RescaleAction, ...)
         if envs is None:
             raise AttributeError(f"{type(self.env).__name__} does not expose its sub-envs")
         return [envs[index] for index in self._get_indices(indices)]
@@ -115,6 +119,41 @@ class GymnasiumVecEnv(VecEnv):
         return list(self.env.render() or [None] * self.num_envs)
 
 
-def make_sb3_vec_env(env_id: str, num_envs: int, **kwargs: Any) -> GymnasiumVecEnv:
-    """``gym.make_vec(env_id, num_envs, autoreset_mode="SameStep", **kwargs)`` as an SB3 ``VecEnv``."""
-    return GymnasiumVecEnv(gym.make_vec(env_id, num_envs, autoreset_mode=AutoresetMode.SAME_STEP, **kwargs))
+def make_sb3_vec_env(
+    env_id: str,
+    num_envs: int = 1,
+    *,
+    seed: int | None = None,
+    monitor_dir: str | None = None,
+    monitor_kwargs: dict[str, Any] | None = None,
+    **kwargs: Any,
+) -> VecEnv:
+    """``gym.make_vec(env_id, num_envs, autoreset_mode="SameStep", **kwargs)`` as an SB3 ``VecEnv``, monitored.
+
+    The counterpart of SB3's ``make_vec_env`` for the native vector envs: one process, the sub-envs' low
+    levels in lockstep.
+
+    Args:
+        env_id: A registered id (every ``antmaze_hirl/...`` id has a native vector env).
+        num_envs: Number of sub-envs, >= 1.
+        seed: As SB3's ``make_vec_env``: sub-env ``i`` is reset with ``seed + i`` on the first ``reset()``,
+            and the action space is seeded with ``seed``. ``None``: unseeded.
+        monitor_dir: Where SB3's ``VecMonitor`` writes ``monitor.csv`` (``None``: it keeps the statistics
+            in memory only). Either way each finished episode's ``info["episode"]`` is filled, so SB3 logs
+            ``rollout/ep_rew_mean`` and ``rollout/ep_len_mean``.
+        monitor_kwargs: More ``VecMonitor`` keywords (``info_keywords=("is_success",)``, ...).
+        **kwargs: The id's keywords (``maze_size``, ``low_level``, ``clip_subgoals``; for the maze ids,
+            ``normalize_actions=True`` for subgoals in ``[-1, 1]``, the space SB3's ``check_env`` asks for).
+
+    Raises:
+        ValueError: As ``gym.make_vec`` of ``env_id`` (``num_envs`` below 1, unknown keywords' values).
+    """
+    venv = GymnasiumVecEnv(gym.make_vec(env_id, num_envs, autoreset_mode=AutoresetMode.SAME_STEP, **kwargs))
+    if seed is not None:
+        venv.seed(seed)
+        venv.action_space.seed(seed)
+    filename = None
+    if monitor_dir is not None:
+        Path(monitor_dir).mkdir(parents=True, exist_ok=True)
+        filename = str(Path(monitor_dir) / "monitor.csv")
+    return VecMonitor(venv, filename=filename, **(monitor_kwargs or {}))

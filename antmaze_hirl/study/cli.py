@@ -222,12 +222,16 @@ def _add_export(commands: argparse._SubParsersAction, formatter_class: type) -> 
     parser.add_argument("dir", type=Path, help="study folder")
     parser.add_argument("--minari", required=True, metavar="NAME", help="dataset id, namespace/name-v0")
     parser.add_argument("--include-practice", action="store_true", help="also export the practice trials")
+    for option, what in (("--author", "author"), ("--author-email", "author's contact"), ("--code-permalink", "")):
+        text = what or "link to the versioned code that collected it"
+        parser.add_argument(option, default=None, help=f"the dataset's {text}, in its metadata (default: none)")
     parser.set_defaults(handler=_run_export)
 
 
 def _run_export(args: argparse.Namespace) -> int:
     from antmaze_hirl.study.export import export_minari
 
-    path = export_minari(args.dir, args.minari, include_practice=args.include_practice)
+    provenance = {"author": args.author, "author_email": args.author_email, "code_permalink": args.code_permalink}
+    path = export_minari(args.dir, args.minari, include_practice=args.include_practice, **provenance)
     print(f"wrote Minari dataset {args.minari} at {path}")
     return 0

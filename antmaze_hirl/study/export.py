@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -182,8 +183,19 @@ def study_env_spec(study_dir: str | Path, body: str) -> Any:
     return spec
 
 
+MINARI_PROVENANCE = ("author", "author_email", "code_permalink")
+"""Minari's metadata that only the person exporting knows; each one left out is named in one warning."""
+
+
 def export_minari(
-    study_dir: str | Path, dataset_id: str, *, include_practice: bool = False, data_path: str | Path | None = None
+    study_dir: str | Path,
+    dataset_id: str,
+    *,
+    include_practice: bool = False,
+    data_path: str | Path | None = None,
+    author: str | None = None,
+    author_email: str | None = None,
+    code_permalink: str | None = None,
 ) -> Path:
     """Writes every saved trial's demonstrations as one Minari dataset.
 
@@ -202,6 +214,12 @@ def export_minari(
         dataset_id: Minari id, ``namespace/name-v0``.
         include_practice: Also export the practice trials.
         data_path: Minari's datasets folder for this export (default: Minari's own).
+        author: The dataset's author, recorded in its metadata.
+        author_email: The author's contact.
+        code_permalink: A link to the versioned code that collected it.
+
+    Those three are the experimenter's to give: any left out is named in one warning (Minari's own warns
+    once for each, and for the evaluation env, which is set here to the study's env).
 
     Returns:
         The dataset's folder.
@@ -245,18 +263,28 @@ def export_minari(
         target = get_dataset_path(dataset_id)
         if target.exists():
             raise ValueError(f"Minari dataset {dataset_id!r} already exists at {target}; pick a new name or version")
+        provenance = {"author": author, "author_email": author_email, "code_permalink": code_permalink}
         try:
-            minari.create_dataset_from_buffers(
-                dataset_id,
-                [EpisodeBuffer(id=i, **buffer) for i, buffer in enumerate(buffers)],
-                observation_space=observation_space,
-                action_space=spaces.Box(-np.inf, np.inf, (2,), np.float32),
-                env=env_spec,  # so that dataset.recover_environment() builds the study's high-level env
-                algorithm_name="antmaze_hirl user study (human high-level labels)",
-                description=f"High-level demonstrations of the {plan.body} maze user study; infos hold the labels.",
-                jpeg_encoding=False,  # the learner trains on exact pixels: store them losslessly
-            )
+            with warnings.catch_warnings():
+                # Minari warns once per missing field; the one warning below names them all with their options.
+                warnings.filterwarnings("ignore", message=r"`(author|author_email|code_permalink)` is set to None")
+                minari.create_dataset_from_buffers(
+                    dataset_id,
+                    [EpisodeBuffer(id=i, **buffer) for i, buffer in enumerate(buffers)],
+                    observation_space=observation_space,
+                    action_space=spaces.Box(-np.inf, np.inf, (2,), np.float32),
+                    env=env_spec,  # so that dataset.recover_environment() builds the study's high-level env
+                    eval_env=env_spec,  # held-out evaluation is the experiment's, not the dataset's: the same env
+                    algorithm_name="antmaze_hirl user study (human high-level labels)",
+                    description=f"High-level demonstrations of the {plan.body} maze user study; infos hold the labels.",
+                    jpeg_encoding=False,  # the learner trains on exact pixels: store them losslessly
+                    **provenance,
+                )
         except BaseException:
             shutil.rmtree(target, ignore_errors=True)  # a half-written dataset would block a retry
             raise
+    missing = [name for name in MINARI_PROVENANCE if provenance[name] is None]
+    if missing:
+        options = ", ".join(f"--{name.replace('_', '-')}" for name in missing)
+        warnings.warn(f"Minari dataset {dataset_id} records no {', '.join(missing)} (give {options})", stacklevel=2)
     return target
