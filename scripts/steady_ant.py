@@ -1,4 +1,4 @@
-"""Distil the shipped ant ensemble into one actor network on in-maze states (issue 51, [steady-ant]).
+"""Distil the shipped ant ensemble into one actor network on in-maze states.
 
 The lab's run of :func:`antmaze_hirl.sb3_ext.distill.distill`: the scripted oracle (2 m subgoals, the ant
 experiment's reach) chooses subgoals in random mazes of ``--maze-sizes`` free cells per side, drawn from the
