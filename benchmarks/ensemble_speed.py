@@ -54,7 +54,7 @@ from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "ensemble_speed" / "ensemble_speed.json"
 GOAL = 1.5
 SINGLE_GOAL = 5.0
-"""One network's batch-1 action at least this many times faster than the ensemble's ``predict`` (the steady-ant goal)."""
+"""One network's batch-1 action at least this many times faster than the ensemble's ``predict``."""
 
 
 def microseconds(call: Callable[[], object], calls: int) -> float:
