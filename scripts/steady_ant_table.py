@@ -2,7 +2,8 @@
 
 Reads
 
-* an ``in_maze.py`` file whose rows are the ensemble (first) and the candidate (second), same mazes and seeds;
+* ``in_maze.py`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
+  first) or two files of one row each (the ensemble's first);
 * pairs of ``antmaze-hirl benchmark`` reports (``--benchmark ENSEMBLE.json CANDIDATE.json``, repeatable), same
   suite, seed, tasks and episodes per task, differing only in ``--low-level``;
 
@@ -13,7 +14,7 @@ one does) and the exact two-sided McNemar p-value over the discordant episodes (
 so they pair). A suite played with several episodes per task repeats mazes: its Wilson interval understates the
 spread (the reports' task bootstrap is printed beside it).
 
-Usage: python scripts/steady_ant_table.py --in-maze IN_MAZE.json --benchmark E.json C.json [...] --out summary.json
+Usage: python scripts/steady_ant_table.py --in-maze E.json [C.json] --benchmark E.json C.json [...] --out summary.json
 """
 
 from __future__ import annotations
@@ -53,24 +54,45 @@ def rate_row(successes: int, episodes: int, flips: int, steps: int) -> dict[str,
     }
 
 
-def in_maze_rows(path: Path) -> dict[str, Any]:
-    """Per family: the two low levels' rows of an ``in_maze.py`` file (first: ensemble, second: candidate)."""
-    data = json.loads(path.read_text())
-    names = list(data["results"])
-    if len(names) != 2:
-        raise ValueError(f"{path} holds rows {names}; this table needs two, the ensemble first")
+def in_maze_rows(paths: list[Path]) -> dict[str, Any]:
+    """Per family: the ensemble's and the candidate's ``in_maze.py`` rows.
+
+    One file holding two rows (the ensemble first), or two files of one row each (the ensemble's first), made
+    with the same episodes, seed and families.
+    """
+    files = [json.loads(path.read_text()) for path in paths]
+    rows = [(data, name) for data in files for name in data["results"]]
+    if len(rows) != 2 or len(paths) > 2:
+        raise ValueError(f"{[str(p) for p in paths]} hold {len(rows)} rows; this table needs two, the ensemble first")
+    keys = ("subgoal_reach_m", "num_envs")
+    if len(files) == 2 and any(files[0].get(key) != files[1].get(key) for key in keys):
+        raise ValueError(f"{paths[0]} and {paths[1]} differ in {keys}: not the same episodes")
     families: dict[str, Any] = {}
-    for role, name in zip(("ensemble", "candidate"), names, strict=True):
+    for role, (data, name) in zip(("ensemble", "candidate"), rows, strict=True):
         row = data["results"][name]
         for family, figures in row["families"].items():
             steps = round(figures["mean_low_level_steps"] * figures["episodes"])
-            entry = families.setdefault(family, {})
+            entry = families.setdefault(family, {"maze_seed": figures["maze_seed"], "episodes": figures["episodes"]})
+            if (entry["maze_seed"], entry["episodes"]) != (figures["maze_seed"], figures["episodes"]):
+                raise ValueError(
+                    f"family {family}: the rows play {entry['episodes']} episodes from maze seed {entry['maze_seed']} "
+                    f"and {figures['episodes']} from {figures['maze_seed']}"
+                )
             entry[role] = {
                 "name": name,
                 "low_level_id": row["low_level_id"],
                 **rate_row(figures["successes"], figures["episodes"], figures["flips"], steps),
             }
-    return {"file": str(path), "command": data.get("command"), "families": families}
+    incomplete = sorted(
+        family for family, entry in families.items() if "candidate" not in entry or "ensemble" not in entry
+    )
+    if incomplete:
+        raise ValueError(f"families {incomplete} are missing from one of the rows")
+    return {
+        "files": [str(path) for path in paths],
+        "commands": [data.get("command") for data in files],
+        "families": families,
+    }
 
 
 def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
@@ -140,7 +162,13 @@ def table(summary: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--in-maze", type=Path, default=None, help="an in_maze.py file: ensemble row, then candidate")
+    parser.add_argument(
+        "--in-maze",
+        type=Path,
+        nargs="+",
+        default=None,
+        help="in_maze.py file(s): the ensemble's row, then the candidate's",
+    )
     parser.add_argument(
         "--benchmark", type=Path, nargs=2, action="append", default=[], metavar=("ENSEMBLE", "CANDIDATE")
     )
