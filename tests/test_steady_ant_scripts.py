@@ -57,3 +57,27 @@ def test_the_run_refuses_bad_settings_in_one_line(tmp_path, capsys):
     assert "iterations must be an integer >= 1" in capsys.readouterr().err
     assert steady_ant.main(["--out", str(tmp_path / "r"), "--resume"]) == 2
     assert "no distillation run to resume" in capsys.readouterr().err
+
+
+def in_maze_file(path, name, episodes, successes=9, flips=1):
+    row = {"successes": successes, "episodes": episodes, "flips": flips, "mean_low_level_steps": 200.0}
+    data = {
+        "command": "x",
+        "subgoal_reach_m": 2.0,
+        "num_envs": 25,
+        "results": {name: {"low_level_id": "sha256:x", "families": {"ant4": {"maze_seed": 1_000_000, **row}}}},
+    }
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_in_maze_rows_pair_the_same_episodes(tmp_path):
+    ensemble = in_maze_file(tmp_path / "e.json", "shipped", 10)
+    candidate = in_maze_file(tmp_path / "c.json", "student.zip", 10, successes=10, flips=0)
+    rows = table.in_maze_rows([ensemble, candidate])["families"]["ant4"]
+    assert rows["ensemble"]["flips_per_10k_steps"] == pytest.approx(1 * 10_000 / 2_000)
+    assert rows["candidate"]["success_rate"] == 1.0
+    with pytest.raises(ValueError, match="play 10 episodes from maze seed 1000000 and 20"):
+        table.in_maze_rows([ensemble, in_maze_file(tmp_path / "d.json", "student.zip", 20)])
+    with pytest.raises(ValueError, match="hold 1 rows"):
+        table.in_maze_rows([ensemble])
