@@ -90,7 +90,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--flip-window", type=int, default=DistillSettings.flip_window)
     parser.add_argument("--flip-weight", type=float, default=DistillSettings.flip_weight)
     parser.add_argument("--max-rows", type=int, default=DistillSettings.max_rows)
-    parser.add_argument("--init-head", type=int, default=DistillSettings.init_head)
+    parser.add_argument("--init-head", type=int, default=DistillSettings.init_head, help="-1: a fresh actor")
+    parser.add_argument(
+        "--init-student", type=Path, default=None, help="start a new run from this student zip (not from a head)"
+    )
     parser.add_argument("--snapshot-every", type=int, default=DistillSettings.snapshot_every)
     parser.add_argument("--seed", type=int, default=DistillSettings.seed)
     parser.add_argument("--maze-sizes", type=int, nargs="+", default=[3, 4, 6], help="free cells per side")
@@ -130,6 +133,7 @@ def main(argv: list[str] | None = None) -> int:
             lambda controller: maze_sources(controller, args.maze_sizes, args.reach_share, subgoal_reach_m),
             settings,
             resume=args.resume,
+            init_student=args.init_student,
             description=description,
         )
     except (ValueError, FileExistsError, FileNotFoundError) as error:

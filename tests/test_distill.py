@@ -135,3 +135,20 @@ def test_the_dataset_keeps_the_newest_rows():
 def test_bad_settings_are_named(changes, message):
     with pytest.raises(ValueError, match=message):
         DistillSettings(**changes)
+
+
+def test_a_new_run_can_start_from_an_earlier_student(tmp_path):
+    teacher = shipped_policy_path("point")
+    earlier = distill(teacher, tmp_path / "a", point_sources, SHORT, body="point", log=lambda line: None)
+    # A step too small to move the weights: the new run's student is the earlier one, not a fresh actor.
+    still = DistillSettings(**{**SHORT.__dict__, "iterations": 1, "gradient_steps": 1, "learning_rate": 1e-12})
+    later = distill(
+        teacher, tmp_path / "b", point_sources, still, body="point", init_student=earlier, log=lambda line: None
+    )
+    before = load_low_level("point", earlier).policy.actor.state_dict()
+    after = load_low_level("point", later).policy.actor.state_dict()
+    assert all(np.allclose(before[key].numpy(), after[key].numpy(), atol=1e-6) for key in before)
+    assert json.loads((tmp_path / "b" / "state.json").read_text())["init_student"] == str(earlier)
+    with pytest.raises(ValueError, match="not a plain single-actor TD3 policy"):
+        ensemble = shipped_policy_path("ant")
+        distill(ensemble, tmp_path / "c", point_sources, still, body="ant", init_student=ensemble)

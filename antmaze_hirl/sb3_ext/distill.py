@@ -456,6 +456,7 @@ def distill(
     *,
     body: str = "ant",
     resume: bool = False,
+    init_student: str | Path | None = None,
     description: dict[str, Any] | None = None,
     log: Callable[[str], None] = print,
 ) -> Path:
@@ -468,6 +469,9 @@ def distill(
         settings: The run's settings.
         body: The body.
         resume: Continue the run in ``out_dir`` (its settings, teacher and ``description`` must match).
+        init_student: Start a new run from this plain single-actor TD3 zip (e.g. an earlier run's student, when that
+            run's folder is gone) instead of from a teacher head (``settings.init_head`` is then unused). Recorded
+            in ``state.json``; on resume it must be the one the run started from.
         description: What ``make_sources`` builds (maze sizes, the high level, ...), recorded and checked on resume.
         log: Where the per-iteration line goes.
 
@@ -486,6 +490,7 @@ def distill(
         "teacher_fingerprint": policy_fingerprint(teacher_model),
         "settings": dataclasses.asdict(settings),
         "description": description or {},
+        "init_student": None if init_student is None else str(init_student),
     }
     if resume:
         if not state_path.is_file():
@@ -499,7 +504,11 @@ def distill(
         if state_path.exists():
             raise FileExistsError(f"{out_dir} already holds a distillation run; resume it or choose another folder")
         state = {**identity, "completed_iterations": 0, "rows": 0, "student": None, "history": []}
-        student = make_student(teacher_path, body, init_head=settings.init_head)
+        student = (
+            make_student(teacher_path, body, init_head=settings.init_head)
+            if init_student is None
+            else _plain_student(body, init_student)
+        )
     teacher = NumpyActor.from_model(teacher_model)
     dataset = Dataset(settings.max_rows)
     for iteration in range(state["completed_iterations"]):
@@ -569,6 +578,18 @@ def distill(
         for source in sources:
             source.close()
     return out_dir / state["student"]
+
+
+def _plain_student(body: str, path: str | Path) -> OffPolicyAlgorithm:
+    # A student to continue from: a TD3 actor with one output network (an ensemble's heads cannot be fitted as one).
+    model = load_low_level(body, path)
+    if not isinstance(model.policy, MultiInputPolicy) or isinstance(
+        model.policy.actor.mu, MeanOfHeads | BatchedMeanOfHeads
+    ):
+        raise ValueError(
+            f"init_student {path} is not a plain single-actor TD3 policy (an ensemble, or another algorithm)"
+        )
+    return model
 
 
 def _differences(state: dict[str, Any], identity: dict[str, Any]) -> list[str]:
