@@ -14,7 +14,11 @@ one does) and the exact two-sided McNemar p-value over the discordant episodes (
 so they pair). A suite played with several episodes per task repeats mazes: its Wilson interval understates the
 spread (the reports' task bootstrap is printed beside it).
 
-Usage: python scripts/steady_ant_table.py --in-maze E.json [C.json] --benchmark E.json C.json [...] --out summary.json
+``--run STATE.json`` adds the distillation run's own curve (student-driven episodes on its training mazes, per
+``--block`` iterations): a health check of the run, not a score.
+
+Usage: python scripts/steady_ant_table.py --in-maze E.json [C.json] --benchmark E.json C.json [...]
+           [--run STATE.json] --out summary.json
 """
 
 from __future__ import annotations
@@ -131,6 +135,34 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
     }
 
 
+def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
+    """A distillation run's own curve from its ``state.json``: per block of iterations, the student-driven episodes.
+
+    These are training mazes (the ``train`` part of the layout partition, the run's maze sizes and reach episodes),
+    not the held-out families: a check that the run is healthy, not a score.
+    """
+    history = json.loads(state_path.read_text())["history"]
+    rows = []
+    for start in range(0, len(history), block):
+        part = history[start : start + block]
+        driven = {
+            key: sum(record[driver][key] for record in part)
+            for driver in ("student",)
+            for key in ("episodes", "successes", "flips", "steps")
+        }
+        if not driven["episodes"]:
+            continue
+        rows.append(
+            {
+                "iterations": [part[0]["iteration"], part[-1]["iteration"]],
+                **rate_row(driven["successes"], driven["episodes"], driven["flips"], driven["steps"]),
+                "fit_loss_mean": sum(record["fit_loss"] for record in part) / len(part),
+                "on_policy_mse_before_fit_mean": sum(record["on_policy_mse_before_fit"] for record in part) / len(part),
+            }
+        )
+    return rows
+
+
 def table(summary: dict[str, Any]) -> str:
     """The Markdown table of the summary."""
     lines = [
@@ -149,6 +181,9 @@ def table(summary: dict[str, Any]) -> str:
 
     for family, rows in (summary.get("in_maze") or {}).get("families", {}).items():
         lines += [line(f"in_maze {family}", role, rows[role]) for role in ("ensemble", "candidate")]
+    for row in summary.get("training_curve") or []:
+        first, last = row["iterations"]
+        lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
     for pair in summary.get("benchmark", []):
         where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']})"
         lines += [line(where, role, pair[role]) for role in ("ensemble", "candidate")]
@@ -172,12 +207,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--benchmark", type=Path, nargs=2, action="append", default=[], metavar=("ENSEMBLE", "CANDIDATE")
     )
+    parser.add_argument("--run", type=Path, default=None, help="a distillation run's state.json: its own curve")
+    parser.add_argument("--block", type=int, default=20, help="iterations per row of the run's curve")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     try:
         summary = {
             "in_maze": in_maze_rows(args.in_maze) if args.in_maze else None,
             "benchmark": [benchmark_pair(first, second) for first, second in args.benchmark],
+            "training_curve": training_curve(args.run, args.block) if args.run else None,
         }
     except (OSError, ValueError, KeyError) as error:
         print(f"steady_ant_table.py: error: {error}", file=sys.stderr)
