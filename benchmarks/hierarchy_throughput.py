@@ -105,7 +105,7 @@ def extra_low_level(spec: str) -> Any:
         return NumpyActor.from_model(model) if spec.endswith("numpy") else controllers.PredictController(model)
     path, _, kind = spec.partition(":")
     if kind not in ("", "numpy"):
-        raise ValueError(f"--low-levels entry {spec!r}: a zip takes no suffix or ':numpy', not {kind!r}")
+        raise ValueError(f"entry {spec!r}: a zip takes no suffix or ':numpy', not {kind!r}")
     model = load_low_level("ant", path)
     return NumpyActor.from_model(model) if kind == "numpy" else controllers.PredictController(model)
 
@@ -146,6 +146,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     if min(args.num_envs) < 1 or min(args.threads) < 1 or args.seconds <= 0:
         parser.error(f"--num-envs and --threads must be >= 1 and --seconds > 0, got {args}")
+    try:  # loaded before any row is timed, so that a bad entry stops the run at once, in one line
+        extras = {spec: extra_low_level(spec) for spec in (args.low_levels if "ant" in args.bodies else [])}
+    except (ValueError, FileNotFoundError) as error:
+        parser.error(f"--low-levels: {error}")
     caller_threads = th.get_num_threads()
     rows: list[dict[str, Any]] = []
     baselines = {}
@@ -166,7 +170,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             body_rows.append({"mode": "serial", "num_envs": 1, "torch_threads": threads, "steps_per_s": rate})
         for spec in args.low_levels if body == "ant" else []:
             th.set_num_threads(1)
-            rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed, extra_low_level(spec))
+            rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed, extras[spec])
             body_rows.append({"mode": f"serial, {spec}", "num_envs": 1, "torch_threads": 1, "steps_per_s": rate})
             print(f"{body} serial {spec}: {rate:,.0f} steps/s ({steps})", flush=True)
         for num_envs in args.num_envs:
