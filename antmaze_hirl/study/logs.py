@@ -27,9 +27,11 @@ files written before the rename keep loading.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
+import os
 import re
 import warnings
 import zlib
@@ -109,12 +111,38 @@ def sealed_json_line(record: Mapping[str, Any]) -> str:
 
 
 def append_json_record(path: str | Path, record: Mapping[str, Any]) -> None:
-    """Appends ``record`` to a JSON-lines log, with its checksum, durably."""
-    durable_append(path, sealed_json_line(record))
+    """Appends ``record`` to a JSON-lines log, with its checksum, durably (or not at all: :func:`append_or_undo`)."""
+    append_or_undo(path, sealed_json_line(record))
+
+
+def append_or_undo(path: str | Path, text: str) -> None:
+    """Appends ``text`` durably, or, if that fails, cuts the file back to what it was and re-raises.
+
+    A full disk can fail the append after some bytes reached the file (at flush or fsync): left there,
+    they would be a torn or an unconfirmed line, and a retry would add it again. The cut is best effort
+    (a cut needs no space); a file that did not exist is removed.
+
+    Raises:
+        OSError: The append's error (``ENOSPC``, ``EIO``...), after the cut.
+    """
+    path = Path(path)
+    try:
+        size: int | None = path.stat().st_size
+    except FileNotFoundError:
+        size = None
+    try:
+        durable_append(path, text)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            if size is None:
+                path.unlink(missing_ok=True)
+            else:
+                os.truncate(path, size)
+        raise
 
 
 def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, Any]) -> None:
-    """Appends ``row`` to a CSV log, with its checksum, durably; a new file gets the header first.
+    """Appends ``row`` to a CSV log, with its checksum, durably or not at all; a new file gets the header first.
 
     A legacy file (its header has no ``crc32`` column) gets legacy rows, so it stays one format.
     """
@@ -129,7 +157,7 @@ def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, A
         text = _csv_text([*columns, CHECKSUM_FIELD]) + "\n"
     body = _csv_text([csv_cell(row.get(column, "")) for column in columns])
     text += f"{body},{line_checksum(body)}\n" if sealed else body + "\n"
-    durable_append(path, text)
+    append_or_undo(path, text)
 
 
 def csv_cell(value: Any) -> str:

@@ -189,8 +189,19 @@ def check_token(token: str) -> str:
 
 
 def _host_name(netloc: str) -> str:
-    # "127.0.0.1:8765" -> "127.0.0.1", "[::1]:8765" -> "::1", "localhost" -> "localhost"
-    return (urlsplit(f"//{netloc}").hostname or "").lower()
+    # "127.0.0.1:8765" -> "127.0.0.1", "[::1]:8765" -> "::1", "localhost" -> "localhost"; "[::1" -> "" (refused)
+    try:
+        return (urlsplit(f"//{netloc}").hostname or "").lower()
+    except ValueError:  # an unbalanced "[" or a bad port
+        return ""
+
+
+def _origin_netloc(origin: str) -> str | None:
+    # The Origin's host:port, or None for one that is not a URL (refused as cross-site).
+    try:
+        return urlsplit(origin).netloc.lower()
+    except ValueError:
+        return None
 
 
 def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPBACK_HOSTS) -> Any:
@@ -215,6 +226,15 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
     statuses = {BodyTooLarge: 413, BadInput: 400, ProtocolError: 409, DamagedRecords: 409, UnknownParticipant: 404}
     for kind, status in statuses.items():
         app.add_exception_handler(kind, lambda request, exc, status=status: refuse(request, status, str(exc)))
+
+    def unsaved(request: Request, exc: OSError) -> Any:
+        # A write that failed (a full disk): the session changed nothing, so the page may simply try again.
+        logger.error("could not save for %s %s: %s", request.method, request.url.path, exc)
+        reason = exc.strerror or type(exc).__name__
+        message = f"the server could not save ({reason}): nothing was changed; try again once the disk has room"
+        return JSONResponse({"error": message}, status_code=503)
+
+    app.add_exception_handler(OSError, unsaved)
     app.add_exception_handler(
         HTTPException,
         lambda request, exc: refuse(request, exc.status_code, str(exc.detail)),  # 404, 405
@@ -238,7 +258,7 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         if _host_name(host) not in hosts:
             return refuse(request, 403, f"Host header {host!r} is not allowed (allowed: {sorted(hosts)})")
         origin = request.headers.get("origin")
-        if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+        if origin is not None and _origin_netloc(origin) != host.lower():
             return refuse(request, 403, f"cross-site request from Origin {origin!r} refused")
         path = request.url.path
         if path == "/" or path.startswith("/api/"):

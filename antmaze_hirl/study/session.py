@@ -28,12 +28,10 @@ silently restarted, and the other participants go on.
 
 from __future__ import annotations
 
-import hashlib
 import io
 import json
 import math
 import os
-import pickle
 import threading
 import time
 from dataclasses import dataclass, field
@@ -42,13 +40,21 @@ from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, trim_torn_tail
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_with, trim_torn_tail
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
+from antmaze_hirl.study.checkpoint import (
+    CHECKPOINT_FILE,
+    LEGACY_CHECKPOINT_FILE,
+    CheckpointError,
+    load_checkpoint,
+    save_checkpoint,
+)
+from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records
 from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.logs import (
     RENAMED_KEYS,
@@ -91,6 +97,9 @@ CLICK_SLACK_PIXELS = 3.0
 
 MIN_CANVAS_SCREEN_PIXELS = 520.0
 """The smallest the page's 640-px canvas is shown (window 1024x640; study.css: max-height 100vh - 120px)."""
+
+MAX_RESPONSE_SECONDS = 3600.0
+"""Longest time a page may report for one click (an hour: longer is a broken clock, not a person thinking)."""
 
 LOGS = ("events.jsonl", "clicks.jsonl", "answers.jsonl", "episodes.csv")
 """A participant's append-only logs (events first: it records the trims of the others)."""
@@ -230,6 +239,8 @@ class ParticipantSession:
         self._walk: list[dict[str, Any]] = []  # the learner's unasked steps the page has not shown yet
         self._camera: AntCamera | None = None
         self._last_trial: dict[str, Any] | None = None  # how the trial just closed went (the page's summary)
+        self._episode_saved = False  # the ended episode's row and checkpoint are on disk; the trial is not closed
+        self._closing_row: dict[str, Any] | None = None  # the ended episode's row, kept while its save fails
         try:
             self._restore()
         except BaseException:
@@ -272,7 +283,8 @@ class ParticipantSession:
                 "episodes": trial.episodes,
             }
             if self._trial is not None:
-                state["episode"] = {"number": len(self._trial.rows) + 1, "of": trial.episodes}
+                number = len(self._trial.rows) + (0 if self._episode_saved else 1)
+                state["episode"] = {"number": number, "of": trial.episodes}
                 state["successes"] = self._trial.successes
                 state["labels"] = int(self._trial.trainer.total_expert_cost + self._labels_this_episode())
             if self.phase == "label" and self._run is not None and self._run.request is not None:
@@ -280,7 +292,7 @@ class ParticipantSession:
             elif self.phase == "episode_over" and self._walk and self._run is not None and self._run.record:
                 # An episode the learner walked unasked: the page shows the walk, then asks for the next maze.
                 state.update(self._scene(self._run.executed[-1].observation, None))
-                state["episode_end"] = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
+                state["episode_end"] = {"number": number, "success": bool(self._run.record.success)}
             if self._walk:
                 state["walk"] = self._walk
             return state
@@ -335,7 +347,8 @@ class ParticipantSession:
             trial = self.trial
             assert trial is not None  # "intro" is only set while a trial remains
             # Build the trial (envs, trainer, first maze: all in memory) before anything is written, so a
-            # trial that cannot be built leaves the participant at "intro" with no trace on disk.
+            # trial that cannot be built leaves the participant at "intro" with no trace on disk; then write,
+            # and a failed write (a full disk) puts the participant back at "intro" too.
             self.phase = "label"
             try:
                 self._open_trial(resume=False)
@@ -344,8 +357,13 @@ class ParticipantSession:
                 raise TrialCannotStart(
                     f"trial {trial.index} of participant {self.participant.id} cannot start: {error}"
                 ) from error
-            self._log_event("trial_start", trial=trial.index)
-            self._save_progress()
+            try:
+                if trial.index not in self._records().started:  # logged by a start that failed
+                    self._log_event("trial_start", trial=trial.index)
+                self._save_progress(self.trial_index, "label")
+            except BaseException:
+                self.phase, self._trial, self._run = "intro", None, None
+                raise
             return self.state()
 
     def label(self, query_id: Any, x: Any, y: Any, response_seconds: Any = None) -> dict[str, Any]:
@@ -370,8 +388,8 @@ class ParticipantSession:
                 raise ProtocolError(
                     f"query {query_id} is not open (the open query is {self._query_id}): already answered?"
                 )
-            subgoal = self._check_click(x, y)
             seconds = self._check_response_seconds(response_seconds)
+            subgoal = self._check_click(x, y)
             now = self.clock()
             server_seconds = max(now - self._query_shown_at, 0.0)
             assert self._run is not None and self._run.request is not None and self._trial is not None
@@ -421,9 +439,18 @@ class ParticipantSession:
                 raise ProtocolError(
                     f"no episode has just ended (participant {self.participant.id} is at {self.phase!r})"
                 )
-            self._walk = []  # shown
-            self._finish_episode()
-            if self.phase == "label":
+            # Each step writes first and changes memory after, so a failed write (a full disk) leaves the
+            # episode open, as it was, and a retry goes on from the step that failed.
+            if not self._episode_saved:
+                self._save_episode()
+            assert self._trial is not None and self.trial is not None
+            if len(self._trial.rows) >= self.trial.episodes:
+                self._close_trial()
+            else:
+                self._walk = []  # shown
+                self._run, self._episode_saved = None, False
+                self.phase = "label"
+                self._start_episode()
                 self._show_query()
             return self.state()
 
@@ -458,7 +485,8 @@ class ParticipantSession:
                 "comment": answers.comment,
                 "time": self.clock(),
             }
-            append_json_record(self.folder / "answers.jsonl", record)
+            if trial.index not in self._records().answered:  # kept by an answer that failed after
+                append_json_record(self.folder / "answers.jsonl", record)
             self._next_trial()
             return self.state()
 
@@ -541,9 +569,11 @@ class ParticipantSession:
     def _check_response_seconds(value: Any) -> float | None:
         if value is None:
             return None
-        seconds = _json_number(value, "response_seconds", ">= 0")
-        if seconds < 0:
-            raise BadInput(f"response_seconds must be a finite number >= 0, got {value!r}")
+        seconds = _json_number(value, "response_seconds", f"from 0 to {MAX_RESPONSE_SECONDS:g}")
+        if not 0 <= seconds <= MAX_RESPONSE_SECONDS:
+            raise BadInput(
+                f"response_seconds must be a finite number from 0 to {MAX_RESPONSE_SECONDS:g}, got {value!r}"
+            )
         return seconds
 
     def _make_trainer(self, trial: TrialPlan) -> DAggerTrainer:
@@ -557,7 +587,10 @@ class ParticipantSession:
         if self._env is None:
             self._envs = TrialEnvs(config)
             self._env = self._envs.train
-        checkpoint = self._trial_folder / "checkpoint.pkl"
+        checkpoint = self._trial_folder / CHECKPOINT_FILE
+        legacy = self._trial_folder / LEGACY_CHECKPOINT_FILE
+        if resume and not checkpoint.is_file() and legacy.is_file():
+            checkpoint = legacy  # refused by _load_checkpoint, naming it
         if resume and checkpoint.is_file():
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
@@ -570,6 +603,7 @@ class ParticipantSession:
             )
         else:
             self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
+        self._episode_saved = False
         if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
             self._close_trial()
         else:
@@ -618,7 +652,30 @@ class ParticipantSession:
         self._query_id += 1
         self._query_shown_at = self.clock()
 
-    def _finish_episode(self) -> None:
+    def _save_episode(self) -> None:
+        # The ended episode's row, checkpoint and demonstrations, written before memory counts the episode.
+        trial, state, run = self.trial, self._trial, self._run
+        assert trial is not None and state is not None and run is not None and run.record is not None
+        if self._closing_row is None:  # kept across a failed save: the update and evaluation run once
+            self._closing_row = self._episode_row()
+        row, success = self._closing_row, bool(run.record.success)
+        state.rows.append(row)
+        state.successes += int(success)
+        state.demonstrations.success.append(success)
+        try:
+            # Checkpoint first, then the row: a crash between them is repaired from the checkpoint on restart.
+            _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
+            state.demonstrations.save(self._trial_folder / "demonstrations.npz")
+            self._append_row(row)
+        except BaseException:
+            state.rows.pop()
+            state.successes -= int(success)
+            state.demonstrations.success.pop()
+            raise
+        self._closing_row = None
+        self._episode_saved = True
+
+    def _episode_row(self) -> dict[str, Any]:
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         record = run.record
@@ -644,45 +701,43 @@ class ParticipantSession:
         final = episode == trial.episodes - 1
         if final or (episode + 1) % self.settings.eval_every == 0:
             row.update(self._envs.evaluate(state.trainer.learner, final=final))
-        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
-        state.successes += int(record.success)
-        state.demonstrations.success.append(bool(record.success))
-        # Checkpoint first, then the row: a crash between them is repaired from the checkpoint on restart.
-        _save_checkpoint(state, self._trial_folder / "checkpoint.pkl")
-        state.demonstrations.save(self._trial_folder / "demonstrations.npz")
-        self._append_row(state.rows[-1])
-        self._run = None
-        if final:
-            self._close_trial()
-        else:
-            self.phase = "label"
-            self._start_episode()
+        return {column: row.get(column, "") for column in EPISODE_COLUMNS}
 
     def _close_trial(self) -> None:
+        # Writes (learner, trial_end once, progress) first; memory moves on only once they are on disk.
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
         state.trainer.learner.save(self._trial_folder / "learner.zip")
-        self._last_trial = {
+        if trial.index not in self._records().ended:  # logged by a close that failed after it
+            self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
+        summary = {
             "label": trial.label,
             "practice": trial.practice,
             "episodes": len(state.rows),
             "successes": state.successes,
             "labels": int(state.trainer.total_expert_cost),
         }
-        self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
-        self._run = None
         if trial.practice:
             self._next_trial()  # the practice trial is recorded, not rated
         else:
+            self._save_progress(self.trial_index, "questionnaire")
             self.phase = "questionnaire"
-            self._save_progress()
+        self._last_trial = summary
+        self._run, self._episode_saved, self._walk = None, False, []
 
     def _next_trial(self) -> None:
-        self.trial_index += 1
+        following = self.trial_index + 1
+        self._save_progress(following, "intro" if following < len(self.participant.trials) else "done")
+        self.trial_index = following
         self._trial = None
         self.close()
         self.phase = "intro" if self.trial is not None else "done"
-        self._save_progress()
+
+    def _records(self) -> ParticipantRecords:
+        try:
+            return participant_records(self.folder)
+        except ValueError as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
 
     def _append_row(self, row: dict[str, Any]) -> None:
         append_csv_row(self.folder / "episodes.csv", EPISODE_COLUMNS, row)
@@ -712,12 +767,9 @@ class ParticipantSession:
         for row in self._trial.rows[len(written) :]:
             self._append_row(row)
 
-    def _save_progress(self) -> None:
-        # An episode that ended but is not closed is not saved yet: after a restart it is replayed.
-        phase = "label" if self.phase == "episode_over" else self.phase
-        atomic_write_json(
-            self.folder / "progress.json", {"trial_index": self.trial_index, "phase": phase}, allow_nan=False
-        )
+    def _save_progress(self, trial_index: int, phase: str) -> None:
+        # Called before memory changes (an episode that ended but is not closed is saved as "label": replayed).
+        atomic_write_json(self.folder / "progress.json", {"trial_index": trial_index, "phase": phase}, allow_nan=False)
 
     def _log_event(self, kind: str, **details: Any) -> None:
         event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}
@@ -741,6 +793,12 @@ class ParticipantSession:
                 f"{self.folder / 'progress.json'}: trial {self.trial_index} at {self.phase!r} is not a place in "
                 f"participant {self.participant.id}'s {len(self.participant.trials)} trials"
             )
+        try:
+            answered = check_records(self.folder, self.participant, self.trial_index, self.phase)
+        except ValueError as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
+        if self.phase == "questionnaire" and answered:  # killed between the answer and the progress file
+            self._next_trial()
         if self.phase == "label":
             self._open_trial(resume=True)
 
@@ -779,37 +837,49 @@ def _json_number(value: Any, name: str, bound: str = "") -> float:
     return number
 
 
-_CHECKPOINT_MAGIC = b"antmaze_hirl trial checkpoint v2\n"
-"""First bytes of a checkpoint with a hash; a SHA-256 hex line follows, then the pickle."""
-
-
 def _save_checkpoint(state: TrialState, path: Path) -> None:
     trainer = state.trainer
     env, expert = trainer.env, trainer.expert
+    factories = _spawn_factories(trainer)
     trainer.env = trainer.expert = None  # simulators are rebuilt on load; the expert is the page
+    for holder in factories:  # a bound method is no class: the loader would refuse it; made again on load
+        holder.make_policy = None
     try:
-        data = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+        save_checkpoint(state, path)
     finally:
         trainer.env, trainer.expert = env, expert
-    atomic_write_bytes(path, _CHECKPOINT_MAGIC + hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
+        for holder in factories:
+            holder.make_policy = trainer.learner.spawn
+
+
+def _spawn_factories(trainer: DAggerTrainer) -> list[Any]:
+    """The strategy's parts whose ``make_policy`` is the learner's ``spawn`` (set by ``attach``)."""
+    found, pending, seen = [], [trainer.strategy], set()
+    while pending:
+        part = pending.pop()
+        if id(part) in seen or not type(part).__module__.startswith("antmaze_hirl."):
+            continue
+        seen.add(id(part))
+        factory = getattr(part, "make_policy", None)
+        if getattr(factory, "__self__", None) is trainer.learner and getattr(factory, "__name__", "") == "spawn":
+            found.append(part)
+        pending.extend(value for value in vars(part).values() if hasattr(value, "__dict__"))
+    return found
 
 
 def _load_checkpoint(path: Path, env: Any) -> TrialState:
-    """The trial state saved at ``path``; checkpoints from before the hash (a bare pickle) load unchecked.
+    """The trial state saved at ``path`` (:mod:`antmaze_hirl.study.checkpoint`: nothing in it can run).
 
     Raises:
-        DamagedRecords: If the file fails its hash, cannot be unpickled, or holds something else (names it).
+        DamagedRecords: If the file fails its hash, is an old pickled checkpoint or a bare pickle, holds a
+            class off the allow-list or something else than a trial state (names the file).
     """
-    data = path.read_bytes()
-    if data.startswith(_CHECKPOINT_MAGIC):
-        digest, _, data = data[len(_CHECKPOINT_MAGIC) :].partition(b"\n")
-        if hashlib.sha256(data).hexdigest().encode() != digest:
-            raise DamagedRecords(f"{path} is damaged: its content does not match its SHA-256 (restore a backup)")
     try:
-        state = pickle.loads(data)
-    except Exception as error:  # a damaged pickle raises nearly anything (TypeError, KeyError, MemoryError...)
-        raise DamagedRecords(f"{path} is not a readable trial checkpoint: {type(error).__name__}: {error}") from None
+        state = load_checkpoint(path, extra_classes=(TrialState, DemonstrationLog))
+    except (CheckpointError, ValueError) as error:  # ValueError: DemonstrationLog's renamed keys
+        raise DamagedRecords(str(error) if isinstance(error, CheckpointError) else f"{path} {error}") from None
     if not isinstance(state, TrialState):
         raise DamagedRecords(f"{path} holds {type(state).__name__}, not a trial checkpoint")
     state.trainer.env, state.trainer.expert = env, PageExpert()
+    state.trainer.strategy.attach(state.trainer.learner)  # make_policy again (left None by the save)
     return state
