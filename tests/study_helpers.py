@@ -5,7 +5,14 @@ from pathlib import Path
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.settings import StudySettings, save_settings
 
-TINY_SETTINGS = {"maze_size": 4, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
+TINY_SETTINGS = {
+    "maze_size": 4,
+    "eval_every": 2,
+    "eval_episodes": 1,
+    "final_eval_episodes": 2,
+    "gradient_steps": 20,
+    "background_updates": False,  # the experiments' order; tests of the background update turn it on
+}
 
 
 def make_tiny_study(

@@ -78,8 +78,11 @@ def episode_rows(participant):
     return [(row["trial"], row["episode"]) for row in read_csv_rows(participant / "episodes.csv", EPISODE_COLUMNS)]
 
 
-def test_disk_full_during_next_changes_nothing_and_a_retry_closes_the_episode_once(tmp_path, disk_full):
-    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=3, practice=0)
+@pytest.mark.parametrize("background", [False, True], ids=["update-first", "background-update"])
+def test_disk_full_during_next_changes_nothing_and_a_retry_closes_the_episode_once(tmp_path, disk_full, background):
+    folder = make_tiny_study(
+        tmp_path / "study", methods=("dagger",), episodes=3, practice=0, background_updates=background
+    )
     session = open_session(folder)
     play_to_episode_end(session)
     before_state, before_files = session.state(), snapshot(folder)

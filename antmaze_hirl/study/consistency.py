@@ -15,8 +15,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from antmaze_hirl.study.data import EPISODE_COLUMNS
-from antmaze_hirl.study.logs import DamagedLog, read_csv_rows, read_json_records
+from antmaze_hirl.study.data import read_episode_rows
+from antmaze_hirl.study.logs import DamagedLog, read_json_records
 from antmaze_hirl.study.plan import ParticipantPlan
 
 
@@ -73,7 +73,7 @@ def participant_records(folder: Path) -> ParticipantRecords:
         records.answered = {_trial(record, answers, number) for number, record in read_json_records(answers)}
     episodes = folder / "episodes.csv"
     if episodes.exists():
-        for number, row in enumerate(read_csv_rows(episodes, EPISODE_COLUMNS), start=2):
+        for number, row in enumerate(read_episode_rows(episodes), start=2):
             records.rows[_trial(row, episodes, number)] += 1
     for checkpoint in folder.glob("trial*/checkpoint.*"):
         suffix = checkpoint.parent.name.removeprefix("trial")

@@ -144,7 +144,8 @@ def append_or_undo(path: str | Path, text: str) -> None:
 def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, Any]) -> None:
     """Appends ``row`` to a CSV log, with its checksum, durably or not at all; a new file gets the header first.
 
-    A legacy file (its header has no ``crc32`` column) gets legacy rows, so it stays one format.
+    A legacy file (its header has no ``crc32`` column) gets legacy rows, so it stays one format; a file
+    whose header is an older, shorter prefix of ``columns`` (columns added since) gets rows of its own columns.
     """
     path = Path(path)
     sealed = True
@@ -152,6 +153,9 @@ def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, A
         with path.open(encoding="utf-8", newline="") as handle:
             header = next(csv.reader([handle.readline()]), [])
         sealed = bool(header) and header[-1] == CHECKSUM_FIELD
+        own = header[:-1] if sealed else header
+        if 0 < len(own) < len(columns) and list(columns[: len(own)]) == own:
+            columns = own  # written before the later columns existed: it stays as it was
         text = ""
     else:
         text = _csv_text([*columns, CHECKSUM_FIELD]) + "\n"
@@ -219,10 +223,12 @@ def read_json_records(path: str | Path) -> list[tuple[int, dict[str, Any]]]:
     return records
 
 
-def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, str]]:
+def read_csv_rows(path: str | Path, columns: Sequence[str], added: Sequence[str] = ()) -> list[dict[str, str]]:
     """The rows of a CSV log as dicts of strings, checksums verified and the ``crc32`` column removed.
 
     An empty file has no rows. A torn last line is skipped with a warning (see the module docs).
+    ``added`` names trailing columns of ``columns`` that files written before them lack: such a file is
+    read with those cells empty.
 
     Raises:
         DamagedLog: For a header other than ``columns`` (with or without ``crc32``), or a row that fails
@@ -234,6 +240,12 @@ def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, st
         return []
     (_, header_line), rows = lines[0], lines[1:]
     header = next(csv.reader([header_line]), [])
+    full = list(columns)
+    for count in range(len(added) + 1):  # the header of this version, then of the versions before each addition
+        own = full[: len(full) - count]
+        if header in (own, [*own, CHECKSUM_FIELD]) and columns[len(own) :] == tuple(added[len(added) - count :]):
+            columns = own
+            break
     if header == [*columns, CHECKSUM_FIELD]:
         sealed = True
     elif header == list(columns):
@@ -252,5 +264,5 @@ def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, st
         cells = next(csv.reader([body]), [])
         if len(cells) != len(columns):
             raise DamagedLog(f"{where}: {len(cells)} cells; expected {len(columns)}")
-        result.append(dict(zip(columns, cells, strict=True)))
+        result.append({**dict.fromkeys(full, ""), **dict(zip(columns, cells, strict=True))})
     return result

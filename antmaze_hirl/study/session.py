@@ -28,6 +28,7 @@ silently restarted, and the other participants go on.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import math
@@ -46,6 +47,7 @@ from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
+from antmaze_hirl.study.background import BackgroundUpdate
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.checkpoint import (
     CHECKPOINT_FILE,
@@ -55,14 +57,13 @@ from antmaze_hirl.study.checkpoint import (
     save_checkpoint,
 )
 from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records
-from antmaze_hirl.study.data import EPISODE_COLUMNS
+from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
 from antmaze_hirl.study.logs import (
     RENAMED_KEYS,
     DamagedLog,
     append_csv_row,
     append_json_record,
     csv_cell,
-    read_csv_rows,
     renamed_value,
 )
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
@@ -188,6 +189,9 @@ class TrialState:
     rows: list[dict[str, Any]]
     demonstrations: DemonstrationLog
     successes: int = 0
+    pending_row: dict[str, Any] | None = None
+    """With background updates: the last maze's row, whose update (``trainer._update_due``) and evaluation
+    have not been applied to ``trainer`` yet (a restore runs them before the next maze)."""
 
 
 class ParticipantSession:
@@ -240,6 +244,9 @@ class ParticipantSession:
         self._camera: AntCamera | None = None
         self._last_trial: dict[str, Any] | None = None  # how the trial just closed went (the page's summary)
         self._episode_saved = False  # the ended episode's row and checkpoint are on disk; the trial is not closed
+        self._update_job: BackgroundUpdate | None = None  # the update after the last maze, running meanwhile
+        self._csv_rows = 0  # how many of the trial's rows episodes.csv holds
+        self._episode_learner_updates = 0  # updates behind the learner that plays the current maze
         self._closing_row: dict[str, Any] | None = None  # the ended episode's row, kept while its save fails
         try:
             self._restore()
@@ -283,7 +290,8 @@ class ParticipantSession:
                 "episodes": trial.episodes,
             }
             if self._trial is not None:
-                number = len(self._trial.rows) + (0 if self._episode_saved else 1)
+                ended = self._run is not None and self._run.done
+                number = self._trial.trainer.episodes_done + (0 if ended else 1)
                 state["episode"] = {"number": number, "of": trial.episodes}
                 state["successes"] = self._trial.successes
                 state["labels"] = int(self._trial.trainer.total_expert_cost + self._labels_this_episode())
@@ -443,8 +451,8 @@ class ParticipantSession:
             # episode open, as it was, and a retry goes on from the step that failed.
             if not self._episode_saved:
                 self._save_episode()
-            assert self._trial is not None and self.trial is not None
-            if len(self._trial.rows) >= self.trial.episodes:
+            assert self._trial is not None and self.trial is not None and self._run is not None
+            if self._run.record.episode >= self.trial.episodes - 1:
                 self._close_trial()
             else:
                 self._walk = []  # shown
@@ -529,8 +537,12 @@ class ParticipantSession:
             return self._camera.frame(self._env.unwrapped.reach.sim.data)
 
     def close(self) -> None:
-        """Releases the trial's simulators and the camera."""
+        """Releases the trial's simulators and the camera (after a background update that uses them ends)."""
         with self.lock:
+            if self._update_job is not None:  # its result is not lost: the checkpoint holds the update as due
+                with contextlib.suppress(RuntimeError):
+                    self._update_job.result()
+                self._update_job = None
             if self._envs is not None:
                 self._envs.close()
             self._envs = self._env = None
@@ -595,6 +607,8 @@ class ParticipantSession:
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
             self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
+            if self._trial.pending_row is not None:  # killed while the last maze's update ran in the background
+                self._finish_pending_update()
         elif resume and (written := len(self._written_rows())):
             raise DamagedRecords(
                 f"{checkpoint} is missing, but {self.folder / 'episodes.csv'} has {written} episode(s) of trial "
@@ -604,6 +618,7 @@ class ParticipantSession:
         else:
             self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
         self._episode_saved = False
+        self._csv_rows = len(self._trial.rows)
         if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
             self._close_trial()
         else:
@@ -617,6 +632,7 @@ class ParticipantSession:
     def _start_episode(self) -> None:
         assert self._trial is not None
         self._run = self._trial.trainer.start_episode()
+        self._episode_learner_updates = self._trial.trainer.updates
         # A gating method may let the learner walk before the first request (or the whole episode).
         first = self._run.executed[0].observation if self._run.executed else self._run.request.observation
         self._trail = [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(first["state"])]]
@@ -654,33 +670,85 @@ class ParticipantSession:
 
     def _save_episode(self) -> None:
         # The ended episode's row, checkpoint and demonstrations, written before memory counts the episode.
+        # With background updates (every maze but a trial's last), the episode is saved with its update still
+        # due (pending_row) and the update runs on a copy while the next maze is played.
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
+        final = run.record.episode >= trial.episodes - 1
+        lagged = self.settings.background_updates and not final
+        if self._update_job is not None:
+            self._take_update()  # the update after the maze before (normally finished while this maze was played)
         if self._closing_row is None:  # kept across a failed save: the update and evaluation run once
-            self._closing_row = self._episode_row()
+            self._closing_row = self._episode_row(update=not lagged)
         row, success = self._closing_row, bool(run.record.success)
-        state.rows.append(row)
+        if lagged:
+            state.pending_row = row
+        else:
+            state.rows.append(row)
         state.successes += int(success)
         state.demonstrations.success.append(success)
         try:
-            # Checkpoint first, then the row: a crash between them is repaired from the checkpoint on restart.
+            # Checkpoint first, then the rows: a crash between them is repaired from the checkpoint on restart.
             _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
             state.demonstrations.save(self._trial_folder / "demonstrations.npz")
-            self._append_row(row)
+            self._append_new_rows()
         except BaseException:
-            state.rows.pop()
+            if lagged:
+                state.pending_row = None
+            else:
+                state.rows.pop()
             state.successes -= int(success)
             state.demonstrations.success.pop()
             raise
         self._closing_row = None
         self._episode_saved = True
+        if lagged:
+            episode = int(row["episode"])
+            due = self._evaluation_due(episode)
+            evaluate = (lambda learner: self._envs.evaluate(learner, final=False)) if due else None
+            self._update_job = BackgroundUpdate(state.trainer, row, evaluate)
 
-    def _episode_row(self) -> dict[str, Any]:
+    def _take_update(self) -> None:
+        # Waits for the background update (if still running), moves its weights in, counts its row.
+        state, job = self._trial, self._update_job
+        assert state is not None and job is not None
+        row = job.result()
+        job.apply_to(state.trainer)
+        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+        state.pending_row = None
+        self._update_job = None
+
+    def _finish_pending_update(self) -> None:
+        # A restore from a checkpoint saved while an update ran in the background: run it here, then save.
+        state = self._trial
+        assert state is not None and state.pending_row is not None
+        state.trainer._update_if_due()
+        row = dict(state.pending_row)
+        if self._evaluation_due(int(row["episode"])):
+            row.update(self._envs.evaluate(state.trainer.learner, final=False))
+        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+        state.pending_row = None
+        _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
+        self._append_new_rows()
+
+    def _evaluation_due(self, episode: int) -> bool:
+        return (episode + 1) % self.settings.eval_every == 0
+
+    def _append_new_rows(self) -> None:
+        # The rows memory has and episodes.csv does not yet (each append is all or nothing).
+        assert self._trial is not None
+        for row in self._trial.rows[self._csv_rows :]:
+            self._append_row(row)
+            self._csv_rows += 1
+
+    def _episode_row(self, *, update: bool) -> dict[str, Any]:
+        # The ended episode's row; with ``update``, after the learner update and the evaluation when due.
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         record = run.record
-        run.finish()  # the learner update, before the evaluation (as the experiment runner evaluates)
-        episode = len(state.rows)
+        if update:
+            run.finish()  # the learner update, before the evaluation (as the experiment runner evaluates)
+        episode = record.episode
         row: dict[str, Any] = {
             "participant": self.participant.id,
             "trial": trial.index,
@@ -697,9 +765,10 @@ class ParticipantSession:
             "time_on_task": round(
                 max(self._episode_ended_at - self._episode_started_at - self._episode_paused, 0.0), 3
             ),
+            "learner_updates": self._episode_learner_updates,
         }
         final = episode == trial.episodes - 1
-        if final or (episode + 1) % self.settings.eval_every == 0:
+        if update and (final or self._evaluation_due(episode)):
             row.update(self._envs.evaluate(state.trainer.learner, final=final))
         return {column: row.get(column, "") for column in EPISODE_COLUMNS}
 
@@ -749,7 +818,7 @@ class ParticipantSession:
         if not path.exists():
             return []
         try:
-            rows = read_csv_rows(path, EPISODE_COLUMNS)
+            rows = read_episode_rows(path)
         except DamagedLog as error:
             raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
         return [row for row in rows if row["trial"] == str(self.trial.index)]
@@ -764,8 +833,8 @@ class ParticipantSession:
                 f"{self.folder / 'episodes.csv'} has {len(written)} row(s) of trial {self.trial.index} that do not "
                 f"match the first {len(written)} of the {len(saved)} in its checkpoint: repeated or changed rows"
             )
-        for row in self._trial.rows[len(written) :]:
-            self._append_row(row)
+        self._csv_rows = len(written)
+        self._append_new_rows()
 
     def _save_progress(self, trial_index: int, phase: str) -> None:
         # Called before memory changes (an episode that ended but is not closed is saved as "label": replayed).

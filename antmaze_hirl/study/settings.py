@@ -27,9 +27,16 @@ class StudySettings(TrialSettings):
 
     Attributes:
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
+        background_updates: Run the learner update (and a due evaluation) after each maze in a background
+            thread while the next maze starts with the learner as it was: no wait between mazes, and the
+            learner lags one maze (:mod:`antmaze_hirl.study.background`; a trial's last maze waits for its
+            update and final evaluation). ``False`` (the default, so that a study folder written before the
+            setting reads as what it ran): the update runs before the next maze, as in the experiments.
+            ``study init`` (:meth:`for_body`) sets it.
     """
 
     show_learner_subgoal: bool = True
+    background_updates: bool = False
 
     def __post_init__(self) -> None:
         self.experiment_config(1)  # the experiment's checks name any bad value
@@ -37,14 +44,15 @@ class StudySettings(TrialSettings):
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if not isinstance(self.show_learner_subgoal, bool):
-            raise ValueError(f"show_learner_subgoal must be true or false, got {self.show_learner_subgoal!r}")
+        for name in ("show_learner_subgoal", "background_updates"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.held_out_layouts:
             check_family_splits(self.maze_size)
 
     @classmethod
     def for_body(cls, body: str, **overrides: Any) -> StudySettings:
-        """The paper protocol's maze family and expert reach for ``body``, held-out layouts on, with ``overrides``.
+        """The paper protocol's maze family and reach for ``body``, held out, background updates on, and ``overrides``.
 
         Raises:
             ValueError: For an unknown body or setting, or a maze size whose family cannot be held out
@@ -55,8 +63,9 @@ class StudySettings(TrialSettings):
         if unknown:
             raise ValueError(f"unknown study setting(s) {unknown}; known: {sorted(known)}")
         held_out = overrides.pop("held_out_layouts", True)
+        background = overrides.pop("background_updates", True)
         family = body_settings(body, held_out_layouts=held_out)
-        return cls(body=body, held_out_layouts=held_out, **{**family, **overrides})
+        return cls(body=body, held_out_layouts=held_out, background_updates=background, **{**family, **overrides})
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
