@@ -60,8 +60,12 @@ def test_a_malformed_host_or_origin_is_a_403_with_a_json_error_not_a_500(served,
     server, _ = served
     raw = "".join(f"{name}: {value}\r\n" for name, value in {"Host": f"127.0.0.1:{server.port}", **headers}.items())
     with socket.create_connection(("127.0.0.1", server.port), timeout=30) as connection:
-        connection.sendall(f"GET /api/study HTTP/1.1\r\n{raw}X-Study-Token: {server.token}\r\n\r\n".encode())
-        reply = connection.recv(65536).decode()
+        request = f"GET /api/study HTTP/1.1\r\n{raw}X-Study-Token: {server.token}\r\nConnection: close\r\n\r\n"
+        connection.sendall(request.encode())
+        chunks = []
+        while chunk := connection.recv(65536):
+            chunks.append(chunk)
+    reply = b"".join(chunks).decode()
     status = int(reply.split(" ", 2)[1])
     assert status == 403, reply
     assert '"error"' in reply

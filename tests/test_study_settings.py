@@ -28,8 +28,13 @@ SETTINGS_KEYS = [
     "decay",
     "held_out_layouts",
     "show_learner_subgoal",
+    "background_updates",
 ]
 """The keys of a study folder's settings.json, in the order written since 0.2.0 (TrialSettings' first)."""
+
+
+PAGE_KEYS = ("show_learner_subgoal", "background_updates")
+"""The study's own settings: how the page and the server run a trial, not what the experiment is."""
 
 
 def experiment_field(name):
@@ -37,7 +42,7 @@ def experiment_field(name):
 
 
 def test_the_shared_fields_are_every_study_setting_but_the_page_one():
-    assert list(EXPERIMENT_FIELDS) == [key for key in SETTINGS_KEYS if key != "show_learner_subgoal"]
+    assert list(EXPERIMENT_FIELDS) == [key for key in SETTINGS_KEYS if key not in PAGE_KEYS]
 
 
 @pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
@@ -55,7 +60,7 @@ def test_the_study_declares_only_the_pages_setting_and_inherits_the_rest():
         node for node in ast.parse(source).body if isinstance(node, ast.ClassDef) and node.name == "StudySettings"
     )
     declared = [node.target.id for node in study_class.body if isinstance(node, ast.AnnAssign)]
-    assert declared == ["show_learner_subgoal"]
+    assert declared == list(PAGE_KEYS)
     assert issubclass(StudySettings, TrialSettings) and issubclass(ExperimentConfig, TrialSettings)
     assert EXPERIMENT_FIELDS == tuple(field.name for field in fields(TrialSettings))
 
@@ -91,7 +96,7 @@ def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     (tmp_path / SETTINGS_FILE).write_text(json.dumps(old, indent=2))
     loaded = load_settings(tmp_path)
     renamed = {("subgoal_reach_m" if key == "expert_max_distance" else key): value for key, value in old.items()}
-    assert asdict(loaded) == {**renamed, "held_out_layouts": False}
+    assert asdict(loaded) == {**renamed, "held_out_layouts": False, "background_updates": False}  # as it ran
     assert loaded.experiment_config(5) == ExperimentConfig(body="ant", episodes=5, maze_size=3, subgoal_reach_m=2.0)
 
 
