@@ -114,3 +114,30 @@ def test_a_settings_file_with_the_reach_under_both_keys_is_one_line_naming_both(
     message = str(error.value)
     assert "\n" not in message and str(tmp_path / SETTINGS_FILE) in message
     assert "'subgoal_reach_m' and its old name 'expert_max_distance' hold different values (2.0 against 3.0)" in message
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [("decay", -1, "decay must be a finite number >= 1"), ("eval_every", 0, "eval_every must be an int in \\[1,")],
+)
+def test_a_settings_file_gets_the_command_lines_bounds(tmp_path, key, value, message):
+    save_settings(StudySettings.for_body("point"), tmp_path)
+    written = json.loads((tmp_path / SETTINGS_FILE).read_text())
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps({**written, key: value}))
+    with pytest.raises(ValueError, match=message):
+        load_settings(tmp_path)
+
+
+def test_study_init_refuses_to_rewrite_a_started_studys_settings(tmp_path, capsys):
+    from antmaze_hirl.cli import main
+
+    folder = tmp_path / "study"
+    assert main(["study", "init", str(folder), "--body", "point", "--participants", "1", "--eval-every", "2"]) == 0
+    before = (folder / SETTINGS_FILE).read_bytes()
+    (folder / "participants" / "P01").mkdir(parents=True)
+    (folder / "participants" / "P01" / "progress.json").write_text('{"trial_index": 0, "phase": "label"}')
+    with pytest.raises(SystemExit) as exit_code:
+        main(["study", "init", str(folder), "--body", "point", "--participants", "1", "--eval-every", "99"])
+    assert exit_code.value.code == 2
+    assert "already holds participant data" in capsys.readouterr().err
+    assert (folder / SETTINGS_FILE).read_bytes() == before

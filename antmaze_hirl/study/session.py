@@ -68,7 +68,7 @@ from antmaze_hirl.study.logs import (
 )
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
-from antmaze_hirl.study.settings import StudySettings
+from antmaze_hirl.study.settings import QUESTIONNAIRE_SECONDS, SECONDS_PER_MAZE_PRIOR, StudySettings
 
 
 class ProtocolError(Exception):
@@ -289,6 +289,8 @@ class ParticipantSession:
                 "practice": trial.practice,
                 "episodes": trial.episodes,
             }
+            if self.phase == "intro":
+                state["length"] = self._length_estimate()
             if self._trial is not None:
                 ended = self._run is not None and self._run.done
                 number = self._trial.trainer.episodes_done + (0 if ended else 1)
@@ -304,6 +306,25 @@ class ParticipantSession:
             if self._walk:
                 state["walk"] = self._walk
             return state
+
+    def _length_estimate(self) -> dict[str, Any]:
+        # How long this part and the rest take: the participant's own seconds per maze once they have some.
+        seconds = SECONDS_PER_MAZE_PRIOR
+        path = self.folder / "episodes.csv"
+        with contextlib.suppress(OSError, ValueError):
+            times = [float(row["time_on_task"]) for row in read_episode_rows(path) if row["time_on_task"]]
+            if times:
+                seconds = max(float(np.mean(times)), 5.0)
+        trials = self.participant.trials[self.trial_index :]
+        rated = sum(not trial.practice for trial in trials)
+        rest = sum(trial.episodes for trial in trials) * seconds + rated * QUESTIONNAIRE_SECONDS
+        return {
+            "seconds_per_maze": round(seconds, 1),
+            "part_minutes": max(1, round(trials[0].episodes * seconds / 60)),
+            "parts_left": len(trials),
+            "minutes_left": max(1, round(rest / 60)),
+            "measured": seconds != SECONDS_PER_MAZE_PRIOR,
+        }
 
     def _labels_this_episode(self) -> int:
         return 0 if self._run is None or self._run.request is None else self._run.request.label_index

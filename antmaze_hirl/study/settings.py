@@ -13,6 +13,14 @@ from antmaze_hirl.experiments.config import ExperimentConfig, TrialSettings, bod
 
 SETTINGS_FILE = "settings.json"
 
+SECONDS_PER_MAZE_PRIOR = 25.0
+"""Seconds a maze takes a participant, for the page's estimate before they have played one: about 6 clicks
+of about 3 s and their walks (the study's default sizes assume it; docs/guides/user-study.md). Once the
+participant has finished mazes, their own mean time per maze replaces it."""
+
+QUESTIONNAIRE_SECONDS = 90.0
+"""Seconds a questionnaire takes, for the page's estimate of what is left."""
+
 
 @dataclass(frozen=True, kw_only=True)
 class StudySettings(TrialSettings):
@@ -39,6 +47,7 @@ class StudySettings(TrialSettings):
     background_updates: bool = False
 
     def __post_init__(self) -> None:
+        check_cli_bounds(self)
         self.experiment_config(1)  # the experiment's checks name any bad value
         for name in ("subgoal_reach_m", "decay"):  # never NaN or Infinity in settings.json (not JSON)
             value = getattr(self, name)
@@ -70,6 +79,32 @@ class StudySettings(TrialSettings):
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code)."""
         return ExperimentConfig(episodes=episodes, **{name: getattr(self, name) for name in EXPERIMENT_FIELDS})
+
+
+def check_cli_bounds(settings: StudySettings) -> None:
+    """Checks every numeric setting against the bounds ``study init`` gives its option (``decay`` >= 1, ...).
+
+    A ``settings.json`` edited by hand gets the same checks as the command line, so that a value the CLI
+    refuses (``"decay": -1``) never reaches a trial.
+
+    Raises:
+        ValueError: Naming the setting, its bounds and the value.
+    """
+    from antmaze_hirl.cli_validation import FLOAT_BOUNDS, INT_BOUNDS
+
+    for field in fields(settings):
+        name, value = field.name, getattr(settings, field.name)
+        if value is None or isinstance(value, bool):
+            continue
+        ints = INT_BOUNDS.get(f"study init:{name}", INT_BOUNDS.get(name))
+        floats = FLOAT_BOUNDS.get(f"study init:{name}", FLOAT_BOUNDS.get(name))
+        if ints is not None and not (isinstance(value, int) and ints.low <= value <= ints.high):
+            raise ValueError(f"{name} must be an int in [{ints.low}, {ints.high}], got {value!r}")
+        if floats is not None:
+            number = value if isinstance(value, int | float) else math.nan
+            above = number >= floats.low if floats.low_inclusive else number > floats.low
+            if not (math.isfinite(number) and above and number <= floats.high):
+                raise ValueError(f"{name} must be {floats.describe()}, got {value!r}")
 
 
 EXPERIMENT_FIELDS: tuple[str, ...] = tuple(field.name for field in fields(TrialSettings))
