@@ -62,7 +62,8 @@ def open_session(folder: Path, participant_id: str = "P01", clock=None):
 
     plan = load_plan(folder)
     participant = next(p for p in plan.participants if p.id == participant_id)
-    return ParticipantSession(folder, plan, participant, load_settings(folder), clock=clock or time.time)
+    timer = clock or time.monotonic  # a fake clock drives the durations too
+    return ParticipantSession(folder, plan, participant, load_settings(folder), clock=clock or time.time, timer=timer)
 
 
 def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) -> dict:

@@ -206,3 +206,28 @@ def test_a_checkpoint_round_trips_and_the_participant_goes_on(in_trial_two):
     play_trial(session)
     session.close()
     assert episode_rows(participant) == [("1", "0"), ("1", "1"), ("2", "0"), ("2", "1")]
+
+
+def test_a_wall_clock_jump_does_not_stretch_the_durations(tmp_path):
+    from study_helpers import FakeClock
+
+    from antmaze_hirl.study.data import read_episode_rows
+    from antmaze_hirl.study.plan import load_plan
+    from antmaze_hirl.study.session import ParticipantSession
+    from antmaze_hirl.study.settings import load_settings
+
+    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=1, practice=0)
+    plan = load_plan(folder)
+    wall, timer = FakeClock(), FakeClock()
+    session = ParticipantSession(folder, plan, plan.participants[0], load_settings(folder), clock=wall, timer=timer)
+    session.start_trial()
+    clicks = 0
+    while session.phase == "label":
+        wall.advance(86_400)  # the machine's clock is set a day ahead between two clicks
+        click_once(session, timer, seconds=2.0)
+        clicks += 1
+    session.next_episode()
+    session.close()
+    (row,) = read_episode_rows(folder / "participants" / "P01" / "episodes.csv")
+    assert float(row["time_on_task"]) == pytest.approx(2.0 * clicks)
+    assert float(row["seconds_per_label"]) == pytest.approx(2.0)

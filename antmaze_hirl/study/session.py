@@ -207,7 +207,9 @@ class ParticipantSession:
         plan: The study plan.
         participant: This participant's part of it.
         settings: The study's trial settings.
-        clock: Wall-clock seconds (injected by tests).
+        clock: Wall-clock seconds, for the times in the records (injected by tests).
+        timer: Monotonic seconds, for durations (time on task, seconds per label, pauses), which a change
+            of the wall clock must not stretch (injected by tests).
 
     """
 
@@ -219,11 +221,13 @@ class ParticipantSession:
         settings: StudySettings,
         *,
         clock: Any = time.time,
+        timer: Any = time.monotonic,
     ) -> None:
         self.plan = plan
         self.participant = participant
         self.settings = settings
         self.clock = clock
+        self.timer = timer
         self.folder = Path(study_dir) / "participants" / participant.id
         self.lock = threading.RLock()  # one request at a time per participant; the server has many threads
         self.trial_index = 0
@@ -419,8 +423,8 @@ class ParticipantSession:
                 )
             seconds = self._check_response_seconds(response_seconds)
             subgoal = self._check_click(x, y)
-            now = self.clock()
-            server_seconds = max(now - self._query_shown_at, 0.0)
+            now, elapsed = self.clock(), self.timer()
+            server_seconds = max(elapsed - self._query_shown_at, 0.0)
             assert self._run is not None and self._run.request is not None and self._trial is not None
             request = self._run.request
             append_json_record(
@@ -446,7 +450,7 @@ class ParticipantSession:
             if self._run.done:
                 assert self._run.record is not None
                 self.phase = "episode_over"  # the page calls next_episode() while it animates the last walk
-                self._episode_ended_at = now  # the person's time ends with their last click, not the update
+                self._episode_ended_at = elapsed  # the person's time ends with their last click, not the update
                 episode_end = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
             else:
                 self._show_query()
@@ -529,17 +533,17 @@ class ParticipantSession:
         with self.lock:
             if not isinstance(paused, bool):
                 raise BadInput(f"paused must be true or false, got {paused!r}")
-            now = self.clock()
+            now = self.timer()
             if paused and self.paused_since is None:
+                self._log_event("pause")  # the record first: a failed write leaves the study running
                 self.paused_since = now
-                self._log_event("pause")
             elif not paused and self.paused_since is not None:
+                self._log_event("resume")
                 if self.phase == "label" and self._run is not None:  # inside an episode
                     pause = max(now - max(self.paused_since, self._episode_started_at), 0.0)
                     self._episode_paused += pause
                     self._query_shown_at += pause  # a pause is not thinking time
                 self.paused_since = None
-                self._log_event("resume")
             return self.state()
 
     def camera_frame(self) -> bytes:
@@ -658,7 +662,7 @@ class ParticipantSession:
         first = self._run.executed[0].observation if self._run.executed else self._run.request.observation
         self._trail = [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(first["state"])]]
         self._walk = self._walked(self._run.executed, self._trial.trainer.episodes_done - int(self._run.done))
-        self._episode_started_at = self.clock()
+        self._episode_started_at = self.timer()
         self._episode_paused = 0.0
         self._episode_label_seconds = []
         if self._run.done:
@@ -687,7 +691,7 @@ class ParticipantSession:
 
     def _show_query(self) -> None:
         self._query_id += 1
-        self._query_shown_at = self.clock()
+        self._query_shown_at = self.timer()
 
     def _save_episode(self) -> None:
         # The ended episode's row, checkpoint and demonstrations, written before memory counts the episode.
