@@ -231,3 +231,25 @@ def test_a_wall_clock_jump_does_not_stretch_the_durations(tmp_path):
     (row,) = read_episode_rows(folder / "participants" / "P01" / "episodes.csv")
     assert float(row["time_on_task"]) == pytest.approx(2.0 * clicks)
     assert float(row["seconds_per_label"]) == pytest.approx(2.0)
+
+
+@pytest.mark.parametrize("name", ["clicks.jsonl", "events.jsonl", "answers.jsonl", "episodes.csv"])
+@pytest.mark.parametrize("damage", ["changed", "repeated"])
+def test_each_logs_damage_is_reported_by_the_server_and_by_analyze(in_trial_two, name, damage):
+    from antmaze_hirl.study.analysis import analyze
+
+    folder, participant = in_trial_two
+    path = participant / name
+    lines = path.read_text().splitlines(keepends=True)
+    if damage == "changed":
+        lines[-1] = lines[-1].replace('"trial": 1', '"trial": 2', 1) if name != "episodes.csv" else lines[-1]
+        lines[-1] = lines[-1].replace(",dagger,", ",daggex,", 1).replace(",reward,", ",rewarx,", 1)
+        if lines[-1] == path.read_text().splitlines(keepends=True)[-1]:
+            lines[-1] = lines[-1].replace('"participant": "P01"', '"participant": "P02"', 1)
+    else:
+        lines.append(lines[-1])
+    path.write_text("".join(lines))
+    with pytest.raises(DamagedRecords, match=name):
+        open_session(folder)
+    with pytest.raises(ValueError, match=name):
+        analyze(folder)

@@ -36,6 +36,7 @@ import pandas as pd
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.plotting import plot_panels
+from antmaze_hirl.study.consistency import check_study_files
 from antmaze_hirl.study.data import finished_trials, load_answers, load_episodes
 from antmaze_hirl.study.figures import save_likert, save_per_participant
 from antmaze_hirl.study.plan import StudyPlan, load_plan, williams_design
@@ -123,6 +124,7 @@ def analyze(study_dir: str | Path) -> Path:
     """
     study_dir = Path(study_dir)
     plan = load_plan(study_dir)
+    check_study_files(study_dir, plan)  # every log's damage, and files that disagree (a deleted episodes.csv)
     episodes = load_episodes(study_dir, plan)
     finished = finished_trials(episodes.loc[~episodes["practice"].astype(bool)], plan)
     answers = load_answers(study_dir, plan)

@@ -11,13 +11,14 @@ restarted, nor a trial closed twice, from files that disagree.
 
 from __future__ import annotations
 
+import json
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from antmaze_hirl.study.data import read_episode_rows
 from antmaze_hirl.study.logs import DamagedLog, read_json_records
-from antmaze_hirl.study.plan import ParticipantPlan
+from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan
 
 
 @dataclass
@@ -54,6 +55,22 @@ class ParticipantRecords:
         return str(folder / f"trial{index}")
 
 
+def read_progress(folder: Path) -> tuple[int, str]:
+    """``(trial_index, phase)`` saved in a participant's folder; ``(0, "intro")`` before they start.
+
+    Raises:
+        ValueError: If ``progress.json`` is malformed (names the file).
+    """
+    progress = folder / "progress.json"
+    if not progress.is_file():
+        return 0, "intro"
+    try:
+        saved = json.loads(progress.read_text())
+        return int(saved["trial_index"]), str(saved["phase"])
+    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
+
+
 def participant_records(folder: Path) -> ParticipantRecords:
     """Reads a participant's logs (a torn last line is skipped with a warning, as the readers do).
 
@@ -71,6 +88,9 @@ def participant_records(folder: Path) -> ParticipantRecords:
     answers = folder / "answers.jsonl"
     if answers.exists():
         records.answered = {_trial(record, answers, number) for number, record in read_json_records(answers)}
+    clicks = folder / "clicks.jsonl"
+    if clicks.exists():  # read for its damage only: a changed or repeated line is named here
+        read_json_records(clicks)
     episodes = folder / "episodes.csv"
     if episodes.exists():
         for number, row in enumerate(read_episode_rows(episodes), start=2):
@@ -142,3 +162,16 @@ def check_records(folder: Path, participant: ParticipantPlan, trial_index: int, 
         if not trial.practice and trial is not current and trial.index not in records.answered:
             raise ValueError(f"{folder / 'answers.jsonl'} has no questionnaire of finished trial {trial.index}")
     return current is not None and phase == "questionnaire" and current.index in records.answered
+
+
+def check_study_files(study_dir: str | Path, plan: StudyPlan) -> None:
+    """Checks every participant's logs for damage and their agreement with ``progress.json`` (``study analyze``).
+
+    Raises:
+        ValueError: Naming the file (and line) of the first damage or disagreement found.
+    """
+    for participant in plan.participants:
+        folder = Path(study_dir) / "participants" / participant.id
+        if folder.is_dir():
+            trial_index, phase = read_progress(folder)
+            check_records(folder, participant, trial_index, phase)

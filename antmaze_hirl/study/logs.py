@@ -195,14 +195,18 @@ def read_json_records(path: str | Path) -> list[tuple[int, dict[str, Any]]]:
     Blank lines are skipped; a torn last line is skipped with a warning (see the module docs).
 
     Raises:
-        DamagedLog: For a line that fails its checksum or is not a JSON object (names file and line).
+        DamagedLog: For a line that fails its checksum, is not a JSON object, or repeats an earlier line exactly
+            (names file and line).
     """
     path = Path(path)
-    records, sealed_seen = [], False
+    records, sealed_seen, seen = [], False, {}
     for number, line in _lines(path):
         if not line.strip():
             continue
         where = f"{path}:{number}"
+        if line in seen:  # every record has a time or an id: an exact repeat is a copied line
+            raise DamagedLog(f"{where}: repeats line {seen[line]} exactly: a copied or replayed line")
+        seen[line] = number
         match = _JSON_SEAL.match(line)
         if match is not None:
             body, checksum = match.group(1) + "}", match.group(2)

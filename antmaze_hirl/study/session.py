@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import math
 import os
 import threading
@@ -56,7 +55,7 @@ from antmaze_hirl.study.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
-from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records
+from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records, read_progress
 from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
 from antmaze_hirl.study.logs import (
     RENAMED_KEYS,
@@ -895,22 +894,6 @@ class ParticipantSession:
             self._next_trial()
         if self.phase == "label":
             self._open_trial(resume=True)
-
-
-def read_progress(folder: Path) -> tuple[int, str]:
-    """``(trial_index, phase)`` saved in a participant's folder; ``(0, "intro")`` before they start.
-
-    Raises:
-        ValueError: If ``progress.json`` is malformed (names the file).
-    """
-    progress = folder / "progress.json"
-    if not progress.is_file():
-        return 0, "intro"
-    try:
-        saved = json.loads(progress.read_text())
-        return int(saved["trial_index"]), str(saved["phase"])
-    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
-        raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
 
 
 def _json_number(value: Any, name: str, bound: str = "") -> float:

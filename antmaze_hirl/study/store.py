@@ -8,8 +8,9 @@ import os
 import threading
 from pathlib import Path
 
+from antmaze_hirl.study.consistency import read_progress
 from antmaze_hirl.study.plan import StudyPlan, load_plan
-from antmaze_hirl.study.session import ParticipantSession, read_progress
+from antmaze_hirl.study.session import ParticipantSession
 from antmaze_hirl.study.settings import StudySettings, load_settings
 
 
