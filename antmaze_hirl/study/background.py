@@ -1,16 +1,22 @@
-"""The learner update after a maze, run in a background thread while the participant plays the next maze.
+"""The learner updates after mazes, run in a background thread while the participant plays on.
 
-With a study's ``background_updates`` on, the page does not wait for the update (gradient steps, a
-strategy's ensemble, an evaluation when one is due) between two mazes: :class:`BackgroundUpdate` copies
-the trainer as the maze ended, runs the update that is due (and the evaluation) on the copy in a
-thread, and the session moves the copy's new weights into the live trainer at the end of the next
-maze (:meth:`BackgroundUpdate.apply_to`). The learner therefore lags one maze: maze ``k + 1`` is
-played by the learner updated after maze ``k - 1``, not after maze ``k``. Each row of ``episodes.csv``
-records the number of updates behind the learner that played it (``learner_updates``).
+With a study's ``background_updates`` on, the page never waits between two mazes for an update (gradient
+steps, a strategy's ensemble, an evaluation when one is due). At the end of maze ``k`` the session hands
+:meth:`UpdateQueue.submit` a copy of the trainer as the maze ended, and the next maze starts at once with
+the learner as it is. One worker thread per participant runs the updates in order, each on its copy
+and starting from the weights of the update before it, so update ``k`` is the method's own update on
+the data of mazes ``0..k``. At the end of each maze the session takes the updates that have finished
+(:meth:`UpdateQueue.take`, without waiting) and moves the newest one's weights into the live trainer.
+
+So the learner that plays a maze lags: by one maze when each update finishes within the next maze (the
+usual case), by more when updates take longer than mazes (several participants on few cores). Each row
+of ``episodes.csv`` records how many updates the learner that played it had had (``learner_updates``).
+The last maze of a trial waits for every update and its own, as the experiments do, before the final
+evaluation.
 
 Why not the trainer's own update: :meth:`~antmaze_hirl.dagger.DAggerTrainer.start_episode` runs a due
-update before the next maze, which is the wait this module removes. The copy runs the trainer's own
-update code (``_update_if_due``), so the update is the method's; only when it takes effect changes.
+update before the next maze, which is the wait this module removes. The copies run the trainer's own
+update code (``_update_if_due``); only when the result takes effect changes.
 """
 
 from __future__ import annotations
@@ -27,8 +33,8 @@ from antmaze_hirl.dagger import DAggerTrainer
 
 STRATEGY_MODELS = ("members", "risk_model", "threshold")
 """Attributes that a strategy's ``on_update`` sets (ensemble members, gating risk model and threshold): what
-moves from the copy into the live strategy. The rest of a strategy's state (a gate's reference states and
-outcomes, kept every step) stays the live one's."""
+moves from an updated copy into the live strategy. The rest of a strategy's state (a gate's reference states
+and outcomes, kept every step) stays the live one's."""
 
 NESTED_STRATEGIES = ("inner", "ensemble")
 """Attributes holding a strategy's own parts (a gated strategy's inner strategy and ensemble)."""
@@ -45,17 +51,13 @@ def detached_copy(trainer: DAggerTrainer) -> DAggerTrainer:
 
 
 class BackgroundUpdate:
-    """The update due after a maze (and its evaluation), started at once on a copy of the trainer.
+    """The update due after one maze (and its evaluation), on a copy of the trainer.
 
-    Taking the update off the live trainer (its ``_update_due``) is what lets the next maze start at
-    once; the update runs on the copy with a stream of its own for the strategy's draws (drawn once from
-    the live stream), so the live episode and the update never share random numbers.
-
-    Args:
-        trainer: The live trainer, at the end of a maze.
-        row: The maze's row for ``episodes.csv`` (evaluation columns are added to a copy).
-        evaluate: ``learner -> evaluation columns``, called on the updated copy's learner; ``None`` when no
-            evaluation is due.
+    Attributes:
+        trainer: The copy (updated once :attr:`done`).
+        row: The maze's row for ``episodes.csv``, with its evaluation columns once :attr:`done`.
+        update_due: Whether an update was due after the maze (else only the evaluation, if any, runs).
+        seconds: How long the update and evaluation took (``None`` until done).
     """
 
     def __init__(
@@ -63,60 +65,144 @@ class BackgroundUpdate:
         trainer: DAggerTrainer,
         row: dict[str, Any],
         evaluate: Callable[[Any], dict[str, Any]] | None,
+        base: BackgroundUpdate | None,
     ) -> None:
+        self.update_due = bool(trainer._update_due)
         self.trainer = detached_copy(trainer)
         trainer._update_due = False  # the live trainer's next start_episode() does not wait for it
+        # A stream of its own for the strategy's draws (drawn once from the live one): the live episode and
+        # the update never share random numbers.
         seed = int(trainer.streams.strategy.integers(2**63))
         self.trainer.streams = self.trainer.streams._replace(strategy=np.random.default_rng(seed))
         self.row = dict(row)
         self.seconds: float | None = None
+        self.error: BaseException | None = None
         self._evaluate = evaluate
-        self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, name="study-background-update", daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        started = time.monotonic()
-        try:
-            self.trainer._update_if_due()
-            if self._evaluate is not None:
-                self.row.update(self._evaluate(self.trainer.learner))
-        except BaseException as error:  # handed to the request that waits for the result
-            self._error = error
-        self.seconds = time.monotonic() - started
+        self._base = base  # the update before this one, not yet in the live trainer when this copy was taken
+        self._done = threading.Event()
 
     @property
     def done(self) -> bool:
-        """Whether the thread has finished."""
-        return not self._thread.is_alive()
+        """Whether the update (and evaluation) has finished, or failed."""
+        return self._done.is_set()
 
-    def result(self, timeout: float | None = None) -> dict[str, Any]:
-        """Waits for the update; the maze's row with its evaluation columns.
+    def run(self) -> None:
+        """Runs the update, from the weights of the update before it when those were not in the copy yet."""
+        started = time.monotonic()
+        try:
+            if self._base is not None:
+                self._base.apply_to(self.trainer)
+                self._base = None
+            self.trainer._update_if_due()
+            if self._evaluate is not None:
+                self.row.update(self._evaluate(self.trainer.learner))
+        except BaseException as error:  # handed to the request that takes the result
+            self.error = error
+        self.seconds = time.monotonic() - started
+        self._done.set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Waits until :attr:`done`; whether it is."""
+        return self._done.wait(timeout)
+
+    def apply_to(self, target: DAggerTrainer) -> None:
+        """Copies the updated learner and strategy models into ``target`` (the live trainer or a later copy).
+
+        Deep copies, so that ``target`` shares no module with this update's copy, which a later update reads.
+        """
+        source = self.trainer
+        memo: dict[int, Any] = {}
+        vars(target.learner).update(copy.deepcopy(vars(source.learner), memo))
+        _take_models(target.strategy, source.strategy, memo, set())
+        target.updates, target.last_loss = source.updates, source.last_loss
+
+
+def _take_models(target: Any, source: Any, memo: dict[int, Any], seen: set[int]) -> None:
+    if id(target) in seen:
+        return
+    seen.add(id(target))
+    for name in STRATEGY_MODELS:
+        if name in vars(source):
+            setattr(target, name, copy.deepcopy(getattr(source, name), memo))
+    for name in NESTED_STRATEGIES:
+        if name in vars(source):
+            _take_models(getattr(target, name), getattr(source, name), memo, seen)
+
+
+class UpdateQueue:
+    """One participant's updates, run in order by one worker thread (started with the first update)."""
+
+    def __init__(self) -> None:
+        self._jobs: list[BackgroundUpdate] = []  # submitted and not yet taken, in order
+        self._cond = threading.Condition()
+        self._started = 0  # how many of _jobs the worker has begun
+        self._stopping = False
+        self._thread: threading.Thread | None = None
+
+    def __len__(self) -> int:
+        with self._cond:
+            return len(self._jobs)
+
+    def submit(
+        self, trainer: DAggerTrainer, row: dict[str, Any], evaluate: Callable[[Any], dict[str, Any]] | None
+    ) -> BackgroundUpdate:
+        """Queues the update due after the maze that just ended in ``trainer`` (its copy is taken now)."""
+        with self._cond:
+            base = self._jobs[-1] if self._jobs else None  # not yet in the live trainer: the copy starts from it
+            job = BackgroundUpdate(trainer, row, evaluate, base)
+            self._jobs.append(job)
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._work, name="study-updates", daemon=True)
+                self._thread.start()
+            self._cond.notify()
+        return job
+
+    def take(self, *, wait: bool = False) -> list[BackgroundUpdate]:
+        """The finished updates from the front of the queue, in order (every one, after waiting, with ``wait``).
 
         Raises:
-            RuntimeError: If the update or evaluation failed (from the thread's error), or ``timeout`` passed.
+            RuntimeError: If an update failed (its error chained); it stays queued.
         """
-        self._thread.join(timeout)
-        if self._thread.is_alive():
-            raise RuntimeError(f"the background update is still running after {timeout} s")
-        if self._error is not None:
-            raise RuntimeError(f"the background learner update failed: {self._error!r}") from self._error
-        return self.row
+        with self._cond:
+            jobs = list(self._jobs)
+        finished = []
+        for job in jobs:
+            if wait:
+                job.wait()
+            if not job.done:
+                break
+            if job.error is not None:
+                raise RuntimeError(f"a background learner update failed: {job.error!r}") from job.error
+            finished.append(job)
+        with self._cond:
+            del self._jobs[: len(finished)]
+            self._started -= len(finished)
+        return finished
 
-    def apply_to(self, live: DAggerTrainer) -> None:
-        """Moves the copy's updated learner and strategy models into ``live`` (after :meth:`result`)."""
-        vars(live.learner).update(vars(self.trainer.learner))
-        _take_models(live.strategy, self.trainer.strategy, set())
-        live.updates, live.last_loss = self.trainer.updates, self.trainer.last_loss
+    def pending(self) -> list[BackgroundUpdate]:
+        """The updates submitted and not yet taken, in order."""
+        with self._cond:
+            return list(self._jobs)
 
+    def stop(self) -> None:
+        """Lets the update in progress finish, runs no other, and drops the queue (a restore runs them again)."""
+        with self._cond:
+            self._stopping = True
+            self._cond.notify()
+            thread = self._thread
+        if thread is not None:
+            thread.join()
+        with self._cond:
+            self._jobs.clear()
+            self._started = 0
 
-def _take_models(live: Any, updated: Any, seen: set[int]) -> None:
-    if id(live) in seen:
-        return
-    seen.add(id(live))
-    for name in STRATEGY_MODELS:
-        if name in vars(updated):
-            setattr(live, name, getattr(updated, name))
-    for name in NESTED_STRATEGIES:
-        if name in vars(updated):
-            _take_models(getattr(live, name), getattr(updated, name), seen)
+    def _work(self) -> None:
+        while True:
+            with self._cond:
+                while not self._stopping and self._started >= len(self._jobs):
+                    self._cond.wait()
+                if self._stopping:
+                    return
+                job = self._jobs[self._started]
+                self._started += 1
+            job.run()

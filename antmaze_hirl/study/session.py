@@ -46,7 +46,7 @@ from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
-from antmaze_hirl.study.background import BackgroundUpdate
+from antmaze_hirl.study.background import UpdateQueue
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
 from antmaze_hirl.study.checkpoint import (
     CHECKPOINT_FILE,
@@ -188,9 +188,9 @@ class TrialState:
     rows: list[dict[str, Any]]
     demonstrations: DemonstrationLog
     successes: int = 0
-    pending_row: dict[str, Any] | None = None
-    """With background updates: the last maze's row, whose update (``trainer._update_due``) and evaluation
-    have not been applied to ``trainer`` yet (a restore runs them before the next maze)."""
+    pending: list[dict[str, Any]] = field(default_factory=list)
+    """With background updates: the mazes whose update and evaluation are not in ``trainer`` yet, in order,
+    each ``{"row": ..., "update_due": bool}`` (a restore runs them before the next maze)."""
 
 
 class ParticipantSession:
@@ -247,7 +247,7 @@ class ParticipantSession:
         self._camera: AntCamera | None = None
         self._last_trial: dict[str, Any] | None = None  # how the trial just closed went (the page's summary)
         self._episode_saved = False  # the ended episode's row and checkpoint are on disk; the trial is not closed
-        self._update_job: BackgroundUpdate | None = None  # the update after the last maze, running meanwhile
+        self._updates = UpdateQueue()  # the updates after the last mazes, running meanwhile
         self._csv_rows = 0  # how many of the trial's rows episodes.csv holds
         self._episode_learner_updates = 0  # updates behind the learner that plays the current maze
         self._closing_row: dict[str, Any] | None = None  # the ended episode's row, kept while its save fails
@@ -563,10 +563,8 @@ class ParticipantSession:
     def close(self) -> None:
         """Releases the trial's simulators and the camera (after a background update that uses them ends)."""
         with self.lock:
-            if self._update_job is not None:  # its result is not lost: the checkpoint holds the update as due
-                with contextlib.suppress(RuntimeError):
-                    self._update_job.result()
-                self._update_job = None
+            self._updates.stop()  # nothing is lost: the checkpoint holds the unfinished updates as pending
+            self._updates = UpdateQueue()
             if self._envs is not None:
                 self._envs.close()
             self._envs = self._env = None
@@ -631,8 +629,8 @@ class ParticipantSession:
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
             self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
-            if self._trial.pending_row is not None:  # killed while the last maze's update ran in the background
-                self._finish_pending_update()
+            if self._trial.pending:  # stopped while updates ran in the background
+                self._finish_pending_updates()
         elif resume and (written := len(self._written_rows())):
             raise DamagedRecords(
                 f"{checkpoint} is missing, but {self.folder / 'episodes.csv'} has {written} episode(s) of trial "
@@ -695,18 +693,20 @@ class ParticipantSession:
     def _save_episode(self) -> None:
         # The ended episode's row, checkpoint and demonstrations, written before memory counts the episode.
         # With background updates (every maze but a trial's last), the episode is saved with its update still
-        # due (pending_row) and the update runs on a copy while the next maze is played.
+        # due (in the pending list) and the update runs on a copy while the next mazes are played.
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         final = run.record.episode >= trial.episodes - 1
         lagged = self.settings.background_updates and not final
-        if self._update_job is not None:
-            self._take_update()  # the update after the maze before (normally finished while this maze was played)
+        self._take_updates(wait=not lagged)  # those finished while this maze was played (all, before the last)
         if self._closing_row is None:  # kept across a failed save: the update and evaluation run once
             self._closing_row = self._episode_row(update=not lagged)
         row, success = self._closing_row, bool(run.record.success)
+        queued = self._updates.pending()  # still running: saved as pending with this maze's own
+        pending_before = state.pending
         if lagged:
-            state.pending_row = row
+            state.pending = [{"row": job.row, "update_due": job.update_due} for job in queued]
+            state.pending.append({"row": row, "update_due": bool(state.trainer._update_due)})
         else:
             state.rows.append(row)
         state.successes += int(success)
@@ -718,7 +718,7 @@ class ParticipantSession:
             self._append_new_rows()
         except BaseException:
             if lagged:
-                state.pending_row = None
+                state.pending = pending_before
             else:
                 state.rows.pop()
             state.successes -= int(success)
@@ -727,31 +727,36 @@ class ParticipantSession:
         self._closing_row = None
         self._episode_saved = True
         if lagged:
-            episode = int(row["episode"])
-            due = self._evaluation_due(episode)
+            due = self._evaluation_due(int(row["episode"]))
             evaluate = (lambda learner: self._envs.evaluate(learner, final=False)) if due else None
-            self._update_job = BackgroundUpdate(state.trainer, row, evaluate)
+            self._updates.submit(state.trainer, row, evaluate)
 
-    def _take_update(self) -> None:
-        # Waits for the background update (if still running), moves its weights in, counts its row.
-        state, job = self._trial, self._update_job
-        assert state is not None and job is not None
-        row = job.result()
-        job.apply_to(state.trainer)
-        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
-        state.pending_row = None
-        self._update_job = None
-
-    def _finish_pending_update(self) -> None:
-        # A restore from a checkpoint saved while an update ran in the background: run it here, then save.
+    def _take_updates(self, *, wait: bool) -> None:
+        # The background updates that have finished (every one, with ``wait``): the newest one's weights go into
+        # the live trainer and their rows join the trial's (written with this maze's save). Not a protocol step:
+        # the pending list on disk holds the same updates, which a restore would run.
         state = self._trial
-        assert state is not None and state.pending_row is not None
-        state.trainer._update_if_due()
-        row = dict(state.pending_row)
-        if self._evaluation_due(int(row["episode"])):
-            row.update(self._envs.evaluate(state.trainer.learner, final=False))
-        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
-        state.pending_row = None
+        assert state is not None
+        finished = self._updates.take(wait=wait)
+        if finished:
+            finished[-1].apply_to(state.trainer)
+            state.rows.extend({column: job.row.get(column, "") for column in EPISODE_COLUMNS} for job in finished)
+            state.pending = state.pending[len(finished) :]
+
+    def _finish_pending_updates(self) -> None:
+        # A restore from a checkpoint saved while updates ran in the background: run them here, in order, on the
+        # data as saved (each on all of it: the mazes' data sets of then are not kept), then save.
+        state = self._trial
+        assert state is not None
+        for entry in state.pending:
+            if entry["update_due"]:
+                state.trainer._update(state.trainer.gradient_steps)
+            row = dict(entry["row"])
+            if self._evaluation_due(int(row["episode"])):
+                row.update(self._envs.evaluate(state.trainer.learner, final=False))
+            state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+        state.trainer._update_due = False
+        state.pending = []
         _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
         self._append_new_rows()
 
