@@ -13,12 +13,17 @@ On disk, per participant (``DIR/participants/<id>/``), everything is written whe
 * ``answers.jsonl``: one questionnaire per analysed trial;
 * ``events.jsonl``: trial starts and ends, pauses, resumptions after a restart;
 * ``progress.json``: where the participant is (atomically replaced);
-* ``trial<k>/checkpoint.pkl``: the trainer after the last finished episode (atomically replaced);
+* ``trial<k>/checkpoint.pt``: the trainer after the last finished episode, and the background updates still
+  queued (atomically replaced; :mod:`antmaze_hirl.study.checkpoint`: loading it cannot run code);
 * ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
 * ``trial<k>/learner.zip``: the learner's weights after the trial.
 
 The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`); the checkpoint starts with a
-SHA-256 of its content. A server killed mid-episode (even ``kill -9``) restarts the participant from the
+SHA-256 of its content. Every step writes its records before it changes the session's memory, and
+``progress.json`` last: a failed write (a full disk) leaves memory and disk as they were, and files that
+disagree (:mod:`antmaze_hirl.study.consistency`) stop the participant. With ``background_updates`` the
+learner updates run while the next mazes are played (:mod:`antmaze_hirl.study.background`).
+A server killed mid-episode (even ``kill -9``) restarts the participant from the
 checkpoint: only the episode in progress is lost, and it is replayed on the same maze (the trainer's
 random state is saved). On that restart a partial last line of a log (a crash inside an append) is cut
 off and the cut logged as a ``torn_tail_trimmed`` event. A damaged or missing checkpoint, a damaged log

@@ -54,6 +54,9 @@ function plainMessage(error, action) {
     return "Your session cannot go on from here: please call the experimenter.";
   }
   if (error.status === 409) { return WAIT[action] || "Please wait, the page is catching up."; }
+  if (error.status === 503) {
+    return "The study could not save your last step, so it did not count: please call the experimenter.";
+  }
   return "That did not work. Please try again; if it happens again, call the experimenter.";
 }
 
