@@ -175,15 +175,16 @@ def _nesting_depth(text: str, stop: int = MAX_JSON_DEPTH) -> int:
     return deepest
 
 
-async def read_body(
-    request: Request, limit: int = MAX_BODY_BYTES, chunk_timeout: float = BODY_CHUNK_TIMEOUT_SECONDS
-) -> bytes:
+async def read_body(request: Request, limit: int = MAX_BODY_BYTES, chunk_timeout: float | None = None) -> bytes:
     """The request's body, read chunk by chunk and refused as soon as it passes ``limit`` bytes.
 
     Raises:
         BodyTooLarge: Without reading the rest (a chunked body has no Content-Length to check first).
-        BodyTimeout: If the next chunk takes more than ``chunk_timeout`` seconds.
+        BodyTimeout: If the next chunk takes more than ``chunk_timeout`` seconds (default
+            :data:`BODY_CHUNK_TIMEOUT_SECONDS`).
     """
+    if chunk_timeout is None:
+        chunk_timeout = BODY_CHUNK_TIMEOUT_SECONDS
     chunks, size = [], 0
     stream = request.stream()
     while True:
