@@ -75,3 +75,28 @@ def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) ->
         clock.advance(seconds)
     x, y = oracle_click(state)
     return session.label(state["query"]["id"], float(x), float(y))
+
+
+def fresh_copy(template: Path, tmp_path: Path) -> tuple[Path, Path]:
+    """A copy of a played study ``template`` (made once per module) under ``tmp_path``: its folder and P01's."""
+    import shutil
+
+    folder = tmp_path / "study"
+    shutil.copytree(template, folder)
+    return folder, folder / "participants" / "P01"
+
+
+def play_to_episode_end(session) -> None:
+    """Starts the trial if at its intro, then clicks as the oracle until the maze ends."""
+    if session.phase == "intro":
+        session.start_trial()
+    while session.phase == "label":
+        click_once(session)
+
+
+def play_trial(session) -> None:
+    """Plays mazes until the trial closes (its questionnaire, or the next trial's intro after a practice)."""
+    trial = session.trial_index
+    while session.trial_index == trial and session.phase in ("intro", "label", "episode_over"):
+        play_to_episode_end(session)
+        session.next_episode()

@@ -3,25 +3,12 @@
 import time
 
 import pytest
-from study_helpers import click_once, make_tiny_study, open_session
+from study_helpers import make_tiny_study, open_session, play_to_episode_end, play_trial
 
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.study.data import read_episode_rows
 
 SLOW_UPDATE_SECONDS = 5.0
-
-
-def play_to_episode_end(session):
-    if session.phase == "intro":
-        session.start_trial()
-    while session.phase == "label":
-        click_once(session)
-
-
-def play_trial(session):
-    while session.phase in ("intro", "label", "episode_over"):
-        play_to_episode_end(session)
-        session.next_episode()
 
 
 def rows_of(folder):

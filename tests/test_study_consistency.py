@@ -8,10 +8,17 @@ import errno
 import json
 import os
 import pickle
-import shutil
 
 import pytest
-from study_helpers import click_once, make_tiny_study, open_session, snapshot
+from study_helpers import (
+    click_once,
+    fresh_copy,
+    make_tiny_study,
+    open_session,
+    play_to_episode_end,
+    play_trial,
+    snapshot,
+)
 
 from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.logs import read_csv_rows, read_json_records
@@ -19,20 +26,6 @@ from antmaze_hirl.study.questionnaire import ITEM_KEYS
 from antmaze_hirl.study.session import DamagedRecords
 
 ANSWERS = {"ratings": dict.fromkeys(ITEM_KEYS, 3), "comment": ""}
-
-
-def play_to_episode_end(session):
-    if session.phase == "intro":
-        session.start_trial()
-    while session.phase == "label":
-        click_once(session)
-    assert session.phase == "episode_over"
-
-
-def play_trial(session):
-    while session.phase in ("intro", "label", "episode_over"):
-        play_to_episode_end(session)
-        session.next_episode()
 
 
 @pytest.fixture
@@ -69,9 +62,7 @@ def in_trial_two_template(tmp_path_factory):
 
 @pytest.fixture
 def in_trial_two(in_trial_two_template, tmp_path):
-    folder = tmp_path / "study"
-    shutil.copytree(in_trial_two_template, folder)
-    return folder, folder / "participants" / "P01"
+    return fresh_copy(in_trial_two_template, tmp_path)
 
 
 def episode_rows(participant):

@@ -3,7 +3,6 @@
 import csv
 import json
 import pickle
-import shutil
 import threading
 import time
 
@@ -11,7 +10,7 @@ import httpx
 import numpy as np
 import pandas as pd
 import pytest
-from study_helpers import click_once, make_tiny_study, open_session
+from study_helpers import click_once, fresh_copy, make_tiny_study, open_session
 
 from antmaze_hirl.study.checkpoint import load_checkpoint, save_checkpoint
 from antmaze_hirl.study.data import CLICK_COLUMNS, EPISODE_COLUMNS, load_clicks, load_episodes
@@ -50,9 +49,7 @@ def one_episode_template(tmp_path_factory):
 @pytest.fixture
 def one_episode_in(one_episode_template, tmp_path):
     """A fresh copy of :func:`one_episode_template` (played once per module): its folder and the participant's."""
-    folder = tmp_path / "study"
-    shutil.copytree(one_episode_template, folder)
-    return folder, folder / "participants" / "P01"
+    return fresh_copy(one_episode_template, tmp_path)
 
 
 def test_a_torn_last_line_is_trimmed_on_restart_and_the_trim_logged(one_episode_in):

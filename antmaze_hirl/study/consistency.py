@@ -167,11 +167,15 @@ def check_records(folder: Path, participant: ParticipantPlan, trial_index: int, 
 def check_study_files(study_dir: str | Path, plan: StudyPlan) -> None:
     """Checks every participant's logs for damage and their agreement with ``progress.json`` (``study analyze``).
 
+    A folder without ``progress.json`` (logs copied or made by hand) has its logs checked for damage only.
+
     Raises:
         ValueError: Naming the file (and line) of the first damage or disagreement found.
     """
     for participant in plan.participants:
         folder = Path(study_dir) / "participants" / participant.id
-        if folder.is_dir():
+        if (folder / "progress.json").is_file():
             trial_index, phase = read_progress(folder)
             check_records(folder, participant, trial_index, phase)
+        elif folder.is_dir():  # logs without a progress file (copied or made by hand): each log's damage only
+            participant_records(folder)
