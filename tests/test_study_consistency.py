@@ -24,6 +24,7 @@ from antmaze_hirl.study.data import EPISODE_COLUMNS
 from antmaze_hirl.study.logs import read_csv_rows, read_json_records
 from antmaze_hirl.study.questionnaire import ITEM_KEYS
 from antmaze_hirl.study.session import DamagedRecords
+from antmaze_hirl.study.store import Study
 
 ANSWERS = {"ratings": dict.fromkeys(ITEM_KEYS, 3), "comment": ""}
 
@@ -147,6 +148,8 @@ def test_a_missing_progress_file_with_data_present_stops_the_participant(in_tria
     before = snapshot(folder)
     with pytest.raises(DamagedRecords, match=r"progress.json is missing"):
         open_session(folder)
+    with pytest.raises(ValueError, match=r"progress.json is missing"):  # the picker lists them as damaged
+        Study(folder).progress("P01")
     assert snapshot(folder) == before  # trial 1's checkpoint and rows untouched
 
 

@@ -8,7 +8,7 @@ import os
 import threading
 from pathlib import Path
 
-from antmaze_hirl.study.consistency import read_progress
+from antmaze_hirl.study.consistency import check_records, read_progress
 from antmaze_hirl.study.plan import StudyPlan, load_plan
 from antmaze_hirl.study.session import ParticipantSession
 from antmaze_hirl.study.settings import StudySettings, load_settings
@@ -130,14 +130,18 @@ class Study:
 
         Raises:
             UnknownParticipant: If the plan has no such participant.
-            ValueError: If its ``progress.json`` is malformed (names the file).
+            ValueError: If its ``progress.json`` is malformed, or its files are damaged or disagree (names the file).
         """
         self._check_known(participant_id)
         with self._lock:
             session = self._sessions.get(participant_id)
         if session is not None:
             return session.trial_index, session.phase
-        return read_progress(self.folder / "participants" / participant_id)
+        folder = self.folder / "participants" / participant_id
+        trial_index, phase = read_progress(folder)
+        if folder.is_dir():  # files that disagree show as damaged here too, not as a fresh participant
+            check_records(folder, self._participants[participant_id], trial_index, phase)
+        return trial_index, phase
 
     def _check_known(self, participant_id: str) -> None:
         if participant_id not in self._participants:
