@@ -83,6 +83,15 @@ function nextBusyText() {
 
 let shownMaze = null;  // the maze the status line speaks of (a new maze gets a fresh status)
 
+// After a rated part's last maze the learner's last update and test take a while: the questionnaire is shown at
+// once and answered meanwhile; this is that "next" request, which the questionnaire's submit waits for.
+let closing = null;
+
+function lastMazeOfRatedPart(current) {
+  return Boolean(current && current.trial && !current.trial.practice && current.episode
+    && current.episode.number >= current.episode.of);
+}
+
 // The server said no: tell the participant what to do, then show what the server has now.
 async function refused(error, action) {
   const message = plainMessage(error, action);
@@ -463,6 +472,14 @@ canvas.addEventListener("click", async (event) => {
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
+    if (next && lastMazeOfRatedPart(before)) {
+      closing = next;
+      closing.catch(() => {});  // answered at the questionnaire's submit
+      state = { ...before, phase: "questionnaire" };
+      await renderQuestionnaire();
+      show("questionnaire");
+      return;
+    }
     if (next) {
       setBusy(nextBusyText());  // the next maze (and, after a part's last, the update), if not done during the walk
       try {
@@ -516,6 +533,19 @@ $("tlx").addEventListener("submit", async (event) => {
   if (missing.length) {
     $("form-error").textContent = `Please answer: ${missing.join(", ")}.`;
     return;
+  }
+  if (closing) {  // the last maze is still being saved: wait for it, counting the seconds
+    setBusy(BUSY.last);
+    try {
+      state = await closing;
+    } catch (error) {
+      closing = null;
+      setBusy(null);
+      await refused(error, "next");
+      return;
+    }
+    closing = null;
+    setBusy(null);
   }
   try {
     state = await api(participantPath("questionnaire"), {
