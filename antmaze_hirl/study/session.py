@@ -375,7 +375,13 @@ class ParticipantSession:
 
     # ---------------------------------------------------------------------------------- actions
     def start_trial(self) -> dict[str, Any]:
-        """Starts the current trial (phase ``intro`` -> ``label``)."""
+        """Starts the current trial (phase ``intro`` -> ``label``).
+
+        Raises:
+            ProtocolError: If no trial is to start now, or the study is paused.
+            TrialCannotStart: If the settings give a trial that cannot be built (nothing written).
+            OSError: If a write fails (a full disk): the participant stays at the intro; the call may be repeated.
+        """
         with self.lock:
             if self.paused_since is not None:
                 raise ProtocolError("the study is paused: resume before starting")
@@ -468,6 +474,8 @@ class ParticipantSession:
 
         Raises:
             ProtocolError: If no episode has just ended, or the study is paused.
+            OSError: If a write fails (a full disk): the episode stays open as it was (its update and
+                evaluation are kept, not run again); the call may be repeated.
         """
         with self.lock:
             if self.paused_since is not None:
@@ -497,6 +505,8 @@ class ParticipantSession:
         Raises:
             ProtocolError: If no questionnaire is due, or it is for another trial.
             BadInput: If the answers are incomplete or out of range.
+            OSError: If a write fails (a full disk): the questionnaire stays due (an answer already on disk is
+                kept and not written again); the call may be repeated.
         """
         with self.lock:
             if self.phase != "questionnaire":
