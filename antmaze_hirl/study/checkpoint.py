@@ -124,7 +124,7 @@ def load_checkpoint(path: str | Path, extra_classes: Iterable[type] = ()) -> Any
     if not data.startswith(MAGIC):
         if data.startswith(_LEGACY_MAGIC) or data[:1] == b"\x80":
             raise CheckpointError(
-                f"{path} is a pickled checkpoint (antmaze_hirl before 0.3), which can run code when loaded: not "
+                f"{path} is a pickled checkpoint (of an earlier antmaze_hirl), which can run code when loaded: not "
                 "loaded. Finish that participant with the version that wrote it, or remove the trial's folder"
             )
         raise CheckpointError(f"{path} is not a trial checkpoint (no {MAGIC[:-1].decode()!r} header)")
