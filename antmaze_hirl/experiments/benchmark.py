@@ -522,7 +522,8 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     parser.add_argument(
         "--policy",
         required=True,
-        help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner (required)",
+        help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner (required; "
+        "SB3 zips hold pickles that can run code: load only files you trust)",
     )
     parser.add_argument(
         "--episodes-per-task",
