@@ -143,7 +143,11 @@ def _add_train_low(subparsers: _Subparsers) -> None:
     parser.add_argument("--resume", action="store_true", help="continue from the latest checkpoint in --out")
     parser.add_argument("--seed", type=int, default=0, help="seed of the model and envs")
     parser.add_argument(
-        "--init-from", type=Path, default=None, help="warm start from this policy .zip's weights (default: none)"
+        "--init-from",
+        type=Path,
+        default=None,
+        help="warm start from this policy .zip's weights (default: none; SB3 zips hold pickles that can run code: "
+        "load only files you trust)",
     )
     parser.add_argument(
         "--init-buffer",
@@ -204,7 +208,8 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
         "--policy",
         type=Path,
         default=None,
-        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed (default: the shipped one)",
+        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed (default: the shipped one); "
+        "SB3 zips hold pickles that can run code: load only files you trust",
     )
     parser.add_argument("--episodes", type=int, default=200, help="subgoals to try")
     parser.add_argument(
@@ -264,7 +269,8 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
         "members",
         nargs="+",
         type=Path,
-        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order (required)",
+        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order (required; "
+        "SB3 zips hold pickles that can run code: load only files you trust)",
     )
     parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
     parser.add_argument("--force", action="store_true", help="replace an existing file at --out")

@@ -14,11 +14,19 @@ Per body, side by side:
   (``controllers.DIRECT_PREDICT = False``), as before :class:`~antmaze_hirl.envs.controllers.PredictController`
   ran the policy's predict steps itself (same actions bit for bit), just before each ``lockstep`` row.
 
+* ``serial, <low level>`` (``--low-levels``, ant only): one ``gym.make`` env at one torch thread with another low
+  level: ``one-head`` (the shipped ensemble's head 0 as a plain TD3 actor, the size of a distilled student,
+  through :class:`~antmaze_hirl.envs.controllers.PredictController`), ``one-head-numpy`` and ``ensemble-numpy``
+  (their :class:`~antmaze_hirl.sb3_ext.numpy_actor.NumpyActor` forward passes), or a zip (``ZIP`` through torch,
+  ``ZIP:numpy`` through numpy). Each row walks as its own low level walks (its flips, its subgoals), so the
+  rows differ in what they play as well as in speed; the rate counts low-level steps per second either way.
+
 Ratios are to the raw baseline of the same body. Each row runs for ``--seconds`` (at least one high-level
 step of every sub-env); seeded, so every row plays the same mazes.
 
     python benchmarks/hierarchy_throughput.py                       # both bodies, N = 1 4 16 64, 1 and 2 threads
     python benchmarks/hierarchy_throughput.py --bodies point --num-envs 1 8 --seconds 2
+    python benchmarks/hierarchy_throughput.py --bodies ant --num-envs 1 --threads 1 --low-levels one-head-numpy
 """
 
 from __future__ import annotations
@@ -77,9 +85,36 @@ def hierarchy_steps_per_s(env: Any, oracle: PathOracle, seconds: float, seed: in
     return steps / (time.perf_counter() - start), steps
 
 
-def serial_steps_per_s(body: str, subgoal_reach_m: float | None, seconds: float, seed: int) -> tuple[float, int]:
+LOW_LEVEL_ROWS = ("one-head", "one-head-numpy", "ensemble-numpy")
+"""The named extra low levels of ``--low-levels`` (a zip path, optionally with ``:numpy``, is the other kind)."""
+
+
+def extra_low_level(spec: str) -> Any:
+    """The ant low level that a ``--low-levels`` entry names (module docstring).
+
+    Raises:
+        ValueError: If the entry is neither a name of :data:`LOW_LEVEL_ROWS` nor a loadable ant zip.
+    """
+    from antmaze_hirl.sb3_ext.distill import make_student
+    from antmaze_hirl.sb3_ext.loading import load_low_level
+    from antmaze_hirl.sb3_ext.numpy_actor import NumpyActor
+    from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
+
+    if spec in LOW_LEVEL_ROWS:
+        model = load_low_level("ant") if spec == "ensemble-numpy" else make_student(shipped_policy_path("ant"))
+        return NumpyActor.from_model(model) if spec.endswith("numpy") else controllers.PredictController(model)
+    path, _, kind = spec.partition(":")
+    if kind not in ("", "numpy"):
+        raise ValueError(f"entry {spec!r}: a zip takes no suffix or ':numpy', not {kind!r}")
+    model = load_low_level("ant", path)
+    return NumpyActor.from_model(model) if kind == "numpy" else controllers.PredictController(model)
+
+
+def serial_steps_per_s(
+    body: str, subgoal_reach_m: float | None, seconds: float, seed: int, low_level: Any = None
+) -> tuple[float, int]:
     """Low-level steps/s of one ``gym.make`` env, as :func:`hierarchy_steps_per_s` counts them."""
-    env = gym.make(maze_env_id(body), maze_size=MAZE_SIZES[body])
+    env = gym.make(maze_env_id(body), maze_size=MAZE_SIZES[body], low_level=low_level)
     oracle = PathOracle.for_env(env, subgoal_reach_m=subgoal_reach_m)
     obs, _ = env.reset(seed=seed)
     steps, start = 0, time.perf_counter()
@@ -101,10 +136,20 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--threads", nargs="+", type=int, default=[1, 2], help="global torch thread counts")
     parser.add_argument("--seconds", type=float, default=4.0, help="wall time per row")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--low-levels",
+        nargs="*",
+        default=[],
+        help=f"extra serial ant rows: {', '.join(LOW_LEVEL_ROWS)}, ZIP or ZIP:numpy (module docstring)",
+    )
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
     if min(args.num_envs) < 1 or min(args.threads) < 1 or args.seconds <= 0:
         parser.error(f"--num-envs and --threads must be >= 1 and --seconds > 0, got {args}")
+    try:  # loaded before any row is timed, so that a bad entry stops the run at once, in one line
+        extras = {spec: extra_low_level(spec) for spec in (args.low_levels if "ant" in args.bodies else [])}
+    except (ValueError, FileNotFoundError) as error:
+        parser.error(f"--low-levels: {error}")
     caller_threads = th.get_num_threads()
     rows: list[dict[str, Any]] = []
     baselines = {}
@@ -123,6 +168,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             th.set_num_threads(threads)
             rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed)
             body_rows.append({"mode": "serial", "num_envs": 1, "torch_threads": threads, "steps_per_s": rate})
+        for spec in args.low_levels if body == "ant" else []:
+            th.set_num_threads(1)
+            rate, steps = serial_steps_per_s(body, subgoal_reach_m, args.seconds, args.seed, extras[spec])
+            body_rows.append({"mode": f"serial, {spec}", "num_envs": 1, "torch_threads": 1, "steps_per_s": rate})
+            print(f"{body} serial {spec}: {rate:,.0f} steps/s ({steps})", flush=True)
         for num_envs in args.num_envs:
             env = gym.make_vec(maze_env_id(body), num_envs, maze_size=MAZE_SIZES[body])
             oracle = PathOracle.for_env(env.envs[0], subgoal_reach_m=subgoal_reach_m)
@@ -154,10 +204,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         rows.extend(body_rows)
         print(f"{body} raw {RAW_IDS[body]}: {before:,.0f} before, {after:,.0f} after", flush=True)
     th.set_num_threads(caller_threads)
-    print(f"{'body':6} {'mode':21} {'N':>3} {'thr':>3} {'steps/s':>9} {'x raw':>6} {'x best':>6}")
+    width = max(21, *(len(row["mode"]) for row in rows))
+    print(f"{'body':6} {'mode':{width}} {'N':>3} {'thr':>3} {'steps/s':>9} {'x raw':>6} {'x best':>6}")
     for row in rows:
         print(
-            f"{row['body']:6} {row['mode']:21} {row['num_envs']:>3} {row['torch_threads']:>3} "
+            f"{row['body']:6} {row['mode']:{width}} {row['num_envs']:>3} {row['torch_threads']:>3} "
             f"{row['steps_per_s']:>9,.0f} {row['ratio_to_raw']:>6.2f} {row['ratio_to_best']:>6.2f}"
         )
     report = {

@@ -10,14 +10,26 @@ evaluation every 10 episodes adds a wait on about one click in 60-100 (see the R
 
 Goal, so that a participant does not wait on the page: ant p95 <= 300 ms.
 
-Usage: python benchmarks/study_latency.py [--episodes 10] [--bodies point,ant] [--out FILE.json]
+The wait between mazes (``--part between``): for every method, with 1 and with 4 participants playing at
+once (threads, one HTTP client each), the ``next`` round trip with the update before the next maze
+("old": ``background_updates`` off, as the experiments run) and with the update in the background ("new",
+``study init``'s default: the learner lags one maze), side by side in one run, p50 / p95 / max and the
+new/old ratio of the p95. The simulated participants click after an exponential delay of mean
+``--click-seconds`` (people take seconds; a participant who clicks at once leaves the background update
+no time). The trial's last ``next`` (its update and the final evaluation, before the questionnaire) is
+reported apart. Goals: p95 <= 2 s with 1 participant, <= 5 s with 4, for every method.
+
+Usage: python benchmarks/study_latency.py [--part clicks|between|all] [--episodes 10] [--bodies point,ant]
+    [--methods dagger,noise,multi_policy,reward] [--participants 1,4] [--between-episodes 8] [--out FILE.json]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +39,11 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.server import StudyServer
 from antmaze_hirl.study.settings import StudySettings, save_settings
-from antmaze_hirl.study.simulate import SimulatedParticipant, simulate_study
+from antmaze_hirl.study.simulate import SimulatedParticipant, StudyClient, play_participant, simulate_study
 
 GOAL_ANT_P95_SECONDS = 0.3
+GOAL_BETWEEN_P95_SECONDS = {1: 2.0, 4: 5.0}
+"""The wait between mazes at p95, by participants playing at once."""
 
 
 def percentiles(values: list[float]) -> dict[str, float | int | None]:
@@ -72,10 +86,79 @@ def measure(body: str, episodes: int, seed: int) -> dict:
     return figures
 
 
+def measure_between(
+    body: str, method: str, participants: int, background: bool, episodes: int, click_seconds: float, seed: int
+) -> dict:
+    """The ``next`` waits of ``participants`` simulated participants playing one ``method`` trial at once."""
+    with tempfile.TemporaryDirectory() as folder:
+        save_plan(make_plan(body, [method], participants, episodes=episodes, practice=0, seed=seed), folder)
+        # The study's own evaluation settings, but for the last evaluation (reported apart, kept small here).
+        every = max(episodes // 2, 1)
+        settings = StudySettings.for_body(body, background_updates=background, eval_every=every, final_eval_episodes=5)
+        save_settings(settings, folder)
+        results: dict[str, dict] = {}
+        with StudyServer(folder).running() as server:
+
+            def play(position: int, participant_id: str) -> None:
+                rng = np.random.default_rng([seed, position])
+                behaviour = SimulatedParticipant(delay=click_seconds, seed=seed)
+                results[participant_id] = play_participant(StudyClient(server.url), participant_id, behaviour, rng=rng)
+
+            threads = [
+                threading.Thread(target=play, args=(position, participant.id))
+                for position, participant in enumerate(server.study.plan.participants)
+            ]
+            for thread in threads:
+                thread.start()
+            for thread in threads:
+                thread.join()
+    if len(results) != participants:
+        raise RuntimeError(f"{participants - len(results)} simulated participant(s) failed")
+    between = [result["between"][:-1] for result in results.values()]  # the last: update + final evaluation
+    last = [result["between"][-1] for result in results.values()]
+    return {
+        "between_mazes": percentiles([wait["round_trip"] for waits in between for wait in waits]),
+        "before_questionnaire": percentiles([wait["round_trip"] for wait in last]),
+        "evaluated_every": every,
+    }
+
+
+def run_between(args: argparse.Namespace, results: dict) -> None:
+    table = results.setdefault("between_mazes", {})
+    for body in args.bodies.split(","):
+        for method in args.methods.split(","):
+            for participants in (int(count) for count in args.participants.split(",")):
+                entry = {}
+                for mode, background in (("old", False), ("new", True)):
+                    entry[mode] = measure_between(
+                        body, method, participants, background, args.between_episodes, args.click_seconds, args.seed
+                    )
+                old, new = entry["old"]["between_mazes"], entry["new"]["between_mazes"]
+                goal = GOAL_BETWEEN_P95_SECONDS.get(participants)
+                entry["new_over_old_p95"] = round(new["p95_ms"] / old["p95_ms"], 3) if old["p95_ms"] else None
+                entry["goal_p95_ms"] = goal * 1000 if goal is not None else None
+                entry["goal_met"] = goal is not None and new["p95_ms"] is not None and new["p95_ms"] <= goal * 1000
+                table[f"{body}/{method}/{participants}"] = entry
+                print(
+                    f"{body:5s} {method:14s} {participants} participant(s): next p50/p95 old {old['p50_ms']}/"
+                    f"{old['p95_ms']} ms, new {new['p50_ms']}/{new['p95_ms']} ms (p95 new/old "
+                    f"{entry['new_over_old_p95']}); goal p95 <= {entry['goal_p95_ms']} ms: "
+                    f"{'met' if entry['goal_met'] else 'NOT met'}; before the questionnaire p95 old "
+                    f"{entry['old']['before_questionnaire']['p95_ms']} ms, new "
+                    f"{entry['new']['before_questionnaire']['p95_ms']} ms",
+                    flush=True,
+                )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--part", choices=("clicks", "between", "all"), default="all")
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--bodies", default="point,ant")
+    parser.add_argument("--methods", default="dagger,noise,multi_policy,reward", help="for --part between")
+    parser.add_argument("--participants", default="1,4", help="participants at once, for --part between")
+    parser.add_argument("--between-episodes", type=int, default=8, help="mazes per trial, for --part between")
+    parser.add_argument("--click-seconds", type=float, default=1.0, help="mean delay before a simulated click")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
         "--out",
@@ -84,7 +167,20 @@ def main() -> None:
     )
     args = parser.parse_args()
     torch.set_num_threads(1)
-    results = {"cpu": platform.processor() or platform.machine(), "torch_threads": 1, "bodies": {}}
+    results = {
+        "cpu": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        "load_average_at_start": os.getloadavg(),
+        "torch_threads": 1,
+        "click_seconds": args.click_seconds,
+        "bodies": {},
+    }
+    if args.part in ("between", "all"):
+        run_between(args, results)
+    if args.part == "between":
+        atomic_write_json(args.out, results)
+        print(f"wrote {args.out}")
+        return
     for body in args.bodies.split(","):
         figures = measure(body, args.episodes, args.seed)
         results["bodies"][body] = figures

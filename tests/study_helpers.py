@@ -5,7 +5,14 @@ from pathlib import Path
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.settings import StudySettings, save_settings
 
-TINY_SETTINGS = {"maze_size": 4, "eval_every": 2, "eval_episodes": 1, "final_eval_episodes": 2, "gradient_steps": 20}
+TINY_SETTINGS = {
+    "maze_size": 4,
+    "eval_every": 2,
+    "eval_episodes": 1,
+    "final_eval_episodes": 2,
+    "gradient_steps": 20,
+    "background_updates": False,  # the experiments' order; tests of the background update turn it on
+}
 
 
 def make_tiny_study(
@@ -55,7 +62,8 @@ def open_session(folder: Path, participant_id: str = "P01", clock=None):
 
     plan = load_plan(folder)
     participant = next(p for p in plan.participants if p.id == participant_id)
-    return ParticipantSession(folder, plan, participant, load_settings(folder), clock=clock or time.time)
+    timer = clock or time.monotonic  # a fake clock drives the durations too
+    return ParticipantSession(folder, plan, participant, load_settings(folder), clock=clock or time.time, timer=timer)
 
 
 def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) -> dict:
@@ -67,3 +75,28 @@ def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) ->
         clock.advance(seconds)
     x, y = oracle_click(state)
     return session.label(state["query"]["id"], float(x), float(y))
+
+
+def fresh_copy(template: Path, tmp_path: Path) -> tuple[Path, Path]:
+    """A copy of a played study ``template`` (made once per module) under ``tmp_path``: its folder and P01's."""
+    import shutil
+
+    folder = tmp_path / "study"
+    shutil.copytree(template, folder)
+    return folder, folder / "participants" / "P01"
+
+
+def play_to_episode_end(session) -> None:
+    """Starts the trial if at its intro, then clicks as the oracle until the maze ends."""
+    if session.phase == "intro":
+        session.start_trial()
+    while session.phase == "label":
+        click_once(session)
+
+
+def play_trial(session) -> None:
+    """Plays mazes until the trial closes (its questionnaire, or the next trial's intro after a practice)."""
+    trial = session.trial_index
+    while session.trial_index == trial and session.phase in ("intro", "label", "episode_over"):
+        play_to_episode_end(session)
+        session.next_episode()

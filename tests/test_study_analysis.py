@@ -178,7 +178,7 @@ def test_episode_columns_are_the_documented_server_format():
     documented = (
         "participant trial method label practice seed episode success expert_cost cumulative_expert_cost attempts "
         "low_level_steps beta dataset_size removed eval_success eval_attempts eval_mazes layout seconds_per_label "
-        "time_on_task"
+        "time_on_task learner_updates"
     )
     assert EPISODE_COLUMNS == tuple(documented.split())
     import antmaze_hirl.study.analysis as analysis

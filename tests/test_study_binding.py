@@ -67,3 +67,19 @@ def test_study_settings_never_hold_nan_or_infinity():
     for value in (float("inf"), float("nan")):
         with pytest.raises(ValueError, match="subgoal_reach_m must be"):
             StudySettings.for_body("point", subgoal_reach_m=value)
+
+
+def test_deleting_server_lock_lets_no_second_server_in(tmp_path):
+    from study_helpers import make_tiny_study
+
+    from antmaze_hirl.study.store import StudyInUse, StudyLock
+
+    folder = make_tiny_study(tmp_path / "study")
+    first = StudyLock(folder)
+    try:
+        (folder / StudyLock.FILE_NAME).unlink()  # the file goes; the folder's OS lock stays
+        with pytest.raises(StudyInUse, match="already served"):
+            StudyLock(folder)
+    finally:
+        first.release()
+    StudyLock(folder).release()  # free again once the first lets go

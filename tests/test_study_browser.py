@@ -178,7 +178,9 @@ def refused_points(state):
 def test_the_page_refuses_bad_clicks_shows_busy_and_summary_and_fits_the_window(tmp_path, width, height):
     from antmaze_hirl.study.server import StudyServer
 
-    folder = make_tiny_study(tmp_path / "study", participants=1, methods=("dagger",), episodes=1, practice=2)
+    folder = make_tiny_study(
+        tmp_path / "study", participants=1, methods=("dagger",), episodes=1, practice=2, background_updates=True
+    )
     images = SCREENSHOT.parent
     with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
@@ -193,6 +195,7 @@ def test_the_page_refuses_bad_clicks_shows_busy_and_summary_and_fits_the_window(
         page.keyboard.press("Enter")
         page.get_by_role("button", name="Start").wait_for()
         assert page.locator("#intro-learner").is_visible()  # the orange suggestion is explained
+        assert "This part has 2 mazes and takes about" in page.locator("#intro-length").inner_text()
         press_tab_until(page, "Start")
         page.keyboard.press("Enter")
         page.keyboard.press("Enter")  # a double start sends one request and shows no protocol error

@@ -3,7 +3,6 @@
 import csv
 import json
 import pickle
-import shutil
 import threading
 import time
 
@@ -11,13 +10,14 @@ import httpx
 import numpy as np
 import pandas as pd
 import pytest
-from study_helpers import click_once, make_tiny_study, open_session
+from study_helpers import click_once, fresh_copy, make_tiny_study, open_session
 
+from antmaze_hirl.study.checkpoint import load_checkpoint, save_checkpoint
 from antmaze_hirl.study.data import CLICK_COLUMNS, EPISODE_COLUMNS, load_clicks, load_episodes
 from antmaze_hirl.study.logs import DamagedLog, append_csv_row, append_json_record, read_csv_rows, read_json_records
 from antmaze_hirl.study.plan import load_plan
 from antmaze_hirl.study.server import StudyServer
-from antmaze_hirl.study.session import DamagedRecords
+from antmaze_hirl.study.session import DamagedRecords, DemonstrationLog, TrialState
 from antmaze_hirl.study.store import Study
 
 TOKEN = "durability-token-0123456789"
@@ -49,9 +49,7 @@ def one_episode_template(tmp_path_factory):
 @pytest.fixture
 def one_episode_in(one_episode_template, tmp_path):
     """A fresh copy of :func:`one_episode_template` (played once per module): its folder and the participant's."""
-    folder = tmp_path / "study"
-    shutil.copytree(one_episode_template, folder)
-    return folder, folder / "participants" / "P01"
+    return fresh_copy(one_episode_template, tmp_path)
 
 
 def test_a_torn_last_line_is_trimmed_on_restart_and_the_trim_logged(one_episode_in):
@@ -125,33 +123,39 @@ def test_old_format_logs_without_checksums_still_load_and_keep_their_format(tmp_
 
 def test_a_checkpoint_with_flipped_bytes_stops_the_participant_naming_the_file(one_episode_in):
     folder, participant = one_episode_in
-    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    checkpoint = participant / "trial1" / "checkpoint.pt"
     data = bytearray(checkpoint.read_bytes())
-    for offset in range(200, 220):  # 20 flipped bytes inside the pickle
+    for offset in range(200, 220):  # 20 flipped bytes inside the archive
         data[offset] ^= 0xFF
     checkpoint.write_bytes(bytes(data))
     before = (participant / "episodes.csv").read_bytes()
-    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl is damaged"):
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pt is damaged"):
         open_session(folder)
     assert (participant / "episodes.csv").read_bytes() == before
 
 
-def test_an_old_format_checkpoint_without_a_hash_still_loads(one_episode_in):
+@pytest.mark.parametrize("header", [b"", b"antmaze_hirl trial checkpoint v2\n" + b"0" * 64 + b"\n"], ids=["bare", "v2"])
+def test_an_old_pickled_checkpoint_is_refused_with_a_message_and_never_unpickled(one_episode_in, tmp_path, header):
     folder, participant = one_episode_in
-    checkpoint = participant / "trial1" / "checkpoint.pkl"
-    data = checkpoint.read_bytes()
-    checkpoint.write_bytes(data.split(b"\n", 2)[2])  # the bare pickle the kit wrote before the hash
-    session = open_session(folder)
-    assert session.state()["episode"]["number"] == 2
-    session.close()
-    pickle.loads(checkpoint.read_bytes())  # untouched: still the bare pickle
+    marker = tmp_path / "payload-ran"
+
+    class Payload:
+        def __reduce__(self):
+            return (open, (str(marker), "w"))
+
+    (participant / "trial1" / "checkpoint.pt").unlink()
+    legacy = participant / "trial1" / "checkpoint.pkl"  # what versions before the torch format wrote
+    legacy.write_bytes(header + pickle.dumps(Payload()))
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl is a pickled checkpoint .* can run code"):
+        open_session(folder)
+    assert not marker.exists() and legacy.read_bytes().endswith(pickle.dumps(Payload()))
 
 
 def test_a_missing_checkpoint_stops_the_participant_instead_of_restarting_the_trial(one_episode_in):
     folder, participant = one_episode_in
-    (participant / "trial1" / "checkpoint.pkl").unlink()
+    (participant / "trial1" / "checkpoint.pt").unlink()
     before = (participant / "episodes.csv").read_bytes()
-    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl is missing.*1 episode"):
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pt is missing.*1 episode"):
         open_session(folder)
     assert (participant / "episodes.csv").read_bytes() == before  # no episode 0 written again
 
@@ -264,16 +268,15 @@ def test_a_click_with_neither_name_or_both_differing_is_refused_naming_file_and_
 
 
 def _rewrite_checkpoint(checkpoint, change):
-    """Re-pickles the checkpoint's trial state after ``change(demonstrations.__dict__)``, as a bare pickle."""
-    data = checkpoint.read_bytes().split(b"\n", 2)[2]  # the pickle after the magic and hash lines
-    state = pickle.loads(data)
+    """Saves the checkpoint's trial state again after ``change(demonstrations.__dict__)``."""
+    state = load_checkpoint(checkpoint, extra_classes=(TrialState, DemonstrationLog))
     change(state.demonstrations.__dict__)
-    checkpoint.write_bytes(pickle.dumps(state))  # bare pickles still load (see above)
+    save_checkpoint(state, checkpoint)
 
 
 def test_a_checkpoint_pickled_with_step_resumes_and_saves_high_level_step(one_episode_in):
     folder, participant = one_episode_in
-    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    checkpoint = participant / "trial1" / "checkpoint.pt"
     _rewrite_checkpoint(checkpoint, lambda log: log.update(step=log.pop("high_level_step")))
     session = open_session(folder)
     play_one_episode(session)
@@ -287,7 +290,7 @@ def test_a_checkpoint_pickled_with_step_resumes_and_saves_high_level_step(one_ep
 
 def test_a_checkpoint_with_both_step_names_differing_stops_the_participant_naming_file_and_key(one_episode_in):
     folder, participant = one_episode_in
-    checkpoint = participant / "trial1" / "checkpoint.pkl"
+    checkpoint = participant / "trial1" / "checkpoint.pt"
     _rewrite_checkpoint(checkpoint, lambda log: log.update(step=[s + 1 for s in log["high_level_step"]]))
-    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pkl .*'high_level_step' and its old name 'step'"):
+    with pytest.raises(DamagedRecords, match=r"trial1/checkpoint.pt .*'high_level_step' and its old name 'step'"):
         open_session(folder)

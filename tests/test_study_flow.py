@@ -119,7 +119,7 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
         participant = folder / "participants" / "P01"
         saved = {name: (participant / name).read_bytes() for name in ("episodes.csv", "clicks.jsonl", "events.jsonl")}
         trial_folder = participant / "trial1"  # without a practice trial the first compared trial is 1
-        checkpoint = (trial_folder / "checkpoint.pkl").read_bytes()
+        checkpoint = (trial_folder / "checkpoint.pt").read_bytes()
     finally:
         server.send_signal(signal.SIGKILL)
         server.wait()
@@ -132,7 +132,7 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
         assert resumed["labels"] == int(read_csv(participant / "episodes.csv")[0]["expert_cost"])
         for name, content in saved.items():
             assert (participant / name).read_bytes().startswith(content), name  # earlier data intact
-        assert (trial_folder / "checkpoint.pkl").read_bytes() == checkpoint
+        assert (trial_folder / "checkpoint.pt").read_bytes() == checkpoint
         events = [json.loads(line)["event"] for line in (participant / "events.jsonl").open()]
         assert events[-1] == "restored"
         while resumed["phase"] == "label":  # the participant goes on to the end of the trial

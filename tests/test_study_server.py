@@ -1,5 +1,7 @@
 """The study server over real HTTP: token, Host and Origin checks, and every bad input refused without a trace."""
 
+import socket
+
 import httpx
 import pytest
 from study_helpers import make_tiny_study, snapshot
@@ -51,6 +53,24 @@ def test_foreign_host_and_cross_site_origin_are_refused(served, client):
     assert client.get("/api/study", headers={"Origin": server.base_url}).status_code == 200
 
 
+@pytest.mark.parametrize(
+    "headers", [{"Host": "[::1"}, {"Host": "[::1:8765"}, {"Origin": "http://[::1"}, {"Origin": "http://]x["}], ids=str
+)
+def test_a_malformed_host_or_origin_is_a_403_with_a_json_error_not_a_500(served, headers):
+    server, _ = served
+    raw = "".join(f"{name}: {value}\r\n" for name, value in {"Host": f"127.0.0.1:{server.port}", **headers}.items())
+    with socket.create_connection(("127.0.0.1", server.port), timeout=30) as connection:
+        request = f"GET /api/study HTTP/1.1\r\n{raw}X-Study-Token: {server.token}\r\nConnection: close\r\n\r\n"
+        connection.sendall(request.encode())
+        chunks = []
+        while chunk := connection.recv(65536):
+            chunks.append(chunk)
+    reply = b"".join(chunks).decode()
+    status = int(reply.split(" ", 2)[1])
+    assert status == 403, reply
+    assert '"error"' in reply
+
+
 def test_bad_requests_get_a_4xx_with_a_message_and_change_nothing(served, client):
     _, folder = served
     assert client.post("/api/participants/P02/start", json={}).status_code == 200
@@ -63,6 +83,13 @@ def test_bad_requests_get_a_4xx_with_a_message_and_change_nothing(served, client
         ("/api/participants/P02/label", None, b'{"query": 1, "x": 1e999, "y": 0}', 400, "finite"),
         ("/api/participants/P02/label", {"query": query, "x": "left", "y": 0.0}, None, 400, "finite number"),
         ("/api/participants/P02/label", {"query": query, "x": 0.0, "y": 0.0, "z": 1}, None, 400, "unknown field"),
+        (
+            "/api/participants/P02/label",
+            {"query": query, "x": 0.0, "y": 0.0, "response_seconds": 1e308},
+            None,
+            400,
+            "response_seconds",
+        ),
         ("/api/participants/P02/label", None, b"not json", 400, "not valid JSON"),
         ("/api/participants/P02/label", None, b"[1, 2]", 400, "JSON object"),
         ("/api/participants/P02/label", None, b"{" + b" " * MAX_BODY_BYTES + b"}", 413, "larger than"),

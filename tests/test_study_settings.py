@@ -29,8 +29,13 @@ SETTINGS_KEYS = [
     "decay",
     "held_out_layouts",
     "show_learner_subgoal",
+    "background_updates",
 ]
 """The keys of a study folder's settings.json, in the order written since 0.2.0 (TrialSettings' first)."""
+
+
+PAGE_KEYS = ("show_learner_subgoal", "background_updates")
+"""The study's own settings: how the page and the server run a trial, not what the experiment is."""
 
 
 def experiment_field(name):
@@ -38,7 +43,7 @@ def experiment_field(name):
 
 
 def test_the_shared_fields_are_every_study_setting_but_the_page_one():
-    assert list(EXPERIMENT_FIELDS) == [key for key in SETTINGS_KEYS if key != "show_learner_subgoal"]
+    assert list(EXPERIMENT_FIELDS) == [key for key in SETTINGS_KEYS if key not in PAGE_KEYS]
 
 
 @pytest.mark.parametrize("name", EXPERIMENT_FIELDS)
@@ -59,7 +64,7 @@ def test_the_study_declares_only_the_pages_setting_and_inherits_the_rest():
         node for node in ast.parse(source).body if isinstance(node, ast.ClassDef) and node.name == "StudySettings"
     )
     declared = [node.target.id for node in study_class.body if isinstance(node, ast.AnnAssign)]
-    assert declared == ["show_learner_subgoal"]
+    assert declared == list(PAGE_KEYS)
     assert issubclass(StudySettings, TrialSettings) and issubclass(ExperimentConfig, TrialSettings)
     assert EXPERIMENT_FIELDS == tuple(field.name for field in fields(TrialSettings))
 
@@ -98,7 +103,7 @@ def test_settings_json_keeps_its_keys_and_old_files_still_load(tmp_path):
     (tmp_path / SETTINGS_FILE).write_text(json.dumps(old, indent=2))
     loaded = load_settings(tmp_path)
     renamed = {("subgoal_reach_m" if key == "expert_max_distance" else key): value for key, value in old.items()}
-    assert asdict(loaded) == {**renamed, "held_out_layouts": False}
+    assert asdict(loaded) == {**renamed, "held_out_layouts": False, "background_updates": False}  # as it ran
     expected = ExperimentConfig(body="ant", episodes=5, maze_size=3, subgoal_reach_m=2.0, **SETTINGS_BEFORE_PROTOCOL_2)
     assert loaded.experiment_config(5) == expected  # a study evaluates as protocol 1, one maze at a time
 
@@ -118,3 +123,30 @@ def test_a_settings_file_with_the_reach_under_both_keys_is_one_line_naming_both(
     message = str(error.value)
     assert "\n" not in message and str(tmp_path / SETTINGS_FILE) in message
     assert "'subgoal_reach_m' and its old name 'expert_max_distance' hold different values (2.0 against 3.0)" in message
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [("decay", -1, "decay must be a finite number >= 1"), ("eval_every", 0, "eval_every must be an int in \\[1,")],
+)
+def test_a_settings_file_gets_the_command_lines_bounds(tmp_path, key, value, message):
+    save_settings(StudySettings.for_body("point"), tmp_path)
+    written = json.loads((tmp_path / SETTINGS_FILE).read_text())
+    (tmp_path / SETTINGS_FILE).write_text(json.dumps({**written, key: value}))
+    with pytest.raises(ValueError, match=message):
+        load_settings(tmp_path)
+
+
+def test_study_init_refuses_to_rewrite_a_started_studys_settings(tmp_path, capsys):
+    from antmaze_hirl.cli import main
+
+    folder = tmp_path / "study"
+    assert main(["study", "init", str(folder), "--body", "point", "--participants", "1", "--eval-every", "2"]) == 0
+    before = (folder / SETTINGS_FILE).read_bytes()
+    (folder / "participants" / "P01").mkdir(parents=True)
+    (folder / "participants" / "P01" / "progress.json").write_text('{"trial_index": 0, "phase": "label"}')
+    with pytest.raises(SystemExit) as exit_code:
+        main(["study", "init", str(folder), "--body", "point", "--participants", "1", "--eval-every", "99"])
+    assert exit_code.value.code == 2
+    assert "already holds participant data" in capsys.readouterr().err
+    assert (folder / SETTINGS_FILE).read_bytes() == before

@@ -342,11 +342,14 @@ def _sb3_algorithm(path: Path) -> Any:
 
 
 def _load_sb3(spec: SuiteSpec, path: Path, env: Any) -> Any:
+    from antmaze_hirl.sb3_ext.loading import LOAD_ERRORS
+
     algorithm = _sb3_algorithm(path)
     try:
         model = algorithm.load(path, device="cpu", custom_objects={"replay_buffer_class": None, "buffer_size": 1})
-    except (zipfile.BadZipFile, KeyError, ValueError, EOFError) as error:
-        raise ValueError(f"{path} is not a loadable SB3 {algorithm.__name__} zip: {error}") from error
+    except LOAD_ERRORS as error:
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"{path} is not a loadable SB3 {algorithm.__name__} zip (damaged?): {reason}") from error
     if model.observation_space != env.observation_space or model.action_space.shape != env.action_space.shape:
         raise ValueError(
             f"policy {path} observes {_space_text(model.observation_space)}, but suite {spec.name!r} ({spec.body}) "
@@ -356,9 +359,13 @@ def _load_sb3(spec: SuiteSpec, path: Path, env: Any) -> Any:
 
 
 def _low_level_text(spec: SuiteSpec, low_level: Any) -> str:
-    if low_level is not None:
-        return type(low_level).__name__
     from antmaze_hirl.sb3_ext.loading import policy_fingerprint
+
+    if low_level is not None:
+        # An SB3 model is named by its weights, so a report says which low level made it.
+        policy = getattr(low_level, "policy", None)
+        weights = f" {policy_fingerprint(low_level)}" if hasattr(policy, "state_dict") else ""
+        return f"{type(low_level).__name__}{weights}"
     from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
     return f"shipped {spec.body} policy {policy_fingerprint(load_shipped_policy(spec.body))}"
@@ -547,7 +554,8 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--policy",
         required=True,
         help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip "
-        "of a high-level model or a saved DAgger learner (required)",
+        "of a high-level model or a saved DAgger learner (required; SB3 zips hold pickles that can run code: load "
+        "only files you trust)",
     )
     parser.add_argument(
         "--episodes-per-task",
@@ -600,6 +608,12 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         help="for a leaderboard submission: the training run's seed (default: none)",
     )
     parser.add_argument(
+        "--low-level",
+        default=None,
+        help="the low level: a zip path or a name, shipped or (the ant's) ensemble; the report records its "
+        "fingerprint (default: the body's shipped low level)",
+    )
+    parser.add_argument(
         "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -626,6 +640,11 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     import torch
 
     torch.set_num_threads(1)  # small-batch forwards: a second thread only contends (shared/README.md)
+    low_level = None
+    if args.low_level is not None:
+        from antmaze_hirl.sb3_ext.loading import load_low_level
+
+        low_level = load_low_level(spec.body, args.low_level)  # a name, or a zip of this body (checked)
     report = score_policy(
         spec.name,
         args.policy,
@@ -636,6 +655,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         subgoal_reach_m=args.subgoal_reach_m,
         clearance_m=args.clearance_m,
+        low_level=low_level,
     )
     command = ["antmaze-hirl", "benchmark", spec.name, "--policy", str(args.policy)]
     command += ["--episodes-per-task", str(report["episodes_per_task"]), "--seed", str(args.seed)]
@@ -645,9 +665,12 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     command += [] if args.policy_name is None else ["--policy-name", args.policy_name]
     command += [] if args.budget is None else ["--budget", args.budget]
     command += [] if args.training_seed is None else ["--training-seed", str(args.training_seed)]
+    command += [] if args.low_level is None else ["--low-level", str(args.low_level)]
     report["command"] = shlex.join(command + (["--tasks", args.tasks] if args.tasks else []))
     if args.policy_name is not None:
         report["policy"] = args.policy_name
+    if args.low_level is not None:
+        report["low_level"] = f"{args.low_level}: {report['low_level']}"
     submission = {"budget": args.budget, "seed": args.training_seed}
     if any(value is not None for value in submission.values()):
         report["submission"] = {key: value for key, value in submission.items() if value is not None}

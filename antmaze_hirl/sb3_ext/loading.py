@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import pickle
 import warnings
 import zipfile
 from pathlib import Path
@@ -18,6 +19,41 @@ from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
 
 _ACTING_ONLY = {"replay_buffer_class": None, "replay_buffer_kwargs": {}, "buffer_size": 1}
+LOAD_ERRORS = (zipfile.BadZipFile, KeyError, ValueError, EOFError, pickle.UnpicklingError, RuntimeError)
+"""What loading a damaged SB3 zip raises: a broken archive, a missing or garbled member, a truncated tensor file
+(torch's ``RuntimeError``), a pickle that torch's weights-only loader refuses."""
+LOW_LEVEL_NAMES: dict[str, dict[str, str]] = {
+    "ant": {"shipped": "ant_td3.zip", "ensemble": "ant_td3.zip"},
+    "point": {"shipped": "point_td3.zip"},
+}
+"""Low levels loadable by name, per body: the file each names in ``antmaze_hirl/policies/``. ``shipped`` is the
+body's default; the ant's ``ensemble`` is the seven-head stage-6 action ensemble, whatever ships by default, so
+that every result made with it replays by name."""
+
+
+def low_level_path(body: str, name_or_path: str | Path | None) -> Path:
+    """The zip that a low-level name (:data:`LOW_LEVEL_NAMES`) or path stands for; ``None``: the shipped one.
+
+    A value is a name when it is one of the body's names; anything else is a path, and a value that looks like
+    neither (no ``.zip`` suffix, no folder, no such file) is reported as an unknown name.
+
+    Raises:
+        ValueError: For an unknown body, or a value that is neither a known name nor a zip path.
+    """
+    names = LOW_LEVEL_NAMES.get(body)
+    if names is None:
+        raise ValueError(f"unknown body {body!r}; choose one of {sorted(LOW_LEVEL_NAMES)}")
+    if name_or_path is None:
+        return shipped_policy_path(body)
+    text = str(name_or_path)
+    if text in names:
+        return shipped_policy_path(body).with_name(names[text])
+    path = Path(name_or_path)
+    if path.suffix != ".zip" and len(path.parts) == 1 and not path.exists():
+        raise ValueError(
+            f"unknown low level {text!r} for the {body}: give a zip path or one of {', '.join(sorted(names))}"
+        )
+    return path
 
 
 def off_policy_algorithms() -> tuple[type[OffPolicyAlgorithm], ...]:
@@ -86,7 +122,8 @@ def load_low_level(body: str, path: str | Path | None = None, *, device: str = "
     Args:
         body: ``"ant"`` or ``"point"``.
         path: An SB3 off-policy ``.zip`` (TD3, DDPG, SAC, or TQC with sb3-contrib installed; ``train-low``
-            writes ``policy.zip``). Default: the policy shipped in the package.
+            writes ``policy.zip``), or a name of :data:`LOW_LEVEL_NAMES` (``"shipped"``, the ant's
+            ``"ensemble"``). Default: the policy shipped in the package.
         device: Torch device for the networks.
 
     Returns:
@@ -94,18 +131,19 @@ def load_low_level(body: str, path: str | Path | None = None, *, device: str = "
 
     Raises:
         FileNotFoundError: If there is no file at ``path``.
-        ValueError: If the file is not an SB3 zip, holds a policy of an unsupported algorithm, or was
-            trained for another body.
+        ValueError: If the file is not an SB3 zip (or is damaged), holds a policy of an unsupported algorithm,
+            was trained for another body, or ``path`` is an unknown name.
     """
-    path = Path(path) if path is not None else shipped_policy_path(body)
+    path = low_level_path(body, path)
     if not path.is_file():
         raise FileNotFoundError(f"no low-level policy at {path}; train one with `antmaze-hirl train-low --body {body}`")
     algorithm = algorithm_of(path)
     try:
         # Loading for acting only: no HER buffer (it would need an env and allocate buffer_size rows).
         model = algorithm.load(path, device=device, custom_objects=_ACTING_ONLY)
-    except (zipfile.BadZipFile, KeyError, ValueError, EOFError) as error:
-        raise ValueError(f"{path} is not a loadable SB3 {algorithm.__name__} zip: {error}") from error
+    except LOAD_ERRORS as error:
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"{path} is not a loadable SB3 {algorithm.__name__} zip (damaged?): {reason}") from error
     probe = ReachEnv(body)  # the body's observation space; the simulator is released right away
     expected = probe.observation_space
     probe.close()

@@ -6,12 +6,14 @@ Data format (what the study server writes; ``DIR`` is the study folder):
 - ``DIR/participants/<pid>/episodes.csv``: one row per finished episode, columns
   ``participant, trial, method, label, practice, seed, episode, success, expert_cost,
   cumulative_expert_cost, attempts, low_level_steps, beta, dataset_size, removed, eval_success,
-  eval_attempts, eval_mazes, layout, seconds_per_label, time_on_task``. ``practice`` and ``success``
+  eval_attempts, eval_mazes, layout, seconds_per_label, time_on_task, learner_updates``. ``practice`` and ``success``
   are ``True``/``False``; ``episode`` counts from 0 within the trial (as the trainer's records do);
   ``eval_*`` are empty except at evaluated episodes (``eval_mazes``: how many mazes); ``layout`` is
   the episode's maze (:func:`~antmaze_hirl.envs.layouts.canonical_layout`); ``seconds_per_label`` is
   the mean time from a query being shown to the click over the episode's labels (empty if the
-  episode had none); ``time_on_task`` is the seconds the episode took.
+  episode had none); ``time_on_task`` is the seconds the episode took; ``learner_updates`` is how many
+  learner updates the policy that played the maze had had (with background updates one fewer than the
+  episodes before it; empty in files written before the column existed).
 - ``DIR/participants/<pid>/answers.jsonl``: one JSON object per line, ``{"participant": "P01",
   "trial": 1, "method": "noise", "label": "Method B", "ratings": {"mental_demand": 3, ...},
   "comment": "...", "time": 1764000000.0}``.
@@ -34,6 +36,7 @@ import pandas as pd
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_text
 from antmaze_hirl.plotting import plot_panels
+from antmaze_hirl.study.consistency import check_study_files
 from antmaze_hirl.study.data import finished_trials, load_answers, load_episodes
 from antmaze_hirl.study.figures import save_likert, save_per_participant
 from antmaze_hirl.study.plan import StudyPlan, load_plan, williams_design
@@ -121,6 +124,7 @@ def analyze(study_dir: str | Path) -> Path:
     """
     study_dir = Path(study_dir)
     plan = load_plan(study_dir)
+    check_study_files(study_dir, plan)  # every log's damage, and files that disagree (a deleted episodes.csv)
     episodes = load_episodes(study_dir, plan)
     finished = finished_trials(episodes.loc[~episodes["practice"].astype(bool)], plan)
     answers = load_answers(study_dir, plan)

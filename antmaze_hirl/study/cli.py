@@ -5,10 +5,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from antmaze_hirl.study.settings import StudySettings
+from antmaze_hirl.study.settings import QUESTIONNAIRE_SECONDS, SECONDS_PER_MAZE_PRIOR, StudySettings
 
 _DEFAULT_METHODS = "dagger,noise,multi_policy,reward"
 _STUDY_DEFAULTS = StudySettings()
+
+DEFAULT_PRACTICE = 10
+"""Practice mazes by default: about 4 min at :data:`~antmaze_hirl.study.settings.SECONDS_PER_MAZE_PRIOR`."""
+
+DEFAULT_EPISODES = 25
+"""Mazes per compared method by default: with the practice, 4 methods and their questionnaires, about 54 min at
+:data:`~antmaze_hirl.study.settings.SECONDS_PER_MAZE_PRIOR` (10 + 4 x 25 = 110 mazes x 25 s + 4 x 90 s)."""
 
 
 def add_study_parser(subparsers: argparse._SubParsersAction, formatter_class: type = argparse.HelpFormatter) -> None:
@@ -62,8 +69,14 @@ def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> No
     parser.add_argument("--body", choices=("point", "ant"), required=True, help="robot the participants guide")
     parser.add_argument("--methods", default=_DEFAULT_METHODS, help="comma-separated methods to compare")
     parser.add_argument("--participants", type=int, required=True, help="number of participants")
-    parser.add_argument("--episodes", type=int, default=100, help="episodes per compared trial")
-    parser.add_argument("--practice", type=int, default=30, help="episodes of the practice trial (0: none)")
+    parser.add_argument(
+        "--episodes",
+        type=int,
+        default=DEFAULT_EPISODES,
+        help="mazes per compared trial (default: sized so that practice and 4 methods fit one sitting of about "
+        "an hour; see docs/guides/user-study.md)",
+    )
+    parser.add_argument("--practice", type=int, default=DEFAULT_PRACTICE, help="mazes of the practice trial (0: none)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the orders, labels and mazes")
     parser.add_argument("--maze-size", type=int, default=None, help="free cells per maze side (default: per body)")
     parser.add_argument(
@@ -79,6 +92,12 @@ def _add_init(commands: argparse._SubParsersAction, formatter_class: type) -> No
         "--final-eval-episodes", type=int, default=_STUDY_DEFAULTS.final_eval_episodes, help="mazes after each trial"
     )
     parser.add_argument("--hide-learner", action="store_true", help="do not draw the learner's proposed subgoal")
+    parser.add_argument(
+        "--update-before-next-maze",
+        action="store_true",
+        help="run each learner update before the next maze, as the experiments do (participants wait for it); "
+        "default: in the background, the learner lagging one maze",
+    )
     parser.set_defaults(handler=_run_init)
 
 
@@ -86,6 +105,12 @@ def _run_init(args: argparse.Namespace) -> int:
     from antmaze_hirl.study.plan import make_plan, save_plan
     from antmaze_hirl.study.settings import save_settings
 
+    started = [path.parent.name for path in sorted(Path(args.dir).glob("participants/*/*")) if path.is_file()]
+    if started:
+        raise FileExistsError(
+            f"{args.dir} already holds participant data ({len(set(started))} participant(s), e.g. "
+            f"{sorted(set(started))[0]}): its plan and settings are not rewritten; use a new folder"
+        )
     methods = [method.strip() for method in args.methods.split(",")]
     plan = make_plan(
         args.body, methods, args.participants, episodes=args.episodes, practice=args.practice, seed=args.seed
@@ -95,6 +120,7 @@ def _run_init(args: argparse.Namespace) -> int:
         "eval_episodes": args.eval_episodes,
         "final_eval_episodes": args.final_eval_episodes,
         "show_learner_subgoal": not args.hide_learner,
+        "background_updates": not args.update_before_next_maze,
     }
     if args.maze_size is not None:
         overrides["maze_size"] = args.maze_size
@@ -105,6 +131,12 @@ def _run_init(args: argparse.Namespace) -> int:
     save_settings(settings, args.dir)
     orders = ", ".join(f"{p.id}: {' > '.join(plan.label_of(m) for m in p.order)}" for p in plan.participants)
     print(f"wrote {args.dir / 'plan.json'} and {args.dir / 'settings.json'}; orders {orders}")
+    mazes = args.practice + args.episodes * len(methods)
+    minutes = (mazes * SECONDS_PER_MAZE_PRIOR + len(methods) * QUESTIONNAIRE_SECONDS) / 60
+    print(
+        f"each participant: {mazes} mazes and {len(methods)} questionnaires, about {minutes:.0f} min at "
+        f"{SECONDS_PER_MAZE_PRIOR:.0f} s per maze (an assumption until your pilot measures it)"
+    )
     print(f"next: antmaze-hirl study serve {args.dir}")
     return 0
 

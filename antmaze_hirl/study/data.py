@@ -30,12 +30,27 @@ EPISODE_COLUMNS: tuple[str, ...] = (
     *(column for column in COLUMNS if column not in ("method", "seed")),
     "seconds_per_label",
     "time_on_task",
+    "learner_updates",
 )
-"""Columns of ``episodes.csv``, in order."""
+"""Columns of ``episodes.csv``, in order. ``learner_updates``: how many learner updates the policy that played
+the maze had had (with background updates, one fewer than the episodes before it: the learner lags a maze)."""
+
+ADDED_EPISODE_COLUMNS: tuple[str, ...] = ("learner_updates",)
+"""Trailing columns of :data:`EPISODE_COLUMNS` that files written before them lack (read as empty)."""
+
+
+def read_episode_rows(path: str | Path) -> list[dict[str, str]]:
+    """The rows of an ``episodes.csv`` as strings (:func:`~antmaze_hirl.study.logs.read_csv_rows`), old files too.
+
+    Raises:
+        DamagedLog: For a damaged line or a header of other columns (names the file and line).
+    """
+    return read_csv_rows(path, EPISODE_COLUMNS, ADDED_EPISODE_COLUMNS)
+
 
 _BOOLEAN_COLUMNS = ("practice", "success")
 _TEXT_COLUMNS = ("participant", "method", "label", "layout")
-_OPTIONAL_COLUMNS = ("eval_success", "eval_attempts", "seconds_per_label", "eval_mazes")
+_OPTIONAL_COLUMNS = ("eval_success", "eval_attempts", "seconds_per_label", "eval_mazes", *ADDED_EPISODE_COLUMNS)
 _NUMBER_COLUMNS = tuple(c for c in EPISODE_COLUMNS if c not in _BOOLEAN_COLUMNS + _TEXT_COLUMNS)
 
 
@@ -95,7 +110,7 @@ def _episodes_file(study_dir: str | Path, participant: str) -> Path | None:
 
 def _read_episodes(path: Path, plan: StudyPlan) -> pd.DataFrame:
     try:
-        rows = read_csv_rows(path, EPISODE_COLUMNS)
+        rows = read_episode_rows(path)
     except (OSError, UnicodeDecodeError) as error:
         raise ValueError(f"{path} is not a readable CSV: {' '.join(str(error).split())}") from None
     if not rows:

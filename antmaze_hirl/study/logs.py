@@ -27,9 +27,11 @@ Files written up to 0.2.0 name some keys otherwise: they read through
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
+import os
 import re
 import warnings
 import zlib
@@ -68,14 +70,41 @@ def sealed_json_line(record: Mapping[str, Any]) -> str:
 
 
 def append_json_record(path: str | Path, record: Mapping[str, Any]) -> None:
-    """Appends ``record`` to a JSON-lines log, with its checksum, durably."""
-    durable_append(path, sealed_json_line(record))
+    """Appends ``record`` to a JSON-lines log, with its checksum, durably (or not at all: :func:`append_or_undo`)."""
+    append_or_undo(path, sealed_json_line(record))
+
+
+def append_or_undo(path: str | Path, text: str) -> None:
+    """Appends ``text`` durably, or, if that fails, cuts the file back to what it was and re-raises.
+
+    A full disk can fail the append after some bytes reached the file (at flush or fsync): left there,
+    they would be a torn or an unconfirmed line, and a retry would add it again. The cut is best effort
+    (a cut needs no space); a file that did not exist is removed.
+
+    Raises:
+        OSError: The append's error (``ENOSPC``, ``EIO``...), after the cut.
+    """
+    path = Path(path)
+    try:
+        size: int | None = path.stat().st_size
+    except FileNotFoundError:
+        size = None
+    try:
+        durable_append(path, text)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            if size is None:
+                path.unlink(missing_ok=True)
+            else:
+                os.truncate(path, size)
+        raise
 
 
 def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, Any]) -> None:
-    """Appends ``row`` to a CSV log, with its checksum, durably; a new file gets the header first.
+    """Appends ``row`` to a CSV log, with its checksum, durably or not at all; a new file gets the header first.
 
-    A legacy file (its header has no ``crc32`` column) gets legacy rows, so it stays one format.
+    A legacy file (its header has no ``crc32`` column) gets legacy rows, so it stays one format; a file
+    whose header is an older, shorter prefix of ``columns`` (columns added since) gets rows of its own columns.
     """
     path = Path(path)
     sealed = True
@@ -83,12 +112,15 @@ def append_csv_row(path: str | Path, columns: Sequence[str], row: Mapping[str, A
         with path.open(encoding="utf-8", newline="") as handle:
             header = next(csv.reader([handle.readline()]), [])
         sealed = bool(header) and header[-1] == CHECKSUM_FIELD
+        own = header[:-1] if sealed else header
+        if 0 < len(own) < len(columns) and list(columns[: len(own)]) == own:
+            columns = own  # written before the later columns existed: it stays as it was
         text = ""
     else:
         text = _csv_text([*columns, CHECKSUM_FIELD]) + "\n"
     body = _csv_text([csv_cell(row.get(column, "")) for column in columns])
     text += f"{body},{line_checksum(body)}\n" if sealed else body + "\n"
-    durable_append(path, text)
+    append_or_undo(path, text)
 
 
 def csv_cell(value: Any) -> str:
@@ -122,14 +154,18 @@ def read_json_records(path: str | Path) -> list[tuple[int, dict[str, Any]]]:
     Blank lines are skipped; a torn last line is skipped with a warning (see the module docs).
 
     Raises:
-        DamagedLog: For a line that fails its checksum or is not a JSON object (names file and line).
+        DamagedLog: For a line that fails its checksum, is not a JSON object, or repeats an earlier line exactly
+            (names file and line).
     """
     path = Path(path)
-    records, sealed_seen = [], False
+    records, sealed_seen, seen = [], False, {}
     for number, line in _lines(path):
         if not line.strip():
             continue
         where = f"{path}:{number}"
+        if line in seen:  # every record has a time or an id: an exact repeat is a copied line
+            raise DamagedLog(f"{where}: repeats line {seen[line]} exactly: a copied or replayed line")
+        seen[line] = number
         match = _JSON_SEAL.match(line)
         if match is not None:
             body, checksum = match.group(1) + "}", match.group(2)
@@ -150,10 +186,12 @@ def read_json_records(path: str | Path) -> list[tuple[int, dict[str, Any]]]:
     return records
 
 
-def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, str]]:
+def read_csv_rows(path: str | Path, columns: Sequence[str], added: Sequence[str] = ()) -> list[dict[str, str]]:
     """The rows of a CSV log as dicts of strings, checksums verified and the ``crc32`` column removed.
 
     An empty file has no rows. A torn last line is skipped with a warning (see the module docs).
+    ``added`` names trailing columns of ``columns`` that files written before them lack: such a file is
+    read with those cells empty.
 
     Raises:
         DamagedLog: For a header other than ``columns`` (with or without ``crc32``), or a row that fails
@@ -165,6 +203,12 @@ def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, st
         return []
     (_, header_line), rows = lines[0], lines[1:]
     header = next(csv.reader([header_line]), [])
+    full = list(columns)
+    for count in range(len(added) + 1):  # the header of this version, then of the versions before each addition
+        own = full[: len(full) - count]
+        if header in (own, [*own, CHECKSUM_FIELD]) and columns[len(own) :] == tuple(added[len(added) - count :]):
+            columns = own
+            break
     if header == [*columns, CHECKSUM_FIELD]:
         sealed = True
     elif header == list(columns):
@@ -183,5 +227,5 @@ def read_csv_rows(path: str | Path, columns: Sequence[str]) -> list[dict[str, st
         cells = next(csv.reader([body]), [])
         if len(cells) != len(columns):
             raise DamagedLog(f"{where}: {len(cells)} cells; expected {len(columns)}")
-        result.append(dict(zip(columns, cells, strict=True)))
+        result.append({**dict.fromkeys(full, ""), **dict(zip(columns, cells, strict=True))})
     return result

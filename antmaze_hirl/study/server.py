@@ -28,6 +28,7 @@ API (all under ``/api``, JSON in and out; errors, unknown paths and methods incl
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import hmac
 import json
@@ -49,6 +50,7 @@ from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException
+from starlette.requests import ClientDisconnect
 
 from antmaze_hirl.study.camera import CameraUnavailable
 from antmaze_hirl.study.questionnaire import SCALE_MAX, TLX_ITEMS
@@ -60,6 +62,21 @@ MAX_BODY_BYTES = 16_384
 
 MAX_JSON_DEPTH = 8
 """Deepest nesting of objects and arrays accepted in a body (a questionnaire needs 2)."""
+
+HEADER_TIMEOUT_SECONDS = 10.0
+"""A connection that has not sent a whole request head this long after it opened is closed (no slowloris)."""
+
+BODY_CHUNK_TIMEOUT_SECONDS = 10.0
+"""Longest wait for the next piece of a request body; longer is a 408 (a slow body is cut off)."""
+
+KEEP_ALIVE_SECONDS = 5
+"""An idle keep-alive connection is closed after this long."""
+
+MAX_CONNECTIONS = 64
+"""Connections and requests served at once; more are answered 503 by uvicorn."""
+
+MAX_HEADER_BYTES = 16_384
+"""Largest request head (request line and headers) h11 buffers; more is a 400 from h11."""
 
 MIN_TOKEN_CHARS = 16
 """Shortest token accepted (a random one has 32 characters)."""
@@ -94,6 +111,15 @@ logger = logging.getLogger(__name__)
 
 class BodyTooLarge(BadInput):
     """A request body over :data:`MAX_BODY_BYTES` (answered with HTTP 413)."""
+
+
+class BodyTimeout(BadInput):
+    """A request body that stalls for :data:`BODY_CHUNK_TIMEOUT_SECONDS` (answered with HTTP 408)."""
+
+
+def printable(text: str, limit: int = 300) -> str:
+    """``text`` with control and other unprintable characters escaped as ``ascii()`` does, cut: safe to log."""
+    return "".join(char if char.isprintable() else ascii(char)[1:-1] for char in text[:limit])
 
 
 def _reject_constant(name: str) -> Any:
@@ -149,14 +175,25 @@ def _nesting_depth(text: str, stop: int = MAX_JSON_DEPTH) -> int:
     return deepest
 
 
-async def read_body(request: Request, limit: int = MAX_BODY_BYTES) -> bytes:
+async def read_body(request: Request, limit: int = MAX_BODY_BYTES, chunk_timeout: float | None = None) -> bytes:
     """The request's body, read chunk by chunk and refused as soon as it passes ``limit`` bytes.
 
     Raises:
         BodyTooLarge: Without reading the rest (a chunked body has no Content-Length to check first).
+        BodyTimeout: If the next chunk takes more than ``chunk_timeout`` seconds (default
+            :data:`BODY_CHUNK_TIMEOUT_SECONDS`).
     """
+    if chunk_timeout is None:
+        chunk_timeout = BODY_CHUNK_TIMEOUT_SECONDS
     chunks, size = [], 0
-    async for chunk in request.stream():
+    stream = request.stream()
+    while True:
+        try:
+            chunk = await asyncio.wait_for(anext(stream), chunk_timeout)
+        except StopAsyncIteration:
+            break
+        except TimeoutError:
+            raise BodyTimeout(f"request body stalled for {chunk_timeout:g} s") from None
         size += len(chunk)
         if size > limit:
             raise BodyTooLarge(f"request body of more than {limit} bytes is larger than {limit}")
@@ -189,8 +226,19 @@ def check_token(token: str) -> str:
 
 
 def _host_name(netloc: str) -> str:
-    # "127.0.0.1:8765" -> "127.0.0.1", "[::1]:8765" -> "::1", "localhost" -> "localhost"
-    return (urlsplit(f"//{netloc}").hostname or "").lower()
+    # "127.0.0.1:8765" -> "127.0.0.1", "[::1]:8765" -> "::1", "localhost" -> "localhost"; "[::1" -> "" (refused)
+    try:
+        return (urlsplit(f"//{netloc}").hostname or "").lower()
+    except ValueError:  # an unbalanced "[" or a bad port
+        return ""
+
+
+def _origin_netloc(origin: str) -> str | None:
+    # The Origin's host:port, or None for one that is not a URL (refused as cross-site).
+    try:
+        return urlsplit(origin).netloc.lower()
+    except ValueError:
+        return None
 
 
 def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPBACK_HOSTS) -> Any:
@@ -209,12 +257,41 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
 
     def refuse(request: Request, status: int, message: str) -> Any:
         client = request.client.host if request.client else "?"
-        logger.warning("refused %s %s from %s: %d %s", request.method, request.url.path, client, status, message)
+        path, shown = printable(request.url.path), printable(message)  # no escape bytes from a URL reach a console
+        logger.warning("refused %s %s from %s: %d %s", printable(request.method), path, client, status, shown)
         return JSONResponse({"error": message}, status_code=status)
 
-    statuses = {BodyTooLarge: 413, BadInput: 400, ProtocolError: 409, DamagedRecords: 409, UnknownParticipant: 404}
+    def disconnected(request: Request, exc: ClientDisconnect) -> Any:
+        # The client went away mid-body: nothing to answer and nothing wrong on this side, so no traceback.
+        logger.warning("client left during %s %s", printable(request.method), printable(request.url.path))
+        return Response(status_code=400)
+
+    def failed(request: Request, exc: Exception) -> Any:
+        # A bug: JSON like every other answer; the traceback goes to the server's log, not to the page.
+        logger.error("error serving %s %s", printable(request.method), printable(request.url.path), exc_info=exc)
+        return JSONResponse({"error": "internal error: the experimenter can find it in the server's log"}, 500)
+
+    app.add_exception_handler(ClientDisconnect, disconnected)
+    app.add_exception_handler(Exception, failed)
+    statuses = {
+        BodyTooLarge: 413,
+        BodyTimeout: 408,
+        BadInput: 400,
+        ProtocolError: 409,
+        DamagedRecords: 409,
+        UnknownParticipant: 404,
+    }
     for kind, status in statuses.items():
         app.add_exception_handler(kind, lambda request, exc, status=status: refuse(request, status, str(exc)))
+
+    def unsaved(request: Request, exc: OSError) -> Any:
+        # A write that failed (a full disk): the session changed nothing, so the page may simply try again.
+        logger.error("could not save for %s %s: %s", request.method, request.url.path, exc)
+        reason = exc.strerror or type(exc).__name__
+        message = f"the server could not save ({reason}): nothing was changed; try again once the disk has room"
+        return JSONResponse({"error": message}, status_code=503)
+
+    app.add_exception_handler(OSError, unsaved)
     app.add_exception_handler(
         HTTPException,
         lambda request, exc: refuse(request, exc.status_code, str(exc.detail)),  # 404, 405
@@ -238,7 +315,7 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         if _host_name(host) not in hosts:
             return refuse(request, 403, f"Host header {host!r} is not allowed (allowed: {sorted(hosts)})")
         origin = request.headers.get("origin")
-        if origin is not None and urlsplit(origin).netloc.lower() != host.lower():
+        if origin is not None and _origin_netloc(origin) != host.lower():
             return refuse(request, 403, f"cross-site request from Origin {origin!r} refused")
         path = request.url.path
         if path == "/" or path.startswith("/api/"):
@@ -349,6 +426,43 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
     return app
 
 
+def uvicorn_config(app: Any) -> Any:
+    """Uvicorn's settings for the study app: the timeouts and limits above, a request-head deadline."""
+    import uvicorn
+
+    return uvicorn.Config(
+        app,
+        log_level="warning",
+        lifespan="off",
+        http=_header_deadline_protocol(),
+        timeout_keep_alive=KEEP_ALIVE_SECONDS,
+        limit_concurrency=MAX_CONNECTIONS,
+        h11_max_incomplete_event_size=MAX_HEADER_BYTES,
+    )
+
+
+def _header_deadline_protocol() -> type:
+    # uvicorn times out idle keep-alive connections only after a response: a connection that never finishes
+    # its first request head would be held for ever. This closes it HEADER_TIMEOUT_SECONDS after it opened.
+    from uvicorn.protocols.http.h11_impl import H11Protocol
+
+    class HeaderDeadlineH11Protocol(H11Protocol):
+        def connection_made(self, transport: Any) -> None:  # type: ignore[override]
+            super().connection_made(transport)
+            self._head_deadline = self.loop.call_later(HEADER_TIMEOUT_SECONDS, self._head_overdue)
+
+        def _head_overdue(self) -> None:
+            if self.cycle is None and not self.transport.is_closing():  # no whole request head yet
+                logger.warning("closed a connection that sent no request head in %g s", HEADER_TIMEOUT_SECONDS)
+                self.transport.close()
+
+        def connection_lost(self, exc: Exception | None) -> None:
+            self._head_deadline.cancel()
+            super().connection_lost(exc)
+
+    return HeaderDeadlineH11Protocol
+
+
 def new_token() -> str:
     """A random URL-safe token (Jupyter-style)."""
     return secrets.token_urlsafe(24)
@@ -409,8 +523,7 @@ class StudyServer:
         url_host, hosts = url_host_and_allowed(host)
         self._url_host = url_host
         app = create_app(self.study, token=self.token, allowed_hosts=hosts)
-        config = uvicorn.Config(app, log_level="warning", lifespan="off")
-        self._server = uvicorn.Server(config)
+        self._server = uvicorn.Server(uvicorn_config(app))
         self._thread = threading.Thread(target=self._server.run, kwargs={"sockets": [self.socket]}, daemon=True)
 
     @property
@@ -530,7 +643,7 @@ def serve(
     if url_host != "127.0.0.1" and host not in LOOPBACK_HOSTS:
         print(f"  or, on this machine: {study_url('127.0.0.1', port, token)}")
     try:
-        uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off")).run(sockets=[sock])
+        uvicorn.Server(uvicorn_config(app)).run(sockets=[sock])
     finally:
         sock.close()
         study.close()

@@ -13,12 +13,17 @@ On disk, per participant (``DIR/participants/<id>/``), everything is written whe
 * ``answers.jsonl``: one questionnaire per analysed trial;
 * ``events.jsonl``: trial starts and ends, pauses, resumptions after a restart;
 * ``progress.json``: where the participant is (atomically replaced);
-* ``trial<k>/checkpoint.pkl``: the trainer after the last finished episode (atomically replaced);
+* ``trial<k>/checkpoint.pt``: the trainer after the last finished episode, and the background updates still
+  queued (atomically replaced; :mod:`antmaze_hirl.study.checkpoint`: loading it cannot run code);
 * ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
 * ``trial<k>/learner.zip``: the learner's weights after the trial.
 
 The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`); the checkpoint starts with a
-SHA-256 of its content. A server killed mid-episode (even ``kill -9``) restarts the participant from the
+SHA-256 of its content. Every step writes its records before it changes the session's memory, and
+``progress.json`` last: a failed write (a full disk) leaves memory and disk as they were, and files that
+disagree (:mod:`antmaze_hirl.study.consistency`) stop the participant. With ``background_updates`` the
+learner updates run while the next mazes are played (:mod:`antmaze_hirl.study.background`).
+A server killed mid-episode (even ``kill -9``) restarts the participant from the
 checkpoint: only the episode in progress is lost, and it is replayed on the same maze (the trainer's
 random state is saved). On that restart a partial last line of a log (a crash inside an append) is cut
 off and the cut logged as a ``torn_tail_trimmed`` event. A damaged or missing checkpoint, a damaged log
@@ -28,12 +33,10 @@ silently restarted, and the other participants go on.
 
 from __future__ import annotations
 
-import hashlib
+import contextlib
 import io
-import json
 import math
 import os
-import pickle
 import threading
 import time
 from dataclasses import dataclass, field
@@ -42,25 +45,33 @@ from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.atomic_io import atomic_write_bytes, atomic_write_json, atomic_write_with, trim_torn_tail
+from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_with, trim_torn_tail
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.trainer import EpisodeRun, ExecutedStep
 from antmaze_hirl.envs.layouts import canonical_layout
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.old_folders import current_study_record
 from antmaze_hirl.experiments.runner import TrialEnvs, make_trainer
+from antmaze_hirl.study.background import UpdateQueue
 from antmaze_hirl.study.camera import AntCamera, CameraUnavailable
-from antmaze_hirl.study.data import EPISODE_COLUMNS
+from antmaze_hirl.study.checkpoint import (
+    CHECKPOINT_FILE,
+    LEGACY_CHECKPOINT_FILE,
+    CheckpointError,
+    load_checkpoint,
+    save_checkpoint,
+)
+from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records, read_progress
+from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
 from antmaze_hirl.study.logs import (
     DamagedLog,
     append_csv_row,
     append_json_record,
     csv_cell,
-    read_csv_rows,
 )
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
-from antmaze_hirl.study.settings import StudySettings
+from antmaze_hirl.study.settings import QUESTIONNAIRE_SECONDS, SECONDS_PER_MAZE_PRIOR, StudySettings
 
 
 class ProtocolError(Exception):
@@ -90,6 +101,9 @@ CLICK_SLACK_PIXELS = 3.0
 
 MIN_CANVAS_SCREEN_PIXELS = 520.0
 """The smallest the page's 640-px canvas is shown (window 1024x640; study.css: max-height 100vh - 120px)."""
+
+MAX_RESPONSE_SECONDS = 3600.0
+"""Longest time a page may report for one click (an hour: longer is a broken clock, not a person thinking)."""
 
 LOGS = ("events.jsonl", "clicks.jsonl", "answers.jsonl", "episodes.csv")
 """A participant's append-only logs (events first: it records the trims of the others)."""
@@ -175,6 +189,9 @@ class TrialState:
     rows: list[dict[str, Any]]
     demonstrations: DemonstrationLog
     successes: int = 0
+    pending: list[dict[str, Any]] = field(default_factory=list)
+    """With background updates: the mazes whose update and evaluation are not in ``trainer`` yet, in order,
+    each ``{"row": ..., "update_due": bool}`` (a restore runs them before the next maze)."""
 
 
 class ParticipantSession:
@@ -190,7 +207,9 @@ class ParticipantSession:
         plan: The study plan.
         participant: This participant's part of it.
         settings: The study's trial settings.
-        clock: Wall-clock seconds (injected by tests).
+        clock: Wall-clock seconds, for the times in the records (injected by tests).
+        timer: Monotonic seconds, for durations (time on task, seconds per label, pauses), which a change
+            of the wall clock must not stretch (injected by tests).
 
     """
 
@@ -202,11 +221,13 @@ class ParticipantSession:
         settings: StudySettings,
         *,
         clock: Any = time.time,
+        timer: Any = time.monotonic,
     ) -> None:
         self.plan = plan
         self.participant = participant
         self.settings = settings
         self.clock = clock
+        self.timer = timer
         self.folder = Path(study_dir) / "participants" / participant.id
         self.lock = threading.RLock()  # one request at a time per participant; the server has many threads
         self.trial_index = 0
@@ -226,6 +247,11 @@ class ParticipantSession:
         self._walk: list[dict[str, Any]] = []  # the learner's unasked steps the page has not shown yet
         self._camera: AntCamera | None = None
         self._last_trial: dict[str, Any] | None = None  # how the trial just closed went (the page's summary)
+        self._episode_saved = False  # the ended episode's row and checkpoint are on disk; the trial is not closed
+        self._updates = UpdateQueue()  # the updates after the last mazes, running meanwhile
+        self._csv_rows = 0  # how many of the trial's rows episodes.csv holds
+        self._episode_learner_updates = 0  # updates behind the learner that plays the current maze
+        self._closing_row: dict[str, Any] | None = None  # the ended episode's row, kept while its save fails
         try:
             self._restore()
         except BaseException:
@@ -267,8 +293,12 @@ class ParticipantSession:
                 "practice": trial.practice,
                 "episodes": trial.episodes,
             }
+            if self.phase == "intro":
+                state["length"] = self._length_estimate()
             if self._trial is not None:
-                state["episode"] = {"number": len(self._trial.rows) + 1, "of": trial.episodes}
+                ended = self._run is not None and self._run.done
+                number = self._trial.trainer.episodes_done + (0 if ended else 1)
+                state["episode"] = {"number": number, "of": trial.episodes}
                 state["successes"] = self._trial.successes
                 state["labels"] = int(self._trial.trainer.total_expert_cost + self._labels_this_episode())
             if self.phase == "label" and self._run is not None and self._run.request is not None:
@@ -276,10 +306,29 @@ class ParticipantSession:
             elif self.phase == "episode_over" and self._walk and self._run is not None and self._run.record:
                 # An episode the learner walked unasked: the page shows the walk, then asks for the next maze.
                 state.update(self._scene(self._run.executed[-1].observation, None))
-                state["episode_end"] = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
+                state["episode_end"] = {"number": number, "success": bool(self._run.record.success)}
             if self._walk:
                 state["walk"] = self._walk
             return state
+
+    def _length_estimate(self) -> dict[str, Any]:
+        # How long this part and the rest take: the participant's own seconds per maze once they have some.
+        seconds = SECONDS_PER_MAZE_PRIOR
+        path = self.folder / "episodes.csv"
+        with contextlib.suppress(OSError, ValueError):
+            times = [float(row["time_on_task"]) for row in read_episode_rows(path) if row["time_on_task"]]
+            if times:
+                seconds = max(float(np.mean(times)), 5.0)
+        trials = self.participant.trials[self.trial_index :]
+        rated = sum(not trial.practice for trial in trials)
+        rest = sum(trial.episodes for trial in trials) * seconds + rated * QUESTIONNAIRE_SECONDS
+        return {
+            "seconds_per_maze": round(seconds, 1),
+            "part_minutes": max(1, round(trials[0].episodes * seconds / 60)),
+            "parts_left": len(trials),
+            "minutes_left": max(1, round(rest / 60)),
+            "measured": seconds != SECONDS_PER_MAZE_PRIOR,
+        }
 
     def _labels_this_episode(self) -> int:
         return 0 if self._run is None or self._run.request is None else self._run.request.label_index
@@ -322,7 +371,13 @@ class ParticipantSession:
 
     # ---------------------------------------------------------------------------------- actions
     def start_trial(self) -> dict[str, Any]:
-        """Starts the current trial (phase ``intro`` -> ``label``)."""
+        """Starts the current trial (phase ``intro`` -> ``label``).
+
+        Raises:
+            ProtocolError: If no trial is to start now, or the study is paused.
+            TrialCannotStart: If the settings give a trial that cannot be built (nothing written).
+            OSError: If a write fails (a full disk): the participant stays at the intro; the call may be repeated.
+        """
         with self.lock:
             if self.paused_since is not None:
                 raise ProtocolError("the study is paused: resume before starting")
@@ -331,7 +386,8 @@ class ParticipantSession:
             trial = self.trial
             assert trial is not None  # "intro" is only set while a trial remains
             # Build the trial (envs, trainer, first maze: all in memory) before anything is written, so a
-            # trial that cannot be built leaves the participant at "intro" with no trace on disk.
+            # trial that cannot be built leaves the participant at "intro" with no trace on disk; then write,
+            # and a failed write (a full disk) puts the participant back at "intro" too.
             self.phase = "label"
             try:
                 self._open_trial(resume=False)
@@ -340,8 +396,13 @@ class ParticipantSession:
                 raise TrialCannotStart(
                     f"trial {trial.index} of participant {self.participant.id} cannot start: {error}"
                 ) from error
-            self._log_event("trial_start", trial=trial.index)
-            self._save_progress()
+            try:
+                if trial.index not in self._records().started:  # logged by a start that failed
+                    self._log_event("trial_start", trial=trial.index)
+                self._save_progress(self.trial_index, "label")
+            except BaseException:
+                self.phase, self._trial, self._run = "intro", None, None
+                raise
             return self.state()
 
     def label(self, query_id: Any, x: Any, y: Any, response_seconds: Any = None) -> dict[str, Any]:
@@ -366,10 +427,10 @@ class ParticipantSession:
                 raise ProtocolError(
                     f"query {query_id} is not open (the open query is {self._query_id}): already answered?"
                 )
-            subgoal = self._check_click(x, y)
             seconds = self._check_response_seconds(response_seconds)
-            now = self.clock()
-            server_seconds = max(now - self._query_shown_at, 0.0)
+            subgoal = self._check_click(x, y)
+            now, elapsed = self.clock(), self.timer()
+            server_seconds = max(elapsed - self._query_shown_at, 0.0)
             assert self._run is not None and self._run.request is not None and self._trial is not None
             request = self._run.request
             append_json_record(
@@ -395,7 +456,7 @@ class ParticipantSession:
             if self._run.done:
                 assert self._run.record is not None
                 self.phase = "episode_over"  # the page calls next_episode() while it animates the last walk
-                self._episode_ended_at = now  # the person's time ends with their last click, not the update
+                self._episode_ended_at = elapsed  # the person's time ends with their last click, not the update
                 episode_end = {"number": len(self._trial.rows) + 1, "success": bool(self._run.record.success)}
             else:
                 self._show_query()
@@ -409,6 +470,8 @@ class ParticipantSession:
 
         Raises:
             ProtocolError: If no episode has just ended, or the study is paused.
+            OSError: If a write fails (a full disk): the episode stays open as it was (its update and
+                evaluation are kept, not run again); the call may be repeated.
         """
         with self.lock:
             if self.paused_since is not None:
@@ -417,9 +480,18 @@ class ParticipantSession:
                 raise ProtocolError(
                     f"no episode has just ended (participant {self.participant.id} is at {self.phase!r})"
                 )
-            self._walk = []  # shown
-            self._finish_episode()
-            if self.phase == "label":
+            # Each step writes first and changes memory after, so a failed write (a full disk) leaves the
+            # episode open, as it was, and a retry goes on from the step that failed.
+            if not self._episode_saved:
+                self._save_episode()
+            assert self._trial is not None and self.trial is not None and self._run is not None
+            if self._run.record.episode >= self.trial.episodes - 1:
+                self._close_trial()
+            else:
+                self._walk = []  # shown
+                self._run, self._episode_saved = None, False
+                self.phase = "label"
+                self._start_episode()
                 self._show_query()
             return self.state()
 
@@ -429,6 +501,8 @@ class ParticipantSession:
         Raises:
             ProtocolError: If no questionnaire is due, or it is for another trial.
             BadInput: If the answers are incomplete or out of range.
+            OSError: If a write fails (a full disk): the questionnaire stays due (an answer already on disk is
+                kept and not written again); the call may be repeated.
         """
         with self.lock:
             if self.phase != "questionnaire":
@@ -454,7 +528,8 @@ class ParticipantSession:
                 "comment": answers.comment,
                 "time": self.clock(),
             }
-            append_json_record(self.folder / "answers.jsonl", record)
+            if trial.index not in self._records().answered:  # kept by an answer that failed after
+                append_json_record(self.folder / "answers.jsonl", record)
             self._next_trial()
             return self.state()
 
@@ -468,17 +543,17 @@ class ParticipantSession:
         with self.lock:
             if not isinstance(paused, bool):
                 raise BadInput(f"paused must be true or false, got {paused!r}")
-            now = self.clock()
+            now = self.timer()
             if paused and self.paused_since is None:
+                self._log_event("pause")  # the record first: a failed write leaves the study running
                 self.paused_since = now
-                self._log_event("pause")
             elif not paused and self.paused_since is not None:
+                self._log_event("resume")
                 if self.phase == "label" and self._run is not None:  # inside an episode
                     pause = max(now - max(self.paused_since, self._episode_started_at), 0.0)
                     self._episode_paused += pause
                     self._query_shown_at += pause  # a pause is not thinking time
                 self.paused_since = None
-                self._log_event("resume")
             return self.state()
 
     def camera_frame(self) -> bytes:
@@ -497,8 +572,10 @@ class ParticipantSession:
             return self._camera.frame(self._env.unwrapped.reach.sim.data)
 
     def close(self) -> None:
-        """Releases the trial's simulators and the camera."""
+        """Releases the trial's simulators and the camera (after a background update that uses them ends)."""
         with self.lock:
+            self._updates.stop()  # nothing is lost: the checkpoint holds the unfinished updates as pending
+            self._updates = UpdateQueue()
             if self._envs is not None:
                 self._envs.close()
             self._envs = self._env = None
@@ -537,9 +614,11 @@ class ParticipantSession:
     def _check_response_seconds(value: Any) -> float | None:
         if value is None:
             return None
-        seconds = _json_number(value, "response_seconds", ">= 0")
-        if seconds < 0:
-            raise BadInput(f"response_seconds must be a finite number >= 0, got {value!r}")
+        seconds = _json_number(value, "response_seconds", f"from 0 to {MAX_RESPONSE_SECONDS:g}")
+        if not 0 <= seconds <= MAX_RESPONSE_SECONDS:
+            raise BadInput(
+                f"response_seconds must be a finite number from 0 to {MAX_RESPONSE_SECONDS:g}, got {value!r}"
+            )
         return seconds
 
     def _make_trainer(self, trial: TrialPlan) -> DAggerTrainer:
@@ -553,11 +632,16 @@ class ParticipantSession:
         if self._env is None:
             self._envs = TrialEnvs(config)
             self._env = self._envs.train
-        checkpoint = self._trial_folder / "checkpoint.pkl"
+        checkpoint = self._trial_folder / CHECKPOINT_FILE
+        legacy = self._trial_folder / LEGACY_CHECKPOINT_FILE
+        if resume and not checkpoint.is_file() and legacy.is_file():
+            checkpoint = legacy  # refused by _load_checkpoint, naming it
         if resume and checkpoint.is_file():
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
             self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
+            if self._trial.pending:  # stopped while updates ran in the background
+                self._finish_pending_updates()
         elif resume and (written := len(self._written_rows())):
             raise DamagedRecords(
                 f"{checkpoint} is missing, but {self.folder / 'episodes.csv'} has {written} episode(s) of trial "
@@ -566,6 +650,8 @@ class ParticipantSession:
             )
         else:
             self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
+        self._episode_saved = False
+        self._csv_rows = len(self._trial.rows)
         if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
             self._close_trial()
         else:
@@ -579,11 +665,12 @@ class ParticipantSession:
     def _start_episode(self) -> None:
         assert self._trial is not None
         self._run = self._trial.trainer.start_episode()
+        self._episode_learner_updates = self._trial.trainer.updates
         # A gating method may let the learner walk before the first request (or the whole episode).
         first = self._run.executed[0].observation if self._run.executed else self._run.request.observation
         self._trail = [[round(float(v), 3) for v in STATE_LAYOUT.agent_xy(first["state"])]]
         self._walk = self._walked(self._run.executed, self._trial.trainer.episodes_done - int(self._run.done))
-        self._episode_started_at = self.clock()
+        self._episode_started_at = self.timer()
         self._episode_paused = 0.0
         self._episode_label_seconds = []
         if self._run.done:
@@ -612,14 +699,96 @@ class ParticipantSession:
 
     def _show_query(self) -> None:
         self._query_id += 1
-        self._query_shown_at = self.clock()
+        self._query_shown_at = self.timer()
 
-    def _finish_episode(self) -> None:
+    def _save_episode(self) -> None:
+        # The ended episode's row, checkpoint and demonstrations, written before memory counts the episode.
+        # With background updates (every maze but a trial's last), the episode is saved with its update still
+        # due (in the pending list) and the update runs on a copy while the next mazes are played.
+        trial, state, run = self.trial, self._trial, self._run
+        assert trial is not None and state is not None and run is not None and run.record is not None
+        final = run.record.episode >= trial.episodes - 1
+        lagged = self.settings.background_updates and not final
+        self._take_updates(wait=not lagged)  # those finished while this maze was played (all, before the last)
+        if self._closing_row is None:  # kept across a failed save: the update and evaluation run once
+            self._closing_row = self._episode_row(update=not lagged)
+        row, success = self._closing_row, bool(run.record.success)
+        queued = self._updates.pending()  # still running: saved as pending with this maze's own
+        pending_before = state.pending
+        if lagged:
+            state.pending = [{"row": job.row, "update_due": job.update_due} for job in queued]
+            state.pending.append({"row": row, "update_due": bool(state.trainer._update_due)})
+        else:
+            state.rows.append(row)
+        state.successes += int(success)
+        state.demonstrations.success.append(success)
+        try:
+            # Checkpoint first, then the rows: a crash between them is repaired from the checkpoint on restart.
+            _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
+            state.demonstrations.save(self._trial_folder / "demonstrations.npz")
+            self._append_new_rows()
+        except BaseException:
+            if lagged:
+                state.pending = pending_before
+            else:
+                state.rows.pop()
+            state.successes -= int(success)
+            state.demonstrations.success.pop()
+            raise
+        self._closing_row = None
+        self._episode_saved = True
+        if lagged:
+            due = self._evaluation_due(int(row["episode"]))
+            evaluate = (lambda learner: self._envs.evaluate(learner, final=False)) if due else None
+            self._updates.submit(state.trainer, row, evaluate)
+
+    def _take_updates(self, *, wait: bool) -> None:
+        # The background updates that have finished (every one, with ``wait``): the newest one's weights go into
+        # the live trainer and their rows join the trial's (written with this maze's save). Not a protocol step:
+        # the pending list on disk holds the same updates, which a restore would run.
+        state = self._trial
+        assert state is not None
+        finished = self._updates.take(wait=wait)
+        if finished:
+            finished[-1].apply_to(state.trainer)
+            state.rows.extend({column: job.row.get(column, "") for column in EPISODE_COLUMNS} for job in finished)
+            state.pending = state.pending[len(finished) :]
+
+    def _finish_pending_updates(self) -> None:
+        # A restore from a checkpoint saved while updates ran in the background: run them here, in order, on the
+        # data as saved (each on all of it: the mazes' data sets of then are not kept), then save.
+        state = self._trial
+        assert state is not None
+        for entry in state.pending:
+            if entry["update_due"]:
+                state.trainer._update(state.trainer.gradient_steps)
+            row = dict(entry["row"])
+            if self._evaluation_due(int(row["episode"])):
+                row.update(self._envs.evaluate(state.trainer.learner, final=False))
+            state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+        state.trainer._update_due = False
+        state.pending = []
+        _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
+        self._append_new_rows()
+
+    def _evaluation_due(self, episode: int) -> bool:
+        return (episode + 1) % self.settings.eval_every == 0
+
+    def _append_new_rows(self) -> None:
+        # The rows memory has and episodes.csv does not yet (each append is all or nothing).
+        assert self._trial is not None
+        for row in self._trial.rows[self._csv_rows :]:
+            self._append_row(row)
+            self._csv_rows += 1
+
+    def _episode_row(self, *, update: bool) -> dict[str, Any]:
+        # The ended episode's row; with ``update``, after the learner update and the evaluation when due.
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         record = run.record
-        run.finish()  # the learner update, before the evaluation (as the experiment runner evaluates)
-        episode = len(state.rows)
+        if update:
+            run.finish()  # the learner update, before the evaluation (as the experiment runner evaluates)
+        episode = record.episode
         row: dict[str, Any] = {
             "participant": self.participant.id,
             "trial": trial.index,
@@ -636,49 +805,48 @@ class ParticipantSession:
             "time_on_task": round(
                 max(self._episode_ended_at - self._episode_started_at - self._episode_paused, 0.0), 3
             ),
+            "learner_updates": self._episode_learner_updates,
         }
         final = episode == trial.episodes - 1
-        if final or (episode + 1) % self.settings.eval_every == 0:
+        if update and (final or self._evaluation_due(episode)):
             row.update(self._envs.evaluate(state.trainer.learner, final=final))
-        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
-        state.successes += int(record.success)
-        state.demonstrations.success.append(bool(record.success))
-        # Checkpoint first, then the row: a crash between them is repaired from the checkpoint on restart.
-        _save_checkpoint(state, self._trial_folder / "checkpoint.pkl")
-        state.demonstrations.save(self._trial_folder / "demonstrations.npz")
-        self._append_row(state.rows[-1])
-        self._run = None
-        if final:
-            self._close_trial()
-        else:
-            self.phase = "label"
-            self._start_episode()
+        return {column: row.get(column, "") for column in EPISODE_COLUMNS}
 
     def _close_trial(self) -> None:
+        # Writes (learner, trial_end once, progress) first; memory moves on only once they are on disk.
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
         state.trainer.learner.save(self._trial_folder / "learner.zip")
-        self._last_trial = {
+        if trial.index not in self._records().ended:  # logged by a close that failed after it
+            self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
+        summary = {
             "label": trial.label,
             "practice": trial.practice,
             "episodes": len(state.rows),
             "successes": state.successes,
             "labels": int(state.trainer.total_expert_cost),
         }
-        self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
-        self._run = None
         if trial.practice:
             self._next_trial()  # the practice trial is recorded, not rated
         else:
+            self._save_progress(self.trial_index, "questionnaire")
             self.phase = "questionnaire"
-            self._save_progress()
+        self._last_trial = summary
+        self._run, self._episode_saved, self._walk = None, False, []
 
     def _next_trial(self) -> None:
-        self.trial_index += 1
+        following = self.trial_index + 1
+        self._save_progress(following, "intro" if following < len(self.participant.trials) else "done")
+        self.trial_index = following
         self._trial = None
         self.close()
         self.phase = "intro" if self.trial is not None else "done"
-        self._save_progress()
+
+    def _records(self) -> ParticipantRecords:
+        try:
+            return participant_records(self.folder)
+        except ValueError as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
 
     def _append_row(self, row: dict[str, Any]) -> None:
         append_csv_row(self.folder / "episodes.csv", EPISODE_COLUMNS, row)
@@ -690,7 +858,7 @@ class ParticipantSession:
         if not path.exists():
             return []
         try:
-            rows = read_csv_rows(path, EPISODE_COLUMNS)
+            rows = read_episode_rows(path)
         except DamagedLog as error:
             raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
         return [row for row in rows if row["trial"] == str(self.trial.index)]
@@ -705,15 +873,12 @@ class ParticipantSession:
                 f"{self.folder / 'episodes.csv'} has {len(written)} row(s) of trial {self.trial.index} that do not "
                 f"match the first {len(written)} of the {len(saved)} in its checkpoint: repeated or changed rows"
             )
-        for row in self._trial.rows[len(written) :]:
-            self._append_row(row)
+        self._csv_rows = len(written)
+        self._append_new_rows()
 
-    def _save_progress(self) -> None:
-        # An episode that ended but is not closed is not saved yet: after a restart it is replayed.
-        phase = "label" if self.phase == "episode_over" else self.phase
-        atomic_write_json(
-            self.folder / "progress.json", {"trial_index": self.trial_index, "phase": phase}, allow_nan=False
-        )
+    def _save_progress(self, trial_index: int, phase: str) -> None:
+        # Called before memory changes (an episode that ended but is not closed is saved as "label": replayed).
+        atomic_write_json(self.folder / "progress.json", {"trial_index": trial_index, "phase": phase}, allow_nan=False)
 
     def _log_event(self, kind: str, **details: Any) -> None:
         event = {"participant": self.participant.id, "event": kind, "time": self.clock(), **details}
@@ -737,24 +902,14 @@ class ParticipantSession:
                 f"{self.folder / 'progress.json'}: trial {self.trial_index} at {self.phase!r} is not a place in "
                 f"participant {self.participant.id}'s {len(self.participant.trials)} trials"
             )
+        try:
+            answered = check_records(self.folder, self.participant, self.trial_index, self.phase)
+        except ValueError as error:
+            raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
+        if self.phase == "questionnaire" and answered:  # killed between the answer and the progress file
+            self._next_trial()
         if self.phase == "label":
             self._open_trial(resume=True)
-
-
-def read_progress(folder: Path) -> tuple[int, str]:
-    """``(trial_index, phase)`` saved in a participant's folder; ``(0, "intro")`` before they start.
-
-    Raises:
-        ValueError: If ``progress.json`` is malformed (names the file).
-    """
-    progress = folder / "progress.json"
-    if not progress.is_file():
-        return 0, "intro"
-    try:
-        saved = json.loads(progress.read_text())
-        return int(saved["trial_index"]), str(saved["phase"])
-    except (json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
-        raise ValueError(f"{progress} is not a participant's progress file: {error}") from error
 
 
 def _json_number(value: Any, name: str, bound: str = "") -> float:
@@ -775,37 +930,49 @@ def _json_number(value: Any, name: str, bound: str = "") -> float:
     return number
 
 
-_CHECKPOINT_MAGIC = b"antmaze_hirl trial checkpoint v2\n"
-"""First bytes of a checkpoint with a hash; a SHA-256 hex line follows, then the pickle."""
-
-
 def _save_checkpoint(state: TrialState, path: Path) -> None:
     trainer = state.trainer
     env, expert = trainer.env, trainer.expert
+    factories = _spawn_factories(trainer)
     trainer.env = trainer.expert = None  # simulators are rebuilt on load; the expert is the page
+    for holder in factories:  # a bound method is no class: the loader would refuse it; made again on load
+        holder.make_policy = None
     try:
-        data = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+        save_checkpoint(state, path)
     finally:
         trainer.env, trainer.expert = env, expert
-    atomic_write_bytes(path, _CHECKPOINT_MAGIC + hashlib.sha256(data).hexdigest().encode() + b"\n" + data)
+        for holder in factories:
+            holder.make_policy = trainer.learner.spawn
+
+
+def _spawn_factories(trainer: DAggerTrainer) -> list[Any]:
+    """The strategy's parts whose ``make_policy`` is the learner's ``spawn`` (set by ``attach``)."""
+    found, pending, seen = [], [trainer.strategy], set()
+    while pending:
+        part = pending.pop()
+        if id(part) in seen or not type(part).__module__.startswith("antmaze_hirl."):
+            continue
+        seen.add(id(part))
+        factory = getattr(part, "make_policy", None)
+        if getattr(factory, "__self__", None) is trainer.learner and getattr(factory, "__name__", "") == "spawn":
+            found.append(part)
+        pending.extend(value for value in vars(part).values() if hasattr(value, "__dict__"))
+    return found
 
 
 def _load_checkpoint(path: Path, env: Any) -> TrialState:
-    """The trial state saved at ``path``; checkpoints from before the hash (a bare pickle) load unchecked.
+    """The trial state saved at ``path`` (:mod:`antmaze_hirl.study.checkpoint`: nothing in it can run).
 
     Raises:
-        DamagedRecords: If the file fails its hash, cannot be unpickled, or holds something else (names it).
+        DamagedRecords: If the file fails its hash, is an old pickled checkpoint or a bare pickle, holds a
+            class off the allow-list or something else than a trial state (names the file).
     """
-    data = path.read_bytes()
-    if data.startswith(_CHECKPOINT_MAGIC):
-        digest, _, data = data[len(_CHECKPOINT_MAGIC) :].partition(b"\n")
-        if hashlib.sha256(data).hexdigest().encode() != digest:
-            raise DamagedRecords(f"{path} is damaged: its content does not match its SHA-256 (restore a backup)")
     try:
-        state = pickle.loads(data)
-    except Exception as error:  # a damaged pickle raises nearly anything (TypeError, KeyError, MemoryError...)
-        raise DamagedRecords(f"{path} is not a readable trial checkpoint: {type(error).__name__}: {error}") from None
+        state = load_checkpoint(path, extra_classes=(TrialState, DemonstrationLog))
+    except (CheckpointError, ValueError) as error:  # ValueError: DemonstrationLog's renamed keys
+        raise DamagedRecords(str(error) if isinstance(error, CheckpointError) else f"{path} {error}") from None
     if not isinstance(state, TrialState):
         raise DamagedRecords(f"{path} holds {type(state).__name__}, not a trial checkpoint")
     state.trainer.env, state.trainer.expert = env, PageExpert()
+    state.trainer.strategy.attach(state.trainer.learner)  # make_policy again (left None by the save)
     return state

@@ -14,6 +14,14 @@ from antmaze_hirl.experiments.old_folders import current_settings
 
 SETTINGS_FILE = "settings.json"
 
+SECONDS_PER_MAZE_PRIOR = 25.0
+"""Seconds a maze takes a participant, for the page's estimate before they have played one: about 6 clicks
+of about 3 s and their walks (the study's default sizes assume it; docs/guides/user-study.md). Once the
+participant has finished mazes, their own mean time per maze replaces it."""
+
+QUESTIONNAIRE_SECONDS = 90.0
+"""Seconds a questionnaire takes, for the page's estimate of what is left."""
+
 
 @dataclass(frozen=True, kw_only=True)
 class StudySettings(TrialSettings):
@@ -28,24 +36,33 @@ class StudySettings(TrialSettings):
 
     Attributes:
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
+        background_updates: Run the learner update (and a due evaluation) after each maze in a background
+            thread while the next maze starts with the learner as it was: no wait between mazes, and the
+            learner lags one maze (:mod:`antmaze_hirl.study.background`; a trial's last maze waits for its
+            update and final evaluation). ``False`` (the default, so that a study folder written before the
+            setting reads as what it ran): the update runs before the next maze, as in the experiments.
+            ``study init`` (:meth:`for_body`) sets it.
     """
 
     show_learner_subgoal: bool = True
+    background_updates: bool = False
 
     def __post_init__(self) -> None:
+        check_cli_bounds(self)
         self.experiment_config(1)  # the experiment's checks name any bad value
         for name in ("subgoal_reach_m", "decay"):  # never NaN or Infinity in settings.json (not JSON)
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
                 raise ValueError(f"{name} must be a finite number, got {value!r}")
-        if not isinstance(self.show_learner_subgoal, bool):
-            raise ValueError(f"show_learner_subgoal must be true or false, got {self.show_learner_subgoal!r}")
+        for name in ("show_learner_subgoal", "background_updates"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
         if self.held_out_layouts:
             check_family_splits(self.maze_size)
 
     @classmethod
     def for_body(cls, body: str, **overrides: Any) -> StudySettings:
-        """The paper protocol's maze family and expert reach for ``body``, held-out layouts on, with ``overrides``.
+        """The paper protocol's maze family and reach for ``body``, held out, background updates on, and ``overrides``.
 
         Raises:
             ValueError: For an unknown body or setting, or a maze size whose family cannot be held out
@@ -56,8 +73,9 @@ class StudySettings(TrialSettings):
         if unknown:
             raise ValueError(f"unknown study setting(s) {unknown}; known: {sorted(known)}")
         held_out = overrides.pop("held_out_layouts", True)
+        background = overrides.pop("background_updates", True)
         family = body_settings(body, held_out_layouts=held_out)
-        return cls(body=body, held_out_layouts=held_out, **{**family, **overrides})
+        return cls(body=body, held_out_layouts=held_out, background_updates=background, **{**family, **overrides})
 
     def experiment_config(self, episodes: int) -> ExperimentConfig:
         """The experiment settings of one trial of ``episodes`` episodes (so the study runs the experiment's code).
@@ -67,6 +85,32 @@ class StudySettings(TrialSettings):
         """
         settings = {name: getattr(self, name) for name in EXPERIMENT_FIELDS}
         return ExperimentConfig(episodes=episodes, protocol=1, evaluation_envs=1, **settings)
+
+
+def check_cli_bounds(settings: StudySettings) -> None:
+    """Checks every numeric setting against the bounds ``study init`` gives its option (``decay`` >= 1, ...).
+
+    A ``settings.json`` edited by hand gets the same checks as the command line, so that a value the CLI
+    refuses (``"decay": -1``) never reaches a trial.
+
+    Raises:
+        ValueError: Naming the setting, its bounds and the value.
+    """
+    from antmaze_hirl.cli_validation import FLOAT_BOUNDS, INT_BOUNDS
+
+    for field in fields(settings):
+        name, value = field.name, getattr(settings, field.name)
+        if value is None or isinstance(value, bool):
+            continue
+        ints = INT_BOUNDS.get(f"study init:{name}", INT_BOUNDS.get(name))
+        floats = FLOAT_BOUNDS.get(f"study init:{name}", FLOAT_BOUNDS.get(name))
+        if ints is not None and not (isinstance(value, int) and ints.low <= value <= ints.high):
+            raise ValueError(f"{name} must be an int in [{ints.low}, {ints.high}], got {value!r}")
+        if floats is not None:
+            number = value if isinstance(value, int | float) else math.nan
+            above = number >= floats.low if floats.low_inclusive else number > floats.low
+            if not (math.isfinite(number) and above and number <= floats.high):
+                raise ValueError(f"{name} must be {floats.describe()}, got {value!r}")
 
 
 EXPERIMENT_FIELDS: tuple[str, ...] = tuple(field.name for field in fields(TrialSettings))

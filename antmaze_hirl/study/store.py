@@ -8,8 +8,9 @@ import os
 import threading
 from pathlib import Path
 
+from antmaze_hirl.study.consistency import check_records, read_progress
 from antmaze_hirl.study.plan import StudyPlan, load_plan
-from antmaze_hirl.study.session import ParticipantSession, read_progress
+from antmaze_hirl.study.session import ParticipantSession
 from antmaze_hirl.study.settings import StudySettings, load_settings
 
 
@@ -28,11 +29,12 @@ class StudyInUse(OSError):
 
 
 class StudyLock:
-    """An exclusive OS lock (``flock``) on ``DIR/server.lock``: one server per study folder.
+    """An exclusive OS lock (``flock``) on the study folder itself and on ``DIR/server.lock``: one server per folder.
 
     Two servers on one folder would both append every click and event. The lock is the kernel's, so
-    it goes with the process that holds it, even after ``kill -9``; the file keeps the holder's PID for
-    the message a second server gives.
+    it goes with the process that holds it, even after ``kill -9``. The folder's lock is the truth: deleting
+    ``server.lock`` (which keeps the holder's PID for the message a second server gives) lets no second
+    server in; the file's lock keeps out servers of earlier versions, which lock only the file.
 
     Args:
         study_dir: The study folder.
@@ -47,26 +49,31 @@ class StudyLock:
         self.path = Path(study_dir) / self.FILE_NAME
         if not Path(study_dir).is_dir():
             raise FileNotFoundError(f"{study_dir} is not a study folder (run 'antmaze-hirl study init' first)")
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        self._folder_fd: int | None = os.open(study_dir, os.O_RDONLY | os.O_DIRECTORY)
+        self._fd: int | None = None
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(self._folder_fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip() or "unknown"
-            os.close(fd)
+            holder = "unknown"
+            with contextlib.suppress(OSError):
+                holder = self.path.read_bytes()[:32].decode("ascii", "replace").strip() or holder
+            self.release()
             raise StudyInUse(
-                f"{study_dir} is already served by PID {holder} (it holds {self.path}); stop that server first"
+                f"{study_dir} is already served by PID {holder} (it holds a lock on the folder); stop that server first"
             ) from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        self._fd: int | None = fd
+        os.ftruncate(self._fd, 0)
+        os.pwrite(self._fd, f"{os.getpid()}\n".encode(), 0)
 
     def release(self) -> None:
-        """Releases the lock (the file stays; its PID line is stale until the next server writes its own)."""
-        if self._fd is not None:
-            with contextlib.suppress(OSError):
-                fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
-            self._fd = None
+        """Releases the locks (the file stays; its PID line is stale until the next server writes its own)."""
+        for fd in (self._fd, self._folder_fd):
+            if fd is not None:
+                with contextlib.suppress(OSError):
+                    fcntl.flock(fd, fcntl.LOCK_UN)
+                os.close(fd)
+        self._fd = self._folder_fd = None
 
 
 class Study:
@@ -123,14 +130,18 @@ class Study:
 
         Raises:
             UnknownParticipant: If the plan has no such participant.
-            ValueError: If its ``progress.json`` is malformed (names the file).
+            ValueError: If its ``progress.json`` is malformed, or its files are damaged or disagree (names the file).
         """
         self._check_known(participant_id)
         with self._lock:
             session = self._sessions.get(participant_id)
         if session is not None:
             return session.trial_index, session.phase
-        return read_progress(self.folder / "participants" / participant_id)
+        folder = self.folder / "participants" / participant_id
+        trial_index, phase = read_progress(folder)
+        if folder.is_dir():  # files that disagree show as damaged here too, not as a fresh participant
+            check_records(folder, self._participants[participant_id], trial_index, phase)
+        return trial_index, phase
 
     def _check_known(self, participant_id: str) -> None:
         if participant_id not in self._participants:

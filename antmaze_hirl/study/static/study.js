@@ -20,7 +20,8 @@ let questionnaireItems = null;
 // What the busy indicator says while the page waits for the server (plain sentences, no internal names).
 const BUSY = {
   start: "Please wait: the maze is loading...",
-  next: "Please wait: the computer is learning from your points, and the next maze is loading...",
+  next: "Please wait: the next maze is loading...",
+  last: "Please wait: the computer is learning from your points and testing itself on new mazes...",
   label: "The robot is walking...",
 };
 
@@ -53,12 +54,42 @@ function plainMessage(error, action) {
     return "Your session cannot go on from here: please call the experimenter.";
   }
   if (error.status === 409) { return WAIT[action] || "Please wait, the page is catching up."; }
+  if (error.status === 503) {
+    return "The study could not save your last step, so it did not count: please call the experimenter.";
+  }
   return "That did not work. Please try again; if it happens again, call the experimenter.";
 }
 
+// A wait over a second shows how long it has lasted, so the page never looks stuck.
+let busyTimer = null;
 function setBusy(text) {
+  clearInterval(busyTimer);
+  busyTimer = null;
   $("busy").hidden = !text;
   $("busy-text").textContent = text || "";
+  if (text) {
+    const started = performance.now();
+    busyTimer = setInterval(() => {
+      const seconds = Math.floor((performance.now() - started) / 1000);
+      if (seconds >= 1) { $("busy-text").textContent = `${text} (${seconds} s)`; }
+    }, 250);
+  }
+}
+
+// The wait after a maze: the last maze of a part also waits for the learner's update and final test.
+function nextBusyText() {
+  return state && state.episode && state.episode.number >= state.episode.of ? BUSY.last : BUSY.next;
+}
+
+let shownMaze = null;  // the maze the status line speaks of (a new maze gets a fresh status)
+
+// After a rated part's last maze the learner's last update and test take a while: the questionnaire is shown at
+// once and answered meanwhile; this is that "next" request, which the questionnaire's submit waits for.
+let closing = null;
+
+function lastMazeOfRatedPart(current) {
+  return Boolean(current && current.trial && !current.trial.practice && current.episode
+    && current.episode.number >= current.episode.of);
 }
 
 // The server said no: tell the participant what to do, then show what the server has now.
@@ -275,7 +306,7 @@ async function render() {
         await replayWalk();
         $("status").textContent = endMessage(state.episode_end);
       }
-      setBusy(BUSY.next);
+      setBusy(nextBusyText());
       try {
         state = await api(participantPath("next"), {});
       } finally {
@@ -298,15 +329,20 @@ async function render() {
       ? "Practice: get to know the task"
       : `${state.trial.label} (part ${state.trial.number} of ${state.trials})`;
     $("intro-learner").hidden = !state.learner_shown;
+    $("intro-length").textContent = lengthText(state);
     renderSummary();
     show("intro");
     $("start").disabled = false;
   } else if (state.phase === "label") {
     show("task");
     $("legend-learner").hidden = !state.learner_subgoal;
+    const maze = state.episode ? `${state.trial.number}/${state.episode.number}` : null;
     if (state.query && state.query.executes === false) {
       $("status").textContent = "The robot did not make it. Where should it have gone from here?";
+    } else if (maze !== shownMaze || !$("status").textContent) {
+      $("status").textContent = "Your turn: click a point inside the dashed circle.";
     }
+    shownMaze = maze;
     draw();
     queryVisibleAt = performance.now();
     refreshCamera();
@@ -316,6 +352,18 @@ async function render() {
   } else if (state.phase === "done") {
     show("done");
   }
+}
+
+// How many mazes this part has and about how long it and the rest take (the server's estimate).
+function lengthText(current) {
+  const length = current.length;
+  if (!length) { return ""; }
+  const mazes = current.trial.episodes === 1 ? "1 maze" : `${current.trial.episodes} mazes`;
+  let text = `This part has ${mazes} and takes about ${length.part_minutes} min.`;
+  if (length.parts_left > 1) {
+    text += ` With the ${length.parts_left - 1} part(s) after it, about ${length.minutes_left} min are left in all.`;
+  }
+  return text;
 }
 
 // After the practice: how it went, in one sentence, before the first real part.
@@ -424,8 +472,16 @@ canvas.addEventListener("click", async (event) => {
     } else {
       $("status").textContent = result.walked.some((w) => w.reached) ? "Reached. Click the next point." : "Click the next point.";
     }
+    if (next && lastMazeOfRatedPart(before)) {
+      closing = next;
+      closing.catch(() => {});  // answered at the questionnaire's submit
+      state = { ...before, phase: "questionnaire" };
+      await renderQuestionnaire();
+      show("questionnaire");
+      return;
+    }
     if (next) {
-      setBusy(BUSY.next);  // the learner's update and the next maze, if not done while the walk played
+      setBusy(nextBusyText());  // the next maze (and, after a part's last, the update), if not done during the walk
       try {
         state = await next;
       } catch (error) {
@@ -477,6 +533,19 @@ $("tlx").addEventListener("submit", async (event) => {
   if (missing.length) {
     $("form-error").textContent = `Please answer: ${missing.join(", ")}.`;
     return;
+  }
+  if (closing) {  // the last maze is still being saved: wait for it, counting the seconds
+    setBusy(BUSY.last);
+    try {
+      state = await closing;
+    } catch (error) {
+      closing = null;
+      setBusy(null);
+      await refused(error, "next");
+      return;
+    }
+    closing = null;
+    setBusy(null);
   }
   try {
     state = await api(participantPath("questionnaire"), {

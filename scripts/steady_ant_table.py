@@ -1,0 +1,231 @@
+"""Side by side: a candidate ant low level against the shipped ensemble, from result files of the repo's own tools.
+
+Reads
+
+* ``in_maze.py`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
+  first) or two files of one row each (the ensemble's first);
+* pairs of ``antmaze-hirl benchmark`` reports (``--benchmark ENSEMBLE.json CANDIDATE.json``, repeatable), same
+  suite, seed, tasks and episodes per task, differing only in ``--low-level``;
+
+and writes one JSON (``--out``) and a Markdown table with, per family or suite and low level: success with its
+95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
+For the benchmark pairs, whose reports keep every episode, also the paired outcome counts (both succeed, only
+one does) and the exact two-sided McNemar p-value over the discordant episodes (episodes share mazes and seeds,
+so they pair). A suite played with several episodes per task repeats mazes: its Wilson interval understates the
+spread (the reports' task bootstrap is printed beside it).
+
+``--run STATE.json`` adds the distillation run's own curve (student-driven episodes on its training mazes, per
+``--block`` iterations): a health check of the run, not a score.
+
+Usage: python scripts/steady_ant_table.py --in-maze E.json [C.json] --benchmark E.json C.json [...]
+           [--run STATE.json] --out summary.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from scipy.stats import binomtest, chi2
+
+from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.experiments.uncertainty import wilson_interval
+
+PER_STEPS = 10_000
+
+
+def poisson_interval(events: int, exposure: float, per: float = PER_STEPS) -> list[float]:
+    """Exact (Garwood) 95% interval of a Poisson rate of ``events`` over ``exposure``, per ``per`` units."""
+    low = 0.0 if events == 0 else chi2.ppf(0.025, 2 * events) / 2
+    high = chi2.ppf(0.975, 2 * events + 2) / 2
+    return [float(low * per / exposure), float(high * per / exposure)]
+
+
+def rate_row(successes: int, episodes: int, flips: int, steps: int) -> dict[str, Any]:
+    """Success with its Wilson interval, flips per 10,000 steps with its Poisson interval."""
+    return {
+        "episodes": episodes,
+        "successes": successes,
+        "success_rate": successes / episodes,
+        "success_ci95": list(wilson_interval(successes, episodes)),
+        "flips": flips,
+        "low_level_steps": steps,
+        "flips_per_10k_steps": flips * PER_STEPS / steps,
+        "flips_per_10k_steps_ci95": poisson_interval(flips, steps),
+    }
+
+
+def in_maze_rows(paths: list[Path]) -> dict[str, Any]:
+    """Per family: the ensemble's and the candidate's ``in_maze.py`` rows.
+
+    One file holding two rows (the ensemble first), or two files of one row each (the ensemble's first), made
+    with the same episodes, seed and families.
+    """
+    files = [json.loads(path.read_text()) for path in paths]
+    rows = [(data, name) for data in files for name in data["results"]]
+    if len(rows) != 2 or len(paths) > 2:
+        raise ValueError(f"{[str(p) for p in paths]} hold {len(rows)} rows; this table needs two, the ensemble first")
+    keys = ("subgoal_reach_m", "num_envs")
+    if len(files) == 2 and any(files[0].get(key) != files[1].get(key) for key in keys):
+        raise ValueError(f"{paths[0]} and {paths[1]} differ in {keys}: not the same episodes")
+    families: dict[str, Any] = {}
+    for role, (data, name) in zip(("ensemble", "candidate"), rows, strict=True):
+        row = data["results"][name]
+        for family, figures in row["families"].items():
+            steps = round(figures["mean_low_level_steps"] * figures["episodes"])
+            entry = families.setdefault(family, {"maze_seed": figures["maze_seed"], "episodes": figures["episodes"]})
+            if (entry["maze_seed"], entry["episodes"]) != (figures["maze_seed"], figures["episodes"]):
+                raise ValueError(
+                    f"family {family}: the rows play {entry['episodes']} episodes from maze seed {entry['maze_seed']} "
+                    f"and {figures['episodes']} from {figures['maze_seed']}"
+                )
+            entry[role] = {
+                "name": name,
+                "low_level_id": row["low_level_id"],
+                **rate_row(figures["successes"], figures["episodes"], figures["flips"], steps),
+            }
+    incomplete = sorted(
+        family for family, entry in families.items() if "candidate" not in entry or "ensemble" not in entry
+    )
+    if incomplete:
+        raise ValueError(f"families {incomplete} are missing from one of the rows")
+    return {
+        "files": [str(path) for path in paths],
+        "commands": [data.get("command") for data in files],
+        "families": families,
+    }
+
+
+def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
+    """One suite's two reports side by side, with the paired outcome counts and McNemar's exact p."""
+    reports = [json.loads(Path(path).read_text()) for path in (ensemble_path, candidate_path)]
+    keys = ("suite", "seed", "episodes_per_task", "task_ids", "policy")
+    differ = [key for key in keys if reports[0].get(key) != reports[1].get(key)]
+    if differ:
+        raise ValueError(f"{ensemble_path} and {candidate_path} differ in {differ}: not the same episodes")
+    first, second = ([(e["task_id"], e["seed"], e["success"]) for e in r["episode_outcomes"]] for r in reports)
+    if [pair[:2] for pair in first] != [pair[:2] for pair in second]:
+        raise ValueError(f"{ensemble_path} and {candidate_path} played other episodes")
+    only_ensemble = sum(a[2] and not b[2] for a, b in zip(first, second, strict=True))
+    only_candidate = sum(b[2] and not a[2] for a, b in zip(first, second, strict=True))
+    both = sum(a[2] and b[2] for a, b in zip(first, second, strict=True))
+    discordant = only_ensemble + only_candidate
+    rows = {}
+    for role, path, report in zip(("ensemble", "candidate"), (ensemble_path, candidate_path), reports, strict=True):
+        rows[role] = {
+            "file": str(path),
+            "command": report.get("command"),
+            "low_level": report["low_level"],
+            "task_bootstrap_95": report.get("task_bootstrap_95"),
+            **rate_row(report["successes"], report["episodes"], report["flips"], report["low_level_steps_total"]),
+        }
+    return {
+        "suite": reports[0]["suite"],
+        "episodes_per_task": reports[0]["episodes_per_task"],
+        **rows,
+        "paired": {
+            "both_succeed": both,
+            "only_ensemble": only_ensemble,
+            "only_candidate": only_candidate,
+            "mcnemar_exact_p": float(binomtest(only_candidate, discordant).pvalue) if discordant else 1.0,
+        },
+    }
+
+
+def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
+    """A distillation run's own curve from its ``state.json``: per block of iterations, the student-driven episodes.
+
+    These are training mazes (the ``train`` part of the layout partition, the run's maze sizes and reach episodes),
+    not the held-out families: a check that the run is healthy, not a score.
+    """
+    history = json.loads(state_path.read_text())["history"]
+    rows = []
+    for start in range(0, len(history), block):
+        part = history[start : start + block]
+        driven = {
+            key: sum(record[driver][key] for record in part)
+            for driver in ("student",)
+            for key in ("episodes", "successes", "flips", "steps")
+        }
+        if not driven["episodes"]:
+            continue
+        rows.append(
+            {
+                "iterations": [part[0]["iteration"], part[-1]["iteration"]],
+                **rate_row(driven["successes"], driven["episodes"], driven["flips"], driven["steps"]),
+                "fit_loss_mean": sum(record["fit_loss"] for record in part) / len(part),
+                "on_policy_mse_before_fit_mean": sum(record["on_policy_mse_before_fit"] for record in part) / len(part),
+            }
+        )
+    return rows
+
+
+def table(summary: dict[str, Any]) -> str:
+    """The Markdown table of the summary."""
+    lines = [
+        "| where | low level | success [95% CI] | flips / steps | flips per 10k steps [95% CI] |",
+        "|---|---|---|---|---|",
+    ]
+
+    def line(where: str, role: str, row: dict[str, Any]) -> str:
+        low, high = row["success_ci95"]
+        flow, fhigh = row["flips_per_10k_steps_ci95"]
+        return (
+            f"| {where} | {role} | {row['successes']}/{row['episodes']} [{low:.0%}, {high:.0%}] | "
+            f"{row['flips']} / {row['low_level_steps']:,} | "
+            f"{row['flips_per_10k_steps']:.2f} [{flow:.2f}, {fhigh:.2f}] |"
+        )
+
+    for family, rows in (summary.get("in_maze") or {}).get("families", {}).items():
+        lines += [line(f"in_maze {family}", role, rows[role]) for role in ("ensemble", "candidate")]
+    for row in summary.get("training_curve") or []:
+        first, last = row["iterations"]
+        lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
+    for pair in summary.get("benchmark", []):
+        where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']})"
+        lines += [line(where, role, pair[role]) for role in ("ensemble", "candidate")]
+        paired = pair["paired"]
+        lines.append(
+            f"| {where} | paired | both {paired['both_succeed']}, only ensemble {paired['only_ensemble']}, only "
+            f"candidate {paired['only_candidate']} | McNemar p = {paired['mcnemar_exact_p']:.3g} | |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--in-maze",
+        type=Path,
+        nargs="+",
+        default=None,
+        help="in_maze.py file(s): the ensemble's row, then the candidate's",
+    )
+    parser.add_argument(
+        "--benchmark", type=Path, nargs=2, action="append", default=[], metavar=("ENSEMBLE", "CANDIDATE")
+    )
+    parser.add_argument("--run", type=Path, default=None, help="a distillation run's state.json: its own curve")
+    parser.add_argument("--block", type=int, default=20, help="iterations per row of the run's curve")
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args(argv)
+    try:
+        summary = {
+            "in_maze": in_maze_rows(args.in_maze) if args.in_maze else None,
+            "benchmark": [benchmark_pair(first, second) for first, second in args.benchmark],
+            "training_curve": training_curve(args.run, args.block) if args.run else None,
+        }
+    except (OSError, ValueError, KeyError) as error:
+        print(f"steady_ant_table.py: error: {error}", file=sys.stderr)
+        return 2
+    summary["table_markdown"] = table(summary)
+    summary["command"] = "python scripts/steady_ant_table.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    print(summary["table_markdown"])
+    atomic_write_json(args.out, summary)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

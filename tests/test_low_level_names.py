@@ -1,0 +1,92 @@
+"""Low levels by name (the ant's ``ensemble`` stays loadable and replays the default), and bad low-level zips."""
+
+import json
+import zipfile
+
+import pytest
+
+from antmaze_hirl.cli import main
+from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_hirl.sb3_ext.loading import load_low_level, low_level_path, policy_fingerprint
+from antmaze_hirl.sb3_ext.shipped import shipped_policy_path
+
+STAGE6 = "8ae38455d9435335"
+"""The fingerprint every committed ant row records (``low_level`` of the benchmark reports, ``low_level_id``)."""
+
+
+def test_the_ensemble_and_shipped_names_load_the_stage6_ensemble():
+    assert low_level_path("ant", "ensemble") == low_level_path("ant", "shipped") == shipped_policy_path("ant")
+    assert low_level_path("ant", None) == shipped_policy_path("ant")
+    assert policy_fingerprint(load_low_level("ant", "ensemble")) == STAGE6
+    assert low_level_path("ant", "runs/x/policy.zip").as_posix() == "runs/x/policy.zip"  # a path stays a path
+    with pytest.raises(ValueError, match=r"unknown low level 'single' for the ant: give a zip path or one of"):
+        low_level_path("ant", "single")
+    with pytest.raises(ValueError, match=r"unknown low level 'ensemble' for the point"):
+        low_level_path("point", "ensemble")
+
+
+def benchmark(tmp_path, name, *extra):
+    out = tmp_path / f"{name}.json"
+    argv = ["benchmark", "ant4", "--policy", "oracle", "--tasks", "0", "--num-envs", "1", "--no-progress"]
+    assert main([*argv, "--json", str(out), *extra]) == 0
+    return load_report(out)
+
+
+def test_the_ensemble_by_name_plays_what_the_default_plays_and_is_recorded(tmp_path):
+    default = benchmark(tmp_path, "default")
+    by_name = benchmark(tmp_path, "ensemble", "--low-level", "ensemble")
+    assert by_name["episode_outcomes"] == default["episode_outcomes"]
+    assert default["low_level"] == f"shipped ant policy {STAGE6}"
+    assert by_name["low_level"] == f"ensemble: TD3 {STAGE6}"
+    assert by_name["command"].endswith("--low-level ensemble --tasks 0")
+
+
+def damaged_zips(folder):
+    """A low-level zip of the wrong body, and ant zips damaged in three ways."""
+    shipped = shipped_policy_path("ant").read_bytes()
+    truncated = folder / "truncated.zip"
+    truncated.write_bytes(shipped[:5000])
+    flipped = folder / "flipped.zip"
+    middle = bytearray(shipped)
+    for index in range(len(middle) // 2, len(middle) // 2 + 200):
+        middle[index] ^= 0xFF
+    flipped.write_bytes(bytes(middle))
+    garbled = folder / "garbled_weights.zip"
+    with zipfile.ZipFile(shipped_policy_path("ant")) as source, zipfile.ZipFile(garbled, "w") as target:
+        for name in source.namelist():
+            target.writestr(name, b"garbage" if name == "policy.pth" else source.read(name))
+    return {
+        "wrong body": (shipped_policy_path("point"), "wrong checkpoint for this body"),
+        "truncated": (truncated, "is not an SB3 policy zip"),
+        "flipped bytes": (flipped, "is not a loadable SB3 TD3 zip"),
+        "garbled weights": (garbled, "is not a loadable SB3 TD3 zip"),
+        "unknown name": ("steady", "unknown low level 'steady' for the ant"),
+        "missing file": (folder / "missing.zip", "no low-level policy at"),
+    }
+
+
+CASES = ["wrong body", "truncated", "flipped bytes", "garbled weights", "unknown name", "missing file"]
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("command", ["eval-low", "benchmark"])
+def test_a_bad_low_level_is_one_line_naming_it_and_exit_2(tmp_path, capsys, command, case):
+    value, message = damaged_zips(tmp_path)[case]
+    if command == "eval-low":
+        argv = ["eval-low", "--body", "ant", "--policy", str(value), "--episodes", "1"]
+    else:
+        argv = ["benchmark", "ant4", "--policy", "oracle", "--tasks", "0", "--low-level", str(value), "--no-progress"]
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert exit_info.value.code == 2
+    assert len(lines) == 1 and lines[0].startswith(f"antmaze-hirl {command}: error: "), captured.err
+    assert message in lines[0] and str(value) in lines[0]
+    assert "Traceback" not in captured.err + captured.out
+
+
+def test_eval_low_takes_the_ensemble_by_name(tmp_path, capsys):
+    out = tmp_path / "eval.json"
+    assert main(["eval-low", "--body", "ant", "--policy", "ensemble", "--episodes", "2", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["low_level_id"] == f"sha256:{STAGE6}"

@@ -1,0 +1,83 @@
+"""The steady-ant lab scripts: the distillation run's command line and the side-by-side table."""
+
+import json
+
+import pytest
+from script_helpers import load_script
+
+steady_ant = load_script("scripts/steady_ant.py")
+table = load_script("scripts/steady_ant_table.py")
+
+
+def test_the_garwood_interval_matches_known_values():
+    # 0 events: [0, 3.689]; 1 event: [0.0253, 5.572] (per unit exposure).
+    assert table.poisson_interval(0, 1.0, per=1.0) == pytest.approx([0.0, 3.6889], abs=1e-4)
+    assert table.poisson_interval(1, 1.0, per=1.0) == pytest.approx([0.0253, 5.5716], abs=1e-4)
+    assert table.poisson_interval(8, 80_296) == pytest.approx([0.430, 1.963], abs=1e-3)
+
+
+def report(successes, low_level, flips=0):
+    outcomes = [
+        {"task_id": k, "seed": k, "success": bool(s), "attempts": 3, "low_level_steps": 100, "flipped": False}
+        for k, s in enumerate(successes)
+    ]
+    return {
+        "suite": "large",
+        "seed": 0,
+        "episodes_per_task": 1,
+        "task_ids": "all",
+        "policy": "oracle",
+        "low_level": low_level,
+        "successes": sum(successes),
+        "episodes": len(successes),
+        "flips": flips,
+        "low_level_steps_total": 100 * len(successes),
+        "episode_outcomes": outcomes,
+    }
+
+
+def test_benchmark_pairs_count_paired_outcomes(tmp_path):
+    first, second = tmp_path / "e.json", tmp_path / "c.json"
+    first.write_text(json.dumps(report([1, 1, 0, 1, 0, 1], "ensemble", flips=2)))
+    second.write_text(json.dumps(report([1, 0, 1, 1, 1, 1], "candidate")))
+    pair = table.benchmark_pair(first, second)
+    assert pair["paired"] == {"both_succeed": 3, "only_ensemble": 1, "only_candidate": 2, "mcnemar_exact_p": 1.0}
+    assert pair["ensemble"]["flips_per_10k_steps"] == pytest.approx(2 * 10_000 / 600)
+    other = report([1, 1, 0, 1, 0, 1], "candidate")
+    other["seed"] = 5
+    second.write_text(json.dumps(other))
+    with pytest.raises(ValueError, match=r"differ in \['seed'\]"):
+        table.benchmark_pair(first, second)
+
+
+def test_the_run_refuses_bad_settings_in_one_line(tmp_path, capsys):
+    assert steady_ant.main(["--out", str(tmp_path / "r"), "--maze-sizes", "1"]) == 2
+    assert "--maze-sizes must be >= 2" in capsys.readouterr().err
+    assert steady_ant.main(["--out", str(tmp_path / "r"), "--iterations", "0"]) == 2
+    assert "iterations must be an integer >= 1" in capsys.readouterr().err
+    assert steady_ant.main(["--out", str(tmp_path / "r"), "--resume"]) == 2
+    assert "no distillation run to resume" in capsys.readouterr().err
+
+
+def in_maze_file(path, name, episodes, successes=9, flips=1):
+    row = {"successes": successes, "episodes": episodes, "flips": flips, "mean_low_level_steps": 200.0}
+    data = {
+        "command": "x",
+        "subgoal_reach_m": 2.0,
+        "num_envs": 25,
+        "results": {name: {"low_level_id": "sha256:x", "families": {"ant4": {"maze_seed": 1_000_000, **row}}}},
+    }
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_in_maze_rows_pair_the_same_episodes(tmp_path):
+    ensemble = in_maze_file(tmp_path / "e.json", "shipped", 10)
+    candidate = in_maze_file(tmp_path / "c.json", "student.zip", 10, successes=10, flips=0)
+    rows = table.in_maze_rows([ensemble, candidate])["families"]["ant4"]
+    assert rows["ensemble"]["flips_per_10k_steps"] == pytest.approx(1 * 10_000 / 2_000)
+    assert rows["candidate"]["success_rate"] == 1.0
+    with pytest.raises(ValueError, match="play 10 episodes from maze seed 1000000 and 20"):
+        table.in_maze_rows([ensemble, in_maze_file(tmp_path / "d.json", "student.zip", 20)])
+    with pytest.raises(ValueError, match="hold 1 rows"):
+        table.in_maze_rows([ensemble])

@@ -1,0 +1,58 @@
+"""Slow and broken connections: a request head or body that stalls is cut off, logs get no raw control bytes."""
+
+import logging
+import socket
+import time
+
+import pytest
+from study_helpers import make_tiny_study
+
+from antmaze_hirl.study import server as server_module
+from antmaze_hirl.study.server import StudyServer
+
+TOKEN = "connections-token-0123456789"
+
+
+@pytest.fixture
+def served(tmp_path, monkeypatch):
+    monkeypatch.setattr(server_module, "HEADER_TIMEOUT_SECONDS", 0.5)
+    monkeypatch.setattr(server_module, "BODY_CHUNK_TIMEOUT_SECONDS", 0.5)
+    server = StudyServer(make_tiny_study(tmp_path / "study"), token=TOKEN)
+    with server.running():
+        yield server
+
+
+def read_all(connection):
+    chunks = []
+    while chunk := connection.recv(65536):
+        chunks.append(chunk)
+    return b"".join(chunks).decode()
+
+
+def test_a_request_head_that_never_ends_is_cut_off(served):
+    with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:
+        connection.sendall(b"GET /api/study HTTP/1.1\r\nHost: 127.0.0.1\r\n")  # and never the blank line
+        started = time.monotonic()
+        assert read_all(connection) == ""  # closed by the server
+        assert time.monotonic() - started < 10
+
+
+def test_a_body_that_stalls_is_a_408_with_a_json_error(served):
+    head = (
+        f"POST /api/participants/P01/pause HTTP/1.1\r\nHost: 127.0.0.1:{served.port}\r\nX-Study-Token: {TOKEN}\r\n"
+        "Content-Type: application/json\r\nContent-Length: 20\r\nConnection: close\r\n\r\n"
+    )
+    with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:
+        connection.sendall(head.encode() + b'{"pau')  # 5 of the 20 bytes, then nothing
+        reply = read_all(connection)
+    assert reply.startswith("HTTP/1.1 408") and '"error"' in reply and "stalled" in reply
+
+
+def test_control_bytes_from_a_url_are_escaped_in_the_log(served, caplog):
+    with caplog.at_level(logging.WARNING, logger="antmaze_hirl.study.server"):
+        with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:
+            request = f"GET /api/x%1b[31mred HTTP/1.1\r\nHost: 127.0.0.1:{served.port}\r\nConnection: close\r\n\r\n"
+            connection.sendall(request.encode())
+            assert read_all(connection).startswith("HTTP/1.1 403")
+    logged = "\n".join(record.getMessage() for record in caplog.records)
+    assert "\\x1b[31mred" in logged and "\x1b" not in logged
