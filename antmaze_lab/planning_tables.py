@@ -2,7 +2,7 @@
 
 ``python -m antmaze_lab.planning_tables screen FILE``: the grid-level screen (``scripts/planner_check.py``);
 ``by-path FILE``: success by shortest path length (``scripts/planner_by_path.py``); ``trials FILE [FILE ...]``:
-DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial).
+DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``.
 """
 
 from __future__ import annotations
@@ -82,14 +82,36 @@ def trials_table(trials: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def speed_table(data: dict[str, Any]) -> str:
+    """One row per learner (and per map it was moved to): grid, rounds, gradient steps/s, batch-1 forward."""
+    rows = data["rows"]
+    first = next(iter(rows))
+    header = ["learner", "grid", "rounds", "gradient steps/s", f"ratio to `{first}`", "batch-1 forward (ms)", "ratio"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for name, row in rows.items():
+        cells = [
+            f"`{name}`",
+            f"{row['grid_size']}x{row['grid_size']}",
+            str(row["planning_rounds"]),
+            f"{row['gradient_steps_per_s']:.1f}",
+            f"{row['gradient_steps_per_s'] / rows[first]['gradient_steps_per_s']:.2f}x",
+            f"{row['batch1_forward_ms']:.2f}",
+            f"{row['batch1_forward_ms'] / rows[first]['batch1_forward_ms']:.2f}x",
+        ]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("table", choices=("screen", "by-path", "trials"))
+    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed"))
     parser.add_argument("files", type=Path, nargs="+")
     args = parser.parse_args(argv)
     loaded = [json.loads(path.read_text()) for path in args.files]
     if args.table == "screen":
         print(screen_table(loaded[0]))
+    elif args.table == "speed":
+        print(speed_table(loaded[0]))
     elif args.table == "by-path":
         print(by_path_table(loaded[0]))
     else:

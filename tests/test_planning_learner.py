@@ -105,3 +105,34 @@ def test_the_planning_learner_learns_to_plan_from_oracle_labels():
     figures = load_script("scripts/planner_check.py").learning_gain(0)
     assert figures["untrained"] <= 0.2
     assert figures["gain"] >= 0.4
+
+
+@pytest.mark.parametrize("body", ["point", "ant"])
+def test_a_planning_learner_ships_for_each_body_with_its_record(body):
+    import hashlib
+
+    from antmaze_hirl.dagger import load_shipped_learner, shipped_learner_path, shipped_learner_record
+
+    record = shipped_learner_record(body)
+    assert hashlib.sha256(shipped_learner_path(body).read_bytes()).hexdigest() == record["sha256"]
+    assert (record["learner"], record["body"]) == ("next_cell_plan", body)
+    assert 300 <= record["labels"] < 320  # "about 300 labels", the first episode past 300
+    learner = load_shipped_learner(body)
+    assert learner.runs_on_any_map and learner.settings.any_map
+
+
+def test_benchmark_policy_planner_scores_the_shipped_learner_zero_shot_on_another_map():
+    from antmaze_hirl.experiments.benchmark import score_policy
+
+    report = score_policy(
+        "point-u", "planner", task_ids=[0], episodes_per_task=1, low_level=lambda obs: np.zeros(2), num_envs=1
+    )
+    assert report["policy"].startswith("shipped point planning learner sha256:")
+    assert report["policy"].endswith("(zero-shot: trained on 7x7 maps)")
+
+
+def test_no_learner_for_an_unknown_body_is_one_line():
+    from antmaze_hirl.dagger import shipped_learner_path
+
+    with pytest.raises(ValueError, match="unknown body 'cat'"):
+        shipped_learner_path("cat")
