@@ -13,7 +13,9 @@ and max (on one torch thread, as the tests run):
 - ``dagger_ratio``: distance of the learner's subgoals to the oracle's after 8 DAgger episodes over
   the untrained one's (``tests/test_dagger.py``, integration tier);
 - ``gated_gain``: success gain of 8 gated episodes on 15 mazes (``tests/test_gated.py``, integration);
-- ``dagger_end_to_end``: success gain of 20 DAgger episodes on 30 mazes (``tests/test_dagger.py``, slow).
+- ``dagger_end_to_end``: success gain of 20 DAgger episodes on 30 mazes (``tests/test_dagger.py``, slow);
+- ``planner_gain``: grid-level success gain of the planning learner after 200 oracle labels on 30 random 4x4
+  point mazes (``scripts/planner_check.py``'s ``learning_gain``; ``tests/test_planning_learner.py``, integration).
 
 ``--window K`` also prints the lowest and highest mean of K consecutive seeds, for a test that asserts on
 the mean of K seeds.
@@ -179,6 +181,19 @@ def dagger_end_to_end_gain(seed: int) -> float:
     return success_gain(point_trainer(seed, gradient_steps=300, policy_settings=HEADING), 20, 30)[0]
 
 
+def planner_gain(seed: int) -> dict[str, float]:
+    """``scripts/planner_check.py``'s ``learning_gain`` (loaded by path: scripts are not a package)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent / "planner_check.py"
+    spec = importlib.util.spec_from_file_location("planner_check", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.learning_gain(seed)
+
+
 CHECKS: dict[str, tuple[Callable[[int], Any], str]] = {
     "risk_model": (risk_model_accuracy, "accuracy"),
     "bc_nll": (bc_nll_drop, "NLL drop"),
@@ -186,6 +201,7 @@ CHECKS: dict[str, tuple[Callable[[int], Any], str]] = {
     "dagger_ratio": (dagger_distance_ratio, "distance ratio"),
     "gated_gain": (gated_run, "gain"),
     "dagger_end_to_end": (dagger_end_to_end_gain, "gain"),
+    "planner_gain": (planner_gain, "gain"),
 }
 """Each check's function of a seed and the name of its figure (a key of its dict, where it returns one)."""
 

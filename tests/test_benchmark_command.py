@@ -180,8 +180,22 @@ def test_a_learner_for_another_maze_shape_is_refused(tmp_path):
     path = tmp_path / "ant4_learner.zip"
     HighLevelPolicy.for_env(env, rng=np.random.default_rng(0)).save(path)
     env.close()
-    with pytest.raises(ValueError, match=r"is a learner for 6x6 maps; suite 'large' has 9x12 maps"):
+    with pytest.raises(ValueError, match=r"is a CNN learner for 6x6 maps; suite 'large' has 9x12 maps \(only a plan"):
         score_policy("large", str(path), task_ids=[0], low_level=lambda obs: np.zeros(8))
+
+
+def test_a_planning_learner_plays_another_map_zero_shot_and_the_report_says_so(tmp_path):
+    from antmaze_hirl.experiments.config import learner_settings
+
+    env = gym.make("antmaze_hirl/PointMaze-5x5-v0", low_level=lambda obs: np.zeros(2))
+    path = tmp_path / "point5_planner.zip"
+    HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **learner_settings("next_cell_plan", 5)).save(path)
+    env.close()
+    report = score_policy(
+        "point-u", str(path), task_ids=[0], episodes_per_task=1, low_level=lambda obs: np.zeros(2), num_envs=1
+    )
+    assert report["policy"].endswith("(zero-shot: trained on 7x7 maps)")
+    assert report["episodes"] == 1
 
 
 def test_a_report_of_another_format_is_refused(tmp_path):

@@ -102,6 +102,11 @@ def test_the_suites_read_their_ids_and_step_limits_from_their_families_with_the_
         "medium": ("antmaze_hirl/AntMaze-medium-v0", "ant", None, 1600),
         "large": ("antmaze_hirl/AntMaze-large-v0", "ant", None, 3040),
         "giant": ("antmaze_hirl/AntMaze-giant-v0", "ant", None, 4800),
+        # The point's 1 m cells: 40 steps a metre of path, at least 500.
+        "point-u": ("antmaze_hirl/PointMaze-u-v0", "point", None, 500),
+        "point-medium": ("antmaze_hirl/PointMaze-medium-v0", "point", None, 500),
+        "point-large": ("antmaze_hirl/PointMaze-large-v0", "point", None, 760),
+        "point-giant": ("antmaze_hirl/PointMaze-giant-v0", "point", None, 1200),
     }
     assert profiles.path_scaled_step_limit(4.0) == 500 and profiles.path_scaled_step_limit(24.1) == 964
 

@@ -17,12 +17,13 @@ results_tables = load_script("scripts/results_tables.py")
 
 
 @pytest.mark.integration  # reads the committed results
-def test_the_page_and_the_readme_hold_the_generated_goals_and_claims():
+def test_the_page_holds_the_generated_goals_and_claims_and_the_readme_links_them():
     # Their text is checked against the commands by tests/test_generated_docs.py.
     page, readme = PAGE.read_text(), (ROOT / "README.md").read_text()
     assert f"<!-- generated: python scripts/results_tables.py {SECTION} -->" in page
     brief = "python scripts/paper_claims.py --protocol2 results/protocol2/point results/protocol2/ant --brief"
-    assert f"<!-- generated: {brief} -->" in page and f"<!-- generated: {brief} -->" in readme
+    assert f"<!-- generated: {brief} -->" in page
+    assert "(docs/paper-claims.md)" in readme and "(docs/preregistration.md)" in readme
 
 
 @pytest.mark.integration  # reads the committed results

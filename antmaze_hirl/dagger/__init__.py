@@ -9,6 +9,7 @@ from antmaze_hirl.dagger.schedules import (
     InverseDecayBetaSchedule,
     LinearBetaSchedule,
 )
+from antmaze_hirl.dagger.shipped import load_shipped_learner, shipped_learner_path, shipped_learner_record
 from antmaze_hirl.dagger.strategies import (
     STRATEGIES,
     AggreVaTeQuery,
@@ -46,5 +47,8 @@ __all__ = [
     "RewardBasedQuery",
     "RewardPerStepQuery",
     "evaluate_high_level",
+    "load_shipped_learner",
     "make_strategy",
+    "shipped_learner_path",
+    "shipped_learner_record",
 ]

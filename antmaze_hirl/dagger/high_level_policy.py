@@ -90,6 +90,9 @@ class LearnerSettings:
             at the agent's cell.
         block_walls: With the ``"next_cell"`` head's value iteration: moves into a wall, or diagonally
             between two, are ruled out (the walls read from the image). Needs ``planning_iterations > 0``.
+        any_map: With the ``"next_cell"`` head's value iteration: the planning learner whose weights act on
+            any map (:class:`~antmaze_hirl.dagger.network.NextCellNetwork`'s ``any_map``: the planner's Q
+            alone, times a trust learnt from 0; :meth:`HighLevelPolicy.on_map`). Needs ``planning_iterations > 0``.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -108,6 +111,7 @@ class LearnerSettings:
     hidden: int = 128
     head: str = "heading"
     block_walls: bool = False
+    any_map: bool = False
     learning_rate: float = 1e-3
     batch_size: int = 64
     augment_symmetries: bool = True
@@ -123,6 +127,9 @@ class LearnerSettings:
             raise ValueError(f"planning_iterations must be >= 0, got {self.planning_iterations}")
         if self.block_walls and (self.head != "next_cell" or self.planning_iterations == 0):
             raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
+        if self.any_map and (self.head != "next_cell" or self.planning_iterations == 0):
+            raise ValueError("any_map needs head='next_cell' and planning_iterations > 0")
+        object.__setattr__(self, "any_map", bool(self.any_map))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -263,6 +270,7 @@ class HighLevelPolicy:
                     settings.hidden,
                     settings.planning_iterations,
                     block_walls=settings.block_walls,
+                    any_map=settings.any_map,
                 )
             else:
                 self.network = SubgoalNetwork(
@@ -435,6 +443,58 @@ class HighLevelPolicy:
         return HighLevelPolicy(
             self.geometry, pixels_per_cell=self.pixels_per_cell, body_dim=self.body_dim, rng=rng, settings=self.settings
         )
+
+    @property
+    def runs_on_any_map(self) -> bool:
+        """Whether the same weights act on a map of any size (:meth:`on_map`): ``settings.any_map``.
+
+        The CNN heads end in a fully connected layer over the whole grid. The earlier planning heads take any
+        grid, but their correction reads the goal offset, which grows with the map beyond anything trained on
+        (zero-shot on ``large``, grid-level: 56% against the ``any_map`` learner's 91%, medians of 3 seeds in
+        ``results/planning_learner/``), so they are not moved either.
+        """
+        return self.settings.any_map
+
+    def on_map(
+        self, geometry: MazeGeometry, *, pixels_per_cell: int | None = None, rng: np.random.Generator | None = None
+    ) -> HighLevelPolicy:
+        """This learner's weights acting on another map (zero-shot), with planning rounds for that map.
+
+        An ``any_map`` learner (:attr:`runs_on_any_map`) gets :func:`planning_rounds` of ``geometry``; any
+        other moves only to a map whose agent-centred grid has its own size.
+
+        Args:
+            geometry: The other map's placement; its cell side must be this learner's (the same body).
+            pixels_per_cell: The other env's image resolution (default: this learner's).
+            rng: The new learner's generator, if it trains on (default seed 0).
+
+        Raises:
+            ValueError: Naming both values, if the cell sides differ or a CNN learner's grid does not fit.
+        """
+        if geometry.scale != self.geometry.scale:
+            raise ValueError(
+                f"the map's cells are {geometry.scale} m but this learner's are {self.geometry.scale} m: another body"
+            )
+        settings = self.settings
+        if self.runs_on_any_map:
+            settings = settings.replace(planning_iterations=planning_rounds(geometry.n_rows, geometry.n_cols))
+        else:
+            size = 2 * max(geometry.n_rows, geometry.n_cols) - 1
+            if size != self.encoder.grid_size:
+                raise ValueError(
+                    f"this learner (head {self.settings.head!r}, any_map False) sees a {self.encoder.grid_size}x"
+                    f"{self.encoder.grid_size} grid and cannot act on a {geometry.n_rows}x{geometry.n_cols} map "
+                    f"(a {size}x{size} grid); only an any_map planning learner runs on any map"
+                )
+        moved = HighLevelPolicy(
+            geometry,
+            pixels_per_cell=pixels_per_cell if pixels_per_cell is not None else self.pixels_per_cell,
+            body_dim=self.body_dim,
+            rng=rng if rng is not None else np.random.default_rng(0),
+            settings=settings,
+        )
+        moved.network.load_state_dict(self.network.state_dict())
+        return moved
 
     def config(self) -> dict[str, Any]:
         """What a saved file's ``config`` holds, by Python name.

@@ -244,5 +244,9 @@ SUITE_FAMILIES: dict[str, MazeFamily] = {
     **{name: MAZE_FAMILIES[name] for name in ("ant4", "u", "medium", "large")},
     # OGBench's giant map (antmaze_hirl.envs.suites.GIANT_MAP).
     "giant": MazeFamily("ant", "giant", None, None, None),
+    # The same four maps and tasks walked by the point mass: planning measured without the ant's falls.
+    **{
+        f"point-{source}": MazeFamily("point", source, None, None, None) for source in ("u", "medium", "large", "giant")
+    },
 }
 """The family each benchmark suite draws its tasks from, by suite name (``SUITE_SPECS``, same order)."""

@@ -126,6 +126,16 @@ SUITE_SPECS: dict[str, SuiteSpec] = {
             longest_path_cells=30,
             episodes_per_task=20,
         ),
+        # The point on the same maps and tasks (so the same longest paths).
+        *(
+            _suite_spec(f"point-{source}", 5, checksum, longest_path_cells=cells, episodes_per_task=20)
+            for source, cells, checksum in (
+                ("u", 6, "6b3c65acc7538fc4f1e3756a05cbcbb8ec69fa48555ee381ac020f2ca22f4c1b"),
+                ("medium", 10, "7a977091333d56d982276f0f7445a326751088abad602bbdfc97ccff527f90eb"),
+                ("large", 19, "fd0ac7ff6ffe3cd46630d0fc9269095437d4832a9692f72ea0ce3db491d16e7a"),
+                ("giant", 30, "a82c62fc914ef2faef52dc2cf33774fdcc33592eb9e6d88133ff0b5d16c28f68"),
+            )
+        ),
     )
 }
 """Every suite, by name, in the order of :data:`~antmaze_hirl.envs.profiles.SUITE_FAMILIES`. Checksums and step

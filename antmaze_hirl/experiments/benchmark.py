@@ -222,8 +222,9 @@ def resolve_policy(
     ``"oracle"``: the scripted oracle, its subgoals at most ``subgoal_reach_m`` metres away (default the
     body's experiment setting: one cell for the point, 2 m for the ant) and its straight walks ``clearance_m``
     from walls (default :class:`~antmaze_hirl.experts.PathOracle`'s, 0.2 cell); ``"random"``:
-    :class:`RandomSubgoalPolicy` seeded with ``seed``; else a path to an SB3 zip of a high-level model (PPO,
-    A2C, SAC, TD3/DDPG) or to a saved DAgger learner
+    :class:`RandomSubgoalPolicy` seeded with ``seed``; ``"planner"``: the planning learner shipped for the suite's
+    body (:mod:`antmaze_hirl.dagger.shipped`), zero-shot on a map it was not trained on; else a path to an SB3
+    zip of a high-level model (PPO, A2C, SAC, TD3/DDPG) or to a saved DAgger learner
     (:meth:`~antmaze_hirl.dagger.high_level_policy.HighLevelPolicy.save`, e.g. a study's ``learner.zip``).
 
     Raises:
@@ -249,6 +250,16 @@ def resolve_policy(
     if policy == "random":
         space = env.action_space
         return RandomSubgoalPolicy(space.low, space.high, seed), "random"
+    if policy == PLANNER:
+        from antmaze_hirl.dagger.shipped import shipped_learner_path, shipped_learner_record
+
+        record = shipped_learner_record(spec.body)
+        path = shipped_learner_path(spec.body)
+        learner, description = _learner_and_description(spec, path, env)
+        return learner, (
+            f"shipped {spec.body} planning learner sha256:{record['sha256'][:16]} ({record['labels']} labels)"
+            + description.removeprefix(f"dagger learner {path}")
+        )
     path = Path(policy)
     if not path.is_file():
         raise FileNotFoundError(
@@ -261,10 +272,26 @@ def resolve_policy(
     except zipfile.BadZipFile:
         raise ValueError(f"{path} is not a zip (an SB3 model or a saved DAgger learner)") from None
     if "meta.json" in names:
-        return _load_learner(spec, path, env), f"dagger learner {path}"
+        return _learner_and_description(spec, path, env)
     if "data" in names:
         return _load_sb3(spec, path, env), f"sb3 {path}"
     raise ValueError(f"{path} is neither an SB3 model zip (no 'data') nor a saved DAgger learner (no 'meta.json')")
+
+
+PLANNER = "planner"
+"""``--policy planner``: the planning learner shipped for the suite's body (:mod:`antmaze_hirl.dagger.shipped`)."""
+
+
+def _learner_and_description(spec: SuiteSpec, path: Path, env: Any) -> tuple[Any, str]:
+    """A saved DAgger learner for ``spec``'s maps and its description, which says when it plays zero-shot."""
+    from antmaze_hirl.dagger.high_level_policy import read_policy_file
+
+    learner = _load_learner(spec, path, env)
+    config, _ = read_policy_file(path)
+    rows, cols = int(config["geometry"][0]), int(config["geometry"][1])
+    inner = env.unwrapped
+    same = (rows, cols) == (inner.geometry.n_rows, inner.geometry.n_cols)
+    return learner, f"dagger learner {path}" + ("" if same else f" (zero-shot: trained on {rows}x{cols} maps)")
 
 
 def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
@@ -287,12 +314,16 @@ def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
             f"policy {path} reads {config['body_dim']} body values per state; suite {spec.name!r} ({spec.body}) "
             f"gives {body_dim}: a learner for another body"
         )
-    if (rows, cols) != (inner.geometry.n_rows, inner.geometry.n_cols):
+    learner = HighLevelPolicy.load(path)
+    if (rows, cols) == (inner.geometry.n_rows, inner.geometry.n_cols):
+        return learner
+    if not learner.runs_on_any_map:
         raise ValueError(
-            f"policy {path} is a learner for {rows}x{cols} maps; suite {spec.name!r} has "
-            f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps"
+            f"policy {path} is a CNN learner for {rows}x{cols} maps; suite {spec.name!r} has "
+            f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps (only a planning learner runs on any map)"
         )
-    return HighLevelPolicy.load(path)
+    # Zero-shot: the same weights, planning rounds for this map (the description says so).
+    return learner.on_map(inner.geometry, pixels_per_cell=inner.pixels_per_cell)
 
 
 def _sb3_algorithm(path: Path) -> Any:
@@ -522,8 +553,9 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
     parser.add_argument(
         "--policy",
         required=True,
-        help="oracle, random, or the path of an SB3 zip of a high-level model or a saved DAgger learner (required; "
-        "SB3 zips hold pickles that can run code: load only files you trust)",
+        help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip "
+        "of a high-level model or a saved DAgger learner (required; SB3 zips hold pickles that can run code: load "
+        "only files you trust)",
     )
     parser.add_argument(
         "--episodes-per-task",

@@ -218,6 +218,7 @@ LEARNERS: dict[str, dict[str, Any]] = {
     "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
     "next_cell_vin": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False},
     "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
+    "next_cell_plan": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False, "any_map": True},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
 body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see

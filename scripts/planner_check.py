@@ -1,0 +1,215 @@
+"""A grid-level check of high-level learners: oracle labels on sampled states, greedy next-cell rollouts.
+
+No simulation: agents stand at random free cells (centre +- 0.35 cells, at rest), the scripted oracle labels
+them (the trial's reach and clearance, as ``scripts/learner_ablation.py``'s held-out states), a learner is
+fitted on ``--labels`` of them from the family's ``train`` part, then rolled out on the grid: from the start
+cell, take the argmax next cell, move to its centre; a move into a wall or diagonally past a wall's corner
+fails, as does not reaching the goal's cell within ``2 * (rows + cols)`` moves. Scored on the ``selection``
+part (by shortest path length in cells) and, for learners that run on any grid, zero-shot on fixed maps.
+
+This is a screen for the planning-learner issue (cheap, seconds per variant), not a result: the learner in the
+env must meet its own goals under DAgger (``scripts/learner_ablation.py``).
+
+Usage: python scripts/planner_check.py --body ant --variants next_cell_cnn,next_cell_plan --seeds 0,1
+           [--labels 1000] [--steps 1500] [--tasks 200] [--maps medium,large,giant] [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch as th
+
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, planning_rounds
+from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
+from antmaze_hirl.envs.layouts import shortest_path
+from antmaze_hirl.envs.state_layout import STATE_LAYOUT
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
+from antmaze_hirl.envs.suites import fixed_map
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, learner_settings
+from antmaze_hirl.experts.oracle import plan_subgoal
+from antmaze_hirl.sb3_ext.shipped import make_maze_env
+
+
+def _env(body: str, *, split: str | None = None, maze_map: Any = None, maze_size: int | None = None) -> Any:
+    kwargs: dict[str, Any] = {"low_level": lambda *_: None}
+    if isinstance(maze_map, str) and maze_map in SUITE_SPECS:  # a fixed map by its suite name (giant included)
+        maze_map = fixed_map(SUITE_SPECS[maze_map])
+    if split is not None:
+        kwargs["split"] = split
+    if maze_size is not None and maze_map is None:
+        kwargs["maze_size"] = maze_size
+    return make_maze_env(body, maze_map, **kwargs)
+
+
+def labelled_states(env: Any, count: int, reach_m: float, rng: np.random.Generator) -> dict[str, list[Any]]:
+    """``count`` oracle-labelled states on tasks drawn from ``env`` (see the module docstring)."""
+    maze = env.unwrapped
+    geometry = maze.geometry
+    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
+    out: dict[str, list[Any]] = defaultdict(list)
+    while len(out["agents"]) < count:
+        task = maze.sample_task(rng)
+        free = np.argwhere(~task.layout.walls)
+        cell = tuple(free[rng.integers(len(free))])
+        if cell == geometry.xy_to_cell(task.goal_xy):
+            continue
+        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
+        label = plan_subgoal(
+            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach_m, clearance_m=0.2 * geometry.scale
+        )
+        out["walls"].append(task.layout.walls)
+        out["agents"].append(agent)
+        out["goals"].append(task.goal_xy)
+        out["labels"].append(label)
+        out["bodies"].append(at_rest)
+    return out
+
+
+def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[bool]]:
+    """Greedy next-cell rollouts on ``tasks`` tasks of ``env``: success lists keyed by shortest path (cells)."""
+    maze = env.unwrapped
+    geometry = maze.geometry
+    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
+    rng = np.random.default_rng(seed)
+    results: dict[int, list[bool]] = defaultdict(list)
+    policy.network.eval()
+    for _ in range(tasks):
+        task = maze.sample_task(rng)
+        walls = task.layout.walls
+        cell = geometry.xy_to_cell(task.start_xy)
+        goal = geometry.xy_to_cell(task.goal_xy)
+        length = len(shortest_path(walls, cell, goal)) - 1
+        success = False
+        for _ in range(2 * (walls.shape[0] + walls.shape[1])):
+            if cell == goal:
+                success = True
+                break
+            batch = policy.encoder.encode([walls], [geometry.cell_to_xy(cell)], [task.goal_xy], [at_rest])
+            with th.no_grad():
+                move = int(policy.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors)).argmax(1)[0])
+            dx, dy = NEXT_CELL_MOVES[move]
+            row, col = cell[0] - dy, cell[1] + dx
+            blocked = not (0 <= row < walls.shape[0] and 0 <= col < walls.shape[1]) or walls[row, col]
+            if dx and dy:
+                blocked = blocked or walls[cell[0] - dy, cell[1]] or walls[cell[0], cell[1] + dx]
+            if blocked or (dx, dy) == (0, 0):
+                break
+            cell = (row, col)
+        results[length].append(success)
+    return results
+
+
+def moved_to(policy: HighLevelPolicy, env: Any, *, any_planner: bool = False) -> HighLevelPolicy:
+    """The same weights on ``env``'s map: a learner shaped for its geometry, planning rounds for its size.
+
+    ``any_planner`` also moves a planning learner that is not ``any_map`` (its correction reads the goal offset),
+    which :meth:`HighLevelPolicy.on_map` refuses: the screen's evidence for that refusal.
+    """
+    maze = env.unwrapped
+    settings = policy.settings
+    if not any_planner or policy.runs_on_any_map or settings.planning_iterations == 0:
+        return policy.on_map(maze.geometry, pixels_per_cell=maze.pixels_per_cell)
+    geometry = maze.geometry
+    moved = HighLevelPolicy(
+        geometry,
+        pixels_per_cell=maze.pixels_per_cell,
+        body_dim=policy.body_dim,
+        rng=np.random.default_rng(0),
+        settings=settings.replace(planning_iterations=planning_rounds(geometry.n_rows, geometry.n_cols)),
+    )
+    moved.network.load_state_dict(policy.network.state_dict())
+    return moved
+
+
+def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int = 30) -> dict[str, float]:
+    """The planning learner's grid-level success on random 4x4 point mazes before and after ``labels`` labels.
+
+    The tests' learning check (``tests/test_planning_learner.py``), its spread measured by
+    ``scripts/learning_margins.py planner_gain``: one torch thread, every draw seeded by ``seed``.
+    """
+    env = _env("point", maze_size=4)
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **learner_settings("next_cell_plan", 4))
+    untrained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
+    data = labelled_states(env, labels, policy.subgoal_reach_m, np.random.default_rng(20_000 + seed))
+    batch = policy.encoder.encode(data["walls"], data["agents"], data["goals"], data["bodies"])
+    policy.fit(batch, policy.targets(np.stack(data["agents"]), np.stack(data["labels"])), steps)
+    trained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
+    env.close()
+    return {"untrained": untrained, "trained": trained, "gain": trained - untrained}
+
+
+def summary(results: dict[int, list[bool]]) -> dict[str, Any]:
+    everything = [s for outcomes in results.values() for s in outcomes]
+    return {
+        "success": float(np.mean(everything)) if everything else None,
+        "tasks": len(everything),
+        "by_path_cells": {str(k): [int(sum(v)), len(v)] for k, v in sorted(results.items())},
+    }
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--body", choices=("point", "ant"), default="ant")
+    parser.add_argument("--variants", default="next_cell_cnn,next_cell_plan")
+    parser.add_argument("--seeds", default="0")
+    parser.add_argument("--labels", type=int, default=1000)
+    parser.add_argument("--steps", type=int, default=1500)
+    parser.add_argument("--tasks", type=int, default=200)
+    parser.add_argument("--maps", default="medium,large,giant")
+    parser.add_argument("--out", type=Path)
+    parser.add_argument("--no-correction", action="store_true", help="screen only: logits are the planner's Q alone")
+    parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
+    parser.add_argument("--rounds-factor", type=float, default=1.0, help="screen only: on_map rounds times this")
+    args = parser.parse_args(argv)
+    th.set_num_threads(1)
+    settings_ = body_settings(args.body, held_out_layouts=True)
+    config = ExperimentConfig(body=args.body, **settings_, protocol=2, held_out_layouts=True)
+    rows = []
+    for variant in args.variants.split(","):
+        for seed in (int(s) for s in args.seeds.split(",")):
+            start = time.perf_counter()
+            train = _env(args.body, split="train", maze_size=config.maze_size)
+            rng = np.random.default_rng(seed)
+            settings = learner_settings(variant, config.maze_size)
+            policy = HighLevelPolicy.for_env(train, rng=rng, subgoal_reach_m=config.subgoal_reach_m, **settings)
+            if args.no_correction and policy.runs_on_any_map:
+                for parameter in policy.network.head.parameters():
+                    parameter.requires_grad_(False)  # stays zero: the correction starts at zero
+            data = labelled_states(train, args.labels, policy.subgoal_reach_m, np.random.default_rng(1000 + seed))
+            selection = _env(args.body, split="selection", maze_size=config.maze_size)
+            row: dict[str, Any] = {"variant": variant, "seed": seed, "labels": args.labels, "steps": args.steps}
+            row["untrained_selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
+            batch = policy.encoder.encode(data["walls"], data["agents"], data["goals"], data["bodies"])
+            targets = policy.targets(np.stack(data["agents"]), np.stack(data["labels"]))
+            row["loss"] = policy.fit(batch, targets, args.steps)
+            row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
+            for name in filter(None, args.maps.split(",")):
+                try:
+                    other = _env(args.body, maze_map=name)
+                    moved = moved_to(policy, other, any_planner=args.move_any_planner)
+                    if args.rounds_factor != 1.0 and moved.runs_on_any_map:
+                        moved.network.planner.iterations = int(moved.network.planner.iterations * args.rounds_factor)
+                    row[name] = summary(grid_rollouts(moved, other, args.tasks, 11))
+                except (ValueError, AttributeError) as error:
+                    row[name] = {"error": str(error)}
+            row["seconds"] = round(time.perf_counter() - start, 1)
+            rows.append(row)
+            brief = {k: (v["success"] if isinstance(v, dict) and "success" in v else v) for k, v in row.items()}
+            print(json.dumps(brief), flush=True)
+    result = {"command": "python scripts/planner_check.py " + " ".join(argv or sys.argv[1:]), "rows": rows}
+    if args.out:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(result, indent=1) + "\n")
+    return result
+
+
+if __name__ == "__main__":
+    main()
