@@ -146,8 +146,8 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         "--init-from",
         type=Path,
         default=None,
-        help="warm start from this policy .zip's weights (default: none; SB3 zips hold pickles that can run code: "
-        "load only files you trust)",
+        help="warm start from this policy .zip's weights; SB3 zips hold pickles that can run code: load only files "
+        "you trust (default: none)",
     )
     parser.add_argument(
         "--init-buffer",
@@ -269,8 +269,8 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
         "members",
         nargs="+",
         type=Path,
-        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order (required; "
-        "SB3 zips hold pickles that can run code: load only files you trust)",
+        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order; SB3 zips "
+        "hold pickles that can run code: load only files you trust (required)",
     )
     parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
     parser.add_argument("--force", action="store_true", help="replace an existing file at --out")

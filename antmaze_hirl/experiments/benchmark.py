@@ -554,8 +554,8 @@ def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFor
         "--policy",
         required=True,
         help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip "
-        "of a high-level model or a saved DAgger learner (required; SB3 zips hold pickles that can run code: load "
-        "only files you trust)",
+        "of a high-level model or a saved DAgger learner; SB3 zips hold pickles that can run code: load only files "
+        "you trust (required)",
     )
     parser.add_argument(
         "--episodes-per-task",
