@@ -23,8 +23,8 @@ REACH_IDS = {"antmaze_hirl/AntReach-v0", "antmaze_hirl/PointReach-v0"}
 POINT_SUITE_ID = SUITE_SPECS["point5"].env_id
 
 
-def test_the_ten_ids_are_registered():
-    assert len(REGISTERED_IDS) == 10
+def test_the_fourteen_ids_are_registered():
+    assert len(REGISTERED_IDS) == 14  # 4 env ids and 10 suites
     assert {spec.env_id for spec in SUITE_SPECS.values()} <= set(REGISTERED_IDS)
 
 

@@ -15,6 +15,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from antmaze_hirl.envs.controllers import as_batch_controller, inference_threads
@@ -98,13 +99,27 @@ def evaluation_outcomes(
     return _lockstep_episodes(policy, env, episodes=episodes, seed=seed, num_envs=min(num_envs, episodes))
 
 
+def time_limit(env: Any) -> int | None:
+    """The subgoal limit ``env`` plays under: its ``TimeLimit`` wrapper's, else its unwrapped env's spec's.
+
+    Read from the wrappers themselves, not from ``env.spec``: a wrapper's ``spec`` deep-copies the env's
+    kwargs, a low level among them, and warns where that cannot be copied (a model holding a lock); the
+    unwrapped env's spec alone misses a ``gym.make(..., max_episode_steps=N)`` override.
+    """
+    layer = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, gym.wrappers.TimeLimit):
+            return int(layer._max_episode_steps)
+        layer = layer.env
+    return getattr(getattr(getattr(env, "unwrapped", env), "spec", None), "max_episode_steps", None)
+
+
 def _lockstep_episodes(
     policy: Any, env: Any, *, episodes: int, seed: int, num_envs: int
 ) -> list[tuple[MazeLayout, dict[str, Any]]]:
     # The serial path plays the env as given, TimeLimit included; lockstep copies are unwrapped, so the limit
     # is applied here in the same way.
-    # The unwrapped env's spec: a wrapper's deep-copies it, low_level too, and warns if that cannot be copied.
-    max_subgoals = getattr(getattr(getattr(env, "unwrapped", env), "spec", None), "max_episode_steps", None)
+    max_subgoals = time_limit(env)
     played = play_on_copies(policy, env, range(seed, seed + episodes), num_envs=num_envs, max_subgoals=max_subgoals)
     return [(episode.layout, episode.info) for episode in played]
 
