@@ -36,7 +36,14 @@ def screen_table(data: dict[str, Any]) -> str:
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
     maps = [name for name in MAPS if any(name in row for row in data["rows"])]
-    header = ["variant", "seeds", "labels", "untrained (selection)", "trained (selection)", *[f"{m} zero-shot" for m in maps]]
+    header = [
+        "variant",
+        "seeds",
+        "labels",
+        "untrained (selection)",
+        "trained (selection)",
+        *[f"{m} zero-shot" for m in maps],
+    ]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for variant, rows in by_variant.items():
         cells = [f"`{variant}`", ",".join(str(r["seed"]) for r in rows), str(rows[0]["labels"])]
@@ -103,6 +110,7 @@ def speed_table(data: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Prints the table named by the first argument from the files after it."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("table", choices=("screen", "by-path", "trials", "speed"))
     parser.add_argument("files", type=Path, nargs="+")
