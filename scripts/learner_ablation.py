@@ -54,7 +54,6 @@ import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger import evaluate_high_level
-from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import (
     LEARNERS,
     SELECTION_SEED,
@@ -70,7 +69,7 @@ from antmaze_hirl.experiments.provenance import code_provenance
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experiments.uncertainty import pooled_rate, rate_with_interval
 from antmaze_hirl.experts import PathOracle
-from antmaze_hirl.experts.oracle import plan_subgoal
+from antmaze_hirl.experts.oracle import sample_labelled_states
 from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "learner_ablation"
@@ -102,25 +101,14 @@ def cell_agreement(policy: Any, agent_xy: np.ndarray, predicted: np.ndarray, lab
 def held_out_agreement(policy: Any, config: ExperimentConfig, seed: int = 0) -> float:
     """:func:`cell_agreement` on oracle-labelled states of selection-part mazes (see the module docstring)."""
     env = make_maze_env(config.body, low_level=lambda *_: None, split="selection", maze_size=config.maze_size)
-    geometry, rng = env.unwrapped.geometry, np.random.default_rng(seed)
-    reach = config.subgoal_reach_m or geometry.scale
-    # The body at rest as a reset leaves it (the point's is zero velocity; the ant's is not all zeros).
-    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=seed)[0]["state"])
-    walls, agents, goals, labels = [], [], [], []
-    while len(agents) < AGREEMENT_STATES:
-        task = env.unwrapped.sample_task(rng)
-        free = np.argwhere(~task.layout.walls)
-        cell = tuple(free[rng.integers(len(free))])
-        if cell == geometry.xy_to_cell(task.goal_xy):
-            continue
-        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
-        label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach, clearance_m=0.2 * geometry.scale
-        )
-        walls.append(task.layout.walls), agents.append(agent), goals.append(task.goal_xy), labels.append(label)
+    reach = config.subgoal_reach_m or env.unwrapped.geometry.scale
+    # The body at rest as a reset with the seed leaves it (the point's is zero velocity; the ant's is not all zeros).
+    states = sample_labelled_states(
+        env, AGREEMENT_STATES, subgoal_reach_m=reach, rng=np.random.default_rng(seed), reset_seed=seed
+    )
     env.close()
-    batch = policy.encoder.encode(walls, agents, goals, [at_rest] * len(agents))
-    agents = np.stack(agents)
+    batch = policy.encoder.encode(states.walls, states.agents, states.goals, states.bodies)
+    agents, labels = np.stack(states.agents), states.labels
     return cell_agreement(policy, agents, agents + policy.subgoal_reach_m * policy.offsets(batch), np.stack(labels))
 
 

@@ -34,7 +34,7 @@ from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.envs.suites import fixed_map
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, learner_settings
-from antmaze_hirl.experts.oracle import plan_subgoal
+from antmaze_hirl.experts.oracle import sample_labelled_states
 from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
 
@@ -47,30 +47,6 @@ def _env(body: str, *, split: str | None = None, maze_map: Any = None, maze_size
     if maze_size is not None and maze_map is None:
         kwargs["maze_size"] = maze_size
     return make_maze_env(body, maze_map, **kwargs)
-
-
-def labelled_states(env: Any, count: int, reach_m: float, rng: np.random.Generator) -> dict[str, list[Any]]:
-    """``count`` oracle-labelled states on tasks drawn from ``env`` (see the module docstring)."""
-    maze = env.unwrapped
-    geometry = maze.geometry
-    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
-    out: dict[str, list[Any]] = defaultdict(list)
-    while len(out["agents"]) < count:
-        task = maze.sample_task(rng)
-        free = np.argwhere(~task.layout.walls)
-        cell = tuple(free[rng.integers(len(free))])
-        if cell == geometry.xy_to_cell(task.goal_xy):
-            continue
-        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
-        label = plan_subgoal(
-            task.layout.walls, geometry, agent, task.goal_xy, subgoal_reach_m=reach_m, clearance_m=0.2 * geometry.scale
-        )
-        out["walls"].append(task.layout.walls)
-        out["agents"].append(agent)
-        out["goals"].append(task.goal_xy)
-        out["labels"].append(label)
-        out["bodies"].append(at_rest)
-    return out
 
 
 def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[bool]]:
@@ -138,9 +114,11 @@ def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int 
     env = _env("point", maze_size=4)
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **learner_settings("next_cell_plan", 4))
     untrained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
-    data = labelled_states(env, labels, policy.subgoal_reach_m, np.random.default_rng(20_000 + seed))
-    batch = policy.encoder.encode(data["walls"], data["agents"], data["goals"], data["bodies"])
-    policy.fit(batch, policy.targets(np.stack(data["agents"]), np.stack(data["labels"])), steps)
+    data = sample_labelled_states(
+        env, labels, subgoal_reach_m=policy.subgoal_reach_m, rng=np.random.default_rng(20_000 + seed)
+    )
+    batch = policy.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+    policy.fit(batch, policy.targets(np.stack(data.agents), np.stack(data.labels)), steps)
     trained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
     env.close()
     return {"untrained": untrained, "trained": trained, "gain": trained - untrained}
@@ -183,12 +161,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             if args.no_correction and policy.runs_on_any_map:
                 for parameter in policy.network.head.parameters():
                     parameter.requires_grad_(False)  # stays zero: the correction starts at zero
-            data = labelled_states(train, args.labels, policy.subgoal_reach_m, np.random.default_rng(1000 + seed))
+            data = sample_labelled_states(
+                train, args.labels, subgoal_reach_m=policy.subgoal_reach_m, rng=np.random.default_rng(1000 + seed)
+            )
             selection = _env(args.body, split="selection", maze_size=config.maze_size)
             row: dict[str, Any] = {"variant": variant, "seed": seed, "labels": args.labels, "steps": args.steps}
             row["untrained_selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
-            batch = policy.encoder.encode(data["walls"], data["agents"], data["goals"], data["bodies"])
-            targets = policy.targets(np.stack(data["agents"]), np.stack(data["labels"]))
+            batch = policy.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+            targets = policy.targets(np.stack(data.agents), np.stack(data.labels))
             row["loss"] = policy.fit(batch, targets, args.steps)
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
             for name in filter(None, args.maps.split(",")):

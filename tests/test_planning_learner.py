@@ -136,3 +136,20 @@ def test_no_learner_for_an_unknown_body_is_one_line():
 
     with pytest.raises(ValueError, match="unknown body 'cat'"):
         shipped_learner_path("cat")
+
+
+def test_sampled_states_are_free_cells_labelled_by_the_oracle_and_seeded():
+    from antmaze_hirl.experts.oracle import plan_subgoal, sample_labelled_states
+
+    env = point_env(maze_size=4)
+    first = sample_labelled_states(env, 20, subgoal_reach_m=1.0, rng=np.random.default_rng(3))
+    again = sample_labelled_states(env, 20, subgoal_reach_m=1.0, rng=np.random.default_rng(3))
+    geometry = env.unwrapped.geometry
+    for walls, agent, goal, label in zip(first.walls, first.agents, first.goals, first.labels, strict=True):
+        assert not walls[geometry.xy_to_cell(agent)]  # the agent stands in a free cell
+        assert geometry.xy_to_cell(agent) != geometry.xy_to_cell(goal)
+        np.testing.assert_array_equal(
+            label, plan_subgoal(walls, geometry, agent, goal, subgoal_reach_m=1.0, clearance_m=0.2 * geometry.scale)
+        )
+        assert np.linalg.norm(label - agent) <= 1.0 + 1e-9
+    np.testing.assert_array_equal(np.stack(first.agents), np.stack(again.agents))

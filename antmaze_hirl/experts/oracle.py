@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,54 @@ def plan_subgoal(
     if distance > subgoal_reach_m:
         target = agent_xy + offset * (subgoal_reach_m / distance)
     return target
+
+
+@dataclass(frozen=True)
+class LabelledStates:
+    """Oracle-labelled states: parallel lists of wall grids, agent and goal xy (metres), body states and labels."""
+
+    walls: list[np.ndarray]
+    agents: list[np.ndarray]
+    goals: list[np.ndarray]
+    bodies: list[np.ndarray]
+    labels: list[np.ndarray]
+
+
+def sample_labelled_states(
+    env: Any, count: int, *, subgoal_reach_m: float, rng: np.random.Generator, reset_seed: int = 0
+) -> LabelledStates:
+    """``count`` states of ``env``'s tasks, each labelled by :func:`plan_subgoal`, without simulating.
+
+    Each state draws a task (``sample_task(rng)``: the env's layouts, its split's part where it has one) and
+    puts the agent at a random free cell other than the goal's, its centre moved by up to 0.35 cell on each
+    axis, at rest (the body observation a reset with ``reset_seed`` leaves), labelled with the oracle's reach
+    ``subgoal_reach_m`` and a clearance of 0.2 cell. For a learner's held-out agreement and grid-level checks.
+    """
+    maze = maze_env(env)
+    geometry = maze.geometry
+    at_rest = STATE_LAYOUT.body_observation(env.reset(seed=reset_seed)[0]["state"])
+    states = LabelledStates([], [], [], [], [])
+    while len(states.agents) < count:
+        task = maze.sample_task(rng)
+        free = np.argwhere(~task.layout.walls)
+        cell = tuple(free[rng.integers(len(free))])
+        if cell == geometry.xy_to_cell(task.goal_xy):
+            continue
+        agent = geometry.cell_to_xy(cell) + rng.uniform(-0.35, 0.35, size=2) * geometry.scale
+        label = plan_subgoal(
+            task.layout.walls,
+            geometry,
+            agent,
+            task.goal_xy,
+            subgoal_reach_m=subgoal_reach_m,
+            clearance_m=0.2 * geometry.scale,
+        )
+        states.walls.append(task.layout.walls)
+        states.agents.append(agent)
+        states.goals.append(task.goal_xy)
+        states.bodies.append(at_rest)
+        states.labels.append(label)
+    return states
 
 
 def _nearest_free_cell(walls: np.ndarray, geometry: MazeGeometry, xy: np.ndarray) -> tuple[int, int]:
