@@ -284,17 +284,6 @@ PLANNER = "planner"
 
 def _learner_and_description(spec: SuiteSpec, path: Path, env: Any) -> tuple[Any, str]:
     """A saved DAgger learner for ``spec``'s maps and its description, which says when it plays zero-shot."""
-    from antmaze_hirl.dagger.high_level_policy import read_policy_file
-
-    learner = _load_learner(spec, path, env)
-    config, _ = read_policy_file(path)
-    rows, cols = int(config["geometry"][0]), int(config["geometry"][1])
-    inner = env.unwrapped
-    same = (rows, cols) == (inner.geometry.n_rows, inner.geometry.n_cols)
-    return learner, f"dagger learner {path}" + ("" if same else f" (zero-shot: trained on {rows}x{cols} maps)")
-
-
-def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
     from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, read_policy_file
     from antmaze_hirl.envs.bodies import BODY_SPECS
     from antmaze_hirl.envs.state_layout import STATE_LAYOUT
@@ -315,15 +304,17 @@ def _load_learner(spec: SuiteSpec, path: Path, env: Any) -> Any:
             f"gives {body_dim}: a learner for another body"
         )
     learner = HighLevelPolicy.load(path)
+    description = f"dagger learner {path}"
     if (rows, cols) == (inner.geometry.n_rows, inner.geometry.n_cols):
-        return learner
+        return learner, description
     if not learner.runs_on_any_map:
         raise ValueError(
             f"policy {path} is a CNN learner for {rows}x{cols} maps; suite {spec.name!r} has "
             f"{inner.geometry.n_rows}x{inner.geometry.n_cols} maps (only a planning learner runs on any map)"
         )
-    # Zero-shot: the same weights, planning rounds for this map (the description says so).
-    return learner.on_map(inner.geometry, pixels_per_cell=inner.pixels_per_cell)
+    # Zero-shot: the same weights, planning rounds for this map.
+    moved = learner.on_map(inner.geometry, pixels_per_cell=inner.pixels_per_cell)
+    return moved, f"{description} (zero-shot: trained on {rows}x{cols} maps)"
 
 
 def _sb3_algorithm(path: Path) -> Any:
