@@ -105,6 +105,13 @@ def moved_to(policy: HighLevelPolicy, env: Any, *, any_planner: bool = False) ->
     return moved
 
 
+def fit_on_oracle_labels(policy: HighLevelPolicy, env: Any, labels: int, steps: int, rng: np.random.Generator) -> float:
+    """Fits ``policy`` for ``steps`` on ``labels`` oracle-labelled states of ``env``'s tasks; the last loss."""
+    data = sample_labelled_states(env, labels, subgoal_reach_m=policy.subgoal_reach_m, rng=rng)
+    batch = policy.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+    return policy.fit(batch, policy.targets(np.stack(data.agents), np.stack(data.labels)), steps)
+
+
 def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int = 30) -> dict[str, float]:
     """The planning learner's grid-level success on random 4x4 point mazes before and after ``labels`` labels.
 
@@ -114,11 +121,7 @@ def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int 
     env = _env("point", maze_size=4)
     policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(seed), **learner_settings("next_cell_plan", 4))
     untrained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
-    data = sample_labelled_states(
-        env, labels, subgoal_reach_m=policy.subgoal_reach_m, rng=np.random.default_rng(20_000 + seed)
-    )
-    batch = policy.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
-    policy.fit(batch, policy.targets(np.stack(data.agents), np.stack(data.labels)), steps)
+    fit_on_oracle_labels(policy, env, labels, steps, np.random.default_rng(20_000 + seed))
     trained = summary(grid_rollouts(policy, env, tasks, 10_000 + seed))["success"]
     env.close()
     return {"untrained": untrained, "trained": trained, "gain": trained - untrained}
@@ -143,9 +146,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--tasks", type=int, default=200)
     parser.add_argument("--maps", default="medium,large,giant")
     parser.add_argument("--out", type=Path)
-    parser.add_argument("--no-correction", action="store_true", help="screen only: logits are the planner's Q alone")
     parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
-    parser.add_argument("--rounds-factor", type=float, default=1.0, help="screen only: on_map rounds times this")
     args = parser.parse_args(argv)
     th.set_num_threads(1)
     settings_ = body_settings(args.body, held_out_layouts=True)
@@ -158,27 +159,19 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             rng = np.random.default_rng(seed)
             settings = learner_settings(variant, config.maze_size)
             policy = HighLevelPolicy.for_env(train, rng=rng, subgoal_reach_m=config.subgoal_reach_m, **settings)
-            if args.no_correction and policy.runs_on_any_map:
-                for parameter in policy.network.head.parameters():
-                    parameter.requires_grad_(False)  # stays zero: the correction starts at zero
-            data = sample_labelled_states(
-                train, args.labels, subgoal_reach_m=policy.subgoal_reach_m, rng=np.random.default_rng(1000 + seed)
-            )
             selection = _env(args.body, split="selection", maze_size=config.maze_size)
             row: dict[str, Any] = {"variant": variant, "seed": seed, "labels": args.labels, "steps": args.steps}
             row["untrained_selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
-            batch = policy.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
-            targets = policy.targets(np.stack(data.agents), np.stack(data.labels))
-            row["loss"] = policy.fit(batch, targets, args.steps)
+            row["loss"] = fit_on_oracle_labels(
+                policy, train, args.labels, args.steps, np.random.default_rng(1000 + seed)
+            )
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)
                     moved = moved_to(policy, other, any_planner=args.move_any_planner)
-                    if args.rounds_factor != 1.0 and moved.runs_on_any_map:
-                        moved.network.planner.iterations = int(moved.network.planner.iterations * args.rounds_factor)
                     row[name] = summary(grid_rollouts(moved, other, args.tasks, 11))
-                except (ValueError, AttributeError) as error:
+                except ValueError as error:
                     row[name] = {"error": str(error)}
             row["seconds"] = round(time.perf_counter() - start, 1)
             rows.append(row)
