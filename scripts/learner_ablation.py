@@ -34,6 +34,9 @@ labels (DAgger's aggregated data) and on 1000 oracle-labelled states of selectio
 (agent at a random free cell's centre +-0.35 cells, at rest, labelled with the trial's oracle reach).
 High on the first and low on the second is a learner that memorises and does not generalise.
 
+Each evaluation also stores ``outcomes``: 1 or 0 per maze, in seed order from its ``first_seed``, so that two
+variants' trials of the same seed can be paired maze by maze (the preregistration's two-way bootstrap).
+
 Finished trials are kept in ``--trials-dir`` (one JSON each) and reused, so an interrupted run resumes;
 the summary lists every variant and seed found there for the settings given.
 """
@@ -53,7 +56,7 @@ import numpy as np
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.dagger import evaluate_high_level
+from antmaze_hirl.dagger.evaluation import evaluation_episodes
 from antmaze_hirl.experiments.config import (
     LEARNERS,
     SELECTION_SEED,
@@ -172,13 +175,16 @@ def evaluate_on(policy: Any, config: ExperimentConfig, chosen: tuple[str, int, i
     """``policy``'s learner-only success on the mazes ``(split, first seed, count)``, with its interval."""
     split, first_seed, mazes = chosen
     eval_env = make_env(config, split=split)
-    result = evaluate_high_level(policy, eval_env, episodes=mazes, seed=first_seed, num_envs=config.evaluation_envs)
+    played = evaluation_episodes(policy, eval_env, episodes=mazes, seed=first_seed, num_envs=config.evaluation_envs)
     eval_env.close()
+    outcomes = [int(bool(info["is_success"])) for info in played]
     return {
-        **rate_with_interval(result["success_rate"], mazes),
-        "mean_attempts": result["mean_attempts"],
+        **rate_with_interval(float(np.mean(outcomes)), mazes),
+        "mean_attempts": float(np.mean([info["attempts"] for info in played])),
         "split": split,
         "first_seed": first_seed,
+        # Per maze, in seed order from first_seed: what a paired (seed x maze) bootstrap between learners reads.
+        "outcomes": outcomes,
     }
 
 

@@ -3,9 +3,13 @@
 import json
 import sys
 
+import numpy as np
+import pytest
 from script_helpers import load_script
 
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+from antmaze_hirl.experiments.runner import make_env
+from antmaze_hirl.experts import PathOracle
 
 learner_ablation = load_script("scripts/learner_ablation.py")
 
@@ -75,3 +79,16 @@ def test_the_untrained_rule_pools_the_seeds_and_a_selection_only_summary_has_no_
     assert cnn["successes"] == 10 and cnn["meets_rule"]
     assert vin["rate"] == 0.25 and not vin["meets_rule"]
     assert learner_ablation.untrained_total([trial("heading_cnn", 0)]) is None  # not measured
+
+
+@pytest.mark.integration
+def test_an_evaluation_stores_one_outcome_per_maze_in_seed_order_and_its_rate_is_their_mean():
+    config = ExperimentConfig(body="point", held_out_layouts=True)
+    env = make_env(config, split="selection")
+    oracle = PathOracle.for_env(env, subgoal_reach_m=config.subgoal_reach_m)
+    env.close()
+    scored = learner_ablation.evaluate_on(oracle, config, ("selection", 3_000_000, 4))
+    random = learner_ablation.evaluate_on(lambda observation: np.zeros(2), config, ("selection", 3_000_000, 4))
+    assert scored["outcomes"] == [1, 1, 1, 1] and scored["successes"] == 4
+    assert len(random["outcomes"]) == 4 and set(random["outcomes"]) <= {0, 1}
+    assert random["successes"] == sum(random["outcomes"]) and random["first_seed"] == 3_000_000
