@@ -11,7 +11,11 @@ This is a screen for the planning-learner issue (cheap, seconds per variant), no
 env must meet its own goals under DAgger (``scripts/learner_ablation.py``).
 
 Usage: python scripts/planner_check.py --body ant --variants next_cell_cnn,next_cell_plan --seeds 0,1
-           [--labels 1000] [--steps 1500] [--tasks 200] [--maps medium,large,giant] [--out FILE]
+           [--labels 1000] [--steps 1500] [--tasks 200] [--maps medium,large,giant] [--selection-sizes 6,8]
+           [--out FILE]
+
+``--selection-sizes`` scores the learner zero-shot on the ``selection`` part of random mazes larger than its
+family's: a screen for carrying to larger maps that reads no fixed map (the fixed maps are benchmark suites).
 """
 
 from __future__ import annotations
@@ -144,7 +148,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--labels", type=int, default=1000)
     parser.add_argument("--steps", type=int, default=1500)
     parser.add_argument("--tasks", type=int, default=200)
-    parser.add_argument("--maps", default="medium,large,giant")
+    parser.add_argument("--maps", default="medium,large,giant", help="fixed maps, zero-shot (default: %(default)s)")
+    parser.add_argument(
+        "--selection-sizes",
+        default="",
+        help="also zero-shot on the selection part of random NxN mazes of these sizes, e.g. 6,8 (default: none)",
+    )
     parser.add_argument("--out", type=Path)
     parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
     args = parser.parse_args(argv)
@@ -166,6 +175,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 policy, train, args.labels, args.steps, np.random.default_rng(1000 + seed)
             )
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
+            for size in (int(n) for n in filter(None, args.selection_sizes.split(","))):
+                larger = _env(args.body, split="selection", maze_size=size)
+                row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved_to(policy, larger), larger, args.tasks, 7))
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)

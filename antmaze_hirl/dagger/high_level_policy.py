@@ -93,6 +93,9 @@ class LearnerSettings:
         any_map: With the ``"next_cell"`` head's value iteration: the planning learner whose weights act on
             any map (:class:`~antmaze_hirl.dagger.network.NextCellNetwork`'s ``any_map``: the planner's Q
             alone, times a trust learnt from 0; :meth:`HighLevelPolicy.on_map`). Needs ``planning_iterations > 0``.
+        learnt_blocking: With the ``"next_cell"`` head's value iteration: a learnt gate per move that can price
+            it above any path on any map (:class:`~antmaze_hirl.dagger.network.CellValueIteration`); walls are
+            learnt, not given, so it excludes ``block_walls``. Needs ``planning_iterations > 0``.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -112,6 +115,7 @@ class LearnerSettings:
     head: str = "heading"
     block_walls: bool = False
     any_map: bool = False
+    learnt_blocking: bool = False
     learning_rate: float = 1e-3
     batch_size: int = 64
     augment_symmetries: bool = True
@@ -129,7 +133,10 @@ class LearnerSettings:
             raise ValueError("block_walls needs head='next_cell' and planning_iterations > 0")
         if self.any_map and (self.head != "next_cell" or self.planning_iterations == 0):
             raise ValueError("any_map needs head='next_cell' and planning_iterations > 0")
+        if self.learnt_blocking and (self.head != "next_cell" or self.planning_iterations == 0 or self.block_walls):
+            raise ValueError("learnt_blocking needs head='next_cell', planning_iterations > 0 and no block_walls")
         object.__setattr__(self, "any_map", bool(self.any_map))
+        object.__setattr__(self, "learnt_blocking", bool(self.learnt_blocking))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -271,6 +278,7 @@ class HighLevelPolicy:
                     settings.planning_iterations,
                     block_walls=settings.block_walls,
                     any_map=settings.any_map,
+                    learnt_blocking=settings.learnt_blocking,
                 )
             else:
                 self.network = SubgoalNetwork(

@@ -136,6 +136,11 @@ UNREACHED = -1.0e3
 BLOCKED_COST = 1.0e4
 """Cost of a move the walls rule out (with ``block_walls``): more than any path's, so none is ever taken."""
 
+BLOCKING_START = -9.0
+"""Starting logit of the learnt blocking gate (``learnt_blocking``): ``BLOCKED_COST * sigmoid(-9)``, about 1.2, so
+the gate starts as one more move cost of a usual size, with a gradient of a usual size (``sigmoid'(-9)`` times
+:data:`BLOCKED_COST`, about 1.2), and labels raise it towards :data:`BLOCKED_COST` where a move must not be made."""
+
 
 def blocked_moves(walls: th.Tensor) -> th.Tensor:
     """``(B, 9, S, S)`` 1.0 where a move leads into a wall (or off the grid) or squeezes between two walls.
@@ -168,19 +173,32 @@ class CellValueIteration(nn.Module):
     diagonally between two), the grid world's known dynamics, so the learned costs need only rank free
     moves: without it, rare wall shapes near the agent were learned too cheap and the point walked into them.
 
+    With ``learnt_blocking`` each move also has a learnt gate ``b_a(s)`` in ``(0, 1)`` (a second convolution
+    over the same 3x3 views), and its cost is ``c_a(s) + BLOCKED_COST * b_a(s)``: the learner can learn that a
+    move is never made, at a cost above any path's on any map. Without it, a learnt cost only has to exceed
+    the detours of the training mazes: on 4x4 ant mazes the learner learnt walls to cost a few moves, and on
+    larger maps, where detours are longer, 33 of its 38 grid-level failures on the selection mazes were moves
+    into a wall (``docs/results/planning-learner.md``). Unlike ``block_walls``, nothing is ruled out before a
+    label: the gate starts closed to nothing (:data:`BLOCKING_START`) and is learnt.
+
     Args:
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
+        learnt_blocking: Add the learnt blocking gate.
 
     Raises:
-        ValueError: If ``iterations`` is below 1.
+        ValueError: If ``iterations`` is below 1, or both ``block_walls`` and ``learnt_blocking`` are set.
     """
 
-    def __init__(self, iterations: int, channels: int = 16, *, block_walls: bool = False) -> None:
+    def __init__(
+        self, iterations: int, channels: int = 16, *, block_walls: bool = False, learnt_blocking: bool = False
+    ) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
+        if block_walls and learnt_blocking:
+            raise ValueError("block_walls and learnt_blocking exclude each other: walls are either given or learnt")
         self.iterations = iterations
         self.block_walls = block_walls
         self.cost = nn.Sequential(
@@ -189,12 +207,24 @@ class CellValueIteration(nn.Module):
             nn.Conv2d(channels, len(NEXT_CELL_MOVES), 3, padding=1),
             nn.Softplus(),
         )
+        self.blocking: nn.Sequential | None = None
+        if learnt_blocking:
+            self.blocking = nn.Sequential(
+                nn.Conv2d(2, channels, 3, padding=1),
+                nn.ReLU(),
+                nn.Conv2d(channels, len(NEXT_CELL_MOVES), 3, padding=1),
+                nn.Sigmoid(),
+            )
+            with th.no_grad():
+                self.blocking[2].bias.fill_(BLOCKING_START)
 
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
         cost = self.cost(grids)
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
+        if self.blocking is not None:
+            cost = cost + BLOCKED_COST * self.blocking(grids)
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
@@ -231,6 +261,7 @@ class NextCellNetwork(nn.Module):
         hidden: Width of the fully connected layers.
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
+        learnt_blocking: The planner learns which moves are never made (:class:`CellValueIteration`).
         any_map: The planning learner whose weights act on any map: the logits are the planner's Q alone,
             times a learnt trust that starts at 0 (so the untrained learner has no preference among moves),
             with no correction from the feature vector (whose goal offset grows with the map beyond anything
@@ -238,7 +269,7 @@ class NextCellNetwork(nn.Module):
             seeds in ``results/planning_learner/``; a correction from local inputs only did worse on the screen too).
 
     Raises:
-        ValueError: If ``any_map`` is given without planning.
+        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning.
     """
 
     def __init__(
@@ -251,16 +282,19 @@ class NextCellNetwork(nn.Module):
         *,
         block_walls: bool = False,
         any_map: bool = False,
+        learnt_blocking: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
         if any_map and planning_iterations < 1:
             raise ValueError("any_map needs planning_iterations > 0")
+        if learnt_blocking and planning_iterations < 1:
+            raise ValueError("learnt_blocking needs planning_iterations > 0")
         self.trust: nn.Parameter | None = None
         self.head: nn.Module | None = None
         if planning_iterations > 0:
             self.planner: CellValueIteration | None = CellValueIteration(
-                planning_iterations, channels, block_walls=block_walls
+                planning_iterations, channels, block_walls=block_walls, learnt_blocking=learnt_blocking
             )
             if any_map:
                 # How far the logits follow the planner, learnt from 0: untrained, every move is as likely (the

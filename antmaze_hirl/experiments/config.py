@@ -219,11 +219,20 @@ LEARNERS: dict[str, dict[str, Any]] = {
     "next_cell_vin": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False},
     "next_cell_vin_walls": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": True},
     "next_cell_plan": {"head": "next_cell", "planning_iterations": PLANS, "block_walls": False, "any_map": True},
+    "next_cell_gate": {
+        "head": "next_cell",
+        "planning_iterations": PLANS,
+        "block_walls": False,
+        "any_map": True,
+        "learnt_blocking": True,
+    },
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
 body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
 only the bird's-eye encoding; ``next_cell_vin`` reads the next cell out of value iteration; ``_walls`` also
-rules out the moves the walls block, which solves most mazes before any label."""
+rules out the moves the walls block, which solves most mazes before any label. ``next_cell_plan`` is the planner
+whose weights act on any map; ``next_cell_gate`` adds a learnt gate that can price a move above any path
+(``LearnerSettings.learnt_blocking``)."""
 
 STRONG_PRIOR = "next_cell_vin_walls"
 """The learner that solves the held-out point mazes untrained (the point's default before protocol 2): a
