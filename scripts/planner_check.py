@@ -177,7 +177,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
             for size in (int(n) for n in filter(None, args.selection_sizes.split(","))):
                 larger = _env(args.body, split="selection", maze_size=size)
-                row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved_to(policy, larger), larger, args.tasks, 7))
+                moved = moved_to(policy, larger)
+                row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved, larger, args.tasks, 7))
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)
