@@ -13,6 +13,7 @@ from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.experiments.config import learner_settings
 
 PLAN = learner_settings("next_cell_plan", 5)
+GATE = learner_settings("next_cell_gate", 5)
 
 
 def point_env(**kwargs):
@@ -93,6 +94,74 @@ def test_the_planner_propagates_over_a_map_larger_than_any_it_trained_on():
     q = planner(grids)[0].detach()
     assert NEXT_CELL_MOVES[int(q.argmax())] == (1, 0)
     assert float(q.max()) == pytest.approx(-20.0, abs=1e-3)
+
+
+def detour_map(size: int, detour_cells: int) -> th.Tensor:
+    """A wall row between the agent (grid centre) and the goal two rows up; the gap is ``detour_cells`` east."""
+    grids = th.ones((1, 2, size, size))
+    grids[:, 1] = 0.0
+    centre = size // 2
+    grids[:, 0, centre - 2 : centre + 1, centre - 1 : centre + detour_cells + 2] = 0.0  # open rows
+    grids[:, 0, centre - 1, centre - 1 : centre + detour_cells] = 1.0  # the wall row, open at its east end
+    grids[:, 1, centre - 2, centre] = 1.0
+    return grids
+
+
+def hand_set(planner: CellValueIteration, wall_cost: float) -> None:
+    """Cost 1 a free move, ``wall_cost`` more into a wall (read from the 3x3 view), as in the test above."""
+    with th.no_grad():
+        first, second = planner.cost[0], planner.cost[2]
+        first.weight.zero_(), first.bias.zero_(), second.weight.zero_()
+        first.weight[0, 0, 1, 1] = 1.0
+        for index, (dx, dy) in enumerate(NEXT_CELL_MOVES):
+            second.weight[index, 0, 1 - dy, 1 + dx] = wall_cost
+        second.bias.fill_(float(np.log(np.e - 1)))
+
+
+@pytest.mark.parametrize("detour_cells", [3, 12])
+def test_a_learnt_blocking_gate_prices_a_wall_above_any_detour_where_a_finite_cost_does_not(detour_cells):
+    # A wall cost learnt on small mazes (here 6 moves) beats short detours only: on a 12-cell detour the plain
+    # planner walks into the wall; with the gate saturated on walls (as labels would push it), it never does.
+    size = 2 * detour_cells + 9
+    grids = detour_map(size, detour_cells)
+    plain = CellValueIteration(planning_rounds(size, size), channels=2)
+    gated = CellValueIteration(planning_rounds(size, size), channels=2, learnt_blocking=True)
+    for planner in (plain, gated):
+        hand_set(planner, 6.0)
+    with th.no_grad():  # the gate: closed (sigmoid ~ 1) for a move into a wall, open (~ 0) otherwise
+        first, second = gated.blocking[0], gated.blocking[2]
+        first.weight.zero_(), first.bias.zero_(), second.weight.zero_()
+        first.weight[0, 0, 1, 1] = 1.0
+        for index, (dx, dy) in enumerate(NEXT_CELL_MOVES):
+            second.weight[index, 0, 1 - dy, 1 + dx] = 40.0
+        second.bias.fill_(-20.0)
+    plain_move, gated_move = (NEXT_CELL_MOVES[int(planner(grids)[0].argmax())] for planner in (plain, gated))
+    assert gated_move == (1, 0)  # east, towards the gap
+    assert (plain_move[1] == 1) == (detour_cells == 12)  # north: into the wall row
+
+
+def test_learnt_blocking_needs_a_planner_and_excludes_given_walls():
+    env = point_env(maze_size=3)
+    with pytest.raises(ValueError, match="learnt_blocking needs head='next_cell', planning_iterations > 0 and no"):
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "block_walls": True})
+    with pytest.raises(ValueError, match="learnt_blocking needs head='next_cell', planning_iterations > 0"):
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "planning_iterations": 0, "any_map": False})
+    with pytest.raises(ValueError, match="block_walls and learnt_blocking exclude each other"):
+        CellValueIteration(3, block_walls=True, learnt_blocking=True)
+
+
+def test_the_gated_learner_starts_without_preference_and_moves_to_a_larger_map(tmp_path):
+    small, big = point_env(maze_size=3), point_env(maze_size=7)
+    learner = HighLevelPolicy.for_env(small, rng=np.random.default_rng(0), **GATE)
+    obs, _ = small.reset(seed=0)
+    batch = learner.encoder.encode_observations([obs])
+    logits = learner.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors))
+    assert th.equal(logits, th.zeros_like(logits))
+    moved = learner.on_map(big.unwrapped.geometry, pixels_per_cell=big.unwrapped.pixels_per_cell)
+    loaded = HighLevelPolicy.load(moved.save(tmp_path / "gate.zip"))
+    assert loaded.settings.learnt_blocking and loaded.network.planner.blocking is not None
+    obs, _ = big.reset(seed=2)
+    np.testing.assert_array_equal(loaded.predict(obs), moved.predict(obs))
 
 
 @pytest.mark.integration  # about 15 s on an idle core (60-90 s on a loaded one)
