@@ -145,7 +145,8 @@ def test_learnt_blocking_needs_a_planner_and_excludes_given_walls():
     with pytest.raises(ValueError, match="learnt_blocking needs head='next_cell', planning_iterations > 0 and no"):
         HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "block_walls": True})
     with pytest.raises(ValueError, match="learnt_blocking needs head='next_cell', planning_iterations > 0"):
-        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "planning_iterations": 0, "any_map": False})
+        no_planner = {**GATE, "planning_iterations": 0, "any_map": False}
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **no_planner)
     with pytest.raises(ValueError, match="block_walls and learnt_blocking exclude each other"):
         CellValueIteration(3, block_walls=True, learnt_blocking=True)
 
