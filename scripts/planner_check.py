@@ -33,6 +33,7 @@ import torch as th
 
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, planning_rounds
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
+from antmaze_hirl.dagger.shipped import load_shipped_learner
 from antmaze_hirl.envs.layouts import shortest_path
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
@@ -55,11 +56,22 @@ def _env(body: str, *, split: str | None = None, maze_map: Any = None, maze_size
 
 def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[bool]]:
     """Greedy next-cell rollouts on ``tasks`` tasks of ``env``: success lists keyed by shortest path (cells)."""
+    ends = grid_rollout_ends(policy, env, tasks, seed)
+    return {length: [end == "success" for end in outcomes] for length, outcomes in ends.items()}
+
+
+ENDS = ("success", "into_wall", "past_corner", "stay", "timeout")
+"""How a grid rollout ends: the goal's cell reached; a move into a wall (or off the map); a diagonal past a wall's
+corner (one or both of its orthogonal cells a wall); the agent's own cell chosen; no goal within the moves."""
+
+
+def grid_rollout_ends(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[str]]:
+    """:func:`grid_rollouts` with how each rollout ended (one of :data:`ENDS`), keyed by shortest path (cells)."""
     maze = env.unwrapped
     geometry = maze.geometry
     at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
     rng = np.random.default_rng(seed)
-    results: dict[int, list[bool]] = defaultdict(list)
+    results: dict[int, list[str]] = defaultdict(list)
     policy.network.eval()
     for _ in range(tasks):
         task = maze.sample_task(rng)
@@ -67,24 +79,52 @@ def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> d
         cell = geometry.xy_to_cell(task.start_xy)
         goal = geometry.xy_to_cell(task.goal_xy)
         length = len(shortest_path(walls, cell, goal)) - 1
-        success = False
+        end = "timeout"
         for _ in range(2 * (walls.shape[0] + walls.shape[1])):
             if cell == goal:
-                success = True
+                end = "success"
                 break
             batch = policy.encoder.encode([walls], [geometry.cell_to_xy(cell)], [task.goal_xy], [at_rest])
             with th.no_grad():
                 move = int(policy.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors)).argmax(1)[0])
             dx, dy = NEXT_CELL_MOVES[move]
             row, col = cell[0] - dy, cell[1] + dx
-            blocked = not (0 <= row < walls.shape[0] and 0 <= col < walls.shape[1]) or walls[row, col]
-            if dx and dy:
-                blocked = blocked or walls[cell[0] - dy, cell[1]] or walls[cell[0], cell[1] + dx]
-            if blocked or (dx, dy) == (0, 0):
+            if (dx, dy) == (0, 0):
+                end = "stay"
+            elif not (0 <= row < walls.shape[0] and 0 <= col < walls.shape[1]) or walls[row, col]:
+                end = "into_wall"
+            elif dx and dy and (walls[cell[0] - dy, cell[1]] or walls[cell[0], cell[1] + dx]):
+                end = "past_corner"
+            if end != "timeout":
                 break
             cell = (row, col)
-        results[length].append(success)
+        results[length].append(end)
     return results
+
+
+def ends_summary(results: dict[int, list[str]]) -> dict[str, Any]:
+    """How many rollouts ended each way (:data:`ENDS`), over all path lengths and on paths of 7 cells or more."""
+    every = [end for ends in results.values() for end in ends]
+    long = [end for length, ends in results.items() if length >= 7 for end in ends]
+    return {
+        "tasks": len(every),
+        "ends": {end: every.count(end) for end in ENDS},
+        "ends_on_paths_of_7_cells_or_more": {end: long.count(end) for end in ENDS},
+    }
+
+
+def shipped_failures(body: str, maps: list[str], tasks: int) -> dict[str, Any]:
+    """How the shipped learner's grid rollouts end on the ``selection`` part of its family and on ``maps``."""
+    rows: dict[str, Any] = {}
+    for name in ["selection", *maps]:
+        if name == "selection":
+            config = ExperimentConfig(body=body, **body_settings(body, held_out_layouts=True), held_out_layouts=True)
+            env = _env(body, split="selection", maze_size=config.maze_size)
+        else:
+            env = _env(body, maze_map=name)
+        rows[name] = ends_summary(grid_rollout_ends(moved_to(load_shipped_learner(body), env), env, tasks, 0))
+        env.close()
+    return rows
 
 
 def moved_to(policy: HighLevelPolicy, env: Any, *, any_planner: bool = False) -> HighLevelPolicy:
@@ -156,8 +196,22 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     parser.add_argument("--out", type=Path)
     parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
+    parser.add_argument(
+        "--shipped-failures",
+        action="store_true",
+        help="instead: how the shipped learner's rollouts end on the selection part and --maps (default: off)",
+    )
     args = parser.parse_args(argv)
     th.set_num_threads(1)
+    if args.shipped_failures:
+        command = "python scripts/planner_check.py " + " ".join(argv or sys.argv[1:])
+        result = {"command": command, "body": args.body, "tasks": args.tasks}
+        result["rows"] = shipped_failures(args.body, list(filter(None, args.maps.split(","))), args.tasks)
+        print(json.dumps({name: row["ends"] for name, row in result["rows"].items()}), flush=True)
+        if args.out:
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            args.out.write_text(json.dumps(result, indent=1) + "\n")
+        return result
     settings_ = body_settings(args.body, held_out_layouts=True)
     config = ExperimentConfig(body=args.body, **settings_, protocol=2, held_out_layouts=True)
     rows = []
