@@ -2,7 +2,8 @@
 
 ``python -m antmaze_lab.planning_tables screen FILE``: the grid-level screen (``scripts/planner_check.py``);
 ``by-path FILE``: success by shortest path length (``scripts/planner_by_path.py``); ``trials FILE [FILE ...]``:
-DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``.
+DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``;
+``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``).
 """
 
 from __future__ import annotations
@@ -36,13 +37,15 @@ def screen_table(data: dict[str, Any]) -> str:
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
     maps = [name for name in MAPS if any(name in row for row in data["rows"])]
+    larger = sorted({key for row in data["rows"] for key in row if key.startswith("selection_")})
+    maps = [*larger, *maps]  # larger random selection mazes (planner_check --selection-sizes), then fixed maps
     header = [
         "variant",
         "seeds",
         "labels",
         "untrained (selection)",
         "trained (selection)",
-        *[f"{m} zero-shot" for m in maps],
+        *[f"{m.removeprefix('selection_')} selection zero-shot" if m in larger else f"{m} zero-shot" for m in maps],
     ]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for variant, rows in by_variant.items():
@@ -109,10 +112,26 @@ def speed_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def ends_table(data: dict[str, Any]) -> str:
+    """How the shipped learner's grid rollouts end (``planner_check.py --shipped-failures``), one row a place."""
+    rows = data["rows"]
+    ends = list(next(iter(rows.values()))["ends"])
+    header = ["where", "tasks", *[end.replace("_", " ") for end in ends], "into a wall, paths >= 7 cells"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for name, row in rows.items():
+        long = row["ends_on_paths_of_7_cells_or_more"]
+        failed_long = sum(count for end, count in long.items() if end != "success")
+        where = "selection part" if name == "selection" else f"`{name}` (zero-shot)"
+        cells = [where, str(row["tasks"]), *[str(row["ends"][end]) for end in ends]]
+        cells.append(f"{long['into_wall']} of {failed_long} failures" if failed_long else "no failure")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Prints the table named by the first argument from the files after it."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed"))
+    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed", "ends"))
     parser.add_argument("files", type=Path, nargs="+")
     args = parser.parse_args(argv)
     loaded = [json.loads(path.read_text()) for path in args.files]
@@ -120,6 +139,8 @@ def main(argv: list[str] | None = None) -> int:
         print(screen_table(loaded[0]))
     elif args.table == "speed":
         print(speed_table(loaded[0]))
+    elif args.table == "ends":
+        print(ends_table(loaded[0]))
     elif args.table == "by-path":
         print(by_path_table(loaded[0]))
     else:

@@ -37,7 +37,7 @@ from antmaze_hirl.dagger.shipped import load_shipped_learner
 from antmaze_hirl.envs.layouts import shortest_path
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
-from antmaze_hirl.envs.suites import fixed_map
+from antmaze_hirl.envs.suites import fixed_map, suite_tasks
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, learner_settings
 from antmaze_hirl.experts.oracle import sample_labelled_states
 from antmaze_hirl.sb3_ext.shipped import make_maze_env
@@ -68,38 +68,45 @@ corner (one or both of its orthogonal cells a wall); the agent's own cell chosen
 def grid_rollout_ends(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[str]]:
     """:func:`grid_rollouts` with how each rollout ended (one of :data:`ENDS`), keyed by shortest path (cells)."""
     maze = env.unwrapped
-    geometry = maze.geometry
     at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
     rng = np.random.default_rng(seed)
     results: dict[int, list[str]] = defaultdict(list)
     policy.network.eval()
     for _ in range(tasks):
         task = maze.sample_task(rng)
-        walls = task.layout.walls
-        cell = geometry.xy_to_cell(task.start_xy)
-        goal = geometry.xy_to_cell(task.goal_xy)
-        length = len(shortest_path(walls, cell, goal)) - 1
-        end = "timeout"
-        for _ in range(2 * (walls.shape[0] + walls.shape[1])):
-            if cell == goal:
-                end = "success"
-                break
-            batch = policy.encoder.encode([walls], [geometry.cell_to_xy(cell)], [task.goal_xy], [at_rest])
-            with th.no_grad():
-                move = int(policy.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors)).argmax(1)[0])
-            dx, dy = NEXT_CELL_MOVES[move]
-            row, col = cell[0] - dy, cell[1] + dx
-            if (dx, dy) == (0, 0):
-                end = "stay"
-            elif not (0 <= row < walls.shape[0] and 0 <= col < walls.shape[1]) or walls[row, col]:
-                end = "into_wall"
-            elif dx and dy and (walls[cell[0] - dy, cell[1]] or walls[cell[0], cell[1] + dx]):
-                end = "past_corner"
-            if end != "timeout":
-                break
-            cell = (row, col)
-        results[length].append(end)
+        cell, goal = maze.geometry.xy_to_cell(task.start_xy), maze.geometry.xy_to_cell(task.goal_xy)
+        length = len(shortest_path(task.layout.walls, cell, goal)) - 1
+        results[length].append(rollout_end(policy, task.layout.walls, cell, goal, task.goal_xy, at_rest))
     return results
+
+
+def rollout_end(
+    policy: HighLevelPolicy,
+    walls: np.ndarray,
+    cell: tuple[int, int],
+    goal: tuple[int, int],
+    goal_xy: np.ndarray,
+    at_rest: np.ndarray,
+) -> str:
+    """One greedy next-cell rollout from ``cell`` to the ``goal`` cell (at ``goal_xy``) on ``walls``: how it ended
+    (:data:`ENDS`)."""
+    geometry = policy.geometry
+    for _ in range(2 * (walls.shape[0] + walls.shape[1])):
+        if cell == goal:
+            return "success"
+        batch = policy.encoder.encode([walls], [geometry.cell_to_xy(cell)], [goal_xy], [at_rest])
+        with th.no_grad():
+            move = int(policy.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors)).argmax(1)[0])
+        dx, dy = NEXT_CELL_MOVES[move]
+        row, col = cell[0] - dy, cell[1] + dx
+        if (dx, dy) == (0, 0):
+            return "stay"
+        if not (0 <= row < walls.shape[0] and 0 <= col < walls.shape[1]) or walls[row, col]:
+            return "into_wall"
+        if dx and dy and (walls[cell[0] - dy, cell[1]] or walls[cell[0], cell[1] + dx]):
+            return "past_corner"
+        cell = (row, col)
+    return "timeout"
 
 
 def ends_summary(results: dict[int, list[str]]) -> dict[str, Any]:
@@ -122,7 +129,15 @@ def shipped_failures(body: str, maps: list[str], tasks: int) -> dict[str, Any]:
             env = _env(body, split="selection", maze_size=config.maze_size)
         else:
             env = _env(body, maze_map=name)
-        rows[name] = ends_summary(grid_rollout_ends(moved_to(load_shipped_learner(body), env), env, tasks, 0))
+        policy = moved_to(load_shipped_learner(body), env)
+        rows[name] = ends_summary(grid_rollout_ends(policy, env, tasks, 0))
+        if name in SUITE_SPECS:  # the suite's own tasks, in task-id order, as the benchmark plays them
+            at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
+            rows[name]["suite_task_ends"] = [
+                rollout_end(policy, task.layout.walls, task.layout.start_cell, task.layout.goal_cell, xy, at_rest)
+                for task in suite_tasks(name)
+                for xy in [policy.geometry.cell_to_xy(task.layout.goal_cell)]
+            ]
         env.close()
     return rows
 

@@ -223,3 +223,36 @@ def test_sampled_states_are_free_cells_labelled_by_the_oracle_and_seeded():
         )
         assert np.linalg.norm(label - agent) <= 1.0 + 1e-9
     np.testing.assert_array_equal(np.stack(first.agents), np.stack(again.agents))
+
+
+class FixedMove(th.nn.Module):
+    """A network that always picks one move (the rollout only reads the argmax)."""
+
+    def __init__(self, move: tuple[int, int]) -> None:
+        super().__init__()
+        self.index = NEXT_CELL_MOVES.index(move)
+
+    def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
+        logits = th.zeros((grids.shape[0], len(NEXT_CELL_MOVES)))
+        logits[:, self.index] = 1.0
+        return logits
+
+
+@pytest.mark.parametrize(
+    ("move", "end"),
+    [((1, 0), "success"), ((0, 1), "into_wall"), ((1, 1), "past_corner"), ((0, 0), "stay"), ((-1, 0), "into_wall")],
+)
+def test_a_grid_rollout_names_how_it_ended(move, end):
+    from script_helpers import load_script
+
+    planner_check = load_script("scripts/planner_check.py")
+    env = point_env(maze_size=3)
+    policy = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **PLAN)
+    policy.network = FixedMove(move)
+    walls = np.ones((5, 5), dtype=bool)
+    walls[2, 1:4] = False  # a west-east corridor; the goal at its east end
+    walls[1, 2] = False  # a free cell north of the corridor's middle: a diagonal from the start passes a corner
+    at_rest = np.zeros(2)
+    goal_xy = policy.geometry.cell_to_xy((2, 3))
+    assert planner_check.rollout_end(policy, walls, (2, 1), (2, 3), goal_xy, at_rest) == end
+    assert end in planner_check.ENDS
