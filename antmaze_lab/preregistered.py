@@ -769,8 +769,8 @@ def _reading_text(reading: dict[str, Any]) -> str:
 
 def _claims_table(report: dict[str, Any]) -> list[str]:
     lines = [
-        "| # | the claim (the repository's words; the paper's to be checked) | readings: effect, + the claimed "
-        "way [two-way 95% interval], p_for / p_against | P_for, P_against after Holm | verdict |",
+        "| # | the claim (the repository's words; the paper's: the preregistration, section 1) | readings: effect, + "
+        "the claimed way [two-way 95% interval], p_for / p_against | P_for, P_against after Holm | verdict |",
         "|---|---|---|---|---|",
     ]
     for claim in report["claims"]:
