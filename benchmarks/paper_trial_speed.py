@@ -165,7 +165,7 @@ def profile_parts(stats: pstats.Stats) -> dict[str, float]:
 
 def profiled_trial(episodes: int, evaluation_envs: int, seed: int, mazes: int) -> dict[str, Any]:
     """One lockstep trial under cProfile: its process time and each part's seconds and share of it."""
-    profile = cProfile.Profile()
+    profile = cProfile.Profile(time.process_time)  # CPU seconds: on a shared machine wall time counts the others'
     profile.enable()
     figures, _ = timed_trial(episodes, evaluation_envs, seed, mazes)
     profile.disable()
