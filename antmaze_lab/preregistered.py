@@ -30,7 +30,7 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -51,7 +51,13 @@ from antmaze_hirl.experiments.uncertainty import (
     two_way_bootstrap,
 )
 from antmaze_lab.folders import BodyEvaluations, MethodEvaluations, read_body, symmetry_check
-from antmaze_lab.selection_trials import SelectionTrial, read_selection_trial, trial_files, trial_identity
+from antmaze_lab.selection_trials import (
+    SelectionTrial,
+    read_selection_trial,
+    selection_task_classes,
+    trial_files,
+    trial_identity,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 PREREGISTRATION = ROOT / "docs" / "preregistration.yaml"
@@ -593,7 +599,10 @@ NOT_DECIDED = "not decided"
 
 
 def _selection_body(
-    candidate: Sequence[SelectionTrial], baseline: Sequence[SelectionTrial], spec: dict[str, Any]
+    candidate: Sequence[SelectionTrial],
+    baseline: Sequence[SelectionTrial],
+    spec: dict[str, Any],
+    task_classes: Callable[[str, tuple[int, ...]], tuple[str, ...]],
 ) -> dict[str, Any]:
     """One body's reading of ``learner.beats``: the paired difference's two-way bootstrap interval, or why none.
 
@@ -616,11 +625,14 @@ def _selection_body(
         return {**out, "verdict": TOO_FEW_SEEDS}
     first = mine[seeds[0]]
     for trial in [mine[s] for s in seeds] + [theirs[s] for s in seeds]:
-        if (trial.maze_seeds, trial.task_classes) != (first.maze_seeds, first.task_classes):
+        if trial.maze_seeds != first.maze_seeds:
             raise ValueError(f"{trial.path} was evaluated on other selection mazes than {first.path}")
     table = np.array([mine[s].success for s in seeds], dtype=float) - np.array([theirs[s].success for s in seeds])
-    clusters = {"canonical_task": first.task_classes, "maze": first.maze_seeds}.get(stats["maze_clusters"])
-    if clusters is None:
+    if stats["maze_clusters"] == "canonical_task":
+        clusters: Sequence[Any] = task_classes(first.body, first.maze_seeds)
+    elif stats["maze_clusters"] == "maze":
+        clusters = first.maze_seeds
+    else:
         raise ValueError(f"statistics.maze_clusters must be canonical_task or maze, got {stats['maze_clusters']!r}")
     drawn = paired_two_way_bootstrap(
         table, clusters, resamples=stats["resamples"], seed=stats["bootstrap_seed"], confidence=stats["confidence"]
@@ -640,13 +652,19 @@ def _selection_body(
     }
 
 
-def learner_beats(trials: Sequence[SelectionTrial], candidate: str, spec: dict[str, Any]) -> dict[str, Any]:
+def learner_beats(
+    trials: Sequence[SelectionTrial],
+    candidate: str,
+    spec: dict[str, Any],
+    task_classes: Callable[[str, tuple[int, ...]], tuple[str, ...]] = selection_task_classes,
+) -> dict[str, Any]:
     """The preregistration's ``learner.beats`` rule: does ``candidate`` beat protocol 2's learner (selection mazes)?
 
     On each body of ``run.bodies``: the trials of ``candidate`` and of ``learner.protocol2_learner`` with
     ``learner.selection_check.episodes`` training episodes, paired by seed (the seeds both have); the table of
     per-maze paired differences of final learner-only success, ``seeds x selection mazes``; its two-way bootstrap
-    (seeds and maze clusters resampled, ``statistics``' resamples, seed, confidence and clusters). A body reads
+    (seeds and maze clusters resampled, ``statistics``' resamples, seed, confidence and clusters: tasks up to
+    symmetry come from ``task_classes(body, maze_seeds)``, the mazes drawn again by default). A body reads
     **beats** when the interval's lower bound is above ``lower_bound_above`` (0), **does not beat** otherwise,
     **too few seeds** with fewer than ``min_seeds`` paired seeds, **missing body** without trials of one learner.
 
@@ -672,7 +690,7 @@ def learner_beats(trials: Sequence[SelectionTrial], candidate: str, spec: dict[s
     bodies = {}
     for body in spec["run"]["bodies"]:
         of = {name: [t for t in chosen if t.body == body and t.variant == name] for name in learners}
-        bodies[body] = _selection_body(of[candidate], of[baseline], spec)
+        bodies[body] = _selection_body(of[candidate], of[baseline], spec, task_classes)
     verdicts = {body: found["verdict"] for body, found in bodies.items()}
     if all(v == BEATS for v in verdicts.values()):
         overall, reason = BEATS, "the lower bound is above 0 on every body"

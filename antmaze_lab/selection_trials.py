@@ -2,19 +2,20 @@
 
 The preregistration's ``learner.beats`` rule (``docs/preregistration.md``, section 2) pairs two learners' seeds
 maze by maze on the selection mazes, so it needs each trial's learner-only outcome **on every selection maze**,
-not only the rate. A trial file carries them in ``selection_success["mazes"]``: one record per maze, in the
-order of its reset seeds, as :func:`antmaze_hirl.experiments.outcomes.play_mazes` returns them::
+not only the rate. A trial file carries them in ``selection_success["outcomes"]``: 1 or 0 per maze, in the order
+of the mazes' reset seeds from ``first_seed``::
 
     "selection_success": {"rate": 0.92, "successes": 46, "episodes": 50, "first_seed": 3000000, ...,
-                          "mazes": [{"maze_seed": 3000000, "layout": "111111/1S0001/...",
-                                     "task_class": "...", "success": true, ...}, ...]}
+                          "outcomes": [1, 0, 1, ...]}
 
-``maze_seed`` and ``success`` are required; the maze's task up to symmetry is ``task_class``, or is computed
-from ``layout`` where only that is recorded (a record with both is checked: they must agree).
+The files do not record the mazes themselves: maze ``i`` is the one the selection part draws at a reset with seed
+``first_seed + i`` (the evaluation reset with that seed before the learner acted), so
+:func:`selection_task_classes` draws them again to group them into tasks up to symmetry.
 """
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -24,10 +25,12 @@ from typing import Any
 import numpy as np
 
 from antmaze_hirl.envs.layouts import canonical_task
-from antmaze_lab.folders import layout_from_string
+from antmaze_hirl.envs.protocol import maze_env
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+from antmaze_hirl.experiments.runner import make_env
 
-PER_MAZE_FIELD = "mazes"
-"""The key of ``selection_success`` that holds the per-maze records."""
+PER_MAZE_FIELD = "outcomes"
+"""The key of ``selection_success`` that holds the per-maze outcomes."""
 
 
 @dataclass(frozen=True)
@@ -41,7 +44,6 @@ class SelectionTrial:
         seed: The trial's seed.
         episodes: Training episodes before the evaluation.
         maze_seeds: Each selection maze's reset seed, ascending.
-        task_classes: Each maze's task up to the square's 8 symmetries, in the same order.
         success: ``(mazes,)`` learner-only success, in the same order.
         evaluation_envs: Mazes played at once in lockstep (``None`` where the file does not say).
     """
@@ -52,21 +54,8 @@ class SelectionTrial:
     seed: int
     episodes: int
     maze_seeds: tuple[int, ...]
-    task_classes: tuple[str, ...]
     success: np.ndarray
     evaluation_envs: int | None
-
-
-def _task_class(path: Path, record: dict) -> str:
-    recorded, layout = record.get("task_class"), record.get("layout")
-    if layout is None:
-        if recorded is None:
-            raise ValueError(f"{path}: selection maze {record['maze_seed']} records neither task_class nor layout")
-        return str(recorded)
-    computed = canonical_task(layout_from_string(layout))
-    if recorded is not None and recorded != computed:
-        raise ValueError(f"{path}: selection maze {record['maze_seed']}'s task_class is not its layout's task")
-    return computed
 
 
 def _load(path: Path) -> dict[str, Any]:
@@ -99,35 +88,32 @@ def read_selection_trial(path: Path) -> SelectionTrial:
 
     Raises:
         ValueError: One line naming the file: not JSON, not a learner-ablation trial, no per-maze outcomes
-            (``selection_success["mazes"]``, see the module docstring), a record without ``maze_seed`` or
-            ``success``, a maze listed twice, or per-maze outcomes that disagree with the recorded count.
+            (``selection_success["outcomes"]``, see the module docstring), outcomes other than 0 and 1, or
+            outcomes that disagree with the recorded count of mazes or of successes.
     """
     path = Path(path)
     trial = _load(path)
     figures = trial["selection_success"]
-    records = figures.get(PER_MAZE_FIELD)
-    if not records:
+    outcomes = figures.get(PER_MAZE_FIELD)
+    if not outcomes or "first_seed" not in figures:
         raise ValueError(
-            f"{path}: selection_success has no per-maze outcomes ({PER_MAZE_FIELD!r}: one {{maze_seed, layout, "
-            "task_class, success} per selection maze, as antmaze_hirl.experiments.outcomes.play_mazes returns them)"
+            f"{path}: selection_success has no per-maze outcomes ({PER_MAZE_FIELD!r}: 1 or 0 per selection maze, "
+            "in seed order from first_seed, as scripts/learner_ablation.py writes them since 6df364a)"
         )
-    if any("maze_seed" not in r or "success" not in r for r in records):
-        raise ValueError(f"{path}: a selection maze record lacks maze_seed or success")
-    records = sorted(records, key=lambda r: int(r["maze_seed"]))
-    seeds = tuple(int(r["maze_seed"]) for r in records)
-    if len(set(seeds)) != len(seeds):
-        raise ValueError(f"{path}: a selection maze is listed twice")
-    success = np.array([bool(r["success"]) for r in records])
-    if "successes" in figures and int(figures["successes"]) != int(success.sum()):
-        raise ValueError(f"{path}: {int(success.sum())} per-maze successes, but successes = {figures['successes']}")
+    if any(value not in (0, 1) for value in outcomes):
+        raise ValueError(f"{path}: selection_success.{PER_MAZE_FIELD} holds values other than 0 and 1")
+    success = np.array(outcomes, dtype=bool)
+    for key, count in (("episodes", len(success)), ("successes", int(success.sum()))):
+        if key in figures and int(figures[key]) != count:
+            raise ValueError(f"{path}: {count} per-maze {key}, but selection_success.{key} = {figures[key]}")
+    first = int(figures["first_seed"])
     return SelectionTrial(
         path=path,
         body=_body(trial),
         variant=str(trial["variant"]),
         seed=int(trial["seed"]),
         episodes=int(trial["episodes"]),
-        maze_seeds=seeds,
-        task_classes=tuple(_task_class(path, r) for r in records),
+        maze_seeds=tuple(range(first, first + len(success))),
         success=success,
         evaluation_envs=trial.get("evaluation_envs"),
     )
@@ -151,3 +137,23 @@ def trial_files(paths: Iterable[Path]) -> list[Path]:
         else:
             raise ValueError(f"no trial file or folder at {path}")
     return sorted(set(found))
+
+
+@functools.lru_cache(maxsize=8)
+def selection_task_classes(body: str, maze_seeds: tuple[int, ...]) -> tuple[str, ...]:
+    """Each selection maze's task up to the square's 8 symmetries, drawn again from its reset seed.
+
+    The learner-ablation trials' env (held-out layouts, the body's maze size, the ``selection`` part), reset with
+    each seed as the evaluation reset it; the maze is drawn at the reset, before any policy acts, so no low level
+    is loaded.
+    """
+    config = ExperimentConfig(body=body, held_out_layouts=True, **body_settings(body, held_out_layouts=True))
+    env = make_env(config, lambda *_: None, split="selection")
+    try:
+        classes = []
+        for seed in maze_seeds:
+            env.reset(seed=seed)
+            classes.append(canonical_task(maze_env(env).layout))
+    finally:
+        env.close()
+    return tuple(classes)

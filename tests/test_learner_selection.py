@@ -7,8 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from antmaze_hirl.envs.layouts import canonical_task
+from antmaze_hirl.envs.protocol import maze_env
+from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
+from antmaze_hirl.experiments.runner import make_env
 from antmaze_lab import preregistered as pre
-from antmaze_lab.selection_trials import read_selection_trial
+from antmaze_lab.selection_trials import read_selection_trial, selection_task_classes
 
 ROOT = Path(__file__).resolve().parents[1]
 CANDIDATE, OLD = "next_cell_plan", "next_cell_cnn"
@@ -23,41 +27,39 @@ def spec():
     return loaded
 
 
-def write_trial(folder, body, variant, seed, success, episodes=100, records=None):
-    """A trial file as ``scripts/learner_ablation.py`` writes it, with the per-maze records the check needs."""
-    success = [bool(v) for v in success]
-    if records is None:
-        records = [{"maze_seed": FIRST_MAZE + i, "task_class": f"task{i}", "success": v} for i, v in enumerate(success)]
+def write_trial(folder, body, variant, seed, success, episodes=100, outcomes=True, first_seed=FIRST_MAZE):
+    """A trial file as ``scripts/learner_ablation.py`` writes it, with the per-maze outcomes the check needs."""
+    success = [int(bool(v)) for v in success]
+    figures = {"rate": float(np.mean(success)), "successes": sum(success), "episodes": len(success)}
     trial = {
         "variant": variant,
         "seed": seed,
         "body": body,
         "episodes": episodes,
         "evaluation_envs": 25,
-        "selection_success": {
-            "rate": float(np.mean(success)),
-            "successes": int(sum(success)),
-            "episodes": len(success),
-            "first_seed": FIRST_MAZE,
-            **({"mazes": records} if records != [] else {}),
-        },
+        "selection_success": {**figures, "first_seed": first_seed, **({"outcomes": success} if outcomes else {})},
     }
     path = Path(folder) / f"{body}_{variant}_e{episodes}_seed{seed}.json"
     path.write_text(json.dumps(trial))
     return path
 
 
-def write_body(folder, body, candidate_rate, old_rate, seeds=range(5), old_seeds=None, same=False):
+def one_task_per_maze(body, maze_seeds):
+    """Crafted mazes: every maze its own task up to symmetry (the default draws the real mazes again)."""
+    return tuple(f"{body} task {seed}" for seed in maze_seeds)
+
+
+def write_body(folder, body, candidate_rate, old_rate, seeds=range(5), old_seeds=None, same=False, mazes=MAZES):
     """Trials of both learners on one body: each maze a success with the learner's rate (a fixed draw per seed)."""
     for seed in seeds:
-        write_trial(folder, body, CANDIDATE, seed, np.random.default_rng(seed).random(MAZES) < candidate_rate)
+        write_trial(folder, body, CANDIDATE, seed, np.random.default_rng(seed).random(mazes) < candidate_rate)
     for seed in seeds if old_seeds is None else old_seeds:
         rate = candidate_rate if same else old_rate
-        write_trial(folder, body, OLD, seed, np.random.default_rng(seed if same else 100 + seed).random(MAZES) < rate)
+        write_trial(folder, body, OLD, seed, np.random.default_rng(seed if same else 100 + seed).random(mazes) < rate)
 
 
-def check(folder, spec):
-    return pre.learner_beats(pre.read_selection_trials([folder], (CANDIDATE, OLD)), CANDIDATE, spec)
+def check(folder, spec, task_classes=one_task_per_maze):
+    return pre.learner_beats(pre.read_selection_trials([folder], (CANDIDATE, OLD)), CANDIDATE, spec, task_classes)
 
 
 def test_a_candidate_clearly_better_on_both_bodies_beats(tmp_path, spec):
@@ -136,22 +138,21 @@ def test_other_learners_and_other_episode_counts_are_left_out(tmp_path, spec):
     for body in ("point", "ant"):
         write_body(tmp_path, body, 0.9, 0.5)
         write_trial(tmp_path, body, OLD, 0, np.zeros(MAZES), episodes=20)  # another trial length
-        write_trial(tmp_path, body, "next_cell_vin_floor", 0, np.zeros(MAZES), records=[])  # no per-maze outcomes
+        write_trial(tmp_path, body, "next_cell_vin_floor", 0, np.zeros(MAZES), outcomes=False)  # not read
     found = check(tmp_path, spec)
     assert found["verdict"] == pre.BEATS and found["left_out"] == 2
 
 
 def test_a_trial_without_per_maze_outcomes_is_refused_naming_the_file_and_the_field(tmp_path, capsys):
-    path = write_trial(tmp_path, "point", OLD, 0, np.ones(MAZES), records=[])
+    path = write_trial(tmp_path, "point", OLD, 0, np.ones(MAZES), outcomes=False)
     assert pre.main(["learner", str(tmp_path), "--candidate", CANDIDATE]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and str(path) in error and "'mazes'" in error
+    assert error.count("\n") == 1 and str(path) in error and "'outcomes'" in error
 
 
 def test_seeds_evaluated_on_other_mazes_are_refused(tmp_path, spec):
     write_body(tmp_path, "point", 0.9, 0.5)
-    records = [{"maze_seed": FIRST_MAZE + 1 + i, "task_class": f"task{i}", "success": True} for i in range(MAZES)]
-    write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES), records=records)
+    write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES), first_seed=FIRST_MAZE + 1)
     with pytest.raises(
         ValueError, match=r"point_next_cell_cnn_e100_seed4\.json was evaluated on other selection mazes"
     ):
@@ -166,35 +167,48 @@ def test_two_files_of_one_trial_are_refused(tmp_path, spec):
         check(tmp_path, spec)
 
 
-LAYOUT = "111111/1S0001/101101/100001/1000G1/111111"
-TURNED = "/".join(reversed(LAYOUT.split("/")))  # LAYOUT mirrored top to bottom: one task up to symmetry
+def test_mazes_that_are_one_task_up_to_symmetry_are_resampled_as_one_cluster(tmp_path, spec):
+    for body in ("point", "ant"):
+        write_body(tmp_path, body, 0.9, 0.5)
+    as_mazes = check(tmp_path, spec)["bodies"]["point"]["bootstrap"]
+    as_pairs = check(tmp_path, spec, lambda body, seeds: tuple(f"task {s // 2}" for s in seeds))["bodies"]["point"]
+    assert (as_mazes["clusters"], as_pairs["bootstrap"]["clusters"]) == (MAZES, MAZES // 2)
+    assert as_pairs["bootstrap"]["mean"] == as_mazes["mean"]
+    assert as_pairs["bootstrap"]["interval_95"] != as_mazes["interval_95"]
 
 
-def test_task_classes_come_from_the_layouts_where_only_layouts_are_recorded(tmp_path):
-    records = [
-        {"maze_seed": FIRST_MAZE + i, "layout": text, "success": i == 0} for i, text in enumerate([LAYOUT, TURNED])
-    ]
-    trial = read_selection_trial(write_trial(tmp_path, "point", OLD, 0, [True, False], records=records))
-    assert len(set(trial.task_classes)) == 1 and trial.success.tolist() == [True, False]
-    records[1]["task_class"] = "another task"
-    with pytest.raises(ValueError, match=r"maze 3000001's task_class is not its layout's task"):
-        read_selection_trial(write_trial(tmp_path, "point", OLD, 1, [True, False], records=records))
+@pytest.mark.integration
+def test_the_selection_mazes_are_drawn_again_as_the_evaluation_drew_them():
+    seeds = (FIRST_MAZE, FIRST_MAZE + 1, FIRST_MAZE + 2)
+    classes = selection_task_classes("ant", seeds)
+    config = ExperimentConfig(body="ant", held_out_layouts=True, **body_settings("ant", held_out_layouts=True))
+    env = make_env(config, split="selection")  # the evaluation's env, with its low level
+    drawn = []
+    for seed in seeds:
+        env.reset(seed=seed)
+        drawn.append(canonical_task(maze_env(env).layout))
+    env.close()
+    assert classes == tuple(drawn) and len(set(classes)) > 1
 
 
-def test_per_maze_outcomes_that_disagree_with_the_recorded_count_are_refused(tmp_path):
+def test_per_maze_outcomes_that_disagree_with_the_recorded_counts_are_refused(tmp_path):
     path = write_trial(tmp_path, "point", OLD, 0, np.ones(MAZES))
     trial = json.loads(path.read_text())
     trial["selection_success"]["successes"] = 3
     path.write_text(json.dumps(trial))
-    with pytest.raises(ValueError, match="50 per-maze successes, but successes = 3"):
+    with pytest.raises(ValueError, match=r"50 per-maze successes, but selection_success\.successes = 3"):
+        read_selection_trial(path)
+    trial["selection_success"]["outcomes"] = [2] * MAZES
+    path.write_text(json.dumps(trial))
+    with pytest.raises(ValueError, match="holds values other than 0 and 1"):
         read_selection_trial(path)
 
 
 def test_the_command_prints_the_verdict_and_writes_the_check(tmp_path, capsys):
     folder = tmp_path / "trials"
     folder.mkdir()
-    for body in ("point", "ant"):
-        write_body(folder, body, 0.9, 0.5)
+    for body in ("point", "ant"):  # few mazes: the command draws them again to group them by task
+        write_body(folder, body, 1.0, 0.0, mazes=6)
     out = tmp_path / "check.json"
     argv = ["learner", str(folder), "--candidate", CANDIDATE, "--json", str(out), "--resamples", "200"]
     assert pre.main(argv) == 0
