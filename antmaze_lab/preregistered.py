@@ -668,9 +668,9 @@ def learner_beats(
     **beats** when the interval's lower bound is above ``lower_bound_above`` (0), **does not beat** otherwise,
     **too few seeds** with fewer than ``min_seeds`` paired seeds, **missing body** without trials of one learner.
 
-    The candidate **beats** protocol 2's learner when it beats it on every body; it **does not beat** it when some
-    body with enough seeds reads "does not beat" (the rule needs every body, so one decides); otherwise the
-    check is **not decided** (too few seeds, or a missing body) and says why.
+    The check is read only with every body complete: while some body has too few seeds or misses a learner, it is
+    **not decided** (and says why), whatever the other bodies read. Then the candidate **beats** protocol 2's
+    learner when it beats it on every body, and **does not beat** it otherwise.
 
     Returns:
         ``{"candidate", "baseline", "episodes", "min_seeds", "verdict", "reason", "bodies": {body: {...}},
@@ -692,14 +692,14 @@ def learner_beats(
         of = {name: [t for t in chosen if t.body == body and t.variant == name] for name in learners}
         bodies[body] = _selection_body(of[candidate], of[baseline], spec, task_classes)
     verdicts = {body: found["verdict"] for body, found in bodies.items()}
-    if all(v == BEATS for v in verdicts.values()):
+    short = [f"{b}: {v}" for b, v in verdicts.items() if v in (TOO_FEW_SEEDS, MISSING_BODY)]
+    if short:  # read on every body complete, never on part of the trials (no optional stopping)
+        overall, reason = NOT_DECIDED, "; ".join(short)
+    elif all(v == BEATS for v in verdicts.values()):
         overall, reason = BEATS, "the lower bound is above 0 on every body"
-    elif DOES_NOT_BEAT in verdicts.values():
+    else:
         overall = DOES_NOT_BEAT
         reason = "the lower bound is not above 0 on " + ", ".join(b for b, v in verdicts.items() if v == DOES_NOT_BEAT)
-    else:
-        overall = NOT_DECIDED
-        reason = "; ".join(f"{b}: {v}" for b, v in verdicts.items() if v != BEATS)
     return {
         "candidate": candidate,
         "baseline": baseline,

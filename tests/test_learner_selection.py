@@ -124,6 +124,14 @@ def test_the_minimum_of_seeds_is_read_from_the_preregistration(tmp_path, spec):
     assert check(tmp_path, stricter)["verdict"] == pre.NOT_DECIDED
 
 
+def test_a_body_short_of_seeds_leaves_the_check_undecided_even_where_the_other_does_not_beat(tmp_path, spec):
+    write_body(tmp_path, "point", 0.5, 0.9)
+    write_body(tmp_path, "ant", 0.5, 0.9, seeds=range(4))
+    found = check(tmp_path, spec)
+    assert found["bodies"]["point"]["verdict"] == pre.DOES_NOT_BEAT
+    assert found["verdict"] == pre.NOT_DECIDED and found["reason"] == "ant: too few seeds"
+
+
 def test_a_body_without_trials_of_a_learner_is_missing_and_the_check_not_decided(tmp_path, spec):
     write_body(tmp_path, "point", 0.9, 0.5)
     for seed in range(5):  # the ant's candidate only
