@@ -21,6 +21,7 @@ Usage (from the repository root)::
 
     python -m antmaze_lab.preregistered read results/protocol2/point results/protocol2/ant --json OUT.json
     python -m antmaze_lab.preregistered table OUT.json
+    python -m antmaze_lab.preregistered learner TRIALS_DIR [TRIALS_DIR ...] --candidate next_cell_plan [--json OUT]
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -50,6 +51,13 @@ from antmaze_hirl.experiments.uncertainty import (
     two_way_bootstrap,
 )
 from antmaze_lab.folders import BodyEvaluations, MethodEvaluations, read_body, symmetry_check
+from antmaze_lab.selection_trials import (
+    SelectionTrial,
+    read_selection_trial,
+    selection_task_classes,
+    trial_files,
+    trial_identity,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 PREREGISTRATION = ROOT / "docs" / "preregistration.yaml"
@@ -584,6 +592,158 @@ def read_folders(folders: Sequence[Path], spec: dict[str, Any]) -> dict[str, Any
     }
 
 
+# ---------------------------------------------------------------- the learner-selection check
+
+BEATS, DOES_NOT_BEAT, TOO_FEW_SEEDS, MISSING_BODY = "beats", "does not beat", "too few seeds", "missing body"
+NOT_DECIDED = "not decided"
+
+
+def _selection_body(
+    candidate: Sequence[SelectionTrial],
+    baseline: Sequence[SelectionTrial],
+    spec: dict[str, Any],
+    task_classes: Callable[[str, tuple[int, ...]], tuple[str, ...]],
+) -> dict[str, Any]:
+    """One body's reading of ``learner.beats``: the paired difference's two-way bootstrap interval, or why none.
+
+    Raises:
+        ValueError: One line naming the trial files when paired seeds were evaluated on different mazes.
+    """
+    check, stats = spec["learner"]["selection_check"], spec["statistics"]
+    mine, theirs = {t.seed: t for t in candidate}, {t.seed: t for t in baseline}
+    seeds = sorted(mine.keys() & theirs.keys())
+    out: dict[str, Any] = {
+        "seeds": seeds,
+        "unpaired_seeds": {
+            "candidate": sorted(mine.keys() - theirs.keys()),
+            "baseline": sorted(theirs.keys() - mine.keys()),
+        },
+    }
+    if not mine or not theirs:
+        return {**out, "verdict": MISSING_BODY, "missing": "candidate" if not mine else "baseline"}
+    if len(seeds) < check["min_seeds"]:
+        return {**out, "verdict": TOO_FEW_SEEDS}
+    first = mine[seeds[0]]
+    for trial in [mine[s] for s in seeds] + [theirs[s] for s in seeds]:
+        if trial.maze_seeds != first.maze_seeds:
+            raise ValueError(f"{trial.path} was evaluated on other selection mazes than {first.path}")
+    table = np.array([mine[s].success for s in seeds], dtype=float) - np.array([theirs[s].success for s in seeds])
+    if stats["maze_clusters"] == "canonical_task":
+        clusters: Sequence[Any] = task_classes(first.body, first.maze_seeds)
+    elif stats["maze_clusters"] == "maze":
+        clusters = first.maze_seeds
+    else:
+        raise ValueError(f"statistics.maze_clusters must be canonical_task or maze, got {stats['maze_clusters']!r}")
+    drawn = paired_two_way_bootstrap(
+        table, clusters, resamples=stats["resamples"], seed=stats["bootstrap_seed"], confidence=stats["confidence"]
+    )
+    beats = drawn["interval_95"][0] > check["lower_bound_above"]
+    return {
+        **out,
+        "verdict": BEATS if beats else DOES_NOT_BEAT,
+        "candidate_success": float(np.mean([mine[s].success.mean() for s in seeds])),
+        "baseline_success": float(np.mean([theirs[s].success.mean() for s in seeds])),
+        "per_seed_difference": [float(v) for v in table.mean(axis=1)],
+        "evaluation_envs": {
+            "candidate": sorted({str(mine[s].evaluation_envs) for s in seeds}),
+            "baseline": sorted({str(theirs[s].evaluation_envs) for s in seeds}),
+        },
+        "bootstrap": drawn,
+    }
+
+
+def learner_beats(
+    trials: Sequence[SelectionTrial],
+    candidate: str,
+    spec: dict[str, Any],
+    task_classes: Callable[[str, tuple[int, ...]], tuple[str, ...]] = selection_task_classes,
+) -> dict[str, Any]:
+    """The preregistration's ``learner.beats`` rule: does ``candidate`` beat protocol 2's learner (selection mazes)?
+
+    On each body of ``run.bodies``: the trials of ``candidate`` and of ``learner.protocol2_learner`` with
+    ``learner.selection_check.episodes`` training episodes, paired by seed (the seeds both have); the table of
+    per-maze paired differences of final learner-only success, ``seeds x selection mazes``; its two-way bootstrap
+    (seeds and maze clusters resampled, ``statistics``' resamples, seed, confidence and clusters: tasks up to
+    symmetry come from ``task_classes(body, maze_seeds)``, the mazes drawn again by default). A body reads
+    **beats** when the interval's lower bound is above ``lower_bound_above`` (0), **does not beat** otherwise,
+    **too few seeds** with fewer than ``min_seeds`` paired seeds, **missing body** without trials of one learner.
+
+    The check is read only with every body complete: while some body has too few seeds or misses a learner, it is
+    **not decided** (and says why), whatever the other bodies read. Then the candidate **beats** protocol 2's
+    learner when it beats it on every body, and **does not beat** it otherwise.
+
+    Returns:
+        ``{"candidate", "baseline", "episodes", "min_seeds", "verdict", "reason", "bodies": {body: {...}},
+        "left_out"}``; ``left_out`` counts the trials of the two learners with another number of episodes.
+    """
+    check, baseline = spec["learner"]["selection_check"], spec["learner"]["protocol2_learner"]
+    if candidate == baseline:
+        raise ValueError(f"the candidate must differ from protocol 2's learner, got {candidate!r} for both")
+    learners = (candidate, baseline)
+    chosen = [t for t in trials if t.variant in learners and t.episodes == check["episodes"]]
+    seen: dict[tuple[str, str, int], Path] = {}
+    for trial in chosen:
+        key = (trial.body, trial.variant, trial.seed)
+        if key in seen:
+            raise ValueError(f"{trial.path} and {seen[key]} are both {trial.body} {trial.variant} seed {trial.seed}")
+        seen[key] = trial.path
+    bodies = {}
+    for body in spec["run"]["bodies"]:
+        of = {name: [t for t in chosen if t.body == body and t.variant == name] for name in learners}
+        bodies[body] = _selection_body(of[candidate], of[baseline], spec, task_classes)
+    verdicts = {body: found["verdict"] for body, found in bodies.items()}
+    short = [f"{b}: {v}" for b, v in verdicts.items() if v in (TOO_FEW_SEEDS, MISSING_BODY)]
+    if short:  # read on every body complete, never on part of the trials (no optional stopping)
+        overall, reason = NOT_DECIDED, "; ".join(short)
+    elif all(v == BEATS for v in verdicts.values()):
+        overall, reason = BEATS, "the lower bound is above 0 on every body"
+    else:
+        overall = DOES_NOT_BEAT
+        reason = "the lower bound is not above 0 on " + ", ".join(b for b, v in verdicts.items() if v == DOES_NOT_BEAT)
+    return {
+        "candidate": candidate,
+        "baseline": baseline,
+        "episodes": check["episodes"],
+        "min_seeds": check["min_seeds"],
+        "verdict": overall,
+        "reason": reason,
+        "bodies": bodies,
+        "left_out": sum(t.variant in learners and t.episodes != check["episodes"] for t in trials),
+    }
+
+
+def read_selection_trials(paths: Sequence[Path], learners: Sequence[str]) -> list[SelectionTrial]:
+    """The trial files of ``learners`` among ``paths`` (folders of ``*.json``, or files), read per maze.
+
+    Files of other learners are skipped unread past their identity, so they need no per-maze outcomes.
+
+    Raises:
+        ValueError: One line naming the file (see :func:`~antmaze_lab.selection_trials.read_selection_trial`).
+    """
+    return [read_selection_trial(p) for p in trial_files(paths) if trial_identity(p)[1] in learners]
+
+
+def format_selection(found: dict[str, Any]) -> str:
+    """The learner-selection check as a few Markdown lines."""
+    lines = [
+        f"`{found['candidate']}` against protocol 2's `{found['baseline']}` on the selection mazes, "
+        f"{found['episodes']} episodes, >= {found['min_seeds']} paired seeds per body: **{found['verdict']}** "
+        f"({found['reason']})."
+    ]
+    for body, row in found["bodies"].items():
+        text = f"- {body}: {row['verdict']}; paired seeds {row['seeds']}"
+        if "bootstrap" in row:
+            low, high = row["bootstrap"]["interval_95"]
+            text += (
+                f"; {100 * row['candidate_success']:.1f}% against {100 * row['baseline_success']:.1f}%, "
+                f"{_pts(row['bootstrap']['mean'])} pts [{_pts(low)}, {_pts(high)}] over "
+                f"{row['bootstrap']['seeds']} seeds and {row['bootstrap']['mazes']} mazes "
+                f"({row['bootstrap']['clusters']} clusters)"
+            )
+        lines.append(text)
+    return "\n".join(lines)
+
+
 # ---------------------------------------------------------------- the report
 
 
@@ -627,8 +787,8 @@ def _reading_text(reading: dict[str, Any]) -> str:
 
 def _claims_table(report: dict[str, Any]) -> list[str]:
     lines = [
-        "| # | the claim (the repository's words; the paper's to be checked) | readings: effect, + the claimed "
-        "way [two-way 95% interval], p_for / p_against | P_for, P_against after Holm | verdict |",
+        "| # | the claim (the repository's words; the paper's: the preregistration, section 1) | readings: effect, + "
+        "the claimed way [two-way 95% interval], p_for / p_against | P_for, P_against after Holm | verdict |",
         "|---|---|---|---|---|",
     ]
     for claim in report["claims"]:
@@ -748,6 +908,36 @@ def format_report(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _spec(args: argparse.Namespace) -> dict[str, Any]:
+    """The preregistration a command reads, with ``--resamples`` applied.
+
+    Raises:
+        ValueError: From :func:`load_preregistration`, or ``--resamples`` below 100.
+    """
+    spec = load_preregistration(args.preregistration)
+    if args.resamples is not None:
+        if args.resamples < 100:
+            raise ValueError(f"--resamples must be >= 100, got {args.resamples}")
+        spec["statistics"]["resamples"] = args.resamples
+    return spec
+
+
+def _learner_command(args: argparse.Namespace) -> int:
+    """``learner``: print the learner-selection check (and write it with ``--json``); 2 on bad input."""
+    try:
+        spec = _spec(args)
+        learners = (args.candidate, spec["learner"]["protocol2_learner"])
+        found = learner_beats(read_selection_trials(args.trials, learners), args.candidate, spec)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if args.json is not None:
+        found["preregistration"] = {"path": str(args.preregistration), "commit": _git_commit(args.preregistration)}
+        atomic_write_json(args.json, found)
+    print(format_selection(found))
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``read`` folders into a JSON report (and print its table), or print the ``table`` of a report."""
     parser = argparse.ArgumentParser(prog="python -m antmaze_lab.preregistered", description=__doc__.splitlines()[0])
@@ -759,18 +949,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     read.add_argument("--resamples", type=int, default=None, help="bootstrap resamples (default: the YAML's)")
     table = commands.add_parser("table", help="print the Markdown table of a report")
     table.add_argument("report", type=Path)
+    learner = commands.add_parser(
+        "learner", help="the learner-selection check (learner.beats) on learner-ablation trial files"
+    )
+    learner.add_argument("trials", nargs="+", type=Path, metavar="TRIALS", help="trial files or folders (required)")
+    learner.add_argument("--candidate", required=True, help="the candidate learner's variant name (required)")
+    learner.add_argument("--json", type=Path, default=None, help="write the check here (default: print only)")
+    learner.add_argument("--preregistration", type=Path, default=PREREGISTRATION, help="(default: the committed one)")
+    learner.add_argument("--resamples", type=int, default=None, help="bootstrap resamples (default: the YAML's)")
     args = parser.parse_args(argv)
+    if args.command == "learner":
+        return _learner_command(args)
     try:
         if args.command == "table":
             if not args.report.is_file():
                 raise ValueError(f"no report at {args.report}")
             print(format_report(json.loads(args.report.read_text())))
             return 0
-        spec = load_preregistration(args.preregistration)
-        if args.resamples is not None:
-            if args.resamples < 100:
-                raise ValueError(f"--resamples must be >= 100, got {args.resamples}")
-            spec["statistics"]["resamples"] = args.resamples
+        spec = _spec(args)
         report = read_folders(args.folders, spec)
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)

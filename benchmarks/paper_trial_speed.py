@@ -23,14 +23,23 @@ after (read the ratios first, the absolute times with the load).
 
     python benchmarks/paper_trial_speed.py                   # 10 episodes, both paths (about 30 min, shared)
     python benchmarks/paper_trial_speed.py --episodes 100    # one whole trial, both paths
+    python benchmarks/paper_trial_speed.py --profile --episodes 10 --mazes 50 --out /tmp/profile.json
+
+``--profile`` plays the lockstep path only, under cProfile, and reports where its process time went
+(:data:`PROFILE_PARTS`: the evaluations, the learner's gradient steps, MuJoCo's physics, the low level's
+network), each with its share of the whole; cProfile's own cost inflates Python-heavy parts, so read the
+shares, not the seconds.
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
 import functools
+import json
 import os
 import platform
+import pstats
 import shlex
 import sys
 import time
@@ -133,6 +142,45 @@ def timed_trial(
     return figures, outcomes
 
 
+PROFILE_PARTS: dict[str, tuple[str, str]] = {
+    "evaluations": ("antmaze_hirl/experiments/outcomes.py", "play_mazes"),
+    "learner_gradient_steps": ("antmaze_hirl/dagger/high_level_policy.py", "fit"),
+    "physics_mj_step": ("~", "<built-in method mujoco._functions.mj_step>"),
+    "low_level_network": ("antmaze_hirl/envs/controllers.py", "_act_directly"),
+}
+"""Parts of a trial by the function that does them, ``(file suffix, function name)`` as cProfile names it:
+cumulative time, or own time for a built-in (file ``~``). Evaluations and the learner's updates are disjoint;
+the physics and the low level's network run in both evaluations and training episodes."""
+
+
+def profile_parts(stats: pstats.Stats) -> dict[str, float]:
+    """Seconds of each part of :data:`PROFILE_PARTS` in a profile (0 where its function never ran)."""
+    found = dict.fromkeys(PROFILE_PARTS, 0.0)
+    for (filename, _, name), (_, _, own, cumulative, _) in stats.stats.items():
+        for part, (suffix, function) in PROFILE_PARTS.items():
+            if name == function and filename.endswith(suffix):
+                found[part] += own if filename == "~" else cumulative
+    return found
+
+
+def profiled_trial(episodes: int, evaluation_envs: int, seed: int, mazes: int) -> dict[str, Any]:
+    """One lockstep trial under cProfile: its process time and each part's seconds and share of it."""
+    profile = cProfile.Profile(time.process_time)  # CPU seconds: on a shared machine wall time counts the others'
+    profile.enable()
+    figures, _ = timed_trial(episodes, evaluation_envs, seed, mazes)
+    profile.disable()
+    stats = pstats.Stats(profile)
+    total = max(stats.total_tt, 1e-9)
+    parts = profile_parts(stats)
+    parts["training_episodes_besides_gradient_steps"] = total - parts["evaluations"] - parts["learner_gradient_steps"]
+    return {
+        **figures,
+        "profiled_s": round(total, 1),
+        "parts_s": {part: round(seconds, 1) for part, seconds in parts.items()},
+        "parts_share": {part: round(seconds / total, 3) for part, seconds in parts.items()},
+    }
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -141,6 +189,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--num-envs", type=int, default=LOCKSTEP_ENVS, help="mazes at once on the lockstep path")
     parser.add_argument("--mazes", type=int, default=100, help="held-out mazes per evaluation (the protocol: 100)")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    parser.add_argument(
+        "--profile", action="store_true", help="profile the lockstep path alone (default: time both paths)"
+    )
     args = parser.parse_args(argv)
     if min(args.episodes, args.mazes) < 1 or args.num_envs < 2:
         parser.error(
@@ -148,6 +199,18 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             f"{args.num_envs}"
         )
     torch.set_num_threads(1)  # paper_experiment.py's --cpus-per-trial 1
+    if args.profile:
+        if args.out == RESULTS:
+            parser.error("--profile writes a profile, not the committed timings: give --out")
+        found = profiled_trial(args.episodes, args.num_envs, args.seed, args.mazes)
+        report = {
+            "benchmark": "paper_trial_speed --profile",
+            "command": shlex.join(["python", "benchmarks/paper_trial_speed.py", *argv]),
+            "profile": found,
+        }
+        print(json.dumps(found["parts_share"]), flush=True)
+        print(f"wrote {atomic_write_json(args.out, report)}")
+        return report
     rows, played = [], []
     for evaluation_envs in (1, args.num_envs):
         figures, outcomes = timed_trial(args.episodes, evaluation_envs, args.seed, args.mazes)

@@ -80,6 +80,13 @@ def test_counting_the_mazes_widens_what_the_per_seed_test_calls_certain():
     assert two_way["interval_95"][0] == 0.0 and two_way["p_greater"] > 0.05
 
 
+def test_the_paired_interval_has_the_coverage_asked_for():
+    table = np.random.default_rng(0).normal(0.1, 1.0, (8, 40))
+    wide, narrow = (paired_two_way_bootstrap(table, resamples=2000, confidence=c)["interval_95"] for c in (0.95, 0.5))
+    assert wide[0] < narrow[0] < table.mean() < narrow[1] < wide[1]
+    assert wide == paired_two_way_bootstrap(table, resamples=2000)["interval_95"]  # 0.95 by default
+
+
 def test_bootstrap_p_counts_the_bound_for_the_null_and_refuses_bad_input():
     values = np.array([-1.0, 0.0, 1.0, 2.0])
     assert bootstrap_p(values, 0.0, "greater") == pytest.approx(3 / 5)  # -1 and 0 are on the null's side

@@ -335,6 +335,7 @@ def paired_two_way_bootstrap(
     *,
     resamples: int = BOOTSTRAP_RESAMPLES,
     seed: int = BOOTSTRAP_SEED,
+    confidence: float = CONFIDENCE,
 ) -> dict[str, Any]:
     """The mean of a ``(seeds, mazes)`` table of paired differences, with a two-way bootstrap interval and p.
 
@@ -348,6 +349,7 @@ def paired_two_way_bootstrap(
         maze_clusters: One label per maze; ``None``: each maze its own cluster.
         resamples: Bootstrap resamples.
         seed: Seed of the resampling.
+        confidence: The interval's coverage (``interval_95`` keeps its name whatever it is; 0.95 by default).
 
     Returns:
         ``{"mean", "seeds", "mazes", "clusters", "interval_95", "p_greater", "p_less", "p_two_sided",
@@ -374,7 +376,7 @@ def paired_two_way_bootstrap(
         "seeds": table.shape[0],
         "mazes": table.shape[1],
         "clusters": len(set(map(str, clusters))),
-        "interval_95": list(percentile_interval(distribution)),
+        "interval_95": list(percentile_interval(distribution, confidence)),
         "p_greater": greater,
         "p_less": less,
         "p_two_sided": min(1.0, 2 * min(greater, less)),
