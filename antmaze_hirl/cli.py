@@ -471,7 +471,7 @@ def _add_study(subparsers: _Subparsers) -> None:
 
 
 def _add_benchmark(subparsers: _Subparsers) -> None:
-    from antmaze_hirl.experiments.benchmark import add_benchmark_parser  # light: the handler imports the envs
+    from antmaze_hirl.experiments.benchmark_command import add_benchmark_parser  # light: the handler imports the envs
 
     add_benchmark_parser(subparsers, _HelpFormatter)
 

@@ -10,8 +10,10 @@ from stable_baselines3 import PPO
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments import benchmark
 from antmaze_hirl.experiments.benchmark import load_report, score_policy
+from antmaze_hirl.experiments.benchmark_policies import resolve_policy
 
 TASKS = [0, 1, 2, 3]
 
@@ -50,7 +52,7 @@ def test_the_oracle_scores_above_a_random_policy_with_intervals_attempts_and_ste
         assert [row["task_id"] for row in report["tasks"]] == TASKS
         assert report["episodes"] == len(TASKS) and report["episodes_per_task"] == 1
         assert report["low_level_steps_total"] == sum(o["low_level_steps"] for o in report["episode_outcomes"])
-        assert report["mean_attempts"] >= 1 and report["suite_checksum"] == benchmark.SUITE_SPECS["point5"].checksum
+        assert report["mean_attempts"] >= 1 and report["suite_checksum"] == SUITE_SPECS["point5"].checksum
     assert random["mean_low_level_steps"] > oracle["mean_low_level_steps"]
 
 
@@ -223,7 +225,7 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
     rows = leaderboard.ROWS_PAGE.read_text()
     for path in reports:
         report = load_report(path)
-        assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
+        assert report["suite_checksum"] == SUITE_SPECS[report["suite"]].checksum, path.name
         assert f"`{path.name}` |" in rows
 
 
@@ -240,11 +242,11 @@ def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
 
 
 def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env):
-    spec = benchmark.SUITE_SPECS["point5"]
+    spec = SUITE_SPECS["point5"]
     obs, _ = point_env.reset(seed=0, options={"task_id": 0})
     agent = obs["state"][:2]
-    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
-    short, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
+    default, _ = resolve_policy(spec, "oracle", point_env, seed=0)
+    short, _ = resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
     assert np.linalg.norm(default(obs) - agent) > 0.6  # one cell (1 m) by default
     assert np.linalg.norm(short(obs) - agent) == pytest.approx(0.5)
     report = score_policy("point5", "oracle", task_ids=[0], subgoal_reach_m=0.5)
@@ -254,9 +256,9 @@ def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env
 
 
 def test_clearance_m_moves_the_oracles_subgoals_off_the_walls_and_is_recorded(point_env):
-    spec = benchmark.SUITE_SPECS["point5"]
-    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
-    wide, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, clearance_m=0.45)
+    spec = SUITE_SPECS["point5"]
+    default, _ = resolve_policy(spec, "oracle", point_env, seed=0)
+    wide, _ = resolve_policy(spec, "oracle", point_env, seed=0, clearance_m=0.45)
     obs, _ = point_env.reset(seed=0, options={"task_id": 0})
     moved, done = 0, False
     while not done:  # one episode of the default oracle; the wide one labels the same observations
@@ -279,7 +281,7 @@ def test_a_bad_oracle_setting_is_refused_naming_it_and_the_value(name, bad):
 def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
     with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; policy 'random' takes none"):
         score_policy("point5", "random", task_ids=[0], subgoal_reach_m=1.0)
-    with pytest.raises(ValueError, match=r"clearance_m are the oracle's settings; a function policy takes none"):
+    with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; a function policy takes none"):
         score_policy("point5", lambda obs: obs["state"][:2], task_ids=[0], subgoal_reach_m=1.0)
     for argv, message in (
         (["--policy", "random", "--subgoal-reach-m", "1"], "is the oracle's setting; --policy random"),

@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
-from antmaze_hirl.experiments.benchmark import POLICY_KEYWORDS, RESULTS_FORMAT
+from antmaze_hirl.experiments.benchmark import RESULTS_FORMAT
+from antmaze_hirl.experiments.benchmark_policies import POLICY_KEYWORDS
 
 
 class SubmissionError(ValueError):
