@@ -211,14 +211,14 @@ def test_a_report_of_another_format_is_refused(tmp_path):
 def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
     from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
 
     generate_docs = load_script("scripts/generate_docs.py")
     for name, section in leaderboard.SECTIONS.items():
         # Each section is one generated block of its page (generate_docs --check compares it; this names the stale one).
         page = leaderboard.page_of(name)
         blocks = {block.command: block.text for block in generate_docs.find_blocks(page, page.read_text())}
-        command = f"python scripts/leaderboard.py --section {name}"
+        command = f"python -m antmaze_lab.leaderboard --section {name}"
         assert blocks[command] == section(), f"stale: run python scripts/generate_docs.py {page}"
     reports = sorted(leaderboard.RESULTS.glob("*.json"))
     assert reports
@@ -230,9 +230,9 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
 
 
 def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
-    from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
+
     assert leaderboard.main(["--section", "suites"]) == 0
     printed = capsys.readouterr().out
     assert printed.startswith("| suite | id | tasks |") and "| policy | budget |" not in printed
@@ -298,9 +298,8 @@ def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
 def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeypatch):
     import shutil
 
-    from script_helpers import load_script
+    from antmaze_lab import leaderboard
 
-    leaderboard = load_script("scripts/leaderboard.py")
     source = leaderboard.RESULTS
     for seed in (0, 1):
         for target in (0, 1000):
@@ -329,9 +328,9 @@ def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeyp
 @pytest.mark.integration  # reads the committed results
 def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_path, monkeypatch):
     from scipy.stats import binomtest
-    from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
+
     report = json.loads((leaderboard.RESULTS / "ant4_dagger_protocol_s0_1000.json").read_text())
 
     def write(method, seed, target, successes):
@@ -368,11 +367,9 @@ def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_
 def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoints_out(tmp_path, monkeypatch):
     import shutil
 
-    from script_helpers import load_script
-
     from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+    from antmaze_lab import leaderboard
 
-    leaderboard = load_script("scripts/leaderboard.py")
     source = leaderboard.RESULTS
     names = [f"ant4_dagger_protocol_s{seed}_1000.json" for seed in (0, 2, 4)]
     names += ["ant4_oracle.json", "ant4_ppo_rl_s0.json", "ant4_ppo_rl_s0_untrained.json"]

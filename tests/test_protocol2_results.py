@@ -20,7 +20,7 @@ def test_the_page_holds_the_generated_goals_and_claims_and_the_readme_links_them
     # Their text is checked against the commands by tests/test_generated_docs.py.
     page, readme = PAGE.read_text(), (ROOT / "README.md").read_text()
     assert f"<!-- generated: python -m antmaze_lab.protocol_tables {SECTION} -->" in page
-    brief = "python scripts/paper_claims.py --protocol2 results/protocol2/point results/protocol2/ant --brief"
+    brief = "python -m antmaze_lab.paper_claims --protocol2 results/protocol2/point results/protocol2/ant --brief"
     assert f"<!-- generated: {brief} -->" in page
     assert "(docs/paper-claims.md)" in readme and "(docs/preregistration.md)" in readme
 

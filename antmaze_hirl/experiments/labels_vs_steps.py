@@ -2,7 +2,7 @@
 
 One figure per suite of :data:`SUITES` (``point5`` and ``ant4``, the suites both DAgger and the RL baselines
 are scored on). Read from committed ``antmaze-hirl benchmark --json`` reports (nothing typed in) by
-``scripts/labels_vs_steps.py``, which draws the figures, and ``scripts/leaderboard.py``, which lists the points:
+``scripts/labels_vs_steps.py``, which draws the figures, and ``antmaze_lab.leaderboard``, which lists the points:
 the DAgger rows at their labels (``training.labels``; 0 is the untrained learner), the RL rows at their training
 steps (``training.steps_reached``, or ``training.high_level_steps`` for the older PPO row). The random policy and
 the oracle are reference lines.

@@ -8,10 +8,10 @@ Every row of the results table (``docs/results/leaderboard-rows.md``) is one ``a
 figures and the points section lists their points (``scripts/labels_vs_steps.py`` draws the PNGs from the
 same reports).
 Nothing is typed in by hand. Each section is a generated block of the page
-(``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
+(``<!-- generated: python -m antmaze_lab.leaderboard --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|leaderboard|summary|results|spread|paired|figure|points
+Usage: python -m antmaze_lab.leaderboard --section suites|leaderboard|summary|results|spread|paired|figure|points
 """
 
 from __future__ import annotations
@@ -402,8 +402,9 @@ def _step_budget(by_seed: dict[int, dict], steps: int) -> str:
 
 
 def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[tuple[str, str, dict[int, dict]]]:
-    """Each submitted entry of ``suite``: the reports no other entry pools, checked (``antmaze-hirl submit``)
-    and pooled by policy and budget, their seeds side by side.
+    """Each submitted entry of ``suite``, its seeds side by side.
+
+    The reports no other entry pools, checked (``antmaze-hirl submit``) and pooled by policy and budget.
 
     Raises:
         SystemExit: If a submitted report fails the check, naming its file and what is wrong.
@@ -424,8 +425,10 @@ def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[
 
 
 def summary_entries() -> list[tuple[str, str, str, dict[int, dict]]]:
-    """Every leaderboard entry as (suite, name, budget, reports by seed): per suite the oracle, the random policy,
-    DAgger's entries by label target, the RL baselines, then the submitted entries.
+    """Every leaderboard entry as (suite, name, budget, reports by seed).
+
+    Per suite: the oracle, the random policy, DAgger's entries by label target, the RL baselines, then the
+    submitted entries.
 
     A trained entry pools its seeds' final rows (one per seed) at one budget; the rows it pools are in the
     results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries, and an active
@@ -597,7 +600,11 @@ def page_of(section: str) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     """Prints the section named by ``--section``; returns the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.leaderboard",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--section", required=True, choices=list(SECTIONS), help="the section of the page to print")
     args = parser.parse_args(argv)
     print(SECTIONS[args.section]())
