@@ -16,7 +16,6 @@ Usage: python -m antmaze_lab.leaderboard --section suites|leaderboard|summary|re
 
 from __future__ import annotations
 
-import argparse
 import re
 import sys
 from collections.abc import Callable
@@ -33,6 +32,7 @@ from antmaze_hirl.experiments.labels_vs_steps import SUITES as FIGURE_SUITES
 from antmaze_hirl.experiments.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_hirl.experiments.submission import SubmissionError, check_submission
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+from antmaze_lab.tables import lab_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
@@ -600,11 +600,7 @@ def page_of(section: str) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     """Prints the section named by ``--section``; returns the exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.leaderboard",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.leaderboard", __doc__)
     parser.add_argument("--section", required=True, choices=list(SECTIONS), help="the section of the page to print")
     args = parser.parse_args(argv)
     print(SECTIONS[args.section]())

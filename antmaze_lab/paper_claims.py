@@ -23,7 +23,6 @@ Usage:
 
 from __future__ import annotations
 
-import argparse
 import json
 from collections.abc import Sequence
 from dataclasses import asdict
@@ -44,6 +43,7 @@ from antmaze_hirl.experiments.claims import (
     evaluate_folders,
     protocol1_figures,
 )
+from antmaze_lab.tables import lab_parser
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
 FOLDERS = [RESULTS / "point", RESULTS / "ant"]
@@ -129,11 +129,7 @@ def _plain(value: Any) -> Any:
 
 def main(argv: Sequence[str] | None = None) -> None:
     """The command line (the module docstring)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.paper_claims",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.paper_claims", __doc__)
     parser.add_argument("--folders", default=None, help="protocol 1: comma-separated folders (default: the committed)")
     parser.add_argument(
         "--protocol2", nargs=2, type=Path, metavar=("POINT_FOLDER", "ANT_FOLDER"), help="protocol 2: the claims table"

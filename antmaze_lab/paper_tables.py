@@ -27,6 +27,7 @@ from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
+from antmaze_lab.tables import lab_parser
 
 TABLES = ("cost", "per-label", "effort", "beside")
 """The tables this prints, in order; ``beside`` only with ``--beside``."""
@@ -293,11 +294,7 @@ def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: b
 
 def main() -> None:
     """The command line (the module docstring): prints the tables of one folder."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.paper_tables",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.paper_tables", __doc__)
     parser.add_argument("folder", type=Path, help="a results folder with summary.json")
     parser.add_argument(
         "--beside", type=Path, default=None, help="another results folder to set final success beside (default: none)"

@@ -172,6 +172,13 @@ def selection_oracle(name: str, rows: Sequence[tuple[str, str]]) -> str:
     return table(["row", f"eval-low ({episodes} subgoals)", f"oracle success ({mazes} mazes)", "score"], lines)
 
 
+def lab_parser(module: str, doc: str | None) -> argparse.ArgumentParser:
+    """The argument parser of a lab command, ``python -m MODULE``, with the module's docstring as its description."""
+    return argparse.ArgumentParser(
+        prog=f"python -m {module}", description=doc, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+
+
 class Sections(dict[str, Callable[[], str]]):
     """A page module's section builders by the name its command takes, and that command.
 
@@ -205,9 +212,7 @@ class Sections(dict[str, Callable[[], str]]):
 
     def main(self, argv: list[str] | None = None) -> int:
         """Prints one section; returns the exit status (2 with a one-line error on a bad results file)."""
-        parser = argparse.ArgumentParser(
-            prog=f"python -m {self.module}", description=self.doc, formatter_class=argparse.RawDescriptionHelpFormatter
-        )
+        parser = lab_parser(self.module, self.doc)
         parser.add_argument("section", nargs="?", choices=list(self), help="the table to print (required)")
         parser.add_argument("--list", action="store_true", help="print the section names (default: off)")
         args = parser.parse_args(argv)

@@ -37,18 +37,17 @@ def report_table(report: dict[str, Any], *, per_task: bool) -> str:
     return "\n".join(lines)
 
 
-def add_benchmark_parser(subparsers: Any, formatter_class: type[argparse.HelpFormatter]) -> None:
-    """Adds the ``benchmark`` subcommand (light: the handler imports the envs and SB3 when it runs)."""
-    parser = subparsers.add_parser(
-        "benchmark",
-        help="score a high-level policy on a benchmark suite",
-        description=(
-            "Score a high-level policy on a benchmark suite: success with its 95% Wilson interval, attempts and "
-            f"low-level steps, per suite and per task. Suites: {', '.join(SUITE_SPECS)} (docs/leaderboard.md)."
-        ),
-        epilog="example:\n  antmaze-hirl benchmark point5 --policy oracle --json runs/point5_oracle.json",
-        formatter_class=formatter_class,
-    )
+HELP = "score a high-level policy on a benchmark suite"
+DESCRIPTION = (
+    "Score a high-level policy on a benchmark suite: success with its 95% Wilson interval, attempts and "
+    f"low-level steps, per suite and per task. Suites: {', '.join(SUITE_SPECS)} (docs/leaderboard.md)."
+)
+EXAMPLE = "antmaze-hirl benchmark point5 --policy oracle --json runs/point5_oracle.json"
+"""The subcommand's help line, description and example; ``antmaze_hirl.cli`` makes its parser from them."""
+
+
+def add_benchmark_arguments(parser: argparse.ArgumentParser) -> None:
+    """Adds ``benchmark``'s arguments and handler to its parser (light: the handler imports the envs and SB3)."""
     parser.add_argument("suite", help=f"suite name: one of {', '.join(SUITE_SPECS)} (required)")
     parser.add_argument(
         "--policy",
