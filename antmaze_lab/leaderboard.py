@@ -5,7 +5,7 @@ of a trained entry pooled with a cluster bootstrap over seeds and tasks (every s
 Every row of the results table (``docs/results/leaderboard-rows.md``) is one ``antmaze-hirl benchmark --json`` report in
 ``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
-figures and the points section lists their points (``scripts/labels_vs_steps.py`` draws the PNGs from the
+figures and the points section lists their points (``antmaze_lab.labels_vs_steps`` draws the PNGs from the
 same reports).
 Nothing is typed in by hand. Each section is a generated block of the page
 (``<!-- generated: python -m antmaze_lab.leaderboard --section results -->``), so after adding a report run
@@ -28,10 +28,10 @@ from statsmodels.stats.multitest import multipletests
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.claims import sign_test
-from antmaze_hirl.experiments.labels_vs_steps import SUITES as FIGURE_SUITES
-from antmaze_hirl.experiments.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_hirl.experiments.submission import SubmissionError, check_submission
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+from antmaze_lab.labels_vs_steps import SUITES as FIGURE_SUITES
+from antmaze_lab.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_lab.tables import lab_parser
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -560,7 +560,7 @@ def paired_table() -> str:
 
 
 def figure_section() -> str:
-    """The figures, drawn by ``scripts/labels_vs_steps.py`` from the same reports (points: :func:`points_section`)."""
+    """The figures, drawn by ``antmaze_lab.labels_vs_steps`` from the same reports (points: :func:`points_section`)."""
     images = []
     for suite in FIGURE_SUITES:
         image = (ROOT / figure_path(suite)).relative_to(PAGE.parent).as_posix()
