@@ -1,5 +1,6 @@
 """The lab's results tables (``antmaze_lab.tables`` and its page modules), read from the committed JSON files."""
 
+import importlib
 import json
 import re
 from pathlib import Path
@@ -241,3 +242,19 @@ def test_a_guide_section_missing_a_field_is_a_one_line_error_naming_it(
     monkeypatch.setattr(tables, "RESULTS", tmp_path)
     assert print_section(section) == 2
     assert capsys.readouterr().err == f"error: {error}\n"
+
+
+LAB_MARKER = re.compile(r"^<!-- generated: python -m (antmaze_lab\.\w+) (?!-)(\S+)", re.MULTILINE)
+
+
+def test_every_generated_block_of_a_page_module_names_one_of_its_sections():
+    # The pages are read, not the results: a block renamed or moved to another module fails here, in the unit tier.
+    root = Path(tables.__file__).resolve().parent.parent
+    pages = [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    named = [(page.name, *found) for page in pages for found in LAB_MARKER.findall(page.read_text())]
+    table_modules = {module: importlib.import_module(module).SECTIONS for module in tables.TABLE_MODULES}
+    checked = [(page, module, section) for page, module, section in named if module in table_modules]
+    assert len(checked) >= 36, checked
+    for page, module, section in checked:
+        assert section in table_modules[module], f"{page}: {module} has no section {section!r}"
+    assert len(SECTIONS) == sum(len(sections) for sections in table_modules.values())  # no section in two modules
