@@ -21,6 +21,9 @@ suites the outcomes are identical (``tests/test_benchmark_lockstep.py``); a batc
 bits differently, which MuJoCo can turn into another ant episode now and then
 (``results/lockstep_agreement/lockstep_agreement.json``). The random policy draws its subgoals from one generator in
 the order it is asked, which the lockstep runner interleaves: same distribution, other draws than serial.
+Both runners are thin: the loops are :mod:`antmaze_hirl.rollout`'s. The policies named on the command line
+are :mod:`antmaze_hirl.experiments.benchmark_policies`', the command and its table
+:mod:`antmaze_hirl.experiments.benchmark_command`'s.
 """
 
 from __future__ import annotations
