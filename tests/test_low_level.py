@@ -54,6 +54,16 @@ def seed_gains(tmp_path, steps, measure):
     return gains
 
 
+def assert_same_actions(model, other, states):
+    """Both models' deterministic actions are equal, bit for bit, on the point's first ``states`` seeded resets."""
+    env = ReachEnv("point")
+    for seed in range(states):
+        obs, _ = env.reset(seed=seed)
+        np.testing.assert_array_equal(
+            model.predict(obs, deterministic=True)[0], other.predict(obs, deterministic=True)[0]
+        )
+
+
 @pytest.mark.integration
 def test_point_td3_her_learns_that_near_goals_are_worth_more(tmp_path):
     # The fast check of learning (the success-rate one below is slow): HER's relabelled sparse rewards teach
@@ -90,24 +100,14 @@ def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the
         assert widths == [32, 16, 2]
     # The zip loads as TD3, SB3's base class of DDPG: it must still act as the DDPG that was trained.
     assert (loaded.policy_delay, loaded.policy.critic.n_critics) == (1, 1)
-    env = ReachEnv("point")
-    for seed in range(3):
-        obs, _ = env.reset(seed=seed)
-        np.testing.assert_array_equal(
-            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
-        )
+    assert_same_actions(model, loaded, states=3)
 
 
 @pytest.mark.integration
 def test_save_load_round_trip_gives_identical_actions(tmp_path):
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
     loaded = load_low_level("point", tmp_path / "policy.zip")
-    env = ReachEnv("point")
-    for seed in range(5):
-        obs, _ = env.reset(seed=seed)
-        np.testing.assert_array_equal(
-            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
-        )
+    assert_same_actions(model, loaded, states=5)
 
 
 @pytest.mark.integration
