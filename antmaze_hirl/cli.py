@@ -63,11 +63,14 @@ class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter, argparse.RawDescrip
         return super()._get_help_string(action)
 
 
-def _add_parser(subparsers: _Subparsers, name: str, help_text: str, example: str) -> argparse.ArgumentParser:
+def _add_parser(
+    subparsers: _Subparsers, name: str, help_text: str, example: str, description: str | None = None
+) -> argparse.ArgumentParser:
+    # Every subcommand's parser: its help line, a description (default: the help line as a sentence), an example.
     return subparsers.add_parser(
         name,
         help=help_text,
-        description=help_text[0].upper() + help_text[1:] + ".",
+        description=description or help_text[0].upper() + help_text[1:] + ".",
         epilog=f"example:\n  {example}",
         formatter_class=_HelpFormatter,
     )
@@ -471,15 +474,19 @@ def _add_study(subparsers: _Subparsers) -> None:
 
 
 def _add_benchmark(subparsers: _Subparsers) -> None:
-    from antmaze_hirl.experiments.benchmark import add_benchmark_parser  # light: the handler imports the envs
+    from antmaze_hirl.experiments import benchmark_command as command  # light: the handler imports the envs
 
-    add_benchmark_parser(subparsers, _HelpFormatter)
+    command.add_benchmark_arguments(
+        _add_parser(subparsers, "benchmark", command.HELP, command.EXAMPLE, command.DESCRIPTION)
+    )
 
 
 def _add_submit(subparsers: _Subparsers) -> None:
-    from antmaze_hirl.experiments.submission import add_submit_parser  # light: no envs, no torch
+    from antmaze_hirl.experiments import submission  # light: no envs, no torch
 
-    add_submit_parser(subparsers, _HelpFormatter)
+    submission.add_submit_arguments(
+        _add_parser(subparsers, "submit", submission.HELP, submission.EXAMPLE, submission.DESCRIPTION)
+    )
 
 
 SUBCOMMANDS: tuple[Callable[[_Subparsers], None], ...] = (

@@ -14,7 +14,7 @@ from antmaze_hirl.envs.vector import copies_of
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
 from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.plotting import plot_played_episode
-from antmaze_hirl.rollout import episode_outcome, play_episode
+from antmaze_hirl.rollout import episode_outcome, play_episode, play_in_lockstep
 
 
 @dataclass(frozen=True)
@@ -111,9 +111,6 @@ def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
     which MuJoCo can turn into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often).
     Prints one line per seed, as :func:`serial_outcomes`.
     """
-    # The dagger package loads torch: imported here, so that importing the demo stays light.
-    from antmaze_hirl.dagger.evaluation import play_in_lockstep
-
     env, oracle = demo_setup(body)
     copies = copies_of(env, min(num_envs, seeds))
     try:

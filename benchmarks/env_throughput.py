@@ -24,6 +24,7 @@ import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.experts import PathOracle
+from antmaze_hirl.rollout import play_episode
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "env_throughput" / "env_throughput.json"
 
@@ -61,11 +62,7 @@ def high_level_oracle(mazes: int) -> dict[str, float]:
     successes, subgoals, steps = 0, [], []
     start = time.perf_counter()
     for seed in range(mazes):
-        obs, _ = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(oracle.label(obs))
-            done = terminated or truncated
+        info = play_episode(env, oracle.label, seed=seed).info
         successes += int(info["is_success"])
         subgoals.append(info["attempts"])
         steps.append(info["total_low_level_steps"])

@@ -2,7 +2,7 @@
 
 A generated block is the output of one command, pasted between two markers in a Markdown page::
 
-    <!-- generated: python scripts/paper_tables.py results/paper_experiment/point --tables -->
+    <!-- generated: python -m antmaze_lab.paper_tables results/paper_experiment/point --tables -->
     | method | ... |
     <!-- end generated -->
 

@@ -10,8 +10,10 @@ from stable_baselines3 import PPO
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments import benchmark
 from antmaze_hirl.experiments.benchmark import load_report, score_policy
+from antmaze_hirl.experiments.benchmark_policies import resolve_policy
 
 TASKS = [0, 1, 2, 3]
 
@@ -50,7 +52,7 @@ def test_the_oracle_scores_above_a_random_policy_with_intervals_attempts_and_ste
         assert [row["task_id"] for row in report["tasks"]] == TASKS
         assert report["episodes"] == len(TASKS) and report["episodes_per_task"] == 1
         assert report["low_level_steps_total"] == sum(o["low_level_steps"] for o in report["episode_outcomes"])
-        assert report["mean_attempts"] >= 1 and report["suite_checksum"] == benchmark.SUITE_SPECS["point5"].checksum
+        assert report["mean_attempts"] >= 1 and report["suite_checksum"] == SUITE_SPECS["point5"].checksum
     assert random["mean_low_level_steps"] > oracle["mean_low_level_steps"]
 
 
@@ -209,28 +211,28 @@ def test_a_report_of_another_format_is_refused(tmp_path):
 def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_current_suites():
     from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
 
     generate_docs = load_script("scripts/generate_docs.py")
     for name, section in leaderboard.SECTIONS.items():
         # Each section is one generated block of its page (generate_docs --check compares it; this names the stale one).
         page = leaderboard.page_of(name)
         blocks = {block.command: block.text for block in generate_docs.find_blocks(page, page.read_text())}
-        command = f"python scripts/leaderboard.py --section {name}"
+        command = f"python -m antmaze_lab.leaderboard --section {name}"
         assert blocks[command] == section(), f"stale: run python scripts/generate_docs.py {page}"
     reports = sorted(leaderboard.RESULTS.glob("*.json"))
     assert reports
     rows = leaderboard.ROWS_PAGE.read_text()
     for path in reports:
         report = load_report(path)
-        assert report["suite_checksum"] == benchmark.SUITE_SPECS[report["suite"]].checksum, path.name
+        assert report["suite_checksum"] == SUITE_SPECS[report["suite"]].checksum, path.name
         assert f"`{path.name}` |" in rows
 
 
 def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
-    from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
+
     assert leaderboard.main(["--section", "suites"]) == 0
     printed = capsys.readouterr().out
     assert printed.startswith("| suite | id | tasks |") and "| policy | budget |" not in printed
@@ -240,11 +242,11 @@ def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
 
 
 def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env):
-    spec = benchmark.SUITE_SPECS["point5"]
+    spec = SUITE_SPECS["point5"]
     obs, _ = point_env.reset(seed=0, options={"task_id": 0})
     agent = obs["state"][:2]
-    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
-    short, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
+    default, _ = resolve_policy(spec, "oracle", point_env, seed=0)
+    short, _ = resolve_policy(spec, "oracle", point_env, seed=0, subgoal_reach_m=0.5)
     assert np.linalg.norm(default(obs) - agent) > 0.6  # one cell (1 m) by default
     assert np.linalg.norm(short(obs) - agent) == pytest.approx(0.5)
     report = score_policy("point5", "oracle", task_ids=[0], subgoal_reach_m=0.5)
@@ -254,9 +256,9 @@ def test_subgoal_reach_m_shortens_the_oracles_subgoals_and_is_recorded(point_env
 
 
 def test_clearance_m_moves_the_oracles_subgoals_off_the_walls_and_is_recorded(point_env):
-    spec = benchmark.SUITE_SPECS["point5"]
-    default, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0)
-    wide, _ = benchmark.resolve_policy(spec, "oracle", point_env, seed=0, clearance_m=0.45)
+    spec = SUITE_SPECS["point5"]
+    default, _ = resolve_policy(spec, "oracle", point_env, seed=0)
+    wide, _ = resolve_policy(spec, "oracle", point_env, seed=0, clearance_m=0.45)
     obs, _ = point_env.reset(seed=0, options={"task_id": 0})
     moved, done = 0, False
     while not done:  # one episode of the default oracle; the wide one labels the same observations
@@ -279,7 +281,7 @@ def test_a_bad_oracle_setting_is_refused_naming_it_and_the_value(name, bad):
 def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
     with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; policy 'random' takes none"):
         score_policy("point5", "random", task_ids=[0], subgoal_reach_m=1.0)
-    with pytest.raises(ValueError, match=r"clearance_m are the oracle's settings; a function policy takes none"):
+    with pytest.raises(ValueError, match=r"subgoal_reach_m is the oracle's setting; a function policy takes none"):
         score_policy("point5", lambda obs: obs["state"][:2], task_ids=[0], subgoal_reach_m=1.0)
     for argv, message in (
         (["--policy", "random", "--subgoal-reach-m", "1"], "is the oracle's setting; --policy random"),
@@ -296,9 +298,8 @@ def test_subgoal_reach_m_for_another_policy_is_refused(point_env, capsys):
 def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeypatch):
     import shutil
 
-    from script_helpers import load_script
+    from antmaze_lab import leaderboard
 
-    leaderboard = load_script("scripts/leaderboard.py")
     source = leaderboard.RESULTS
     for seed in (0, 1):
         for target in (0, 1000):
@@ -327,9 +328,9 @@ def test_the_spread_section_sets_each_dagger_seed_side_by_side(tmp_path, monkeyp
 @pytest.mark.integration  # reads the committed results
 def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_path, monkeypatch):
     from scipy.stats import binomtest
-    from script_helpers import load_script
 
-    leaderboard = load_script("scripts/leaderboard.py")
+    from antmaze_lab import leaderboard
+
     report = json.loads((leaderboard.RESULTS / "ant4_dagger_protocol_s0_1000.json").read_text())
 
     def write(method, seed, target, successes):
@@ -366,11 +367,9 @@ def test_the_paired_section_sets_a_method_against_plain_dagger_seed_by_seed(tmp_
 def test_the_summary_pools_an_entrys_seeds_over_shared_tasks_and_leaves_checkpoints_out(tmp_path, monkeypatch):
     import shutil
 
-    from script_helpers import load_script
-
     from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+    from antmaze_lab import leaderboard
 
-    leaderboard = load_script("scripts/leaderboard.py")
     source = leaderboard.RESULTS
     names = [f"ant4_dagger_protocol_s{seed}_1000.json" for seed in (0, 2, 4)]
     names += ["ant4_oracle.json", "ant4_ppo_rl_s0.json", "ant4_ppo_rl_s0_untrained.json"]

@@ -4,9 +4,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from antmaze_hirl.dagger.evaluation import play_on_copies, release_copies
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
 from antmaze_hirl.experiments.benchmark import score_policy
+from antmaze_hirl.rollout import play_on_copies, release_copies
 
 TASKS = list(range(6))
 

@@ -6,12 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from script_helpers import load_script
 
 from antmaze_hirl.experiments import claims as cl
 from antmaze_hirl.experiments.uncertainty import paired_comparison, signed_rank_interval, smallest_signed_rank_p
+from antmaze_lab import paper_claims as pc
 
-pc = load_script("scripts/paper_claims.py")
 CLAIM = {claim.number: claim for claim in cl.CLAIMS}
 
 ROOT = Path(__file__).resolve().parents[1]

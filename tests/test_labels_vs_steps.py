@@ -1,4 +1,4 @@
-"""antmaze_hirl.experiments.labels_vs_steps: the leaderboard figure's points, one series per trainer and seed."""
+"""antmaze_lab.labels_vs_steps: the leaderboard figure's points, one series per trainer and seed."""
 
 import json
 import shutil
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from antmaze_hirl.experiments.labels_vs_steps import figure_points
+from antmaze_lab.labels_vs_steps import figure_points
 
 LEADERBOARD = Path(__file__).resolve().parents[1] / "results" / "leaderboard"
 
@@ -38,7 +38,7 @@ def test_each_rl_seed_is_its_own_series(tmp_path):
 
 
 def test_each_family_suite_has_its_own_figure_and_points(tmp_path):
-    from antmaze_hirl.experiments.labels_vs_steps import figure_path
+    from antmaze_lab.labels_vs_steps import figure_path
 
     for name in ("point5_dagger_protocol_s0_100.json", "ant4_dagger_protocol_s0_100.json", "ant4_oracle.json"):
         shutil.copy(LEADERBOARD / name, tmp_path / name)

@@ -4,9 +4,10 @@ import gymnasium as gym
 import numpy as np
 
 import antmaze_hirl  # noqa: F401 - registers the ids
-from antmaze_hirl.dagger.evaluation import evaluation_outcomes, release_copies
+from antmaze_hirl.dagger.evaluation import evaluation_outcomes
 from antmaze_hirl.envs.controllers import PointGoToController
 from antmaze_hirl.experts.oracle import PathOracle
+from antmaze_hirl.rollout import release_copies
 from antmaze_hirl.sb3_ext.evaluation import reach_outcomes
 
 

@@ -40,21 +40,37 @@ def goal_value_gap(model, env):
     return float(np.mean(gaps))
 
 
+def seed_gains(tmp_path, steps, measure):
+    """``measure(model, env)`` after ``steps`` steps of TD3 + HER on the point minus before, for seeds 0, 1 and 2."""
+    config = tiny_config()
+    env = ReachEnv("point")
+    gains = []
+    for seed in range(3):
+        untrained = measure(make_model("point", "td3", config, seed=seed), env)
+        model = train_low_level(
+            "point", "td3", steps, tmp_path / str(seed), seed=seed, config=config, checkpoint_freq=10**9, **TINY
+        )
+        gains.append(measure(model, env) - untrained)
+    return gains
+
+
+def assert_same_actions(model, other, states):
+    """Both models' deterministic actions are equal, bit for bit, on the point's first ``states`` seeded resets."""
+    env = ReachEnv("point")
+    for seed in range(states):
+        obs, _ = env.reset(seed=seed)
+        np.testing.assert_array_equal(
+            model.predict(obs, deterministic=True)[0], other.predict(obs, deterministic=True)[0]
+        )
+
+
 @pytest.mark.integration
 def test_point_td3_her_learns_that_near_goals_are_worth_more(tmp_path):
     # The fast check of learning (the success-rate one below is slow): HER's relabelled sparse rewards teach
     # the critic, within 1000 steps, that a goal next to the body is worth more than one far away (without
     # relabelling, n_sampled_goal=0, the gap stays under 0.2). Over seeds 0-7 (AMD EPYC, shared machine) the
     # gain was 1.58-2.61 (mean 2.17, sd 0.33): the bound 0.5 on the mean of 3 seeds is far outside the spread.
-    config = tiny_config()
-    env = ReachEnv("point")
-    gains = []
-    for seed in range(3):
-        untrained = goal_value_gap(make_model("point", "td3", config, seed=seed), env)
-        model = train_low_level(
-            "point", "td3", 1000, tmp_path / str(seed), seed=seed, config=config, checkpoint_freq=10**9, **TINY
-        )
-        gains.append(goal_value_gap(model, env) - untrained)
+    gains = seed_gains(tmp_path, 1000, goal_value_gap)
     assert np.mean(gains) > 0.5, gains
 
 
@@ -63,15 +79,9 @@ def test_point_td3_her_learns_past_untrained_baseline(tmp_path):
     # 8k steps: 4k sat at the edge of the margin (0.3 vs 0.375 needed on one machine, enough on another), so
     # the check is the mean gain of 3 seeds. Seed 0 gained 0.90 (0.075 -> 0.975) on an AMD EPYC; fewer than 8
     # seeds were measured at 8k steps (each takes minutes), so the margin's spread is not yet known.
-    config = tiny_config()
-    env = ReachEnv("point")
-    gains = []
-    for seed in range(3):
-        untrained = evaluate_reach(make_model("point", "td3", config, seed=seed), env, episodes=40, seed=500)
-        model = train_low_level(
-            "point", "td3", 8000, tmp_path / str(seed), seed=seed, config=config, checkpoint_freq=10**9, **TINY
-        )
-        gains.append(evaluate_reach(model, env, episodes=40, seed=500)["success_rate"] - untrained["success_rate"])
+    gains = seed_gains(
+        tmp_path, 8000, lambda model, env: evaluate_reach(model, env, episodes=40, seed=500)["success_rate"]
+    )
     assert np.mean(gains) >= 0.3, gains
 
 
@@ -90,24 +100,14 @@ def test_ddpg_trains_with_the_configs_settings_and_writes_a_policy_that_acts_the
         assert widths == [32, 16, 2]
     # The zip loads as TD3, SB3's base class of DDPG: it must still act as the DDPG that was trained.
     assert (loaded.policy_delay, loaded.policy.critic.n_critics) == (1, 1)
-    env = ReachEnv("point")
-    for seed in range(3):
-        obs, _ = env.reset(seed=seed)
-        np.testing.assert_array_equal(
-            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
-        )
+    assert_same_actions(model, loaded, states=3)
 
 
 @pytest.mark.integration
 def test_save_load_round_trip_gives_identical_actions(tmp_path):
     model = train_low_level("point", "td3", 300, tmp_path, config=tiny_config(), checkpoint_freq=10**9, **TINY)
     loaded = load_low_level("point", tmp_path / "policy.zip")
-    env = ReachEnv("point")
-    for seed in range(5):
-        obs, _ = env.reset(seed=seed)
-        np.testing.assert_array_equal(
-            model.predict(obs, deterministic=True)[0], loaded.predict(obs, deterministic=True)[0]
-        )
+    assert_same_actions(model, loaded, states=5)
 
 
 @pytest.mark.integration

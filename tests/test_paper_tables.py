@@ -1,16 +1,14 @@
-"""The README's experiment tables come from ``scripts/paper_tables.py``: checked on crafted curves."""
+"""The README's experiment tables come from ``antmaze_lab.paper_tables``: checked on crafted curves."""
 
 import copy
 import json
 import sys
 
 import pytest
-from script_helpers import load_script
 from test_experiments import crafted_rows
 
 from antmaze_hirl.experiments import summarise
-
-paper_tables = load_script("scripts/paper_tables.py")
+from antmaze_lab import paper_tables
 
 
 def test_tables_print_the_summary_figures():

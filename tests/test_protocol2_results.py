@@ -5,23 +5,22 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-from script_helpers import load_script
 
 from antmaze_hirl.experiments import claims
+from antmaze_lab import protocol_tables, tables
 
 ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = ROOT / "results" / "protocol2"
 PAGE = ROOT / "docs" / "results" / "protocol2.md"
 SECTION = "protocol2-goals"
-results_tables = load_script("scripts/results_tables.py")
 
 
 @pytest.mark.integration  # reads the committed results
 def test_the_page_holds_the_generated_goals_and_claims_and_the_readme_links_them():
     # Their text is checked against the commands by tests/test_generated_docs.py.
     page, readme = PAGE.read_text(), (ROOT / "README.md").read_text()
-    assert f"<!-- generated: python scripts/results_tables.py {SECTION} -->" in page
-    brief = "python scripts/paper_claims.py --protocol2 results/protocol2/point results/protocol2/ant --brief"
+    assert f"<!-- generated: python -m antmaze_lab.protocol_tables {SECTION} -->" in page
+    brief = "python -m antmaze_lab.paper_claims --protocol2 results/protocol2/point results/protocol2/ant --brief"
     assert f"<!-- generated: {brief} -->" in page
     assert "(docs/paper-claims.md)" in readme and "(docs/preregistration.md)" in readme
 
@@ -37,7 +36,7 @@ def test_the_folders_are_complete_and_the_goals_quote_them(body):
     untrained = summary["methods"]["dagger"]["untrained_success"]["pooled"]
     finals = {name: spec["final_success"]["median"] for name, spec in summary["methods"].items()}
     best = max(finals, key=finals.get)
-    text = results_tables.SECTIONS[SECTION]()
+    text = protocol_tables.SECTIONS[SECTION]()
     assert f"{100 * untrained['rate']:.1f}% [" in text
     oracle = summary["oracle_success"]["success_rate"]
     exact = [f"{100 * rate:.1f}".removesuffix(".0") for rate in (finals[best], oracle, oracle - finals[best])]
@@ -69,13 +68,13 @@ def test_each_goal_turns_with_the_data(tmp_path, monkeypatch, untrained, best_fi
         (tmp_path / "protocol2" / body).mkdir(parents=True)
         summary = _summary(untrained, best_final, 0.97, ratio)
         (tmp_path / "protocol2" / body / "summary.json").write_text(json.dumps(summary))
-    monkeypatch.setattr(results_tables, "RESULTS", tmp_path)
-    monkeypatch.setattr(results_tables, "LOADED", [])
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    monkeypatch.setattr(tables, "LOADED", [])
     outcomes = {name: {"point": saving, "ant": saving} for name in claims.ACTIVE}
     verdict = claims.HOLDS if saving == claims.SUPPORTS else claims.DOES_NOT_HOLD
     report = SimpleNamespace(verdicts=[None] * 5 + [SimpleNamespace(outcomes=outcomes, verdict=verdict)])
     monkeypatch.setattr(claims, "evaluate_folders", lambda *folders: report)
-    rows = results_tables.protocol2_goals().splitlines()[2:]
+    rows = protocol_tables.protocol2_goals().splitlines()[2:]
     assert [row.rsplit("| **", 1)[1].removesuffix("** |") for row in rows] == met
     gap = round(100 * (0.97 - best_final))
     assert f"vs the oracle's 97%: {gap} points |" in rows[1]

@@ -1,13 +1,21 @@
-"""scripts/results_tables.py: the results pages' tables, read from the committed JSON files."""
+"""The lab's results tables (``antmaze_lab.tables`` and its page modules), read from the committed JSON files."""
 
+import importlib
 import json
 import re
 from pathlib import Path
 
 import pytest
-from script_helpers import load_script
 
-results_tables = load_script("scripts/results_tables.py")
+from antmaze_lab import headline, in_maze_tables, tables
+
+SECTIONS = tables.all_sections()
+"""Every section, with the page module that prints it."""
+
+
+def print_section(section):
+    """The exit status of the section's command (``python -m MODULE SECTION``)."""
+    return SECTIONS[section].main([section])
 
 
 def in_maze_family(successes, flips=1, timeouts=0):
@@ -30,25 +38,25 @@ def tiny_results(tmp_path, monkeypatch):
     """A results/ folder with one in-maze file of two rows: ``new`` 97 of 100 per family, ``old`` 90."""
     (tmp_path / "in_maze").mkdir()
     rows = {
-        "new": {"families": {f: in_maze_family(97, flips=2) for f in results_tables.FAMILIES}},
-        "old": {"families": {f: in_maze_family(90, flips=5, timeouts=1) for f in results_tables.FAMILIES}},
+        "new": {"families": {f: in_maze_family(97, flips=2) for f in in_maze_tables.FAMILIES}},
+        "old": {"families": {f: in_maze_family(90, flips=5, timeouts=1) for f in in_maze_tables.FAMILIES}},
     }
     (tmp_path / "in_maze" / "tiny.json").write_text(json.dumps({"results": rows}))
-    monkeypatch.setattr(results_tables, "RESULTS", tmp_path)
-    monkeypatch.setattr(results_tables, "LOADED", [])
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    monkeypatch.setattr(tables, "LOADED", [])
     return tmp_path
 
 
 def test_a_rate_carries_its_wilson_interval_in_percent():
-    assert results_tables.rate_cell(185, 200) == "92.5% [88.0, 95.4]"
-    assert results_tables.rate_cell(97, 100) == "97% [91.5, 99.0]"
-    assert results_tables.rate_cell_of(0.94, 50) == "94% [83.8, 97.9]"
-    with pytest.raises(results_tables.ResultsFileError, match=r"a success rate of 0.333 is no whole count of 200"):
-        results_tables.count(0.333, 200)
+    assert tables.rate_cell(185, 200) == "92.5% [88.0, 95.4]"
+    assert tables.rate_cell(97, 100) == "97% [91.5, 99.0]"
+    assert tables.rate_cell_of(0.94, 50) == "94% [83.8, 97.9]"
+    with pytest.raises(tables.ResultsFileError, match=r"a success rate of 0.333 is no whole count of 200"):
+        tables.count(0.333, 200)
 
 
 def test_the_pair_table_prints_each_rows_figures_from_the_file(tiny_results):
-    text = results_tables.in_maze_pair("in_maze/tiny.json", "new", "old", "stage 6", "stage 5")
+    text = in_maze_tables.in_maze_pair("in_maze/tiny.json", "new", "old", "stage 6", "stage 5")
     header, rule, *rows = text.splitlines()
     assert header.startswith("| family | stage 6 [95% Wilson] | flips, frozen, timeouts |")
     assert rule == "|" + "---|" * 12
@@ -60,45 +68,45 @@ def test_the_pair_table_prints_each_rows_figures_from_the_file(tiny_results):
 
 def test_a_damaged_results_file_is_a_one_line_error_naming_it(tiny_results, capsys):
     (tiny_results / "in_maze" / "in_maze.json").write_text('{"results": {"shipped": ')
-    assert results_tables.main(["in-maze-stage6"]) == 2
+    assert print_section("in-maze-stage6") == 2
     error = capsys.readouterr().err
     assert error.count("\n") == 1
     assert error.startswith("error: results/in_maze/in_maze.json is not JSON: ")
 
 
 def test_a_missing_file_or_field_is_a_one_line_error_naming_the_file(tiny_results, capsys):
-    assert results_tables.main(["in-maze-tilt"]) == 2
+    assert print_section("in-maze-tilt") == 2
     assert capsys.readouterr().err == "error: results/in_maze/in_maze_tilt.json: no such results file\n"
     data = json.loads((tiny_results / "in_maze" / "tiny.json").read_text())
     del data["results"]["new"]["families"]["u"]["successes"]
     (tiny_results / "in_maze" / "in_maze.json").write_text(json.dumps({"results": {"shipped": data["results"]["new"]}}))
-    with pytest.raises(results_tables.ResultsFileError, match=r"results/in_maze/in_maze.json: no field \['results'\]"):
-        results_tables.in_maze_pair("in_maze/in_maze.json", "shipped", "runs/device/stage5.zip", "a", "b")
-    results_tables.LOADED.clear()
+    with pytest.raises(tables.ResultsFileError, match=r"results/in_maze/in_maze.json: no field \['results'\]"):
+        in_maze_tables.in_maze_pair("in_maze/in_maze.json", "shipped", "runs/device/stage5.zip", "a", "b")
+    tables.LOADED.clear()
     (tiny_results / "in_maze" / "in_maze.json").write_text(
         json.dumps({"results": {"shipped": data["results"]["new"], "runs/device/stage5.zip": data["results"]["old"]}})
     )
-    assert results_tables.main(["in-maze-stage6"]) == 2
+    assert print_section("in-maze-stage6") == 2
     assert capsys.readouterr().err == "error: no field 'successes' in results/in_maze/in_maze.json\n"
 
 
 @pytest.mark.integration  # reads the committed results
-@pytest.mark.parametrize("section", list(results_tables.SECTIONS))
+@pytest.mark.parametrize("section", list(SECTIONS))
 def test_every_section_prints_a_table_from_the_committed_files(section, capsys):
-    assert results_tables.main([section]) == 0
+    assert print_section(section) == 0
     assert "|---|" in capsys.readouterr().out
 
 
 def test_an_unknown_section_is_refused_naming_it(capsys):
     with pytest.raises(SystemExit):
-        results_tables.main(["in-maze-stage7"])
+        in_maze_tables.main(["in-maze-stage7"])
     assert "invalid choice: 'in-maze-stage7'" in capsys.readouterr().err
 
 
 @pytest.mark.integration  # reads the committed results
 def test_the_headline_rows_are_one_table_whose_links_resolve_from_the_readme_and_the_results_page():
-    root = Path(results_tables.__file__).resolve().parent.parent
-    docs, readme = results_tables.headline(), results_tables.headline(links_from=".")
+    root = Path(tables.__file__).resolve().parent.parent
+    docs, readme = headline.headline(), headline.headline(links_from=".")
     link = re.compile(r"\]\(([^)]+)\)")
     assert link.sub("]()", docs) == link.sub("]()", readme)
     for text, base in ((docs, root / "docs" / "results"), (readme, root)):
@@ -109,8 +117,8 @@ def test_the_headline_rows_are_one_table_whose_links_resolve_from_the_readme_and
 
 def test_an_in_maze_familys_misses_name_each_way_it_failed():
     family = in_maze_family(90, flips=7, timeouts=1) | {"frozen": 2}
-    assert results_tables.misses(family) == "7 flips, 2 frozen, 1 timeout"
-    assert results_tables.misses(in_maze_family(100, flips=0)) == ""
+    assert headline.misses(family) == "7 flips, 2 frozen, 1 timeout"
+    assert headline.misses(in_maze_family(100, flips=0)) == ""
 
 
 GUIDE_FIGURES = {
@@ -131,7 +139,7 @@ GUIDE_FIGURES = {
 @pytest.mark.integration  # reads the committed results
 @pytest.mark.parametrize(("section", "line"), list(GUIDE_FIGURES.items()))
 def test_each_guide_section_prints_its_figures_from_the_committed_files(section, line, capsys):
-    assert results_tables.main([section]) == 0
+    assert print_section(section) == 0
     assert line in capsys.readouterr().out
 
 
@@ -224,13 +232,29 @@ def without(data, keys):
 def test_a_guide_section_missing_a_field_is_a_one_line_error_naming_it(
     section, name, keys, error, tmp_path, monkeypatch, capsys
 ):
-    assert results_tables.main([section]) == 0
+    assert print_section(section) == 0
     capsys.readouterr()
-    for loaded in set(results_tables.LOADED):  # the section's files, copied into a results/ of its own
+    for loaded in set(tables.LOADED):  # the section's files, copied into a results/ of its own
         (tmp_path / loaded).parent.mkdir(parents=True, exist_ok=True)
-        (tmp_path / loaded).write_text((results_tables.RESULTS / loaded).read_text())
+        (tmp_path / loaded).write_text((tables.RESULTS / loaded).read_text())
     damaged = tmp_path / name
     damaged.write_text(json.dumps(without(json.loads(damaged.read_text()), keys)))
-    monkeypatch.setattr(results_tables, "RESULTS", tmp_path)
-    assert results_tables.main([section]) == 2
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    assert print_section(section) == 2
     assert capsys.readouterr().err == f"error: {error}\n"
+
+
+LAB_MARKER = re.compile(r"^<!-- generated: python -m (antmaze_lab\.\w+) (?!-)(\S+)", re.MULTILINE)
+
+
+def test_every_generated_block_of_a_page_module_names_one_of_its_sections():
+    # The pages are read, not the results: a block renamed or moved to another module fails here, in the unit tier.
+    root = Path(tables.__file__).resolve().parent.parent
+    pages = [root / "README.md", *sorted((root / "docs").rglob("*.md"))]
+    named = [(page.name, *found) for page in pages for found in LAB_MARKER.findall(page.read_text())]
+    table_modules = {module: importlib.import_module(module).SECTIONS for module in tables.TABLE_MODULES}
+    checked = [(page, module, section) for page, module, section in named if module in table_modules]
+    assert len(checked) >= 36, checked
+    for page, module, section in checked:
+        assert section in table_modules[module], f"{page}: {module} has no section {section!r}"
+    assert len(SECTIONS) == sum(len(sections) for sections in table_modules.values())  # no section in two modules

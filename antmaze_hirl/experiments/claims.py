@@ -408,7 +408,7 @@ def _pct(value: float | None, decimals: int = 0) -> str:
 def exact_percent(value: float | None) -> str:
     """A success rate in percent to one decimal where it has one (0.905: "90.5%", not a half-even "90%").
 
-    ``None`` (no figure) reads "n/a". ``scripts/results_tables.py`` formats its exact figures with it too.
+    ``None`` (no figure) reads "n/a". The lab's results tables format their exact figures with it too.
     """
     return "n/a" if value is None else f"{100 * value:.1f}".removesuffix(".0") + "%"
 

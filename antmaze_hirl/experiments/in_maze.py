@@ -34,7 +34,6 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from antmaze_hirl.dagger.evaluation import play_in_lockstep
 from antmaze_hirl.envs import profiles
 from antmaze_hirl.envs.controllers import SmoothedController, as_controller
 from antmaze_hirl.envs.layouts import STANDARD_MAPS
@@ -44,7 +43,7 @@ from antmaze_hirl.experiments.runner import low_level_identity, make_env
 from antmaze_hirl.experiments.uncertainty import wilson_interval
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import OUTCOMES as EPISODE_OUTCOMES
-from antmaze_hirl.rollout import episode_outcome, play_episode
+from antmaze_hirl.rollout import episode_outcome, play_episode, play_in_lockstep
 from antmaze_hirl.sb3_ext.loading import load_low_level
 
 FAMILIES = tuple(name for name, family in profiles.MAZE_FAMILIES.items() if family.split != "selection")

@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
-from antmaze_hirl.experiments.benchmark import POLICY_KEYWORDS, RESULTS_FORMAT
+from antmaze_hirl.experiments.benchmark import RESULTS_FORMAT
+from antmaze_hirl.experiments.benchmark_policies import POLICY_KEYWORDS
 
 
 class SubmissionError(ValueError):
@@ -122,19 +123,18 @@ def load_submission(path: str | Path, *, budget: str | None = None, seed: int | 
     return check_submission(report, name=str(path), budget=budget, seed=seed)
 
 
-def add_submit_parser(subparsers: Any, formatter_class: type[argparse.HelpFormatter]) -> None:
-    """Adds the ``submit`` subcommand (light: no envs, no torch)."""
-    parser = subparsers.add_parser(
-        "submit",
-        help="check a benchmark report for the leaderboard and fill its budget and seed",
-        description=(
-            "Check a benchmark report for the leaderboard: its format, the suite's checksum, the protocol's "
-            "episodes and its counts; fill the row's budget and training seed from the report (or the options "
-            "below), print the row and, with --out, write the checked report (CONTRIBUTING.md)."
-        ),
-        epilog="example:\n  antmaze-hirl submit runs/point5_mine.json --out results/leaderboard/point5_mine_s0.json",
-        formatter_class=formatter_class,
-    )
+HELP = "check a benchmark report for the leaderboard and fill its budget and seed"
+DESCRIPTION = (
+    "Check a benchmark report for the leaderboard: its format, the suite's checksum, the protocol's "
+    "episodes and its counts; fill the row's budget and training seed from the report (or the options "
+    "below), print the row and, with --out, write the checked report (CONTRIBUTING.md)."
+)
+EXAMPLE = "antmaze-hirl submit runs/point5_mine.json --out results/leaderboard/point5_mine_s0.json"
+"""The subcommand's help line, description and example; ``antmaze_hirl.cli`` makes its parser from them."""
+
+
+def add_submit_arguments(parser: argparse.ArgumentParser) -> None:
+    """Adds ``submit``'s arguments and handler to its parser (light: no envs, no torch)."""
     parser.add_argument("report", type=Path, help="the report written by antmaze-hirl benchmark --json (required)")
     parser.add_argument(
         "--budget", default=None, help="the training budget, e.g. '200k high-level steps' (default: the report's)"

@@ -1,6 +1,6 @@
 """The paper's claims, one by one, against the committed results folders.
 
-**Protocol 1** (the default, ``python scripts/paper_claims.py [--folders A,B]``): the figures that the
+**Protocol 1** (the default, ``python -m antmaze_lab.paper_claims [--folders A,B]``): the figures that the
 hand-written table of ``docs/paper-claims.md`` quotes, per body and method, from the old folders
 (``results/paper_experiment/{point,ant}``, with the flaws the audit of protocol 1 found). It prints final
 success (median, min-max over seeds, the paired Wilcoxon p against DAgger), labels per trial, labels to
@@ -16,14 +16,13 @@ The verdict rules are stated once, in the docstring of :mod:`antmaze_hirl.experi
 computes every verdict; the table's footnote summarises them.
 
 Usage:
-  python scripts/paper_claims.py                       # protocol 1, the committed folders
-  python scripts/paper_claims.py --protocol2 results/protocol2/point results/protocol2/ant \\
-      [--json claims.json] [--brief]
+  python -m antmaze_lab.paper_claims                       # protocol 1, the committed folders
+  python -m antmaze_lab.paper_claims --protocol2 POINT_FOLDER ANT_FOLDER [--json claims.json] [--brief]
+      (the committed: results/protocol2/point results/protocol2/ant)
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 from collections.abc import Sequence
 from dataclasses import asdict
@@ -44,6 +43,7 @@ from antmaze_hirl.experiments.claims import (
     evaluate_folders,
     protocol1_figures,
 )
+from antmaze_lab.tables import lab_parser
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "paper_experiment"
 FOLDERS = [RESULTS / "point", RESULTS / "ant"]
@@ -129,7 +129,7 @@ def _plain(value: Any) -> Any:
 
 def main(argv: Sequence[str] | None = None) -> None:
     """The command line (the module docstring)."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = lab_parser("antmaze_lab.paper_claims", __doc__)
     parser.add_argument("--folders", default=None, help="protocol 1: comma-separated folders (default: the committed)")
     parser.add_argument(
         "--protocol2", nargs=2, type=Path, metavar=("POINT_FOLDER", "ANT_FOLDER"), help="protocol 2: the claims table"

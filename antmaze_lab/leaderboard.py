@@ -5,18 +5,17 @@ of a trained entry pooled with a cluster bootstrap over seeds and tasks (every s
 Every row of the results table (``docs/results/leaderboard-rows.md``) is one ``antmaze-hirl benchmark --json`` report in
 ``results/leaderboard/`` (its figures, budget, wall time and file), or a "not run yet" row from
 :data:`NOT_RUN` with the command that would fill it. The figure section links the labels-against-steps
-figures and the points section lists their points (``scripts/labels_vs_steps.py`` draws the PNGs from the
+figures and the points section lists their points (``antmaze_lab.labels_vs_steps`` draws the PNGs from the
 same reports).
 Nothing is typed in by hand. Each section is a generated block of the page
-(``<!-- generated: python scripts/leaderboard.py --section results -->``), so after adding a report run
+(``<!-- generated: python -m antmaze_lab.leaderboard --section results -->``), so after adding a report run
 ``python scripts/generate_docs.py``; ``tests/test_generated_docs.py`` runs its ``--check``.
 
-Usage: python scripts/leaderboard.py --section suites|leaderboard|summary|results|spread|paired|figure|points
+Usage: python -m antmaze_lab.leaderboard --section suites|leaderboard|summary|results|spread|paired|figure|points
 """
 
 from __future__ import annotations
 
-import argparse
 import re
 import sys
 from collections.abc import Callable
@@ -29,10 +28,11 @@ from statsmodels.stats.multitest import multipletests
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
 from antmaze_hirl.experiments.claims import sign_test
-from antmaze_hirl.experiments.labels_vs_steps import SUITES as FIGURE_SUITES
-from antmaze_hirl.experiments.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_hirl.experiments.submission import SubmissionError, check_submission
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+from antmaze_lab.labels_vs_steps import SUITES as FIGURE_SUITES
+from antmaze_lab.labels_vs_steps import figure_path, figure_points, points_table
+from antmaze_lab.tables import lab_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
@@ -402,8 +402,9 @@ def _step_budget(by_seed: dict[int, dict], steps: int) -> str:
 
 
 def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[tuple[str, str, dict[int, dict]]]:
-    """Each submitted entry of ``suite``: the reports no other entry pools, checked (``antmaze-hirl submit``)
-    and pooled by policy and budget, their seeds side by side.
+    """Each submitted entry of ``suite``, its seeds side by side.
+
+    The reports no other entry pools, checked (``antmaze-hirl submit``) and pooled by policy and budget.
 
     Raises:
         SystemExit: If a submitted report fails the check, naming its file and what is wrong.
@@ -424,8 +425,10 @@ def _other_rows(suite: str, reports: dict[str, dict], placed: set[str]) -> list[
 
 
 def summary_entries() -> list[tuple[str, str, str, dict[int, dict]]]:
-    """Every leaderboard entry as (suite, name, budget, reports by seed): per suite the oracle, the random policy,
-    DAgger's entries by label target, the RL baselines, then the submitted entries.
+    """Every leaderboard entry as (suite, name, budget, reports by seed).
+
+    Per suite: the oracle, the random policy, DAgger's entries by label target, the RL baselines, then the
+    submitted entries.
 
     A trained entry pools its seeds' final rows (one per seed) at one budget; the rows it pools are in the
     results table. Checkpoints of an RL run (``_at_N``) are points of its curve, not entries, and an active
@@ -557,7 +560,7 @@ def paired_table() -> str:
 
 
 def figure_section() -> str:
-    """The figures, drawn by ``scripts/labels_vs_steps.py`` from the same reports (points: :func:`points_section`)."""
+    """The figures, drawn by ``antmaze_lab.labels_vs_steps`` from the same reports (points: :func:`points_section`)."""
     images = []
     for suite in FIGURE_SUITES:
         image = (ROOT / figure_path(suite)).relative_to(PAGE.parent).as_posix()
@@ -597,7 +600,7 @@ def page_of(section: str) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     """Prints the section named by ``--section``; returns the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = lab_parser("antmaze_lab.leaderboard", __doc__)
     parser.add_argument("--section", required=True, choices=list(SECTIONS), help="the section of the page to print")
     args = parser.parse_args(argv)
     print(SECTIONS[args.section]())

@@ -10,8 +10,8 @@ the seeds both runs hold. The two runs must share the final mazes (body, maze si
 episodes); a note names every other setting they differ in.
 
 Usage:
-  python scripts/paper_tables.py results/paper_experiment/point [--tables cost,per-label,effort]
-  python scripts/paper_tables.py results/paper_experiment/ant --beside OTHER_FOLDER --names 'this run,other'
+  python -m antmaze_lab.paper_tables results/paper_experiment/point [--tables cost,per-label,effort]
+  python -m antmaze_lab.paper_tables results/paper_experiment/ant --beside OTHER_FOLDER --names 'this run,other'
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
+from antmaze_lab.tables import lab_parser
 
 TABLES = ("cost", "per-label", "effort", "beside")
 """The tables this prints, in order; ``beside`` only with ``--beside``."""
@@ -292,7 +293,8 @@ def _load_summary(parser: argparse.ArgumentParser, folder: Path, *, per_label: b
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    """The command line (the module docstring): prints the tables of one folder."""
+    parser = lab_parser("antmaze_lab.paper_tables", __doc__)
     parser.add_argument("folder", type=Path, help="a results folder with summary.json")
     parser.add_argument(
         "--beside", type=Path, default=None, help="another results folder to set final success beside (default: none)"

@@ -10,23 +10,125 @@ horizontal lines. The x axis is logarithmic (``symlog``: linear below 1, so the 
 One expert label and one high-level environment step are both one subgoal chosen in one maze state, which
 is why they share the axis; a body step is a 50th of a subgoal's walk or less.
 
-Usage: python scripts/labels_vs_steps.py [--suite point5|ant4]   (default both; writes
+The points come from :func:`figure_points`; ``python -m antmaze_lab.leaderboard --section points`` lists them
+too.
+
+Usage: python -m antmaze_lab.labels_vs_steps [--suite point5|ant4]   (default both; writes
 docs/images/<suite>_labels_vs_steps.png and prints its points)
 """
 
 from __future__ import annotations
 
-import argparse
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.experiments.labels_vs_steps import SUITES, Point, figure_path, figure_points, points_table
+from antmaze_hirl.experiments.benchmark import load_report
+from antmaze_lab.tables import lab_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "leaderboard"
+
+SUITES = ("point5", "ant4")
+"""The suites with a figure: the held-out families both DAgger and the RL baselines train for."""
+
+
+def figure_path(suite: str) -> Path:
+    """The figure of ``suite``, relative to the repository root.
+
+    Raises:
+        ValueError: For a suite without a figure (not in :data:`SUITES`).
+    """
+    if suite not in SUITES:
+        raise ValueError(f"suite {suite!r} has no labels-against-steps figure; choose from {list(SUITES)}")
+    return Path("docs") / "images" / f"{suite}_labels_vs_steps.png"
+
+
+@dataclass(frozen=True)
+class Point:
+    """One plotted report.
+
+    Attributes:
+        series: The legend entry.
+        x: Labels or training steps.
+        x_kind: ``"labels"``, ``"high-level steps"`` or ``"body steps"``.
+        successes: Successful episodes.
+        episodes: Episodes scored.
+        low: Wilson interval's lower end.
+        high: Its upper end.
+        file: The report's file name.
+    """
+
+    series: str
+    x: int
+    x_kind: str
+    successes: int
+    episodes: int
+    low: float
+    high: float
+    file: str
+
+
+def figure_points(reports: Path, suite: str = "point5") -> tuple[list[Point], dict[str, float]]:
+    """The points of ``suite``'s figure, and its reference lines (``{"random": rate, "oracle": rate}``).
+
+    Args:
+        reports: The folder of committed ``antmaze-hirl benchmark --json`` reports; each ``<suite>_*.json`` of
+            100 episodes or more is a point or a line, the others are left out.
+        suite: A suite of :data:`SUITES`.
+
+    Raises:
+        ValueError: For a suite without a figure.
+    """
+    figure_path(suite)  # validates the suite
+    points, lines = [], {}
+    for path in sorted(reports.glob(f"{suite}_*.json")):
+        report = load_report(path)
+        if report["suite"] != suite or report["episodes"] < 100:
+            continue
+        if report["policy"] in ("oracle", "random"):
+            lines[report["policy"]] = report["success_rate"]
+            continue
+        training = report.get("training", {})
+        if "labels" in training:
+            seed = report["policy"].split("seed ")[1].split(",")[0]
+            # One series per learner and seed: the learners differ in prior, so their curves are not pooled.
+            learner = training.get("learner", "generic")
+            # An active method's curve is its own series (reports from before --method are plain DAgger's).
+            method = training.get("method", "dagger")
+            trainer = "DAgger (plain)" if method == "dagger" else f"DAgger with `{method}`"
+            series, x, kind = f"{trainer}, {learner} learner, seed {seed}", training["labels"], "labels"
+        elif "algorithm" in training:
+            x = training.get("steps_reached", training.get("high_level_steps"))
+            seed = training.get("seed", 0)  # one series per seed, as for DAgger: a run's curve is one draw
+            if training["algorithm"] == "flat-sac-her":
+                series, kind = f"flat SAC+HER, no hierarchy, seed {seed}", "body steps"
+            else:
+                mazes = training.get("num_envs", 1)  # the older PPO row trained on one maze at a time
+                algorithm = training["algorithm"].upper()
+                series = f"SB3 {algorithm} on the high level, {mazes} maze{'s' * (mazes > 1)}, seed {seed}"
+                kind = "high-level steps"
+        else:
+            continue
+        low, high = report["wilson_95"]
+        points.append(Point(series, int(x), kind, report["successes"], report["episodes"], low, high, path.name))
+    points.sort(key=lambda point: (point.x_kind != "labels", point.series, point.x))
+    return points, lines
+
+
+def points_table(points: list[Point]) -> str:
+    """The plotted points as a Markdown table (``docs/results/leaderboard-rows.md`` prints one per suite)."""
+    lines = ["| series | x | success [95% Wilson] | file |", "|---|---|---|---|"]
+    for point in points:
+        rate = point.successes / point.episodes
+        lines.append(
+            f"| {point.series} | {point.x:,} {point.x_kind} | {point.successes}/{point.episodes} = {100 * rate:.1f}% "
+            f"[{100 * point.low:.1f}%, {100 * point.high:.1f}%] | `{point.file}` |"
+        )
+    return "\n".join(lines)
 
 
 def series_colours(series: list[str], plt: Any) -> dict[str, Any]:
@@ -107,7 +209,7 @@ def draw(points: list[Point], lines: dict[str, float], path: Path, suite: str) -
 
 def main(argv: list[str] | None = None) -> int:
     """Draws the figure of each suite asked for and prints its points; returns the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = lab_parser("antmaze_lab.labels_vs_steps", __doc__)
     parser.add_argument("--suite", choices=SUITES, default=None, help="one suite's figure (default: every suite's)")
     args = parser.parse_args(argv)
     for suite in [args.suite] if args.suite else SUITES:

@@ -1,0 +1,158 @@
+"""Tables of the low level's tables, printed from committed results files.
+
+Pages: ``docs/results/low-level.md`` and ``docs/guides/low-level.md``'s ``ensemble-speed``.
+
+``python -m antmaze_lab.low_level_tables SECTION`` prints one generated block (``--list`` names them):
+``low-level-eval``, ``low-level-throughput``, ``low-level-selection``, ``env-throughput``, ``ensemble-speed``.
+Loading, formatting and the command are :mod:`antmaze_lab.tables`'.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from antmaze_lab.tables import Sections, count, load, rate_cell, rate_cell_of, selection_oracle, table, times
+
+SECTIONS = Sections("antmaze_lab.low_level_tables", __doc__)
+"""Each generated block's builder, by the section name the command line takes."""
+
+
+@SECTIONS.add("low-level-eval")
+def low_level_eval() -> str:
+    """Eval-low of the shipped point and ant per disjoint set of subgoals and pooled, then the ant's eval-low files."""
+    summary = load("low_level/low_level.json")
+    bodies = [("point", summary.get("eval_low", "point")), ("ant", summary.get("eval_low", "ant"))]
+    seeds = list(bodies[0][1]["disjoint_sets"])
+    lines = []
+    for body, entry in bodies:
+        episodes, pooled = entry["episodes"], entry["pooled_episodes"]
+        hits = count(entry["pooled_success_rate"], pooled)
+        lines.append(
+            [
+                f"{body} (`{entry['low_level_id']}`)",
+                f"{entry['max_distance_m']:g} m",
+                *(rate_cell_of(entry["disjoint_sets"][seed], episodes) for seed in seeds),
+                f"{hits} of {pooled}: {rate_cell(hits, pooled)}",
+                f"{entry['mean_steps']:.1f}",
+            ]
+        )
+    header = ["shipped", "subgoals up to", *(f"seed {seed} ({bodies[0][1]['episodes']})" for seed in seeds)]
+    header += ["pooled", "mean steps, seed 0"]
+    files = []
+    for seed in ("", "_200", "_400", "_600"):
+        entry = load(f"low_level/eval_low_ant{seed}.json")
+        files.append(
+            [
+                f"`low_level/eval_low_ant{seed}.json`",
+                f"`{entry.get('low_level_id')}`",
+                rate_cell_of(entry.get("success_rate"), entry.get("episodes")),
+                f"{entry.get('mean_steps'):.1f}",
+            ]
+        )
+    goal = summary.get("goals", "ant_success_rate")
+    return (
+        table(header, lines)
+        + f"\n\nThe ant's goal: {goal}. Its `antmaze-hirl eval-low` files:\n\n"
+        + table(["file", "low level", "success [95% Wilson]", "mean steps"], files)
+    )
+
+
+@SECTIONS.add("low-level-throughput")
+def low_level_throughput() -> str:
+    """``train_low_level`` against plain SB3 ``learn``: steps per second and their ratios."""
+    speed = load("low_level/low_level.json").get("training_throughput")
+    goal = load("low_level/low_level.json").get("goals", "ratio_checkpoint_every_50k")
+    return table(
+        [
+            "steps per block",
+            "ours, steps/s",
+            "plain SB3, steps/s",
+            "checkpoint save",
+            "ratio, one checkpoint per block",
+            f"ratio, checkpoint every 50k (goal {goal})",
+        ],
+        [
+            [
+                speed["steps_per_block"],
+                speed["ours_steps_per_s"],
+                speed["plain_sb3_steps_per_s"],
+                f"{speed['checkpoint_save_s']} s",
+                speed["ratio_one_checkpoint_per_block"],
+                speed["ratio_checkpoint_every_50k"],
+            ]
+        ],
+    )
+
+
+@SECTIONS.add("low-level-selection")
+def low_level_selection() -> str:
+    """Stage 2's selection: the pick and stage 1."""
+    name = "select_low_level/low_level_selection.json"
+    results = load(name)
+    rows = [("the pick (stage 2)", results.get("best")), ("stage 1", "antmaze_hirl/policies/ant_td3.zip")]
+    return f"{len(results.get('scores'))} rows scored.\n\n" + selection_oracle(name, rows)
+
+
+@SECTIONS.add("env-throughput")
+def env_throughput() -> str:
+    """AntReach against raw AntMaze steps/s, and the point oracle's random mazes."""
+    results = load("env_throughput/env_throughput.json")
+    low, oracle = results.get("low_level"), results.get("high_level_point_oracle")
+    goals = results.get("goals")
+    return table(
+        ["figure", "value", "goal"],
+        [
+            ["AntReach-v0, steps/s (random actions)", low["ours_steps_per_s"], ""],
+            ["raw `AntMaze_UMaze-v5`, steps/s", low["raw_AntMaze_UMaze_v5_steps_per_s"], ""],
+            ["ratio", low["ratio"], goals["low_level_ratio"]],
+            [
+                f"PointMaze-v0, oracle and scripted controller, {oracle['mazes']} random mazes",
+                rate_cell_of(oracle["success_rate"], oracle["mazes"]),
+                goals["oracle_success_rate"],
+            ],
+            [
+                "episodes/s, mean subgoals, mean steps",
+                f"{oracle['episodes_per_s']}, {oracle['mean_subgoals']}, {oracle['mean_low_level_steps']:.0f}",
+                "",
+            ],
+        ],
+    )
+
+
+@SECTIONS.add("ensemble-speed")
+def ensemble_speed() -> str:
+    """The shipped ensemble's two layouts, sequential and batched heads, timed side by side."""
+    results = load("ensemble_speed/ensemble_speed.json")
+    median = results.get("median_microseconds")
+    goal = results.get("goal_predict_speedup_at_least")
+    predict = results.get("predict_speedup")
+    return table(
+        [
+            "policy",
+            "heads",
+            "`predict`, sequential",
+            "`predict`, batched",
+            "`predict` speed-up (goal)",
+            "a whole low-level step, speed-up",
+            "largest action gap",
+            "calls x rounds",
+        ],
+        [
+            [
+                f"`{results.get('policy')}` (`{results.get('fingerprints', 'batched')}`)",
+                results.get("heads"),
+                f"{median['sequential']:.0f} us",
+                f"{median['batched']:.0f} us",
+                f"{times(predict)} (>= {goal}x: {'met' if predict >= goal else 'missed'})",
+                times(results.get("low_level_step_speedup")),
+                results.get("max_action_gap"),
+                f"{results.get('settings', 'calls')} x {results.get('settings', 'rounds')}",
+            ]
+        ],
+    )
+
+
+main = SECTIONS.main
+
+if __name__ == "__main__":
+    sys.exit(main())
