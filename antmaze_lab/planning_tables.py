@@ -3,7 +3,8 @@
 ``python -m antmaze_lab.planning_tables screen FILE``: the grid-level screen (``scripts/planner_check.py``);
 ``by-path FILE``: success by shortest path length (``scripts/planner_by_path.py``); ``trials FILE [FILE ...]``:
 DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``;
-``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``).
+``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``);
+``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes.
 """
 
 from __future__ import annotations
@@ -123,15 +124,37 @@ def ends_table(data: dict[str, Any]) -> str:
         failed_long = sum(count for end, count in long.items() if end != "success")
         where = "selection part" if name == "selection" else f"`{name}` (zero-shot)"
         cells = [where, str(row["tasks"]), *[str(row["ends"][end]) for end in ends]]
-        cells.append(f"{long['into_wall']} of {failed_long} failures" if failed_long else "no failure")
+        if not sum(long.values()):
+            cells.append("no such path")
+        else:
+            cells.append(f"{long['into_wall']} of {failed_long} failures" if failed_long else "no failure")
         lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def tasks_table(ends: dict[str, Any], reports: list[dict[str, Any]]) -> str:
+    """Per suite task: how the shipped learner's grid rollout ends, beside its benchmark report's episodes.
+
+    ``ends`` is ``planner_check.py --shipped-failures`` output; ``reports`` are ``antmaze-hirl benchmark`` reports
+    of the same learner (``--policy planner``), one a suite.
+    """
+    lines = ["| suite | task | grid rollout | env successes | env flips |", "|---|---|---|---|---|"]
+    for report in reports:
+        suite = report["suite"]
+        by_task: dict[int, list[dict[str, Any]]] = defaultdict(list)
+        for episode in report["episode_outcomes"]:
+            by_task[episode["task_id"]].append(episode)
+        for task, end in enumerate(ends["rows"][suite]["suite_task_ends"]):
+            played = by_task[task]
+            successes, flips = sum(e["success"] for e in played), sum(e["flipped"] for e in played)
+            lines.append(f"| `{suite}` | {task} | {end.replace('_', ' ')} | {successes}/{len(played)} | {flips} |")
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Prints the table named by the first argument from the files after it."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed", "ends"))
+    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed", "ends", "tasks"))
     parser.add_argument("files", type=Path, nargs="+")
     args = parser.parse_args(argv)
     loaded = [json.loads(path.read_text()) for path in args.files]
@@ -139,6 +162,8 @@ def main(argv: list[str] | None = None) -> int:
         print(screen_table(loaded[0]))
     elif args.table == "speed":
         print(speed_table(loaded[0]))
+    elif args.table == "tasks":
+        print(tasks_table(loaded[0], loaded[1:]))
     elif args.table == "ends":
         print(ends_table(loaded[0]))
     elif args.table == "by-path":
