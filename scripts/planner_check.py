@@ -120,16 +120,21 @@ def ends_summary(results: dict[int, list[str]]) -> dict[str, Any]:
     }
 
 
-def shipped_failures(body: str, maps: list[str], tasks: int) -> dict[str, Any]:
-    """How the shipped learner's grid rollouts end on the ``selection`` part of its family and on ``maps``."""
+def shipped_failures(
+    body: str, maps: list[str], tasks: int, *, sizes: tuple[int, ...] = (), learner: Path | None = None
+) -> dict[str, Any]:
+    """How the shipped learner's grid rollouts end on the ``selection`` part of its family and on ``maps``.
+
+    ``sizes`` adds the ``selection`` part of random mazes of those sizes (``selection_NxN``); ``learner`` scores a
+    saved learner of the body instead of the shipped one.
+    """
+    trained = load_shipped_learner(body) if learner is None else HighLevelPolicy.load(learner)
+    config = ExperimentConfig(body=body, **body_settings(body, held_out_layouts=True), held_out_layouts=True)
+    places = [("selection", config.maze_size), *((f"selection_{n}x{n}", n) for n in sizes), *((m, None) for m in maps)]
     rows: dict[str, Any] = {}
-    for name in ["selection", *maps]:
-        if name == "selection":
-            config = ExperimentConfig(body=body, **body_settings(body, held_out_layouts=True), held_out_layouts=True)
-            env = _env(body, split="selection", maze_size=config.maze_size)
-        else:
-            env = _env(body, maze_map=name)
-        policy = moved_to(load_shipped_learner(body), env)
+    for name, size in places:
+        env = _env(body, maze_map=name) if size is None else _env(body, split="selection", maze_size=size)
+        policy = moved_to(trained, env)
         rows[name] = ends_summary(grid_rollout_ends(policy, env, tasks, 0))
         if name in SUITE_SPECS:  # the suite's own tasks, in task-id order, as the benchmark plays them
             at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
@@ -216,12 +221,17 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         action="store_true",
         help="instead: how the shipped learner's rollouts end on the selection part and --maps (default: off)",
     )
+    parser.add_argument(
+        "--learner-zip", type=Path, help="with --shipped-failures: a saved learner instead (default: the shipped one)"
+    )
     args = parser.parse_args(argv)
     th.set_num_threads(1)
     if args.shipped_failures:
         command = "python scripts/planner_check.py " + " ".join(argv or sys.argv[1:])
         result = {"command": command, "body": args.body, "tasks": args.tasks}
-        result["rows"] = shipped_failures(args.body, list(filter(None, args.maps.split(","))), args.tasks)
+        sizes = tuple(int(n) for n in filter(None, args.selection_sizes.split(",")))
+        maps = list(filter(None, args.maps.split(",")))
+        result["rows"] = shipped_failures(args.body, maps, args.tasks, sizes=sizes, learner=args.learner_zip)
         print(json.dumps({name: row["ends"] for name, row in result["rows"].items()}), flush=True)
         if args.out:
             args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -8,6 +8,7 @@ fingerprint and the learner file's SHA-256). No evaluation maze is seen: score i
 ``antmaze-hirl benchmark SUITE --policy planner``.
 
 Usage: python scripts/train_shipped_learner.py --body ant [--labels 300] [--seed 0] [--out-dir DIR]
+           [--learner next_cell_gate]
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from antmaze_hirl.sb3_ext.loading import policy_fingerprint
 from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 
 LEARNER = "next_cell_plan"
+"""The shipped learner; ``--learner`` trains another planning learner the same way (not shipped: give --out-dir)."""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -38,15 +40,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--labels", type=int, default=300)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out-dir", type=Path, default=None, help="default: the package's learners/ folder")
+    parser.add_argument(
+        "--learner", choices=("next_cell_plan", "next_cell_gate"), default=LEARNER, help="(default: %(default)s)"
+    )
     args = parser.parse_args(argv)
     if args.labels < 1:
         parser.error(f"--labels must be >= 1, got {args.labels}")
+    if args.learner != LEARNER and args.out_dir is None:
+        parser.error(f"--learner {args.learner} is not the shipped learner: give --out-dir")
     torch.set_num_threads(1)
     config = ExperimentConfig(
         body=args.body,
         held_out_layouts=True,
         protocol=2,
-        learner=LEARNER,
+        learner=args.learner,
         **body_settings(args.body, held_out_layouts=True),
     )
     start = time.perf_counter()
@@ -68,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
         "command": shlex.join(
             ["python", "scripts/train_shipped_learner.py", *(argv if argv is not None else sys.argv[1:])]
         ),
-        "learner": LEARNER,
+        "learner": args.learner,
         "body": args.body,
         "seed": args.seed,
         "family": f"{config.maze_size}x{config.maze_size}, train part",
