@@ -22,7 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from antmaze_hirl.experiments.claims import NEVER
+from antmaze_lab.claims import NEVER
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range

@@ -39,7 +39,7 @@ import numpy as np
 import yaml
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.claims import sign_test
+from antmaze_lab.claims import sign_test
 from antmaze_hirl.experiments.uncertainty import (
     bootstrap_p,
     holm,
