@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import sys
 
-from antmaze_lab.claims import exact_percent
 from antmaze_lab import tables
+from antmaze_lab.claims import exact_percent
 from antmaze_lab.tables import Sections, count, load, percent, rate_cell, table, times
 
 SECTIONS = Sections("antmaze_lab.protocol_tables", __doc__)

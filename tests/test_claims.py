@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antmaze_lab import claims as cl
 from antmaze_hirl.experiments.uncertainty import paired_comparison, signed_rank_interval, smallest_signed_rank_p
+from antmaze_lab import claims as cl
 from antmaze_lab import paper_claims as pc
 
 CLAIM = {claim.number: claim for claim in cl.CLAIMS}
