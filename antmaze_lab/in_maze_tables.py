@@ -323,40 +323,28 @@ def tilt_rows(name: str) -> list[tuple[str, str]]:
 STAGE2 = "stage 2"
 
 
-CANDIDATES = [
-    InMazeRow(STAGE2, "in_maze/in_maze_smoothing.json", "shipped"),
-    InMazeRow(
-        "maze fine-tune (`ant_maze.yml`), 75k steps",
-        "in_maze/in_maze_ant_maze_75k.json",
-        "/work/runs/ant_maze_step_75000.zip",
-    ),
-    *(
-        InMazeRow(
-            f"the same, {k}k", f"in_maze/in_maze_ant_maze_{k}k.json", f"/work/runs/ant_maze/snapshots/step_{k}000.zip"
-        )
-        for k in (125, 475, 650)
-    ),
-    InMazeRow(
-        "the same, 700k (stage 3)",
-        "in_maze/in_maze_ant_maze_700k_smoothing.json",
-        "/work/runs/ant_maze/snapshots/step_700000.zip",
-    ),
-    InMazeRow(
-        "the same, 700k, smoothing 0.5",
-        "in_maze/in_maze_ant_maze_700k_smoothing.json",
-        "/work/runs/ant_maze/snapshots/step_700000.zip smoothing=0.5",
-    ),
-    InMazeRow(
-        "smoothing fine-tune (`ant_maze_smoothed.yml`), 375k, smoothing 0.5",
-        "in_maze/in_maze_ant_maze_smoothed_375k.json",
-        "/work/runs/ant_maze_smoothed/snapshots/step_375000.zip smoothing=0.5",
-    ),
-    InMazeRow(
-        "stage 2, smoothing 0.5 (beside the row above)",
-        "in_maze/in_maze_ant_maze_smoothed_375k.json",
-        "shipped smoothing=0.5",
-    ),
-]
+def trained_row(label: str, name: str, smoothing: str = "") -> InMazeRow:
+    """The row of in-maze file ``name`` that its run scored beside the shipped policy.
+
+    That is the ``--low-level`` policy its command names (at ``smoothing``, if given): the lab names no machine's path.
+    """
+    arguments = shlex.split(load(name).get("command"))
+    policy = arguments[arguments.index("--low-level") + 1]
+    return InMazeRow(label, name, f"{policy} smoothing={smoothing}" if smoothing else policy)
+
+
+def candidate_rows() -> list[InMazeRow]:
+    """The stage-3 candidates: the maze fine-tune's snapshots and the smoothing fine-tune, beside stage 2."""
+    smoothed = "in_maze/in_maze_ant_maze_smoothed_375k.json"
+    return [
+        InMazeRow(STAGE2, SMOOTHING, "shipped"),
+        trained_row("maze fine-tune (`ant_maze.yml`), 75k steps", "in_maze/in_maze_ant_maze_75k.json"),
+        *(trained_row(f"the same, {k}k", f"in_maze/in_maze_ant_maze_{k}k.json") for k in (125, 475, 650)),
+        trained_row("the same, 700k (stage 3)", "in_maze/in_maze_ant_maze_700k_smoothing.json"),
+        trained_row("the same, 700k, smoothing 0.5", "in_maze/in_maze_ant_maze_700k_smoothing.json", "0.5"),
+        trained_row("smoothing fine-tune (`ant_maze_smoothed.yml`), 375k, smoothing 0.5", smoothed, "0.5"),
+        InMazeRow("stage 2, smoothing 0.5 (beside the row above)", smoothed, "shipped smoothing=0.5"),
+    ]
 
 
 SMOOTHING = "in_maze/in_maze_smoothing.json"
@@ -538,7 +526,7 @@ def selection_stage3_later() -> str:
 @SECTIONS.add("candidates")
 def candidates() -> str:
     """The ``candidates`` block."""
-    return in_maze_rows(CANDIDATES, with_file=True)
+    return in_maze_rows(candidate_rows(), with_file=True)
 
 
 @SECTIONS.add("selection-tilt")

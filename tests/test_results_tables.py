@@ -298,3 +298,12 @@ def test_a_selection_table_lists_the_rows_its_run_scored(tmp_path, monkeypatch):
         in_maze_tables.ensemble_label(key) for key in (in_maze_tables.STAGE4, "train_runs/ensembles/t750_s3.zip")
     ]
     assert ensembles == ["stage 4 (tilt 750k alone)|1", "t750 + s3|2"]
+
+
+def test_an_in_maze_row_is_the_policy_its_run_was_given(tmp_path, monkeypatch):
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    command = "python scripts/in_maze.py --low-level /elsewhere/step_5000.zip --action-smoothing 0,0.5 --out x.json"
+    write_results(tmp_path, "in_maze/f.json", {"command": command})
+    row = in_maze_tables.trained_row("late", "in_maze/f.json", "0.5")
+    assert row == in_maze_tables.InMazeRow("late", "in_maze/f.json", "/elsewhere/step_5000.zip smoothing=0.5")
+    assert in_maze_tables.trained_row("plain", "in_maze/f.json").row == "/elsewhere/step_5000.zip"
