@@ -10,12 +10,15 @@ Pages: ``docs/results/ant-in-mazes.md`` (``scripts/in_maze.py`` and ``scripts/se
 
 from __future__ import annotations
 
+import itertools
 import re
+import shlex
 import sys
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
+from antmaze_lab import tables
 from antmaze_lab.tables import (
     Sections,
     families,
@@ -238,16 +241,31 @@ def selection_held_out() -> str:
     return selection_oracle(name, [(labels.get(key, snapshot_label(key)), key) for key in load(name).get("scores")])
 
 
-STAGE6_ROWS = [
-    ("stage 5 (sequential heads)|5", "antmaze_hirl/policies/ant_td3.zip"),
-    ("stage 5 + x|6", "runs/device/s5x.zip"),
-    ("stage 5 + y|6", "runs/device/s5y.zip"),
-    ("stage 5 + x + y (stage 6, shipped)|7", "runs/device/s5xy.zip"),
-    ("stage 5 + x + x2 + y + y2|9", "runs/device/s5xxyy.zip"),
-    ("x + y|2", "runs/device/xy.zip"),
-    ("x alone|1", "runs/device/x.zip"),
-    ("y alone|1", "runs/device/y.zip"),
-]
+STAGE6_LABELS = {
+    "antmaze_hirl/policies/ant_td3.zip": "stage 5 (sequential heads)|5",
+    "runs/device/s5x.zip": "stage 5 + x|6",
+    "runs/device/s5y.zip": "stage 5 + y|6",
+    "runs/device/s5xy.zip": "stage 5 + x + y (stage 6, shipped)|7",
+    "runs/device/s5xxyy.zip": "stage 5 + x + x2 + y + y2|9",
+    "runs/device/xy.zip": "x + y|2",
+    "runs/device/x.zip": "x alone|1",
+    "runs/device/y.zip": "y alone|1",
+}
+"""The names (and heads) of the stage-6 selection's policies; its rows are the ones the run scored, in its order."""
+
+
+def scored_rows(name: str, label: Callable[[str], str]) -> list[tuple[str, str]]:
+    """Every row a selection file scored, in the run's order, labelled by ``label(key)``: the run's own inventory."""
+    return [(label(key), key) for key in load(name).get("scores")]
+
+
+def run_policies(name: str) -> list[str]:
+    """The policies the run that wrote selection file ``name`` was given (its command's positional arguments).
+
+    A file merged from several runs holds more rows than its last run scored; the command names that run's own.
+    """
+    arguments = shlex.split(load(name).get("command"))[2:]
+    return list(itertools.takewhile(lambda argument: not argument.startswith("-"), arguments))
 
 
 ENSEMBLES = "train_runs/ensembles/"
@@ -263,97 +281,97 @@ def ensemble_row(name: str) -> tuple[str, str]:
     return f"{label}|{len(members)}", f"{ENSEMBLES}{name}.zip"
 
 
-ENSEMBLE_ROWS = [
-    ("stage 4 (tilt 750k alone)|1", "train_runs/ant_stage4.zip"),
-    *map(
-        ensemble_row,
-        (
-            "t750_b325",
-            "t750_b325_b225",
-            "t750_b325_b225_s3",
-            "t750_t700",
-            "b325_b225",
-            "t750_b325_s3",
-            STAGE5_MEMBERS,
-            "t750_s3",
-            "t750_b325_b225_s3_t700_k350",
-            "t750_b325_s3_k350",
-            "t750_b325_b225_s3_t700_s650",
-        ),
-    ),
-]
+STAGE4 = "train_runs/ant_stage4.zip"
+
+
+def ensemble_label(key: str) -> str:
+    """An ensemble selection row's label: ``train_runs/ensembles/t750_s3.zip`` -> ``"t750 + s3|2"``."""
+    if key == STAGE4:
+        return "stage 4 (tilt 750k alone)|1"
+    return ensemble_row(key.removeprefix(ENSEMBLES).removesuffix(".zip"))[0]
 
 
 TILT = "train_runs/ant_maze_tilt/snapshots/step_{}000.zip"
 
 
-TILT3 = "train_runs/ant_maze_tilt3/snapshots/step_{}000.zip"
-
-
 TILT_BUFFER = "train_runs/ant_maze_tilt_buffer/snapshots/step_{}000.zip"
 
 
-TILT_ROWS = [
-    ("stage 3 (`ant_maze` 700k)", "train_runs/ant_maze/snapshots/step_700000.zip"),
-    *(
-        (f"`ant_maze_tilt.yml` (w = 1, empty buffer) {k}k{' (stage 4, shipped)' if k == 750 else ''}", TILT.format(k))
-        for k in (150, 350, 500, 650, 700, 750)
-    ),
-    *((f"`ant_maze_tilt3.yml` (w = 3) {k}k", TILT3.format(k)) for k in (150, 350)),
-    *(
-        (f"w = 1, stage 3's replay buffer carried (`--init-buffer`) {k}k", TILT_BUFFER.format(k))
-        for k in (125, 225, 275, 325)
-    ),
-]
+def tilt_label(key: str) -> str:
+    """A tilt selection row's label, by its fine-tune run and snapshot."""
+    match = SNAPSHOT.fullmatch(key)
+    run, k = match["run"], int(match["steps"]) // 1000
+    labels = {
+        "ant_maze": f"stage 3 (`ant_maze` {k}k)",
+        "ant_maze_tilt": f"`ant_maze_tilt.yml` (w = 1, empty buffer) {k}k{' (stage 4, shipped)' if k == 750 else ''}",
+        "ant_maze_tilt3": f"`ant_maze_tilt3.yml` (w = 3) {k}k",
+        "ant_maze_tilt_buffer": f"w = 1, stage 3's replay buffer carried (`--init-buffer`) {k}k",
+    }
+    return labels[run]
+
+
+def tilt_rows(name: str) -> list[tuple[str, str]]:
+    """The tilt run's own rows (its command's policies), by fine-tune run then snapshot step."""
+
+    def order(key: str) -> tuple[str, int]:
+        match = SNAPSHOT.fullmatch(key)
+        return match["run"], int(match["steps"])
+
+    return [(tilt_label(key), key) for key in sorted(run_policies(name), key=order)]
 
 
 STAGE2 = "stage 2"
 
 
-CANDIDATES = [
-    InMazeRow(STAGE2, "in_maze/in_maze_smoothing.json", "shipped"),
-    InMazeRow(
-        "maze fine-tune (`ant_maze.yml`), 75k steps",
-        "in_maze/in_maze_ant_maze_75k.json",
-        "/work/runs/ant_maze_step_75000.zip",
-    ),
-    *(
-        InMazeRow(
-            f"the same, {k}k", f"in_maze/in_maze_ant_maze_{k}k.json", f"/work/runs/ant_maze/snapshots/step_{k}000.zip"
-        )
-        for k in (125, 475, 650)
-    ),
-    InMazeRow(
-        "the same, 700k (stage 3)",
-        "in_maze/in_maze_ant_maze_700k_smoothing.json",
-        "/work/runs/ant_maze/snapshots/step_700000.zip",
-    ),
-    InMazeRow(
-        "the same, 700k, smoothing 0.5",
-        "in_maze/in_maze_ant_maze_700k_smoothing.json",
-        "/work/runs/ant_maze/snapshots/step_700000.zip smoothing=0.5",
-    ),
-    InMazeRow(
-        "smoothing fine-tune (`ant_maze_smoothed.yml`), 375k, smoothing 0.5",
-        "in_maze/in_maze_ant_maze_smoothed_375k.json",
-        "/work/runs/ant_maze_smoothed/snapshots/step_375000.zip smoothing=0.5",
-    ),
-    InMazeRow(
-        "stage 2, smoothing 0.5 (beside the row above)",
-        "in_maze/in_maze_ant_maze_smoothed_375k.json",
-        "shipped smoothing=0.5",
-    ),
-]
+def trained_row(label: str, name: str, smoothing: str = "") -> InMazeRow:
+    """The row of in-maze file ``name`` that its run scored beside the shipped policy.
+
+    That is the ``--low-level`` policy its command names (at ``smoothing``, if given): the lab names no machine's path.
+    """
+    arguments = shlex.split(load(name).get("command"))
+    policy = arguments[arguments.index("--low-level") + 1]
+    return InMazeRow(label, name, f"{policy} smoothing={smoothing}" if smoothing else policy)
 
 
-SMOOTHING_ROWS = [
-    InMazeRow("2 m, none (stage 2)", "in_maze/in_maze_smoothing.json", "shipped"),
-    *(
-        InMazeRow(f"2 m, {s}", "in_maze/in_maze_smoothing.json", f"shipped smoothing={s}")
-        for s in ("0.25", "0.5", "0.75")
-    ),
-    *(InMazeRow(f"{d} m, none", f"in_maze/in_maze_distance_{d}.json", "shipped") for d in ("1.5", "3", "4")),
-]
+def candidate_rows() -> list[InMazeRow]:
+    """The stage-3 candidates: the maze fine-tune's snapshots and the smoothing fine-tune, beside stage 2."""
+    smoothed = "in_maze/in_maze_ant_maze_smoothed_375k.json"
+    return [
+        InMazeRow(STAGE2, SMOOTHING, "shipped"),
+        trained_row("maze fine-tune (`ant_maze.yml`), 75k steps", "in_maze/in_maze_ant_maze_75k.json"),
+        *(trained_row(f"the same, {k}k", f"in_maze/in_maze_ant_maze_{k}k.json") for k in (125, 475, 650)),
+        trained_row("the same, 700k (stage 3)", "in_maze/in_maze_ant_maze_700k_smoothing.json"),
+        trained_row("the same, 700k, smoothing 0.5", "in_maze/in_maze_ant_maze_700k_smoothing.json", "0.5"),
+        trained_row("smoothing fine-tune (`ant_maze_smoothed.yml`), 375k, smoothing 0.5", smoothed, "0.5"),
+        InMazeRow("stage 2, smoothing 0.5 (beside the row above)", smoothed, "shipped smoothing=0.5"),
+    ]
+
+
+SMOOTHING = "in_maze/in_maze_smoothing.json"
+"""The smoothing sweep of the stage-2 ant at the default subgoal distance."""
+
+
+DISTANCES = "in_maze/in_maze_distance_*.json"
+"""The subgoal-distance sweep: one file per distance, each run written by ``scripts/in_maze.py --subgoal-distance``."""
+
+
+def smoothing_rows() -> list[InMazeRow]:
+    """The smoothing sweep's rows, then each distance file's (shortest first): the rows the runs wrote.
+
+    Each row is labelled by the subgoal distance and the smoothing its file records.
+    """
+    distances = [str(path.relative_to(tables.RESULTS)) for path in tables.RESULTS.glob(DISTANCES)]
+    files = [SMOOTHING, *sorted(distances, key=lambda name: load(name).get("expert_max_distance"))]
+    rows = []
+    for name in files:
+        results = load(name)
+        distance_m = results.get("expert_max_distance")
+        for key in results.get("results"):
+            smoothing = key.partition(" smoothing=")[2] or "none"
+            rows.append(InMazeRow(f"{distance_m:g} m, {smoothing}", name, key))
+    # The first row is the shipped ant as it was: stage 2, unsmoothed.
+    rows[0] = replace(rows[0], label=f"{rows[0].label} (stage 2)")
+    return rows
 
 
 @SECTIONS.add("flip-diagnostics")
@@ -469,13 +487,15 @@ def in_maze_stage6() -> str:
 @SECTIONS.add("selection-stage6")
 def selection_stage6() -> str:
     """The ``selection-stage6`` block."""
-    return selection("select_low_level/low_level_selection_stage6.json", STAGE6_ROWS, extra="heads")
+    name = "select_low_level/low_level_selection_stage6.json"
+    return selection(name, scored_rows(name, STAGE6_LABELS.__getitem__), extra="heads")
 
 
 @SECTIONS.add("selection-ensembles")
 def selection_ensembles() -> str:
     """The ``selection-ensembles`` block."""
-    return selection("select_low_level/low_level_selection_ensembles.json", ENSEMBLE_ROWS, extra="members")
+    name = "select_low_level/low_level_selection_ensembles.json"
+    return selection(name, scored_rows(name, ensemble_label), extra="members")
 
 
 @SECTIONS.add("selection-stage3")
@@ -506,13 +526,14 @@ def selection_stage3_later() -> str:
 @SECTIONS.add("candidates")
 def candidates() -> str:
     """The ``candidates`` block."""
-    return in_maze_rows(CANDIDATES, with_file=True)
+    return in_maze_rows(candidate_rows(), with_file=True)
 
 
 @SECTIONS.add("selection-tilt")
 def selection_tilt() -> str:
     """The ``selection-tilt`` block."""
-    return selection("select_low_level/low_level_selection_tilt.json", TILT_ROWS)
+    name = "select_low_level/low_level_selection_tilt.json"
+    return selection(name, tilt_rows(name))
 
 
 @SECTIONS.add("in-maze-tilt")
@@ -531,7 +552,7 @@ def in_maze_tilt() -> str:
 @SECTIONS.add("smoothing")
 def smoothing() -> str:
     """The ``smoothing`` block."""
-    return in_maze_rows(SMOOTHING_ROWS)
+    return in_maze_rows(smoothing_rows())
 
 
 main = SECTIONS.main

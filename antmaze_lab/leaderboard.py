@@ -27,9 +27,9 @@ from statsmodels.stats.multitest import multipletests
 
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.experiments.benchmark import load_report
-from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.submission import SubmissionError, check_submission
 from antmaze_hirl.experiments.uncertainty import cluster_bootstrap
+from antmaze_lab.claims import sign_test
 from antmaze_lab.labels_vs_steps import SUITES as FIGURE_SUITES
 from antmaze_lab.labels_vs_steps import figure_path, figure_points, points_table
 from antmaze_lab.tables import lab_parser

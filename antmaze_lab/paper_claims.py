@@ -12,7 +12,7 @@ removed.
 verdicts, computed from each folder's ``summary.json`` (and ``episodes.csv`` where the folder has it). It
 prints one markdown row per claim: the claim, what was measured on each body, and the verdict.
 
-The verdict rules are stated once, in the docstring of :mod:`antmaze_hirl.experiments.claims`, which
+The verdict rules are stated once, in the docstring of :mod:`antmaze_lab.claims`, which
 computes every verdict; the table's footnote summarises them.
 
 Usage:
@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from antmaze_hirl.experiments.claims import (
+from antmaze_lab.claims import (
     ALPHA,
     EPISODE_LIMIT,
     FULL_SEEDS,
@@ -61,7 +61,7 @@ def _folder_line(body: Body) -> str:
 
 
 FOOTNOTE = (
-    "Verdict rules (the docstring of `antmaze_hirl.experiments.claims`). Each method is paired by seed against "
+    "Verdict rules (the docstring of `antmaze_lab.claims`). Each method is paired by seed against "
     f"DAgger: two-sided Wilcoxon signed-rank test at p < {ALPHA}, split over the methods a claim tries "
     "(two reward-based: 0.025; five active: 0.01). CI is the 95% Hodges-Lehmann interval of the paired "
     "differences, unbounded with 5 pairs or fewer. With n pairs, p cannot go below 2/2^n (the floor). A body "

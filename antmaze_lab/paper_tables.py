@@ -22,11 +22,11 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from antmaze_hirl.experiments.claims import NEVER
 from antmaze_hirl.experiments.curves import LABEL_BUDGETS
 from antmaze_hirl.experiments.results_folder import read_summary
 from antmaze_hirl.experiments.summary import median_range
 from antmaze_hirl.experiments.uncertainty import paired_comparison
+from antmaze_lab.claims import NEVER
 from antmaze_lab.tables import lab_parser
 
 TABLES = ("cost", "per-label", "effort", "beside")

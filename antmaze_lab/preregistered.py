@@ -39,7 +39,6 @@ import numpy as np
 import yaml
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.experiments.claims import sign_test
 from antmaze_hirl.experiments.uncertainty import (
     bootstrap_p,
     holm,
@@ -50,6 +49,7 @@ from antmaze_hirl.experiments.uncertainty import (
     signed_rank_p,
     two_way_bootstrap,
 )
+from antmaze_lab.claims import sign_test
 from antmaze_lab.folders import BodyEvaluations, MethodEvaluations, read_body, symmetry_check
 from antmaze_lab.selection_trials import (
     SelectionTrial,

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import sys
 
-from antmaze_hirl.experiments.claims import exact_percent
 from antmaze_lab import tables
+from antmaze_lab.claims import exact_percent
 from antmaze_lab.tables import Sections, count, load, percent, rate_cell, table, times
 
 SECTIONS = Sections("antmaze_lab.protocol_tables", __doc__)
@@ -117,13 +117,13 @@ SAVING_WORDS = {
     "contradicts": "the paired interval of labels - 0.3x DAgger's lies above 0",
     "undecided": "the paired test does not decide",
 }
-"""Claim 6's outcome on one method and body, in words (``antmaze_hirl.experiments.claims``)."""
+"""Claim 6's outcome on one method and body, in words (``antmaze_lab.claims``)."""
 
 
 @SECTIONS.add("protocol2-goals")
 def protocol2_goals() -> str:
     """Protocol 2's three goals, each body's measured figure beside it, met or missed, from the final folders."""
-    from antmaze_hirl.experiments import claims
+    from antmaze_lab import claims
 
     summaries = {body: load(f"protocol2/{body}/summary.json") for body in PROTOCOL2_BODIES}
     report = claims.evaluate_folders(*(tables.RESULTS / "protocol2" / body for body in PROTOCOL2_BODIES))

@@ -1,4 +1,4 @@
-"""The paper's claims (``antmaze_hirl.experiments.claims``): verdicts on crafted summaries, and its script."""
+"""The paper's claims (``antmaze_lab.claims``): verdicts on crafted summaries, and its script."""
 
 import json
 import math
@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antmaze_hirl.experiments import claims as cl
 from antmaze_hirl.experiments.uncertainty import paired_comparison, signed_rank_interval, smallest_signed_rank_p
+from antmaze_lab import claims as cl
 from antmaze_lab import paper_claims as pc
 
 CLAIM = {claim.number: claim for claim in cl.CLAIMS}

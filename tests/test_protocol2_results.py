@@ -6,8 +6,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from antmaze_hirl.experiments import claims
-from antmaze_lab import protocol_tables, tables
+from antmaze_lab import claims, protocol_tables, tables
 
 ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = ROOT / "results" / "protocol2"

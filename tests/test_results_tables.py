@@ -258,3 +258,52 @@ def test_every_generated_block_of_a_page_module_names_one_of_its_sections():
     for page, module, section in checked:
         assert section in table_modules[module], f"{page}: {module} has no section {section!r}"
     assert len(SECTIONS) == sum(len(sections) for sections in table_modules.values())  # no section in two modules
+
+
+def write_results(root, name, data):
+    (root / name).parent.mkdir(parents=True, exist_ok=True)
+    (root / name).write_text(json.dumps(data))
+
+
+def test_the_smoothing_table_lists_the_rows_the_sweeps_wrote(tmp_path, monkeypatch):
+    # The inventory is the results folder: a new distance file is a new row, with no list in the lab to edit.
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    write_results(
+        tmp_path,
+        in_maze_tables.SMOOTHING,
+        {"expert_max_distance": 2.0, "results": {"shipped": {}, "shipped smoothing=0.5": {}}},
+    )
+    for distance_m in (3.0, 1.5, 12.0):
+        write_results(
+            tmp_path,
+            f"in_maze/in_maze_distance_{distance_m:g}.json",
+            {"expert_max_distance": distance_m, "results": {"shipped": {}}},
+        )
+    rows = in_maze_tables.smoothing_rows()
+    assert [row.label for row in rows] == ["2 m, none (stage 2)", "2 m, 0.5", "1.5 m, none", "3 m, none", "12 m, none"]
+    assert [row.row for row in rows] == ["shipped", "shipped smoothing=0.5", "shipped", "shipped", "shipped"]
+    assert rows[-1].file == "in_maze/in_maze_distance_12.json"
+
+
+def test_a_selection_table_lists_the_rows_its_run_scored(tmp_path, monkeypatch):
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    name = "select_low_level/merged.json"
+    scores = {"old.zip": {}, "b/snapshots/step_5000.zip": {}, "a/snapshots/step_7000.zip": {}}
+    command = "python scripts/select_low_level.py b/snapshots/step_5000.zip a/snapshots/step_7000.zip --mazes 100"
+    write_results(tmp_path, name, {"command": command, "scores": scores})
+    # A merged file scored more rows than its last run: the command names that run's own.
+    assert in_maze_tables.run_policies(name) == ["b/snapshots/step_5000.zip", "a/snapshots/step_7000.zip"]
+    assert in_maze_tables.scored_rows(name, str.upper) == [(key.upper(), key) for key in scores]
+    ensembles = [
+        in_maze_tables.ensemble_label(key) for key in (in_maze_tables.STAGE4, "train_runs/ensembles/t750_s3.zip")
+    ]
+    assert ensembles == ["stage 4 (tilt 750k alone)|1", "t750 + s3|2"]
+
+
+def test_an_in_maze_row_is_the_policy_its_run_was_given(tmp_path, monkeypatch):
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+    command = "python scripts/in_maze.py --low-level /elsewhere/step_5000.zip --action-smoothing 0,0.5 --out x.json"
+    write_results(tmp_path, "in_maze/f.json", {"command": command})
+    row = in_maze_tables.trained_row("late", "in_maze/f.json", "0.5")
+    assert row == in_maze_tables.InMazeRow("late", "in_maze/f.json", "/elsewhere/step_5000.zip smoothing=0.5")
+    assert in_maze_tables.trained_row("plain", "in_maze/f.json").row == "/elsewhere/step_5000.zip"
