@@ -539,6 +539,7 @@ class StudyServer:
     def start(self) -> StudyServer:
         """Starts serving; returns once uvicorn accepts connections."""
         self._thread.start()
+        self.study.resume_closing()
         while not self._server.started:
             if not self._thread.is_alive():
                 raise RuntimeError("the study server stopped during start-up")
@@ -546,13 +547,21 @@ class StudyServer:
         return self
 
     def stop(self) -> None:
-        """Stops serving, releases the simulators and the folder's lock."""
+        """Stops serving, waits for the closed trials' final updates to be written, releases the simulators and lock.
+
+        (Its callers read the files next; ``study serve`` stops at once instead, and its next start resumes them.)
+        """
         self._server.should_exit = True
         if self._thread.is_alive():
             self._thread.join(10)
         self.socket.close()
-        self.study.close()
-        self.lock.release()
+        try:
+            self.study.wait_for_closed_trials()
+        except RuntimeError as error:  # already logged; the next start runs it again
+            logger.warning("%s", error)
+        finally:
+            self.study.close()
+            self.lock.release()
 
     @contextlib.contextmanager
     def running(self) -> Iterator[StudyServer]:
@@ -642,6 +651,7 @@ def serve(
     print(f"study {study.folder} ({len(study.participant_ids)} participants): open {study_url(url_host, port, token)}")
     if url_host != "127.0.0.1" and host not in LOOPBACK_HOSTS:
         print(f"  or, on this machine: {study_url('127.0.0.1', port, token)}")
+    study.resume_closing()  # closed trials whose final update a stop or a kill cut off
     try:
         uvicorn.Server(uvicorn_config(app)).run(sockets=[sock])
     finally:
