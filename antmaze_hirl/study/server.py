@@ -443,7 +443,8 @@ def uvicorn_config(app: Any) -> Any:
 
 def _header_deadline_protocol() -> type:
     # uvicorn times out idle keep-alive connections only after a response: a connection that never finishes
-    # its first request head would be held for ever. This closes it HEADER_TIMEOUT_SECONDS after it opened.
+    # its first request head would be held for ever. This closes it HEADER_TIMEOUT_SECONDS after it opened,
+    # and answers what h11 cannot parse with a JSON 400 (uvicorn's own is plain text).
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class HeaderDeadlineH11Protocol(H11Protocol):
@@ -459,6 +460,26 @@ def _header_deadline_protocol() -> type:
         def connection_lost(self, exc: Exception | None) -> None:
             self._head_deadline.cancel()
             super().connection_lost(exc)
+
+        def send_400_response(self, msg: str) -> None:
+            # h11 could not parse the request (a bad request line or header, a head over MAX_HEADER_BYTES, bad
+            # framing of the body): uvicorn answers before the app sees it, in plain text; JSON, as the app does.
+            import h11
+
+            body = json.dumps({"error": f"malformed HTTP request: {msg}"}).encode()
+            headers = [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                (b"connection", b"close"),
+                (b"cache-control", b"no-store"),
+                *((name.lower().encode(), value.encode()) for name, value in SECURITY_HEADERS.items()),
+            ]
+            try:
+                for event in (h11.Response(status_code=400, headers=headers), h11.Data(data=body), h11.EndOfMessage()):
+                    self.transport.write(self.conn.send(event))
+            except h11.LocalProtocolError:  # the app had begun its answer already: nothing more can be said
+                pass
+            self.transport.close()
 
     return HeaderDeadlineH11Protocol
 
