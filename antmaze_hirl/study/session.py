@@ -11,12 +11,14 @@ On disk, per participant (``DIR/participants/<id>/``), everything is written whe
 * ``clicks.jsonl``: every accepted click (appended and fsynced before the step runs);
 * ``episodes.csv``: one row per finished episode (:data:`EPISODE_COLUMNS`);
 * ``answers.jsonl``: one questionnaire per analysed trial;
-* ``events.jsonl``: trial starts and ends, pauses, resumptions after a restart;
+* ``events.jsonl``: trial starts and ends, final updates written after a trial closed, pauses, resumptions
+  after a restart;
 * ``progress.json``: where the participant is (atomically replaced);
 * ``trial<k>/checkpoint.pt``: the trainer after the last finished episode, and the background updates still
   queued (atomically replaced; :mod:`antmaze_hirl.study.checkpoint`: loading it cannot run code);
 * ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
-* ``trial<k>/learner.zip``: the learner's weights after the trial.
+* ``trial<k>/learner.zip``: the learner's weights after the trial's final update (with background updates
+  written after the trial closed, last of its files: :class:`TrialClosing`).
 
 The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`); the checkpoint starts with a
 SHA-256 of its content. Every step writes its records before it changes the session's memory, and

@@ -38,10 +38,11 @@ class StudySettings(TrialSettings):
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
         background_updates: Run the learner update (and a due evaluation) after each maze in a background
             thread while the next maze starts with the learner as it was: no wait between mazes, and the
-            learner lags one maze (:mod:`antmaze_hirl.study.background`; a trial's last maze waits for its
-            update and final evaluation). ``False`` (the default, so that a study folder written before the
-            setting reads as what it ran): the update runs before the next maze, as in the experiments.
-            ``study init`` (:meth:`for_body`) sets it.
+            learner lags one maze (:mod:`antmaze_hirl.study.background`); after a trial's last maze the
+            trial closes at once and its last updates and final evaluation are written after it
+            (:class:`~antmaze_hirl.study.session.TrialClosing`). ``False`` (the default, so that a study
+            folder written before the setting reads as what it ran): the update runs before the next maze, as
+            in the experiments. ``study init`` (:meth:`for_body`) sets it.
     """
 
     show_learner_subgoal: bool = True
