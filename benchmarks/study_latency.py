@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import tempfile
 import threading
 from pathlib import Path
@@ -159,6 +160,7 @@ def run_between(args: argparse.Namespace, results: dict) -> None:
                 entry["goal_met"] = _within(new, goal)
                 entry["goal_met_after_last_maze"] = _within(entry["new"]["after_last_maze"], goal)
                 table[f"{body}/{method}/{participants}"] = entry
+                atomic_write_json(args.out, results)  # each row as it is timed: a long run cut short keeps its rows
                 last_old, last_new = entry["old"]["after_last_maze"], entry["new"]["after_last_maze"]
                 print(
                     f"{body:5s} {method:14s} {participants} participant(s): next p50/p95 old {old['p50_ms']}/"
@@ -200,6 +202,7 @@ def main() -> None:
         "load_average_at_start": os.getloadavg(),
         "torch_threads": 1,
         "click_seconds": args.click_seconds,
+        "command": "python benchmarks/study_latency.py " + " ".join(sys.argv[1:]),
         "bodies": {},
     }
     if args.part in ("between", "all"):
