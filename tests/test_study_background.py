@@ -114,11 +114,19 @@ def play_to_the_last_maze(session):
     play_to_episode_end(session)
 
 
-def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp_path, monkeypatch):
-    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=2, practice=0, background_updates=True)
-    slowed(monkeypatch)
+def at_the_last_maze(tmp_path, monkeypatch, slow_seconds=SLOW_UPDATE_SECONDS, practice=0):
+    """A 2-maze background-update study with slowed updates, its session at the end of the first part's last maze."""
+    folder = make_tiny_study(
+        tmp_path / "study", methods=("dagger",), episodes=2, practice=practice, background_updates=True
+    )
+    slowed(monkeypatch, slow_seconds)
     session = open_session(folder)
     play_to_the_last_maze(session)
+    return folder, session
+
+
+def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch)
     started = time.monotonic()
     state = session.next_episode()
     waited = time.monotonic() - started
@@ -144,10 +152,7 @@ def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp
 
 
 def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_update_runs(tmp_path, monkeypatch):
-    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=2, practice=2, background_updates=True)
-    slowed(monkeypatch, 3.0)
-    session = open_session(folder)
-    play_to_the_last_maze(session)
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, 3.0, practice=2)
     started = time.monotonic()
     assert session.next_episode()["phase"] == "intro"
     assert session.start_trial()["phase"] == "label"
@@ -166,10 +171,7 @@ def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_upda
 
 
 def test_a_stop_while_a_closed_trial_updates_is_resumed_when_the_server_starts(tmp_path, monkeypatch):
-    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=2, practice=0, background_updates=True)
-    slowed(monkeypatch, 2.0)
-    session = open_session(folder)
-    play_to_the_last_maze(session)
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, 2.0)
     assert session.next_episode()["phase"] == "questionnaire"
     session.close()  # a stop: the running update ends unused, nothing of it is written
     trial = folder / "participants" / "P01" / "trial1"
