@@ -73,30 +73,14 @@ def main() -> None:
     parser.add_argument(
         "--think-seconds", type=float, default=3.0, help="ASSUMED seconds to think of a click (default: %(default)s)"
     )
-    parser.add_argument(
-        "--episodes-csv",
-        type=Path,
-        default=ROOT / "results" / "paper_experiment" / "point" / "episodes.csv",
-        help="the oracle's trials, one row a maze (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--latency",
-        type=Path,
-        default=ROOT / "results" / "study_latency" / "study_latency.json",
-        help="the click latencies (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--between",
-        type=Path,
-        default=ROOT / "results" / "study_latency" / "last_maze.json",
-        help="the waits between mazes (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--out",
-        type=Path,
-        default=ROOT / "results" / "study_latency" / "sitting.json",
-        help="where to write (default: %(default)s)",
-    )
+    files = ROOT / "results"
+    for flag, default, what in (
+        ("--episodes-csv", files / "paper_experiment" / "point" / "episodes.csv", "the oracle's trials, a row a maze"),
+        ("--latency", files / "study_latency" / "study_latency.json", "the click latencies"),
+        ("--between", files / "study_latency" / "last_maze.json", "the waits between mazes"),
+        ("--out", files / "study_latency" / "sitting.json", "where to write"),
+    ):
+        parser.add_argument(flag, type=Path, default=default, help=f"{what} (default: %(default)s)")
     args = parser.parse_args()
     methods = args.methods.split(",")
     rows = pd.read_csv(args.episodes_csv)
