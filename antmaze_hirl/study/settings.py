@@ -14,10 +14,12 @@ from antmaze_hirl.experiments.old_folders import current_settings
 
 SETTINGS_FILE = "settings.json"
 
-SECONDS_PER_MAZE_PRIOR = 25.0
-"""Seconds a maze takes a participant, for the page's estimate before they have played one: about 6 clicks
-of about 3 s and their walks (the study's default sizes assume it; docs/guides/user-study.md). Once the
-participant has finished mazes, their own mean time per maze replaces it."""
+SECONDS_PER_MAZE_PRIOR = 22.4
+"""Seconds a maze takes a participant, for the page's estimate before they have played one (and ``study init``'s
+estimate of a sitting). The default study's mean from ``scripts/study_sitting.py``: the oracle's clicks per
+maze on the point, the page's walk animations and the server's times, measured, and 3 s to think of a click,
+**assumed** (no person was timed; docs/guides/user-study.md). Once the participant has finished mazes, their
+own mean time per maze replaces it."""
 
 QUESTIONNAIRE_SECONDS = 90.0
 """Seconds a questionnaire takes, for the page's estimate of what is left."""
