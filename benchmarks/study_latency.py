@@ -16,8 +16,11 @@ once (threads, one HTTP client each), the ``next`` round trip with the update be
 ``study init``'s default: the learner lags one maze), side by side in one run, p50 / p95 / max and the
 new/old ratio of the p95. The simulated participants click after an exponential delay of mean
 ``--click-seconds`` (people take seconds; a participant who clicks at once leaves the background update
-no time). The trial's last ``next`` (its update and the final evaluation, before the questionnaire) is
-reported apart. Goals: p95 <= 2 s with 1 participant, <= 5 s with 4, for every method.
+no time). The trial's last ``next`` (before the questionnaire) is reported apart: "old" runs the trial's last
+update and final evaluation in it; "new" closes the trial at once and writes them after
+(:class:`~antmaze_hirl.study.session.TrialClosing`), ``final_update_lag`` seconds later (each trial's
+``final_update`` event). Goals: p95 <= 2 s with 1 participant, <= 5 s with 4, for every method, between mazes
+and after the last.
 
 Usage: python benchmarks/study_latency.py [--part clicks|between|all] [--episodes 10] [--bodies point,ant]
     [--methods dagger,noise,multi_policy,reward] [--participants 1,4] [--between-episodes 8] [--out FILE.json]
@@ -28,6 +31,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import tempfile
 import threading
 from pathlib import Path
@@ -36,6 +40,8 @@ import numpy as np
 import torch
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.study.data import read_episode_rows
+from antmaze_hirl.study.logs import read_json_records
 from antmaze_hirl.study.plan import make_plan, save_plan
 from antmaze_hirl.study.server import StudyServer
 from antmaze_hirl.study.settings import StudySettings, save_settings
@@ -69,7 +75,7 @@ def measure(body: str, episodes: int, seed: int) -> dict:
     figures = {"episodes": episodes, "clicks": len(clicks)}
     # The wait between mazes (POST next: the learner's update, a checkpoint, the next maze), which the
     # page overlaps with the animation of the last walk; the trial's last one also runs the final evaluation.
-    between = result["between"][:-1]
+    between = [wait for wait in result["between"] if not wait["closed_trial"]]
     figures["between_episodes"] = {
         "server": percentiles([b["server"] for b in between]),
         "round_trip": percentiles([b["round_trip"] for b in between]),
@@ -112,13 +118,27 @@ def measure_between(
                 thread.start()
             for thread in threads:
                 thread.join()
+            # Read before the server stops: it waits for the closed trials' final updates, which write the lag.
+            assert server.study.wait_for_closed_trials()
+            folders = [Path(folder) / "participants" / participant.id for participant in server.study.plan.participants]
+            lags = [
+                record["lag_seconds"]
+                for participant in folders
+                for _, record in read_json_records(participant / "events.jsonl")
+                if record["event"] == "final_update"
+            ]
+            rows = [row for participant in folders for row in read_episode_rows(participant / "episodes.csv")]
     if len(results) != participants:
         raise RuntimeError(f"{participants - len(results)} simulated participant(s) failed")
-    between = [result["between"][:-1] for result in results.values()]  # the last: update + final evaluation
-    last = [result["between"][-1] for result in results.values()]
+    waits = [wait for result in results.values() for wait in result["between"]]
     return {
-        "between_mazes": percentiles([wait["round_trip"] for waits in between for wait in waits]),
-        "before_questionnaire": percentiles([wait["round_trip"] for wait in last]),
+        "between_mazes": percentiles([wait["round_trip"] for wait in waits if not wait["closed_trial"]]),
+        "mazes_walked_unasked": sum(wait["walked"] for wait in waits),
+        "after_last_maze": percentiles([wait["round_trip"] for wait in waits if wait["closed_trial"]]),
+        "final_update_lag": percentiles(lags),
+        # The scripted participant's mazes (clicks after --click-seconds, no page animation): not a person's.
+        "labels_per_maze": round(float(np.mean([float(row["expert_cost"]) for row in rows])), 2),
+        "scripted_time_per_maze": percentiles([float(row["time_on_task"]) for row in rows]),
         "evaluated_every": every,
     }
 
@@ -137,17 +157,26 @@ def run_between(args: argparse.Namespace, results: dict) -> None:
                 goal = GOAL_BETWEEN_P95_SECONDS.get(participants)
                 entry["new_over_old_p95"] = round(new["p95_ms"] / old["p95_ms"], 3) if old["p95_ms"] else None
                 entry["goal_p95_ms"] = goal * 1000 if goal is not None else None
-                entry["goal_met"] = goal is not None and new["p95_ms"] is not None and new["p95_ms"] <= goal * 1000
+                entry["goal_met"] = _within(new, goal)
+                entry["goal_met_after_last_maze"] = _within(entry["new"]["after_last_maze"], goal)
                 table[f"{body}/{method}/{participants}"] = entry
+                atomic_write_json(args.out, results)  # each row as it is timed: a long run cut short keeps its rows
+                last_old, last_new = entry["old"]["after_last_maze"], entry["new"]["after_last_maze"]
                 print(
                     f"{body:5s} {method:14s} {participants} participant(s): next p50/p95 old {old['p50_ms']}/"
                     f"{old['p95_ms']} ms, new {new['p50_ms']}/{new['p95_ms']} ms (p95 new/old "
                     f"{entry['new_over_old_p95']}); goal p95 <= {entry['goal_p95_ms']} ms: "
-                    f"{'met' if entry['goal_met'] else 'NOT met'}; before the questionnaire p95 old "
-                    f"{entry['old']['before_questionnaire']['p95_ms']} ms, new "
-                    f"{entry['new']['before_questionnaire']['p95_ms']} ms",
+                    f"{'met' if entry['goal_met'] else 'NOT met'}; after the last maze p50/p95 old "
+                    f"{last_old['p50_ms']}/{last_old['p95_ms']} ms, new {last_new['p50_ms']}/{last_new['p95_ms']} ms "
+                    f"({'met' if entry['goal_met_after_last_maze'] else 'NOT met'}); final update written "
+                    f"p50/p95 {entry['new']['final_update_lag']['p50_ms']}/"
+                    f"{entry['new']['final_update_lag']['p95_ms']} ms after",
                     flush=True,
                 )
+
+
+def _within(figures: dict, goal: float | None) -> bool:
+    return goal is not None and figures["p95_ms"] is not None and figures["p95_ms"] <= goal * 1000
 
 
 def main() -> None:
@@ -173,6 +202,7 @@ def main() -> None:
         "load_average_at_start": os.getloadavg(),
         "torch_threads": 1,
         "click_seconds": args.click_seconds,
+        "command": "python benchmarks/study_latency.py " + " ".join(sys.argv[1:]),
         "bodies": {},
     }
     if args.part in ("between", "all"):

@@ -6,7 +6,13 @@ import pytest
 from study_helpers import make_tiny_study, open_session, play_to_episode_end, play_trial
 
 from antmaze_hirl.dagger import DAggerTrainer
+from antmaze_hirl.study.consistency import check_study_files
 from antmaze_hirl.study.data import read_episode_rows
+from antmaze_hirl.study.logs import read_json_records
+from antmaze_hirl.study.plan import load_plan
+from antmaze_hirl.study.questionnaire import ITEM_KEYS
+from antmaze_hirl.study.session import ParticipantSession
+from antmaze_hirl.study.store import Study
 
 SLOW_UPDATE_SECONDS = 5.0
 
@@ -38,7 +44,8 @@ def test_next_does_not_wait_for_a_slow_update(tmp_path, monkeypatch):
             job.wait()
     assert len(updating) == 2  # both updates ran, in the background
     assert max(waits) < SLOW_UPDATE_SECONDS - 1.5, waits  # the maze is saved and the next built, no more
-    play_trial(session)  # the last maze waits for its own update and the final evaluation
+    play_trial(session)
+    assert session.wait_for_closed_trials(timeout=60)  # the last maze's update, after the trial closed
     session.close()
     assert [row["learner_updates"] for row in rows_of(folder)] == ["0", "0", "1"]  # the learner lags one maze
 
@@ -51,6 +58,7 @@ def test_every_maze_records_its_learner_and_evaluations_land_on_the_schedule(tmp
     session = open_session(folder)
     play_trial(session)
     assert session.phase == "questionnaire"
+    assert session.wait_for_closed_trials(timeout=60)
     session.close()
     rows = rows_of(folder)
     assert [row["episode"] for row in rows] == ["0", "1", "2", "3"]
@@ -74,5 +82,137 @@ def test_a_restart_while_an_update_runs_finishes_it_and_loses_no_maze(tmp_path):
     assert [row["episode"] for row in rows_of(folder)] == ["0"]  # the restore ran the update and wrote the row
     assert restarted.state()["episode"] == {"number": 2, "of": 3}
     play_trial(restarted)
+    assert restarted.wait_for_closed_trials(timeout=60)
     restarted.close()
     assert [row["episode"] for row in rows_of(folder)] == ["0", "1", "2"]
+
+
+def slowed(monkeypatch, seconds=SLOW_UPDATE_SECONDS):
+    """Every learner update takes ``seconds`` longer (a loaded machine, a big ensemble)."""
+    real_update = DAggerTrainer._update
+
+    def slow_update(self, steps):
+        time.sleep(seconds)
+        real_update(self, steps)
+
+    monkeypatch.setattr(DAggerTrainer, "_update", slow_update)
+
+
+def final_updates(folder):
+    events = read_json_records(folder / "participants" / "P01" / "events.jsonl")
+    return [record for _, record in events if record["event"] == "final_update"]
+
+
+def play_to_the_last_maze(session):
+    """Plays every maze but the last (each update done before the next maze ends, as for a person)."""
+    episodes = session.trial.episodes
+    for _ in range(episodes - 1):
+        play_to_episode_end(session)
+        session.next_episode()
+        for job in session._updates.pending():
+            job.wait()
+    play_to_episode_end(session)
+
+
+def at_the_last_maze(tmp_path, monkeypatch, slow_seconds=SLOW_UPDATE_SECONDS, practice=0):
+    """A 2-maze background-update study with slowed updates, its session at the end of the first part's last maze."""
+    folder = make_tiny_study(
+        tmp_path / "study", methods=("dagger",), episodes=2, practice=practice, background_updates=True
+    )
+    slowed(monkeypatch, slow_seconds)
+    session = open_session(folder)
+    play_to_the_last_maze(session)
+    return folder, session
+
+
+def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch)
+    started = time.monotonic()
+    state = session.next_episode()
+    waited = time.monotonic() - started
+    assert state["phase"] == "questionnaire" and state["last_trial"]["episodes"] == 2
+    assert waited < SLOW_UPDATE_SECONDS - 1.5, waited  # the part ends without its update
+    trial = folder / "participants" / "P01" / "trial1"
+    assert not (trial / "learner.zip").exists()  # the final learner is not written yet
+    assert [row["episode"] for row in rows_of(folder)] == ["0"]  # its row waits for the final evaluation
+    with pytest.raises(ValueError, match=r"trial1 has no learner\.zip yet"):  # analyze waits for it
+        check_study_files(folder, load_plan(folder))
+    assert Study(folder).progress("P01") == (0, "questionnaire")  # not damage: the picker lists it as it is
+    answered = session.submit_questionnaire(1, {"ratings": dict.fromkeys(ITEM_KEYS, 3), "comment": ""})
+    assert answered["phase"] == "done"  # answered while the update runs
+    assert session.wait_for_closed_trials(timeout=60)
+    session.close()
+    rows = rows_of(folder)
+    assert [row["episode"] for row in rows] == ["0", "1"] and rows[-1]["eval_success"] != ""  # the final evaluation
+    assert (trial / "learner.zip").is_file()
+    (event,) = final_updates(folder)
+    assert event["updates"] == 1 and not event["resumed"]
+    assert event["lag_seconds"] >= SLOW_UPDATE_SECONDS - 0.5  # the data state the lag
+    check_study_files(folder, load_plan(folder))
+
+
+def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_update_runs(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, 3.0, practice=2)
+    started = time.monotonic()
+    assert session.next_episode()["phase"] == "intro"
+    assert session.start_trial()["phase"] == "label"
+    assert time.monotonic() - started < 3.0 - 1.0  # neither waits for the practice's last update
+    play_trial(session)
+    assert session.wait_for_closed_trials(timeout=60)
+    session.close()
+    assert [(row["trial"], row["episode"]) for row in rows_of(folder)] == [
+        ("0", "0"),
+        ("0", "1"),
+        ("1", "0"),
+        ("1", "1"),
+    ]
+    assert [event["trial"] for event in final_updates(folder)] == [0, 1]
+    check_study_files(folder, load_plan(folder))
+
+
+def test_a_stop_while_a_closed_trial_updates_is_resumed_when_the_server_starts(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, 2.0)
+    assert session.next_episode()["phase"] == "questionnaire"
+    session.close()  # a stop: the running update ends unused, nothing of it is written
+    trial = folder / "participants" / "P01" / "trial1"
+    assert not (trial / "learner.zip").exists() and len(rows_of(folder)) == 1 and not final_updates(folder)
+    study = Study(folder)  # a server start: the participant need not come back for the update to finish
+    resuming = study.resume_closing()
+    assert resuming is not None
+    resuming.join(60)
+    assert study.wait_for_closed_trials(timeout=60)
+    assert study.session("P01").phase == "questionnaire"
+    study.close()
+    assert [row["episode"] for row in rows_of(folder)] == ["0", "1"] and (trial / "learner.zip").is_file()
+    (event,) = final_updates(folder)
+    assert event["resumed"] and event["updates"] == 1
+    assert Study(folder).resume_closing() is None  # nothing left
+
+
+def test_a_failed_close_after_the_last_maze_is_closed_by_the_restart(tmp_path, monkeypatch):
+    # A kill (here: a failed progress write, then a stop) after the last maze was saved, before the close.
+    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=2, practice=0, background_updates=True)
+    session = open_session(folder)
+    play_to_the_last_maze(session)
+    real_save = ParticipantSession._save_progress
+
+    def failing(self, trial_index, phase):
+        if phase == "questionnaire":
+            raise OSError("no space left on device")
+        real_save(self, trial_index, phase)
+
+    monkeypatch.setattr(ParticipantSession, "_save_progress", failing)
+    with pytest.raises(OSError, match="no space"):
+        session.next_episode()
+    assert session.phase == "episode_over"
+    session.close()
+    monkeypatch.setattr(ParticipantSession, "_save_progress", real_save)
+    restarted = open_session(folder)
+    assert restarted.phase == "questionnaire"
+    assert restarted.wait_for_closed_trials(timeout=60)
+    restarted.close()
+    rows = rows_of(folder)
+    assert [row["episode"] for row in rows] == ["0", "1"] and rows[-1]["eval_success"] != ""
+    assert (folder / "participants" / "P01" / "trial1" / "learner.zip").is_file()
+    assert len(final_updates(folder)) == 1
+    check_study_files(folder, load_plan(folder))

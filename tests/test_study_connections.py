@@ -1,5 +1,6 @@
 """Slow and broken connections: a request head or body that stalls is cut off, logs get no raw control bytes."""
 
+import json
 import logging
 import socket
 import time
@@ -56,3 +57,27 @@ def test_control_bytes_from_a_url_are_escaped_in_the_log(served, caplog):
             assert read_all(connection).startswith("HTTP/1.1 403")
     logged = "\n".join(record.getMessage() for record in caplog.records)
     assert "\\x1b[31mred" in logged and "\x1b" not in logged
+
+
+MALFORMED = {
+    "request line": b"GARBAGE\r\n\r\n",
+    "header line": b"GET /api/study HTTP/1.1\r\nHost: 127.0.0.1\r\nno colon here\r\n\r\n",
+    "content length": b"POST /api/study HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: abc\r\n\r\n",
+    "head too large": b"GET /api/study HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + b"a" * 20_000,  # still unended
+    "chunk size": (
+        b"POST /api/participants/P01/pause HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Study-Token: "
+        + TOKEN.encode()
+        + b"\r\nTransfer-Encoding: chunked\r\n\r\nzz\r\n"
+    ),
+}
+
+
+@pytest.mark.parametrize("request_bytes", MALFORMED.values(), ids=MALFORMED.keys())
+def test_malformed_http_framing_is_a_json_400(served, request_bytes):
+    with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:
+        connection.sendall(request_bytes)
+        reply = read_all(connection)
+    head, _, body = reply.partition("\r\n\r\n")
+    assert head.startswith("HTTP/1.1 400"), reply[:200]
+    assert "content-type: application/json" in head.lower() and "x-content-type-options: nosniff" in head.lower()
+    assert json.loads(body)["error"].startswith("malformed HTTP request")

@@ -87,6 +87,7 @@ def test_disk_full_during_next_changes_nothing_and_a_retry_closes_the_episode_on
     disk_full.free()
     assert session.next_episode()["episode"] == {"number": 2, "of": 3}
     play_trial(session)
+    assert session.wait_for_closed_trials(timeout=60)
     session.close()
     participant = folder / "participants" / "P01"
     assert episode_rows(participant) == [("1", "0"), ("1", "1"), ("1", "2")]

@@ -81,9 +81,18 @@ def test_a_noise_free_simulated_participant_gives_the_oracle_experiments_numbers
         assert expected[-1]["eval_success"] == float(got[-1]["eval_success"])  # the final evaluation too
 
 
-def _serve(folder, port, token):
+SLOW_UPDATES = (
+    "import time; from antmaze_hirl.dagger import DAggerTrainer; update = DAggerTrainer._update; "
+    "DAggerTrainer._update = lambda self, steps: (time.sleep(30), update(self, steps))[1]; "
+    "from antmaze_hirl.cli import main; main()"
+)
+"""A server whose learner updates take 30 s longer (``_serve(..., program=SLOW_UPDATES)``)."""
+
+
+def _serve(folder, port, token, program=None):
     env = {**os.environ, "PYTHONUNBUFFERED": "1", TOKEN_ENV: token}  # from the environment: not visible in `ps`
-    command = [sys.executable, "-m", "antmaze_hirl.cli", "study", "serve", str(folder), "--port", str(port)]
+    start = ["-m", "antmaze_hirl.cli"] if program is None else ["-c", program]
+    command = [sys.executable, *start, "study", "serve", str(folder), "--port", str(port)]
     process = subprocess.Popen(command, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     deadline = time.time() + 120
     while time.time() < deadline:
@@ -144,6 +153,45 @@ def test_kill_9_mid_trial_loses_at_most_the_episode_in_progress(tmp_path):
         assert resumed["phase"] == "questionnaire"
         rows = read_csv(participant / "episodes.csv")
         assert [int(r["episode"]) for r in rows] == [0, 1, 2]
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+
+
+def test_kill_9_while_a_closed_part_updates_is_resumed_by_the_next_start(tmp_path):
+    # Background updates: the part's last maze closes it at once; its update (30 s slower here) runs after.
+    # A kill -9 then loses only that work in progress; the next server start (updates at their speed) runs it again.
+    folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=2, practice=0, background_updates=True)
+    probe = bind_socket("127.0.0.1", 0)
+    port = probe.getsockname()[1]
+    probe.close()
+    token = "kill-test-token-0123456789"
+    client = StudyClient(f"http://127.0.0.1:{port}/?token={token}")
+    participant = folder / "participants" / "P01"
+    server = _serve(folder, port, token, program=SLOW_UPDATES)
+    try:
+        state = client.participant("P01", "start", {})
+        while state["phase"] != "questionnaire":
+            click = oracle_click(state)
+            result = client.participant("P01", "label", {"query": state["query"]["id"], "x": click[0], "y": click[1]})
+            state = client.participant("P01", "next", {}) if result["episode_end"] else result["state"]
+        assert not (participant / "trial1" / "learner.zip").exists()  # the final update still runs
+    finally:
+        server.send_signal(signal.SIGKILL)
+        server.wait()
+    episodes = participant / "episodes.csv"
+    assert not episodes.exists() or len(read_csv(episodes)) < 2  # the last row waits for the final evaluation
+    server = _serve(folder, port, token)  # no participant request: the start itself resumes the update
+    try:
+        deadline = time.time() + 180
+        while not (participant / "trial1" / "learner.zip").exists() and time.time() < deadline:
+            time.sleep(0.5)
+        assert (participant / "trial1" / "learner.zip").exists()
+        assert client.participant("P01", "state")["phase"] == "questionnaire"
+        rows = read_csv(participant / "episodes.csv")
+        assert [row["episode"] for row in rows] == ["0", "1"] and rows[-1]["eval_success"] != ""
+        events = [json.loads(line) for line in (participant / "events.jsonl").open()]
+        assert [event["resumed"] for event in events if event["event"] == "final_update"] == [True]
     finally:
         server.send_signal(signal.SIGKILL)
         server.wait()

@@ -11,8 +11,10 @@ the data of mazes ``0..k``. At the end of each maze the session takes the update
 So the learner that plays a maze lags: by one maze when each update finishes within the next maze (the
 usual case), by more when updates take longer than mazes (several participants on few cores). Each row
 of ``episodes.csv`` records how many updates the learner that played it had had (``learner_updates``).
-The last maze of a trial waits for every update and its own, as the experiments do, before the final
-evaluation.
+A trial's last maze waits for none of them either: the trial closes at once, and its queued updates, the
+last maze's own and the final evaluation run after it, still in order, followed by the trial's last files
+(:class:`~antmaze_hirl.study.session.TrialClosing`; the final evaluation is of the learner after every update,
+as in the experiments).
 
 Why not the trainer's own update: :meth:`~antmaze_hirl.dagger.DAggerTrainer.start_episode` runs a due
 update before the next maze, which is the wait this module removes. The copies run the trainer's own

@@ -14,8 +14,8 @@ DEFAULT_PRACTICE = 10
 """Practice mazes by default: about 4 min at :data:`~antmaze_hirl.study.settings.SECONDS_PER_MAZE_PRIOR`."""
 
 DEFAULT_EPISODES = 25
-"""Mazes per compared method by default: with the practice, 4 methods and their questionnaires, about 54 min at
-:data:`~antmaze_hirl.study.settings.SECONDS_PER_MAZE_PRIOR` (10 + 4 x 25 = 110 mazes x 25 s + 4 x 90 s)."""
+"""Mazes per compared method by default: with the practice, 4 methods and their questionnaires, about 47 min at
+:data:`~antmaze_hirl.study.settings.SECONDS_PER_MAZE_PRIOR` (10 + 4 x 25 = 110 mazes x 22.4 s + 4 x 90 s)."""
 
 
 def add_study_parser(subparsers: argparse._SubParsersAction, formatter_class: type = argparse.HelpFormatter) -> None:
@@ -135,7 +135,8 @@ def _run_init(args: argparse.Namespace) -> int:
     minutes = (mazes * SECONDS_PER_MAZE_PRIOR + len(methods) * QUESTIONNAIRE_SECONDS) / 60
     print(
         f"each participant: {mazes} mazes and {len(methods)} questionnaires, about {minutes:.0f} min at "
-        f"{SECONDS_PER_MAZE_PRIOR:.0f} s per maze (an assumption until your pilot measures it)"
+        f"{SECONDS_PER_MAZE_PRIOR:g} s per maze (measured clicks, walks and server times with an assumed 3 s to think "
+        "of a click: no person was timed, so time a pilot)"
     )
     print(f"next: antmaze-hirl study serve {args.dir}")
     return 0

@@ -1,12 +1,14 @@
 """Whether a participant's files agree with each other and with ``progress.json``.
 
-Every step of the protocol writes its records before ``progress.json`` moves on (a trial's start event,
-then the progress; an episode's checkpoint, then its row; a trial's end event, then the progress; an
-answer, then the progress). A kill between two writes leaves the records at most one step ahead of the
-progress file, which the session finishes on restart. Anything else (``progress.json`` missing while
-records exist, records of a trial the progress file has not reached, a finished trial with missing rows,
-no ``trial_end`` or no answers) is damage, named by :func:`check_records`: a participant is never
-restarted, nor a trial closed twice, from files that disagree.
+Every step of the protocol writes its records before ``progress.json`` moves on (a trial's start event, then the
+progress; an episode's checkpoint, then its row; a trial's end event, then the progress; an answer, then the progress).
+A kill between two writes leaves the records at most one step ahead of the progress file, which the session finishes on
+restart. A trial closed with its last background updates still running
+(:class:`~antmaze_hirl.study.session.TrialClosing`) has its last rows written after the close, and its ``learner.zip``
+last: until then (:func:`closing_trials`) its checkpoint holds those rows. Anything else (``progress.json`` missing
+while records exist, records of a trial the progress file has not reached, a finished trial with missing rows, no
+``trial_end`` or no answers) is damage, named by :func:`check_records`: a participant is never restarted, nor a trial
+closed twice, from files that disagree.
 """
 
 from __future__ import annotations
@@ -16,9 +18,13 @@ from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from antmaze_hirl.study.checkpoint import CHECKPOINT_FILE
 from antmaze_hirl.study.data import read_episode_rows
 from antmaze_hirl.study.logs import DamagedLog, read_json_records
-from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan
+from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
+
+LEARNER_FILE = "learner.zip"
+"""A trial's learner after its last update, written last when the trial is done."""
 
 
 @dataclass
@@ -31,6 +37,7 @@ class ParticipantRecords:
         answered: Trials with a questionnaire in ``answers.jsonl``.
         rows: Rows in ``episodes.csv`` per trial.
         checkpoints: Trials whose folder holds a checkpoint.
+        final_updates: Trials with a ``final_update`` event (their closing's updates written).
     """
 
     started: set[int] = field(default_factory=set)
@@ -38,6 +45,7 @@ class ParticipantRecords:
     answered: set[int] = field(default_factory=set)
     rows: Counter[int] = field(default_factory=Counter)
     checkpoints: set[int] = field(default_factory=set)
+    final_updates: set[int] = field(default_factory=set)
 
     def trials(self) -> set[int]:
         """Every trial index that any record names."""
@@ -83,8 +91,9 @@ def participant_records(folder: Path) -> ParticipantRecords:
     if events.exists():
         for number, record in read_json_records(events):
             kind = record.get("event")
-            if kind in ("trial_start", "trial_end"):
-                (records.started if kind == "trial_start" else records.ended).add(_trial(record, events, number))
+            held = {"trial_start": records.started, "trial_end": records.ended, "final_update": records.final_updates}
+            if kind in held:
+                held[kind].add(_trial(record, events, number))
     answers = folder / "answers.jsonl"
     if answers.exists():
         records.answered = {_trial(record, answers, number) for number, record in read_json_records(answers)}
@@ -107,6 +116,27 @@ def _trial(record: dict, path: Path, number: int) -> int:
         return int(record["trial"])
     except (KeyError, TypeError, ValueError):
         raise DamagedLog(f"{path}:{number}: names no trial ({record.get('trial')!r})") from None
+
+
+def closed_trials(participant: ParticipantPlan, trial_index: int, phase: str) -> list[TrialPlan]:
+    """The trials that ``(trial_index, phase)`` has closed: those before it, and it at its questionnaire."""
+    trials = participant.trials
+    current = [trials[trial_index]] if phase == "questionnaire" and trial_index < len(trials) else []
+    return list(trials[:trial_index]) + current
+
+
+def closing_trials(folder: Path, participant: ParticipantPlan, trial_index: int, phase: str) -> list[TrialPlan]:
+    """The closed trials whose final update is not written yet: a ``checkpoint.pt`` and no ``learner.zip``.
+
+    Their last rows of ``episodes.csv`` may be missing: the checkpoint holds them, and a running server writes
+    them (a restore resumes it).
+    """
+    return [
+        trial
+        for trial in closed_trials(participant, trial_index, phase)
+        if (folder / f"trial{trial.index}" / CHECKPOINT_FILE).is_file()
+        and not (folder / f"trial{trial.index}" / LEARNER_FILE).is_file()
+    ]
 
 
 def check_records(folder: Path, participant: ParticipantPlan, trial_index: int, phase: str) -> bool:
@@ -150,9 +180,10 @@ def check_records(folder: Path, participant: ParticipantPlan, trial_index: int, 
             f"{progress} is behind the logs (trial {trial_index + 1} at {phase!r}, but {records.where(index, folder)} "
             f"has later records of trial {index}): it was rolled back or replaced; restore it from a backup"
         )
-    finished = list(trials[:trial_index]) + ([current] if current is not None and phase == "questionnaire" else [])
-    for trial in finished:
-        if records.rows[trial.index] != trial.episodes:
+    closing = {trial.index for trial in closing_trials(folder, participant, trial_index, phase)}
+    for trial in closed_trials(participant, trial_index, phase):
+        rows = records.rows[trial.index]
+        if rows != trial.episodes and not (trial.index in closing and rows < trial.episodes):
             raise ValueError(
                 f"{folder / 'episodes.csv'} has {records.rows[trial.index]} of the {trial.episodes} rows of "
                 f"finished trial {trial.index}: rows were removed (restore the file from a backup)"
@@ -177,5 +208,11 @@ def check_study_files(study_dir: str | Path, plan: StudyPlan) -> None:
         if (folder / "progress.json").is_file():
             trial_index, phase = read_progress(folder)
             check_records(folder, participant, trial_index, phase)
+            for trial in closing_trials(folder, participant, trial_index, phase):
+                raise ValueError(
+                    f"{folder / f'trial{trial.index}'} has no {LEARNER_FILE} yet: trial {trial.index}'s final learner "
+                    "update and evaluation are still being written by the study server (which resumes them when it "
+                    "starts); analyze once they are"
+                )
         elif folder.is_dir():  # logs without a progress file (copied or made by hand): each log's damage only
             participant_records(folder)

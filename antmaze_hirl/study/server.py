@@ -443,7 +443,8 @@ def uvicorn_config(app: Any) -> Any:
 
 def _header_deadline_protocol() -> type:
     # uvicorn times out idle keep-alive connections only after a response: a connection that never finishes
-    # its first request head would be held for ever. This closes it HEADER_TIMEOUT_SECONDS after it opened.
+    # its first request head would be held for ever. This closes it HEADER_TIMEOUT_SECONDS after it opened,
+    # and answers what h11 cannot parse with a JSON 400 (uvicorn's own is plain text).
     from uvicorn.protocols.http.h11_impl import H11Protocol
 
     class HeaderDeadlineH11Protocol(H11Protocol):
@@ -459,6 +460,26 @@ def _header_deadline_protocol() -> type:
         def connection_lost(self, exc: Exception | None) -> None:
             self._head_deadline.cancel()
             super().connection_lost(exc)
+
+        def send_400_response(self, msg: str) -> None:
+            # h11 could not parse the request (a bad request line or header, a head over MAX_HEADER_BYTES, bad
+            # framing of the body): uvicorn answers before the app sees it, in plain text; JSON, as the app does.
+            import h11
+
+            body = json.dumps({"error": f"malformed HTTP request: {msg}"}).encode()
+            headers = [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                (b"connection", b"close"),
+                (b"cache-control", b"no-store"),
+                *((name.lower().encode(), value.encode()) for name, value in SECURITY_HEADERS.items()),
+            ]
+            try:
+                for event in (h11.Response(status_code=400, headers=headers), h11.Data(data=body), h11.EndOfMessage()):
+                    self.transport.write(self.conn.send(event))
+            except h11.LocalProtocolError:  # the app had begun its answer already: nothing more can be said
+                pass
+            self.transport.close()
 
     return HeaderDeadlineH11Protocol
 
@@ -539,6 +560,7 @@ class StudyServer:
     def start(self) -> StudyServer:
         """Starts serving; returns once uvicorn accepts connections."""
         self._thread.start()
+        self.study.resume_closing()
         while not self._server.started:
             if not self._thread.is_alive():
                 raise RuntimeError("the study server stopped during start-up")
@@ -546,13 +568,21 @@ class StudyServer:
         return self
 
     def stop(self) -> None:
-        """Stops serving, releases the simulators and the folder's lock."""
+        """Stops serving, waits for the closed trials' final updates to be written, releases the simulators and lock.
+
+        (Its callers read the files next; ``study serve`` stops at once instead, and its next start resumes them.)
+        """
         self._server.should_exit = True
         if self._thread.is_alive():
             self._thread.join(10)
         self.socket.close()
-        self.study.close()
-        self.lock.release()
+        try:
+            self.study.wait_for_closed_trials()
+        except RuntimeError as error:  # already logged; the next start runs it again
+            logger.warning("%s", error)
+        finally:
+            self.study.close()
+            self.lock.release()
 
     @contextlib.contextmanager
     def running(self) -> Iterator[StudyServer]:
@@ -642,6 +672,7 @@ def serve(
     print(f"study {study.folder} ({len(study.participant_ids)} participants): open {study_url(url_host, port, token)}")
     if url_host != "127.0.0.1" and host not in LOOPBACK_HOSTS:
         print(f"  or, on this machine: {study_url('127.0.0.1', port, token)}")
+    study.resume_closing()  # closed trials whose final update a stop or a kill cut off
     try:
         uvicorn.Server(uvicorn_config(app)).run(sockets=[sock])
     finally:

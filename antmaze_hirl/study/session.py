@@ -11,12 +11,14 @@ On disk, per participant (``DIR/participants/<id>/``), everything is written whe
 * ``clicks.jsonl``: every accepted click (appended and fsynced before the step runs);
 * ``episodes.csv``: one row per finished episode (:data:`EPISODE_COLUMNS`);
 * ``answers.jsonl``: one questionnaire per analysed trial;
-* ``events.jsonl``: trial starts and ends, pauses, resumptions after a restart;
+* ``events.jsonl``: trial starts and ends, final updates written after a trial closed, pauses, resumptions
+  after a restart;
 * ``progress.json``: where the participant is (atomically replaced);
 * ``trial<k>/checkpoint.pt``: the trainer after the last finished episode, and the background updates still
   queued (atomically replaced; :mod:`antmaze_hirl.study.checkpoint`: loading it cannot run code);
 * ``trial<k>/demonstrations.npz``: every labelled step of the trial so far (for ``study export``);
-* ``trial<k>/learner.zip``: the learner's weights after the trial.
+* ``trial<k>/learner.zip``: the learner's weights after the trial's final update (with background updates
+  written after the trial closed, last of its files: :class:`TrialClosing`).
 
 The logs carry a checksum per line (:mod:`antmaze_hirl.study.logs`); the checkpoint starts with a
 SHA-256 of its content. Every step writes its records before it changes the session's memory, and
@@ -35,10 +37,12 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import math
 import os
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -61,7 +65,13 @@ from antmaze_hirl.study.checkpoint import (
     load_checkpoint,
     save_checkpoint,
 )
-from antmaze_hirl.study.consistency import ParticipantRecords, check_records, participant_records, read_progress
+from antmaze_hirl.study.consistency import (
+    ParticipantRecords,
+    check_records,
+    closing_trials,
+    participant_records,
+    read_progress,
+)
 from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
 from antmaze_hirl.study.logs import (
     DamagedLog,
@@ -72,6 +82,8 @@ from antmaze_hirl.study.logs import (
 from antmaze_hirl.study.plan import ParticipantPlan, StudyPlan, TrialPlan
 from antmaze_hirl.study.questionnaire import validate_answers
 from antmaze_hirl.study.settings import QUESTIONNAIRE_SECONDS, SECONDS_PER_MAZE_PRIOR, StudySettings
+
+logger = logging.getLogger(__name__)
 
 
 class ProtocolError(Exception):
@@ -252,6 +264,7 @@ class ParticipantSession:
         self._csv_rows = 0  # how many of the trial's rows episodes.csv holds
         self._episode_learner_updates = 0  # updates behind the learner that plays the current maze
         self._closing_row: dict[str, Any] | None = None  # the ended episode's row, kept while its save fails
+        self._closing: list[TrialClosing] = []  # closed trials whose last updates are still running
         try:
             self._restore()
         except BaseException:
@@ -572,7 +585,40 @@ class ParticipantSession:
             return self._camera.frame(self._env.unwrapped.reach.sim.data)
 
     def close(self) -> None:
-        """Releases the trial's simulators and the camera (after a background update that uses them ends)."""
+        """Releases the trial's simulators and the camera, and stops the closed trials' final updates.
+
+        A final update still running ends unused and nothing is written for it: the trial's checkpoint holds
+        its mazes as pending, and the next restore runs them again (:class:`TrialClosing`).
+        """
+        with self.lock:
+            closings, self._closing = self._closing, []
+        for closing in closings:  # outside the lock: a closing takes it to append to the logs
+            closing.stop()
+        with self.lock:
+            self._release_trial()
+
+    def wait_for_closed_trials(self, timeout: float | None = None) -> bool:
+        """Waits until every closed trial's final update and evaluation are written; whether they are.
+
+        Raises:
+            RuntimeError: If one failed (its error chained; the next restore runs it again).
+        """
+        with self.lock:
+            closings = list(self._closing)
+        deadline = None if timeout is None else time.monotonic() + timeout
+        for closing in closings:
+            left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
+            if not closing.wait(left):
+                return False
+            if closing.error is not None:
+                raise RuntimeError(
+                    f"participant {self.participant.id}, trial {closing.trial.index}: the final update failed: "
+                    f"{closing.error!r}"
+                ) from closing.error
+        return True
+
+    def _release_trial(self) -> None:
+        # The current trial's simulators, camera and update queue (a closed trial's are its TrialClosing's).
         with self.lock:
             self._updates.stop()  # nothing is lost: the checkpoint holds the unfinished updates as pending
             self._updates = UpdateQueue()
@@ -640,9 +686,10 @@ class ParticipantSession:
             self._trial = _load_checkpoint(checkpoint, self._env)
             self._repair_rows()
             self._log_event("restored", trial=trial.index, episodes_done=len(self._trial.rows))
-            if self._trial.pending:  # stopped while updates ran in the background
-                self._finish_pending_updates()
-        elif resume and (written := len(self._written_rows())):
+            played = len(self._trial.rows) + len(self._trial.pending)
+            if self._trial.pending and played < trial.episodes:  # stopped while updates ran in the background
+                self._finish_pending_updates()  # (after the last maze, the close below hands them on)
+        elif resume and (written := len(self._written_rows(trial))):
             raise DamagedRecords(
                 f"{checkpoint} is missing, but {self.folder / 'episodes.csv'} has {written} episode(s) of trial "
                 f"{trial.index}: participant {self.participant.id} cannot go on without it (restore it from a "
@@ -652,7 +699,7 @@ class ParticipantSession:
             self._trial = TrialState(self._make_trainer(trial), [], DemonstrationLog())
         self._episode_saved = False
         self._csv_rows = len(self._trial.rows)
-        if len(self._trial.rows) >= trial.episodes:  # killed after the last episode, before the trial closed
+        if len(self._trial.rows) + len(self._trial.pending) >= trial.episodes:  # killed before the trial closed
             self._close_trial()
         else:
             self._start_episode()
@@ -708,8 +755,10 @@ class ParticipantSession:
         trial, state, run = self.trial, self._trial, self._run
         assert trial is not None and state is not None and run is not None and run.record is not None
         final = run.record.episode >= trial.episodes - 1
-        lagged = self.settings.background_updates and not final
-        self._take_updates(wait=not lagged)  # those finished while this maze was played (all, before the last)
+        # The trial's last maze too: its update and the final evaluation run after the trial has closed
+        # (_close_trial hands them to a TrialClosing), so the questionnaire or the next part opens at once.
+        lagged = self.settings.background_updates
+        self._take_updates(wait=not lagged)  # those finished while this maze was played
         if self._closing_row is None:  # kept across a failed save: the update and evaluation run once
             self._closing_row = self._episode_row(update=not lagged)
         row, success = self._closing_row, bool(run.record.success)
@@ -738,9 +787,7 @@ class ParticipantSession:
         self._closing_row = None
         self._episode_saved = True
         if lagged:
-            due = self._evaluation_due(int(row["episode"]))
-            evaluate = (lambda learner: self._envs.evaluate(learner, final=False)) if due else None
-            self._updates.submit(state.trainer, row, evaluate)
+            self._updates.submit(state.trainer, row, _evaluation(self._envs, self._evaluation_due(row, trial), final))
 
     def _take_updates(self, *, wait: bool) -> None:
         # The background updates that have finished (every one, with ``wait``): the newest one's weights go into
@@ -755,24 +802,17 @@ class ParticipantSession:
             state.pending = state.pending[len(finished) :]
 
     def _finish_pending_updates(self) -> None:
-        # A restore from a checkpoint saved while updates ran in the background: run them here, in order, on the
-        # data as saved (each on all of it: the mazes' data sets of then are not kept), then save.
-        state = self._trial
-        assert state is not None
-        for entry in state.pending:
-            if entry["update_due"]:
-                state.trainer._update(state.trainer.gradient_steps)
-            row = dict(entry["row"])
-            if self._evaluation_due(int(row["episode"])):
-                row.update(self._envs.evaluate(state.trainer.learner, final=False))
-            state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
-        state.trainer._update_due = False
-        state.pending = []
+        # A restore from a checkpoint saved while updates ran in the background: run them here, then save.
+        state, trial = self._trial, self.trial
+        assert state is not None and trial is not None
+        _run_pending(state, self._envs, trial, self._evaluation_due)
         _save_checkpoint(state, self._trial_folder / CHECKPOINT_FILE)
         self._append_new_rows()
 
-    def _evaluation_due(self, episode: int) -> bool:
-        return (episode + 1) % self.settings.eval_every == 0
+    def _evaluation_due(self, row: dict[str, Any], trial: TrialPlan) -> bool:
+        # After every eval_every-th maze, and the trial's last (its final evaluation).
+        episode = int(row["episode"])
+        return (episode + 1) % self.settings.eval_every == 0 or episode == trial.episodes - 1
 
     def _append_new_rows(self) -> None:
         # The rows memory has and episodes.csv does not yet (each append is all or nothing).
@@ -807,39 +847,59 @@ class ParticipantSession:
             ),
             "learner_updates": self._episode_learner_updates,
         }
-        final = episode == trial.episodes - 1
-        if update and (final or self._evaluation_due(episode)):
-            row.update(self._envs.evaluate(state.trainer.learner, final=final))
+        if update and self._evaluation_due(row, trial):
+            row.update(self._envs.evaluate(state.trainer.learner, final=episode == trial.episodes - 1))
         return {column: row.get(column, "") for column in EPISODE_COLUMNS}
 
     def _close_trial(self) -> None:
-        # Writes (learner, trial_end once, progress) first; memory moves on only once they are on disk.
+        # Writes (learner, trial_end once, progress) first; memory moves on only once they are on disk. With
+        # background updates the last mazes' updates and the final evaluation are still pending: the trial
+        # closes now and a TrialClosing finishes them and writes the learner (the participant goes on).
         state, trial = self._trial, self.trial
         assert state is not None and trial is not None
-        state.trainer.learner.save(self._trial_folder / "learner.zip")
+        closing = None
+        if state.pending:
+            closing = TrialClosing(
+                self, trial, state=state, csv_rows=self._csv_rows, envs=self._envs, queue=self._updates
+            )
+        else:
+            state.trainer.learner.save(self._trial_folder / "learner.zip")
+        episodes = len(state.rows) + len(state.pending)
         if trial.index not in self._records().ended:  # logged by a close that failed after it
-            self._log_event("trial_end", trial=trial.index, episodes=len(state.rows), successes=state.successes)
+            self._log_event("trial_end", trial=trial.index, episodes=episodes, successes=state.successes)
         summary = {
             "label": trial.label,
             "practice": trial.practice,
-            "episodes": len(state.rows),
+            "episodes": episodes,
             "successes": state.successes,
             "labels": int(state.trainer.total_expert_cost),
         }
         if trial.practice:
-            self._next_trial()  # the practice trial is recorded, not rated
+            self._next_trial(closing)  # the practice trial is recorded, not rated
         else:
             self._save_progress(self.trial_index, "questionnaire")
+            self._hand_over(closing)
             self.phase = "questionnaire"
         self._last_trial = summary
         self._run, self._episode_saved, self._walk = None, False, []
 
-    def _next_trial(self) -> None:
+    def _hand_over(self, closing: TrialClosing | None) -> None:
+        # The closed trial's updates, evaluation envs and queue go to ``closing`` (once its close is on disk).
+        if closing is None:
+            return
+        self._closing = [job for job in self._closing if not job.done]
+        self._closing.append(closing)
+        self._updates = UpdateQueue()
+        self._envs = self._env = None  # the closing's now: the next trial builds its own
+        closing.start()
+
+    def _next_trial(self, closing: TrialClosing | None = None) -> None:
         following = self.trial_index + 1
         self._save_progress(following, "intro" if following < len(self.participant.trials) else "done")
+        self._hand_over(closing)
         self.trial_index = following
         self._trial = None
-        self.close()
+        self._release_trial()
         self.phase = "intro" if self.trial is not None else "done"
 
     def _records(self) -> ParticipantRecords:
@@ -851,9 +911,8 @@ class ParticipantSession:
     def _append_row(self, row: dict[str, Any]) -> None:
         append_csv_row(self.folder / "episodes.csv", EPISODE_COLUMNS, row)
 
-    def _written_rows(self) -> list[dict[str, str]]:
-        # This trial's rows in episodes.csv (a damaged file stops the participant, naming the line).
-        assert self.trial is not None
+    def _written_rows(self, trial: TrialPlan) -> list[dict[str, str]]:
+        # ``trial``'s rows in episodes.csv (a damaged file stops the participant, naming the line).
         path = self.folder / "episodes.csv"
         if not path.exists():
             return []
@@ -861,19 +920,23 @@ class ParticipantSession:
             rows = read_episode_rows(path)
         except DamagedLog as error:
             raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
-        return [row for row in rows if row["trial"] == str(self.trial.index)]
+        return [row for row in rows if row["trial"] == str(trial.index)]
+
+    def _checked_rows(self, trial: TrialPlan, state: TrialState) -> int:
+        # How many of ``state``'s rows episodes.csv holds: a prefix of them, else the participant stops.
+        written = self._written_rows(trial)
+        saved = [{column: csv_cell(row.get(column)) for column in EPISODE_COLUMNS} for row in state.rows]
+        if written != saved[: len(written)]:
+            raise DamagedRecords(
+                f"{self.folder / 'episodes.csv'} has {len(written)} row(s) of trial {trial.index} that do not "
+                f"match the first {len(written)} of the {len(saved)} in its checkpoint: repeated or changed rows"
+            )
+        return len(written)
 
     def _repair_rows(self) -> None:
         # Rows the checkpoint has but the CSV lacks (killed between the two writes) are appended again.
-        assert self._trial is not None
-        written = self._written_rows()
-        saved = [{column: csv_cell(row.get(column)) for column in EPISODE_COLUMNS} for row in self._trial.rows]
-        if written != saved[: len(written)]:
-            raise DamagedRecords(
-                f"{self.folder / 'episodes.csv'} has {len(written)} row(s) of trial {self.trial.index} that do not "
-                f"match the first {len(written)} of the {len(saved)} in its checkpoint: repeated or changed rows"
-            )
-        self._csv_rows = len(written)
+        assert self._trial is not None and self.trial is not None
+        self._csv_rows = self._checked_rows(self.trial, self._trial)
         self._append_new_rows()
 
     def _save_progress(self, trial_index: int, phase: str) -> None:
@@ -906,10 +969,137 @@ class ParticipantSession:
             answered = check_records(self.folder, self.participant, self.trial_index, self.phase)
         except ValueError as error:
             raise DamagedRecords(f"participant {self.participant.id}: {error}") from None
+        # Closed trials whose final update was cut off (a stop or a kill): resumed from their checkpoints.
+        closing = closing_trials(self.folder, self.participant, self.trial_index, self.phase)
         if self.phase == "questionnaire" and answered:  # killed between the answer and the progress file
             self._next_trial()
+        for trial in closing:
+            state = _load_checkpoint(self.folder / f"trial{trial.index}" / CHECKPOINT_FILE, None)
+            written = self._checked_rows(trial, state)
+            self._closing.append(TrialClosing(self, trial, state=state, csv_rows=written, resumed=True))
+            self._closing[-1].start()
         if self.phase == "label":
             self._open_trial(resume=True)
+
+
+class TrialClosing:
+    """A closed trial's last background updates and final evaluation, finished in a thread of its own.
+
+    With ``background_updates`` a trial's last maze closes the trial at once: the questionnaire or the next
+    part opens while the updates still queued, the last maze's own and the final evaluation run here, in
+    order, on the closed trial's trainer and evaluation simulators. Then, in this order: the checkpoint
+    (nothing pending), the trial's rows still missing from ``episodes.csv``, a ``final_update`` event
+    (``updates``: how many ran after the close; ``lag_seconds``: from the close, or from a restore, to this
+    write; ``resumed``) and last ``learner.zip``. A closed trial with a checkpoint and no ``learner.zip`` is
+    one whose closing has not finished (:func:`~antmaze_hirl.study.consistency.closing_trials`): a stop or a
+    kill loses only the work in progress, and the next restore starts a closing from the checkpoint.
+
+    Args:
+        session: The participant's session (its lock guards the shared logs).
+        trial: The closed trial.
+        state: Its trial state (the live one, or loaded from the checkpoint on a restore).
+        csv_rows: How many of ``state.rows`` ``episodes.csv`` holds.
+        envs: The trial's simulators (built here when ``None``; closed here when done).
+        queue: The trial's update queue, still running (``None`` on a restore).
+        resumed: Whether a restore started it.
+    """
+
+    def __init__(
+        self,
+        session: ParticipantSession,
+        trial: TrialPlan,
+        *,
+        state: TrialState,
+        csv_rows: int,
+        envs: TrialEnvs | None = None,
+        queue: UpdateQueue | None = None,
+        resumed: bool = False,
+    ) -> None:
+        self.session, self.trial, self.resumed = session, trial, resumed
+        self.folder = session.folder / f"trial{trial.index}"
+        self.error: BaseException | None = None
+        self._state, self._csv_rows, self._envs, self._queue = state, csv_rows, envs, queue
+        self._closed_at = session.timer()
+        self._stopping = threading.Event()
+        self._done = threading.Event()
+        name = f"study-close-{session.participant.id}-{trial.index}"
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+
+    @property
+    def done(self) -> bool:
+        """Whether it has finished (written, failed, or stopped)."""
+        return self._done.is_set()
+
+    def start(self) -> None:
+        """Starts the thread."""
+        self._thread.start()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Waits until :attr:`done`; whether it is."""
+        return self._done.wait(timeout)
+
+    def stop(self) -> None:
+        """Lets the update in progress end, writes nothing more (the next restore resumes), and waits."""
+        self._stopping.set()
+        if self._queue is not None:
+            self._queue.stop()
+        if self._thread.is_alive():
+            self._thread.join()
+
+    def _run(self) -> None:
+        try:
+            self._finish()
+        except BaseException as error:  # kept for wait_for_closed_trials; the next restore runs it again
+            self.error = error
+            logger.error(
+                "participant %s, trial %d: the final update failed (a restart runs it again): %r",
+                self.session.participant.id,
+                self.trial.index,
+                error,
+            )
+        finally:
+            if self._queue is not None:
+                self._queue.stop()
+            if self._envs is not None:
+                self._envs.close()
+            self._done.set()
+
+    def _finish(self) -> None:
+        session, trial, state = self.session, self.trial, self._state
+        if self._envs is None:  # a restore: the trial's simulators again, for the evaluations
+            self._envs = TrialEnvs(session.settings.experiment_config(trial.episodes))
+            state.trainer.env = self._envs.train
+        updates = 0
+        if self._queue is not None:
+            for job in self._queue.pending():
+                while not job.wait(0.1):
+                    if self._stopping.is_set():
+                        return
+            finished = self._queue.take()
+            if finished:
+                with session.lock:  # the session shows this state's counts until the questionnaire is answered
+                    finished[-1].apply_to(state.trainer)
+                    state.rows.extend(
+                        {column: job.row.get(column, "") for column in EPISODE_COLUMNS} for job in finished
+                    )
+                    state.pending = state.pending[len(finished) :]
+            updates += len(finished)
+        if self._stopping.is_set():
+            return
+        updates += _run_pending(state, self._envs, trial, session._evaluation_due, self._stopping.is_set)
+        if self._stopping.is_set():
+            return
+        _save_checkpoint(state, self.folder / CHECKPOINT_FILE)
+        with session.lock:  # the live trial appends to the same logs
+            for row in state.rows[self._csv_rows :]:
+                session._append_row(row)
+                self._csv_rows += 1
+            if trial.index not in session._records().final_updates:  # logged by a closing cut off after it
+                lag = round(max(session.timer() - self._closed_at, 0.0), 3)
+                session._log_event(
+                    "final_update", trial=trial.index, updates=updates, lag_seconds=lag, resumed=self.resumed
+                )
+        state.trainer.learner.save(self.folder / "learner.zip")
 
 
 def _json_number(value: Any, name: str, bound: str = "") -> float:
@@ -928,6 +1118,46 @@ def _json_number(value: Any, name: str, bound: str = "") -> float:
     if not math.isfinite(number):
         raise BadInput(f"{wanted}, got {value!r}")
     return number
+
+
+def _evaluation(envs: TrialEnvs | None, due: bool, final: bool) -> Callable[[Any], dict[str, Any]] | None:
+    """The evaluation a background update runs after its maze (``None`` when none is due).
+
+    Bound to ``envs`` now: the session's own may belong to the next trial by the time the update runs.
+    """
+    if not due:
+        return None
+    assert envs is not None
+    return lambda learner: envs.evaluate(learner, final=final)
+
+
+def _run_pending(
+    state: TrialState,
+    envs: TrialEnvs | None,
+    trial: TrialPlan,
+    due: Callable[[dict[str, Any], TrialPlan], bool],
+    stopping: Callable[[], bool] = lambda: False,
+) -> int:
+    """Runs ``state``'s pending updates (and their evaluations) in order, here; how many there were.
+
+    A restore's way: each runs on the data as saved, all of it (the mazes' data sets of then are not kept).
+    Their rows join ``state.rows``; ``pending`` is emptied. Once ``stopping()``, the rest is left (and
+    ``state`` half done: the caller writes nothing of it).
+    """
+    for entry in state.pending:
+        if stopping():
+            return 0
+        if entry["update_due"]:
+            state.trainer._update(state.trainer.gradient_steps)
+        row = dict(entry["row"])
+        evaluate = _evaluation(envs, due(row, trial), int(row["episode"]) == trial.episodes - 1)
+        if evaluate is not None:
+            row.update(evaluate(state.trainer.learner))
+        state.rows.append({column: row.get(column, "") for column in EPISODE_COLUMNS})
+    count = len(state.pending)
+    state.trainer._update_due = False
+    state.pending = []
+    return count
 
 
 def _save_checkpoint(state: TrialState, path: Path) -> None:

@@ -14,10 +14,12 @@ from antmaze_hirl.experiments.old_folders import current_settings
 
 SETTINGS_FILE = "settings.json"
 
-SECONDS_PER_MAZE_PRIOR = 25.0
-"""Seconds a maze takes a participant, for the page's estimate before they have played one: about 6 clicks
-of about 3 s and their walks (the study's default sizes assume it; docs/guides/user-study.md). Once the
-participant has finished mazes, their own mean time per maze replaces it."""
+SECONDS_PER_MAZE_PRIOR = 22.4
+"""Seconds a maze takes a participant, for the page's estimate before they have played one (and ``study init``'s
+estimate of a sitting). The default study's mean from ``scripts/study_sitting.py``: the oracle's clicks per
+maze on the point, the page's walk animations and the server's times, measured, and 3 s to think of a click,
+**assumed** (no person was timed; docs/guides/user-study.md). Once the participant has finished mazes, their
+own mean time per maze replaces it."""
 
 QUESTIONNAIRE_SECONDS = 90.0
 """Seconds a questionnaire takes, for the page's estimate of what is left."""
@@ -38,10 +40,11 @@ class StudySettings(TrialSettings):
         show_learner_subgoal: Draw the learner's proposed subgoal on the page.
         background_updates: Run the learner update (and a due evaluation) after each maze in a background
             thread while the next maze starts with the learner as it was: no wait between mazes, and the
-            learner lags one maze (:mod:`antmaze_hirl.study.background`; a trial's last maze waits for its
-            update and final evaluation). ``False`` (the default, so that a study folder written before the
-            setting reads as what it ran): the update runs before the next maze, as in the experiments.
-            ``study init`` (:meth:`for_body`) sets it.
+            learner lags one maze (:mod:`antmaze_hirl.study.background`); after a trial's last maze the
+            trial closes at once and its last updates and final evaluation are written after it
+            (:class:`~antmaze_hirl.study.session.TrialClosing`). ``False`` (the default, so that a study
+            folder written before the setting reads as what it ran): the update runs before the next maze, as
+            in the experiments. ``study init`` (:meth:`for_body`) sets it.
     """
 
     show_learner_subgoal: bool = True

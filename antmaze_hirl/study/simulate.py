@@ -162,7 +162,8 @@ def play_participant(
     Returns:
         ``{"participant", "clicks", "trials", "latencies", "between"}``: each latency is a click's
         ``{"round_trip", "server", "episode_end"}`` (seconds; whether the click ended an episode), and
-        ``between`` the ``{"round_trip", "server"}`` of each ``next`` request that closed an episode.
+        ``between`` the ``{"round_trip", "server", "closed_trial", "walked"}`` of each ``next`` request that
+        closed an episode (whether it closed the trial too; whether the learner walked that maze unasked).
     """
     state = client.participant(participant_id, "state")
     clicks, latencies, between, trial_clicks, trial_failures, trial_episodes = 0, [], [], 0, 0, 0
@@ -206,13 +207,11 @@ def play_participant(
             if result["episode_end"] is not None:
                 trial_episodes += 1
                 trial_failures += int(not result["episode_end"]["success"])
-                started = time.perf_counter()
-                state = client.participant(participant_id, "next", {})
-                between.append({"round_trip": time.perf_counter() - started, "server": client.last_server_seconds})
+                state = _next_maze(client, participant_id, between, walked=False)
         elif state["phase"] == "episode_over":  # a gated method's learner walked the whole maze unasked
             trial_episodes += 1
             trial_failures += int(not state["episode_end"]["success"])
-            state = client.participant(participant_id, "next", {})
+            state = _next_maze(client, participant_id, between, walked=True)
         elif state["phase"] == "questionnaire":
             ratings = _ratings(
                 rng, offset, trial_clicks / max(trial_episodes, 1), trial_failures / max(trial_episodes, 1)
@@ -230,6 +229,21 @@ def play_participant(
         "latencies": latencies,
         "between": between,
     }
+
+
+def _next_maze(client: StudyClient, participant_id: str, between: list[dict[str, Any]], *, walked: bool) -> dict:
+    # POST next, timed: the wait between two mazes, or after a part's last maze (the trial closed).
+    started = time.perf_counter()
+    state = client.participant(participant_id, "next", {})
+    between.append(
+        {
+            "round_trip": time.perf_counter() - started,
+            "server": client.last_server_seconds,
+            "closed_trial": state["phase"] not in ("label", "episode_over"),
+            "walked": walked,
+        }
+    )
+    return state
 
 
 def _ratings(

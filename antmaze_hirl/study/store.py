@@ -4,14 +4,18 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import logging
 import os
 import threading
+import time
 from pathlib import Path
 
-from antmaze_hirl.study.consistency import check_records, read_progress
+from antmaze_hirl.study.consistency import check_records, closing_trials, read_progress
 from antmaze_hirl.study.plan import StudyPlan, load_plan
-from antmaze_hirl.study.session import ParticipantSession
+from antmaze_hirl.study.session import DamagedRecords, ParticipantSession
 from antmaze_hirl.study.settings import StudySettings, load_settings
+
+logger = logging.getLogger(__name__)
 
 
 class UnknownParticipant(KeyError):
@@ -143,12 +147,58 @@ class Study:
             check_records(folder, self._participants[participant_id], trial_index, phase)
         return trial_index, phase
 
+    def resume_closing(self) -> threading.Thread | None:
+        """Restores, in a background thread, the participants with a closed trial whose final update was cut off.
+
+        A stop or a kill during a :class:`~antmaze_hirl.study.session.TrialClosing` leaves a closed trial with
+        a checkpoint and no ``learner.zip``; restoring the participant's session resumes it, whether or not the
+        participant comes back. A participant whose files are damaged is left for their next request (409).
+
+        Returns:
+            The thread, or ``None`` when no participant has such a trial.
+        """
+        waiting = []
+        for participant in self.plan.participants:
+            folder = self.folder / "participants" / participant.id
+            with contextlib.suppress(ValueError):
+                if folder.is_dir() and closing_trials(folder, participant, *read_progress(folder)):
+                    waiting.append(participant.id)
+        if not waiting:
+            return None
+
+        def restore() -> None:
+            for participant_id in waiting:
+                try:
+                    self.session(participant_id)
+                except (DamagedRecords, ValueError, OSError) as error:
+                    logger.warning("participant %s not restored at start: %s", participant_id, error)
+
+        thread = threading.Thread(target=restore, name="study-resume-closing", daemon=True)
+        thread.start()
+        return thread
+
+    def wait_for_closed_trials(self, timeout: float | None = None) -> bool:
+        """Waits until every open session's closed trials have their final updates written; whether they have.
+
+        Raises:
+            RuntimeError: If one failed (:meth:`~antmaze_hirl.study.session.ParticipantSession.wait_for_closed_trials`).
+        """
+        deadline = None if timeout is None else time.monotonic() + timeout
+        with self._lock:
+            sessions = list(self._sessions.values())
+        for session in sessions:
+            left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
+            if not session.wait_for_closed_trials(left):
+                return False
+        return True
+
     def _check_known(self, participant_id: str) -> None:
         if participant_id not in self._participants:
             raise UnknownParticipant(f"unknown participant {participant_id!r}; the plan has {self.participant_ids}")
 
     def close(self) -> None:
-        """Releases every session's simulators."""
+        """Releases every session's simulators and stops the final updates still running (a restart resumes them)."""
         with self._lock:
-            for session in self._sessions.values():
-                session.close()
+            sessions = list(self._sessions.values())
+        for session in sessions:
+            session.close()

@@ -76,15 +76,16 @@ function setBusy(text) {
   }
 }
 
-// The wait after a maze: the last maze of a part also waits for the learner's update and final test.
+// The wait after a maze: without background updates the last maze of a part also waits for the learner's update
+// and final test (with them, the server closes the part at once and finishes those after).
 function nextBusyText() {
   return state && state.episode && state.episode.number >= state.episode.of ? BUSY.last : BUSY.next;
 }
 
 let shownMaze = null;  // the maze the status line speaks of (a new maze gets a fresh status)
 
-// After a rated part's last maze the learner's last update and test take a while: the questionnaire is shown at
-// once and answered meanwhile; this is that "next" request, which the questionnaire's submit waits for.
+// After a rated part's last maze the learner's last update and test may take a while (without background updates):
+// the questionnaire is shown at once and answered meanwhile; this is that "next" request, which the submit awaits.
 let closing = null;
 
 function lastMazeOfRatedPart(current) {
