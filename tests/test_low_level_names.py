@@ -5,6 +5,7 @@ import json
 import zipfile
 
 import pytest
+from script_helpers import load_script
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments.benchmark import load_report
@@ -152,3 +153,20 @@ def test_a_single_actor_ant_zip_warm_starts_every_weight(tmp_path, ant_single_ac
         "ant", "td3", 0, tmp_path / "warm", seed=0, init_from=ant_single_actors["plain"], progress_bar=False
     )
     assert policy_fingerprint(warm) == source != policy_fingerprint(cold)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_in_maze_refuses_a_bad_low_level_in_one_line_before_any_episode(tmp_path, capsys, monkeypatch, case):
+    value, message = damaged_zips(tmp_path)[case]
+    in_maze = load_script("scripts/in_maze.py")
+    out = tmp_path / "in_maze.json"
+    argv = ["in_maze.py", "--episodes", "1", "--families", "ant3", "--low-level", str(value), "--out", str(out)]
+    monkeypatch.setattr("sys.argv", argv)
+    with pytest.raises(SystemExit) as exit_info:
+        in_maze.main()
+    captured = capsys.readouterr()
+    last = captured.err.strip().splitlines()[-1]  # argparse's usage, then the one error line
+    assert exit_info.value.code == 2
+    assert last.startswith("in_maze.py: error: ") and message in last and str(value) in last, captured.err
+    assert "Traceback" not in captured.err + captured.out
+    assert not out.exists()
