@@ -155,18 +155,29 @@ def test_a_single_actor_ant_zip_warm_starts_every_weight(tmp_path, ant_single_ac
     assert policy_fingerprint(warm) == source != policy_fingerprint(cold)
 
 
+SCRIPT_ARGV = {
+    "in_maze": ["--episodes", "1", "--families", "ant3", "--low-level"],
+    "select_low_level": ["--episodes", "1", "--mazes", "1"],  # the policy file goes last
+}
+"""Each lab script that plays a low-level zip, with the arguments before the bad value."""
+
+
 @pytest.mark.parametrize("case", CASES)
-def test_in_maze_refuses_a_bad_low_level_in_one_line_before_any_episode(tmp_path, capsys, monkeypatch, case):
+@pytest.mark.parametrize("script", sorted(SCRIPT_ARGV))
+def test_the_lab_scripts_refuse_a_bad_low_level_in_one_line_before_any_episode(
+    tmp_path, capsys, monkeypatch, script, case
+):
     value, message = damaged_zips(tmp_path)[case]
-    in_maze = load_script("scripts/in_maze.py")
-    out = tmp_path / "in_maze.json"
-    argv = ["in_maze.py", "--episodes", "1", "--families", "ant3", "--low-level", str(value), "--out", str(out)]
-    monkeypatch.setattr("sys.argv", argv)
+    if script == "select_low_level" and case in ("unknown name", "missing file"):
+        message = "neither a policy file nor a run with a snapshots/ folder"  # it takes files and run folders
+    module = load_script(f"scripts/{script}.py")
+    out = tmp_path / "out.json"
+    monkeypatch.setattr("sys.argv", [f"{script}.py", *SCRIPT_ARGV[script], str(value), "--out", str(out)])
     with pytest.raises(SystemExit) as exit_info:
-        in_maze.main()
+        module.main()
     captured = capsys.readouterr()
     last = captured.err.strip().splitlines()[-1]  # argparse's usage, then the one error line
     assert exit_info.value.code == 2
-    assert last.startswith("in_maze.py: error: ") and message in last and str(value) in last, captured.err
+    assert last.startswith(f"{script}.py: error: ") and message in last and str(value) in last, captured.err
     assert "Traceback" not in captured.err + captured.out
     assert not out.exists()
