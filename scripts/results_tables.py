@@ -696,6 +696,38 @@ def flip_diagnostics() -> str:
     return table(["turn to the subgoal", "subgoals", "flips", "flips / subgoal"], lines) + "\n\n" + per_family
 
 
+STEADY_ANT_SUMMARIES = ("steady_ant/summary.json",)
+"""``scripts/steady_ant_table.py``'s summaries, each a candidate beside the ensemble on the same maps and episodes."""
+
+
+def steady_ant_maps(names: Sequence[str] = STEADY_ANT_SUMMARIES) -> str:
+    """The oracle on the fixed maps with the ensemble and each one-network candidate: success and flips, intervals.
+
+    The ensemble's row of a map is listed once however many summaries hold it (they read the same file).
+    """
+    rows: dict[tuple[str, str], list[object]] = {}
+    for name in names:
+        for pair in load(name).get("benchmark"):
+            for side in ("ensemble", "candidate"):
+                row = pair[side]
+                low, high = row["flips_per_10k_steps_ci95"]
+                rows.setdefault(
+                    (pair["suite"], row["file"]),
+                    [
+                        f"`{pair['suite']}`",
+                        f"`{row['low_level']}`",
+                        rate_cell(row["successes"], row["episodes"]),
+                        f"{row['flips']} / {row['low_level_steps']:,}",
+                        f"{row['flips_per_10k_steps']:.2f} [{low:.2f}, {high:.2f}]",
+                    ],
+                )
+    suites = list(dict.fromkeys(suite for suite, _ in rows))
+    return table(
+        ["map (oracle, K = 20)", "low level", "success [95% CI]", "flips / low-level steps", "flips per 10k [95% CI]"],
+        [rows[key] for suite in suites for key in rows if key[0] == suite],
+    )
+
+
 def flip_warning() -> str:
     """Uprightness before a flip, and the reflexes' success, on the select6 mazes."""
     results = load("flip_warning/flip_warning.json")
@@ -1444,6 +1476,8 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "smoothing": lambda: in_maze_rows(SMOOTHING_ROWS),
     "flip-diagnostics": flip_diagnostics,
     "flip-warning": flip_warning,
+    # docs/guides/low-level.md
+    "steady-ant-maps": steady_ant_maps,
     # README.md and docs/results/index.md
     "headline": headline,
     "headline-readme": lambda: headline(links_from="."),
