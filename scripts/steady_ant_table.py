@@ -11,7 +11,9 @@ and writes one JSON (``--out``) and a Markdown table with, per family or suite a
 95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
 For the benchmark pairs, whose reports keep every episode, also the paired outcome counts (both succeed, only
 one does) and the exact two-sided McNemar p-value over the discordant episodes (episodes share mazes and seeds,
-so they pair). A suite played with several episodes per task repeats mazes: its Wilson interval understates the
+so they pair), and the exact conditional p-value of equal flip rates per step (:func:`flip_rate_p`). The first
+report of a pair is called the ensemble's; it may be any reference (such as a fine-tune's start): every row
+names its low level. A suite played with several episodes per task repeats mazes: its Wilson interval understates the
 spread (the reports' task bootstrap is printed beside it).
 
 ``--run STATE.json`` adds the distillation run's own curve (student-driven episodes on its training mazes, per
@@ -132,7 +134,18 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
             "only_candidate": only_candidate,
             "mcnemar_exact_p": float(binomtest(only_candidate, discordant).pvalue) if discordant else 1.0,
         },
+        "flip_rate_exact_p": flip_rate_p(rows["ensemble"], rows["candidate"]),
     }
+
+
+def flip_rate_p(first: dict[str, Any], second: dict[str, Any]) -> float:
+    """Two-sided exact p of equal flip rates per step: given the pair's flips, the second's count is binomial by
+    its share of the steps (the conditional test of two Poisson counts); 1.0 when neither flipped."""
+    flips = first["flips"] + second["flips"]
+    if flips == 0:
+        return 1.0
+    share = second["low_level_steps"] / (first["low_level_steps"] + second["low_level_steps"])
+    return float(binomtest(second["flips"], flips, share).pvalue)
 
 
 def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
@@ -186,11 +199,14 @@ def table(summary: dict[str, Any]) -> str:
         lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
     for pair in summary.get("benchmark", []):
         where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']})"
-        lines += [line(where, role, pair[role]) for role in ("ensemble", "candidate")]
+        lines += [line(where, f"{role}: {pair[role]['low_level']}", pair[role]) for role in ("ensemble", "candidate")]
         paired = pair["paired"]
+        flips_p = pair.get("flip_rate_exact_p")
         lines.append(
             f"| {where} | paired | both {paired['both_succeed']}, only ensemble {paired['only_ensemble']}, only "
-            f"candidate {paired['only_candidate']} | McNemar p = {paired['mcnemar_exact_p']:.3g} | |"
+            f"candidate {paired['only_candidate']} | McNemar p = {paired['mcnemar_exact_p']:.3g} | "
+            + ("" if flips_p is None else f"equal rates p = {flips_p:.3g}")
+            + " |"
         )
     return "\n".join(lines)
 

@@ -81,3 +81,15 @@ def test_in_maze_rows_pair_the_same_episodes(tmp_path):
         table.in_maze_rows([ensemble, in_maze_file(tmp_path / "d.json", "student.zip", 20)])
     with pytest.raises(ValueError, match="hold 1 rows"):
         table.in_maze_rows([ensemble])
+
+
+def test_the_flip_rate_test_is_the_conditional_binomial_of_two_poisson_counts():
+    def row(flips, steps):
+        return {"flips": flips, "low_level_steps": steps}
+
+    assert table.flip_rate_p(row(10, 1000), row(0, 1000)) == pytest.approx(2 * 0.5**10)
+    assert table.flip_rate_p(row(5, 1000), row(5, 1000)) == pytest.approx(1.0)
+    assert table.flip_rate_p(row(0, 1000), row(0, 5000)) == 1.0
+    # Twice the steps, twice the flips: the same rate.
+    assert table.flip_rate_p(row(4, 1000), row(8, 2000)) == pytest.approx(1.0)
+    assert table.flip_rate_p(row(9, 80_000), row(1, 80_000)) < 0.05
