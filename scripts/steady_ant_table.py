@@ -5,7 +5,8 @@ Reads
 * ``in_maze.py`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
   first) or two files of one row each (the ensemble's first);
 * pairs of ``antmaze-hirl benchmark`` reports (``--benchmark ENSEMBLE.json CANDIDATE.json``, repeatable), same
-  suite, seed, tasks and episodes per task, differing only in ``--low-level``;
+  suite, seed and episodes per task, differing only in ``--low-level`` (and perhaps ``--tasks``: a pair whose
+  reports played other tasks is read on the tasks both played, its counts recounted from their episodes);
 
 and writes one JSON (``--out``) and a Markdown table with, per family or suite and low level: success with its
 95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
@@ -104,10 +105,16 @@ def in_maze_rows(paths: list[Path]) -> dict[str, Any]:
 def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
     """One suite's two reports side by side, with the paired outcome counts and McNemar's exact p."""
     reports = [json.loads(Path(path).read_text()) for path in (ensemble_path, candidate_path)]
-    keys = ("suite", "seed", "episodes_per_task", "task_ids", "policy")
+    keys = ("suite", "seed", "episodes_per_task", "policy")
     differ = [key for key in keys if reports[0].get(key) != reports[1].get(key)]
     if differ:
         raise ValueError(f"{ensemble_path} and {candidate_path} differ in {differ}: not the same episodes")
+    tasks = [{episode["task_id"] for episode in report["episode_outcomes"]} for report in reports]
+    shared = sorted(tasks[0] & tasks[1])
+    if not shared:
+        raise ValueError(f"{ensemble_path} and {candidate_path} share no task")
+    if tasks[0] != tasks[1]:  # one played a subset (--tasks): both are read on the tasks they share
+        reports = [on_tasks(report, shared) for report in reports]
     first, second = ([(e["task_id"], e["seed"], e["success"]) for e in r["episode_outcomes"]] for r in reports)
     if [pair[:2] for pair in first] != [pair[:2] for pair in second]:
         raise ValueError(f"{ensemble_path} and {candidate_path} played other episodes")
@@ -127,6 +134,7 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
     return {
         "suite": reports[0]["suite"],
         "episodes_per_task": reports[0]["episodes_per_task"],
+        "tasks": "all" if tasks[0] == tasks[1] and reports[0].get("task_ids") == "all" else shared,
         **rows,
         "paired": {
             "both_succeed": both,
@@ -135,6 +143,22 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
             "mcnemar_exact_p": float(binomtest(only_candidate, discordant).pvalue) if discordant else 1.0,
         },
         "flip_rate_exact_p": flip_rate_p(rows["ensemble"], rows["candidate"]),
+    }
+
+
+def on_tasks(report: dict[str, Any], task_ids: list[int]) -> dict[str, Any]:
+    """A benchmark report cut to the episodes of ``task_ids``, its counts recounted from those episodes (its task
+    bootstrap, made over all its tasks, is dropped)."""
+    episodes = [episode for episode in report["episode_outcomes"] if episode["task_id"] in task_ids]
+    return {
+        **report,
+        "task_ids": ",".join(map(str, task_ids)),
+        "episode_outcomes": episodes,
+        "episodes": len(episodes),
+        "successes": sum(episode["success"] for episode in episodes),
+        "flips": sum(episode["flipped"] for episode in episodes),
+        "low_level_steps_total": sum(episode["low_level_steps"] for episode in episodes),
+        "task_bootstrap_95": None,
     }
 
 
@@ -198,7 +222,10 @@ def table(summary: dict[str, Any]) -> str:
         first, last = row["iterations"]
         lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
     for pair in summary.get("benchmark", []):
-        where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']})"
+        tasks = pair.get("tasks", "all")
+        where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']}" + (
+            ")" if tasks == "all" else f", tasks {','.join(map(str, tasks))})"
+        )
         lines += [line(where, f"{role}: {pair[role]['low_level']}", pair[role]) for role in ("ensemble", "candidate")]
         paired = pair["paired"]
         flips_p = pair.get("flip_rate_exact_p")
