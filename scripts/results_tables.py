@@ -696,7 +696,7 @@ def flip_diagnostics() -> str:
     return table(["turn to the subgoal", "subgoals", "flips", "flips / subgoal"], lines) + "\n\n" + per_family
 
 
-STEADY_ANT_SUMMARIES = ("steady_ant/summary.json", "steady_ant/summary_student199.json")
+STEADY_ANT_SUMMARIES = ("steady_ant/summary.json", "steady_ant/summary_student199.json", "steady_ant/summary_tilt.json")
 """``scripts/steady_ant_table.py``'s summaries, each a candidate beside the ensemble on the same maps and episodes."""
 
 
