@@ -149,8 +149,8 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         "--init-from",
         type=Path,
         default=None,
-        help="warm start from this policy .zip's weights; SB3 zips hold pickles that can run code: load only files "
-        "you trust (default: none)",
+        help="warm start from this policy .zip's weights (or a low-level name: shipped); SB3 zips hold pickles that "
+        "can run code: load only files you trust (default: none)",
     )
     parser.add_argument(
         "--init-buffer",

@@ -10,6 +10,7 @@ Loading, formatting and the command are :mod:`antmaze_lab.tables`'.
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 
 from antmaze_lab.tables import Sections, count, load, rate_cell, rate_cell_of, selection_oracle, table, times
 
@@ -149,6 +150,42 @@ def ensemble_speed() -> str:
                 f"{results.get('settings', 'calls')} x {results.get('settings', 'rounds')}",
             ]
         ],
+    )
+
+
+STEADY_ANT_SUMMARIES = ("steady_ant/summary.json", "steady_ant/summary_student199.json", "steady_ant/summary_tilt.json")
+"""``scripts/steady_ant_table.py``'s summaries, each a candidate beside the ensemble on the same maps and episodes."""
+
+
+@SECTIONS.add("steady-ant-maps")
+def steady_ant_maps(names: Sequence[str] = STEADY_ANT_SUMMARIES) -> str:
+    """The oracle on the fixed maps with the ensemble and each one-network candidate: success and flips, intervals.
+
+    The ensemble's row of a map is listed once however many summaries hold it on the same tasks (they read the
+    same file).
+    """
+    rows: dict[tuple[str, str, str], list[object]] = {}
+    for name in names:
+        for pair in load(name).get("benchmark"):
+            tasks = pair.get("tasks", "all")  # a pair read on a subset of the tasks says which
+            where = pair["suite"] if tasks == "all" else f"{pair['suite']}, tasks {','.join(map(str, tasks))}"
+            for side in ("ensemble", "candidate"):
+                row = pair[side]
+                low, high = row["flips_per_10k_steps_ci95"]
+                rows.setdefault(
+                    (pair["suite"], row["file"], str(tasks)),
+                    [
+                        f"`{where}`",
+                        f"`{row['low_level']}`",
+                        rate_cell(row["successes"], row["episodes"]),
+                        f"{row['flips']} / {row['low_level_steps']:,}",
+                        f"{row['flips_per_10k_steps']:.2f} [{low:.2f}, {high:.2f}]",
+                    ],
+                )
+    suites = list(dict.fromkeys(suite for suite, _, _ in rows))
+    return table(
+        ["map (oracle, K = 20)", "low level", "success [95% CI]", "flips / low-level steps", "flips per 10k [95% CI]"],
+        [rows[key] for suite in suites for key in rows if key[0] == suite],
     )
 
 

@@ -67,6 +67,7 @@ from antmaze_hirl.experiments.in_maze import (
     parse_smoothing,
     row_names,
     run,
+    worker_low_level,
 )
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "in_maze"
@@ -95,7 +96,8 @@ def main() -> None:
         type=Path,
         action="append",
         default=None,
-        help="candidate policy .zip (repeatable); the shipped policy always runs first",
+        help="candidate policy .zip or low-level name, such as ensemble (repeatable); the shipped policy always runs "
+        "first (default: none)",
     )
     parser.add_argument("--seed", type=int, default=HELD_OUT_SEED, help="maze seed of episode 0")
     parser.add_argument(
@@ -132,10 +134,12 @@ def main() -> None:
             parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
     if args.subgoal_reach_m is not None and not args.subgoal_reach_m > 0:
         parser.error(f"--subgoal-reach-m must be > 0 metres, got {args.subgoal_reach_m}")
-    missing = [str(path) for path in args.low_level or [] if not path.is_file()]
-    if missing:
-        parser.error(f"--low-level files not found: {missing}")
     torch.set_num_threads(1)
+    for value in args.low_level or []:
+        try:  # loaded here once (a name, its body, its zip checked) rather than failing in a worker
+            worker_low_level(value)
+        except (ValueError, FileNotFoundError) as error:
+            parser.error(str(error))
     subgoal_reach_m = args.subgoal_reach_m or BODY_DEFAULTS["ant"]["subgoal_reach_m"]
     results = run(
         [None, *(args.low_level or [])],

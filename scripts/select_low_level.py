@@ -180,7 +180,10 @@ def main() -> None:
         names = row_names(snapshots, tuple(smoothing))
     except ValueError as error:
         parser.error(str(error))
-    identities = {path: low_level_identity("ant", load_low_level("ant", path)) for path in snapshots}
+    try:  # every file loaded (its body, its zip checked) before any row is scored
+        identities = {path: low_level_identity("ant", load_low_level("ant", path)) for path in snapshots}
+    except (ValueError, FileNotFoundError) as error:
+        parser.error(str(error))
     for alpha in smoothing:
         # New rows, or rows whose file a rerun of training replaced.
         new = [p for p in snapshots if scores.get(row_name(p, alpha), {}).get("low_level_id") != identities[p]]

@@ -5,13 +5,16 @@ Reads
 * ``in_maze.py`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
   first) or two files of one row each (the ensemble's first);
 * pairs of ``antmaze-hirl benchmark`` reports (``--benchmark ENSEMBLE.json CANDIDATE.json``, repeatable), same
-  suite, seed, tasks and episodes per task, differing only in ``--low-level``;
+  suite, seed and episodes per task, differing only in ``--low-level`` (and perhaps ``--tasks``: a pair whose
+  reports played other tasks is read on the tasks both played, its counts recounted from their episodes);
 
 and writes one JSON (``--out``) and a Markdown table with, per family or suite and low level: success with its
 95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
 For the benchmark pairs, whose reports keep every episode, also the paired outcome counts (both succeed, only
 one does) and the exact two-sided McNemar p-value over the discordant episodes (episodes share mazes and seeds,
-so they pair). A suite played with several episodes per task repeats mazes: its Wilson interval understates the
+so they pair), and the exact conditional p-value of equal flip rates per step (:func:`flip_rate_p`). The first
+report of a pair is called the ensemble's; it may be any reference (such as a fine-tune's start): every row
+names its low level. A suite played with several episodes per task repeats mazes: its Wilson interval understates the
 spread (the reports' task bootstrap is printed beside it).
 
 ``--run STATE.json`` adds the distillation run's own curve (student-driven episodes on its training mazes, per
@@ -102,10 +105,16 @@ def in_maze_rows(paths: list[Path]) -> dict[str, Any]:
 def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
     """One suite's two reports side by side, with the paired outcome counts and McNemar's exact p."""
     reports = [json.loads(Path(path).read_text()) for path in (ensemble_path, candidate_path)]
-    keys = ("suite", "seed", "episodes_per_task", "task_ids", "policy")
+    keys = ("suite", "seed", "episodes_per_task", "policy")
     differ = [key for key in keys if reports[0].get(key) != reports[1].get(key)]
     if differ:
         raise ValueError(f"{ensemble_path} and {candidate_path} differ in {differ}: not the same episodes")
+    tasks = [{episode["task_id"] for episode in report["episode_outcomes"]} for report in reports]
+    shared = sorted(tasks[0] & tasks[1])
+    if not shared:
+        raise ValueError(f"{ensemble_path} and {candidate_path} share no task")
+    if tasks[0] != tasks[1]:  # one played a subset (--tasks): both are read on the tasks they share
+        reports = [on_tasks(report, shared) for report in reports]
     first, second = ([(e["task_id"], e["seed"], e["success"]) for e in r["episode_outcomes"]] for r in reports)
     if [pair[:2] for pair in first] != [pair[:2] for pair in second]:
         raise ValueError(f"{ensemble_path} and {candidate_path} played other episodes")
@@ -125,6 +134,7 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
     return {
         "suite": reports[0]["suite"],
         "episodes_per_task": reports[0]["episodes_per_task"],
+        "tasks": "all" if tasks[0] == tasks[1] and reports[0].get("task_ids") == "all" else shared,
         **rows,
         "paired": {
             "both_succeed": both,
@@ -132,7 +142,34 @@ def benchmark_pair(ensemble_path: Path, candidate_path: Path) -> dict[str, Any]:
             "only_candidate": only_candidate,
             "mcnemar_exact_p": float(binomtest(only_candidate, discordant).pvalue) if discordant else 1.0,
         },
+        "flip_rate_exact_p": flip_rate_p(rows["ensemble"], rows["candidate"]),
     }
+
+
+def on_tasks(report: dict[str, Any], task_ids: list[int]) -> dict[str, Any]:
+    """A benchmark report cut to the episodes of ``task_ids``, its counts recounted from those episodes (its task
+    bootstrap, made over all its tasks, is dropped)."""
+    episodes = [episode for episode in report["episode_outcomes"] if episode["task_id"] in task_ids]
+    return {
+        **report,
+        "task_ids": ",".join(map(str, task_ids)),
+        "episode_outcomes": episodes,
+        "episodes": len(episodes),
+        "successes": sum(episode["success"] for episode in episodes),
+        "flips": sum(episode["flipped"] for episode in episodes),
+        "low_level_steps_total": sum(episode["low_level_steps"] for episode in episodes),
+        "task_bootstrap_95": None,
+    }
+
+
+def flip_rate_p(first: dict[str, Any], second: dict[str, Any]) -> float:
+    """Two-sided exact p of equal flip rates per step: given the pair's flips, the second's count is binomial by
+    its share of the steps (the conditional test of two Poisson counts); 1.0 when neither flipped."""
+    flips = first["flips"] + second["flips"]
+    if flips == 0:
+        return 1.0
+    share = second["low_level_steps"] / (first["low_level_steps"] + second["low_level_steps"])
+    return float(binomtest(second["flips"], flips, share).pvalue)
 
 
 def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
@@ -185,12 +222,18 @@ def table(summary: dict[str, Any]) -> str:
         first, last = row["iterations"]
         lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
     for pair in summary.get("benchmark", []):
-        where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']})"
-        lines += [line(where, role, pair[role]) for role in ("ensemble", "candidate")]
+        tasks = pair.get("tasks", "all")
+        where = f"benchmark {pair['suite']} (K={pair['episodes_per_task']}" + (
+            ")" if tasks == "all" else f", tasks {','.join(map(str, tasks))})"
+        )
+        lines += [line(where, f"{role}: {pair[role]['low_level']}", pair[role]) for role in ("ensemble", "candidate")]
         paired = pair["paired"]
+        flips_p = pair.get("flip_rate_exact_p")
         lines.append(
             f"| {where} | paired | both {paired['both_succeed']}, only ensemble {paired['only_ensemble']}, only "
-            f"candidate {paired['only_candidate']} | McNemar p = {paired['mcnemar_exact_p']:.3g} | |"
+            f"candidate {paired['only_candidate']} | McNemar p = {paired['mcnemar_exact_p']:.3g} | "
+            + ("" if flips_p is None else f"equal rates p = {flips_p:.3g}")
+            + " |"
         )
     return "\n".join(lines)
 

@@ -81,3 +81,39 @@ def test_in_maze_rows_pair_the_same_episodes(tmp_path):
         table.in_maze_rows([ensemble, in_maze_file(tmp_path / "d.json", "student.zip", 20)])
     with pytest.raises(ValueError, match="hold 1 rows"):
         table.in_maze_rows([ensemble])
+
+
+def test_the_flip_rate_test_is_the_conditional_binomial_of_two_poisson_counts():
+    def row(flips, steps):
+        return {"flips": flips, "low_level_steps": steps}
+
+    assert table.flip_rate_p(row(10, 1000), row(0, 1000)) == pytest.approx(2 * 0.5**10)
+    assert table.flip_rate_p(row(5, 1000), row(5, 1000)) == pytest.approx(1.0)
+    assert table.flip_rate_p(row(0, 1000), row(0, 5000)) == 1.0
+    # Twice the steps, twice the flips: the same rate.
+    assert table.flip_rate_p(row(4, 1000), row(8, 2000)) == pytest.approx(1.0)
+    assert table.flip_rate_p(row(9, 80_000), row(1, 80_000)) < 0.05
+
+
+def test_a_pair_whose_candidate_played_fewer_tasks_is_read_on_the_shared_tasks(tmp_path):
+    first, second = tmp_path / "e.json", tmp_path / "c.json"
+    ensemble = report([1, 1, 0, 1, 0, 1], "ensemble")
+    ensemble["episode_outcomes"][2]["flipped"] = True
+    ensemble["episode_outcomes"][4]["flipped"] = True
+    ensemble["flips"] = 2
+    first.write_text(json.dumps(ensemble))
+    candidate = report([1, 0, 1], "candidate")  # tasks 0, 1, 2 only (--tasks 0,1,2)
+    candidate["task_ids"] = "0,1,2"
+    second.write_text(json.dumps(candidate))
+    pair = table.benchmark_pair(first, second)
+    assert pair["tasks"] == [0, 1, 2]
+    assert (pair["ensemble"]["episodes"], pair["ensemble"]["successes"], pair["ensemble"]["flips"]) == (3, 2, 1)
+    assert pair["ensemble"]["low_level_steps"] == 300 and pair["ensemble"]["task_bootstrap_95"] is None
+    assert pair["paired"] == {"both_succeed": 1, "only_ensemble": 1, "only_candidate": 1, "mcnemar_exact_p": 1.0}
+    assert "benchmark large (K=1, tasks 0,1,2)" in table.table({"benchmark": [pair]})
+    assert table.benchmark_pair(first, first)["tasks"] == "all"
+    disjoint = report([1], "candidate")
+    disjoint["episode_outcomes"][0]["task_id"] = 9
+    second.write_text(json.dumps(disjoint))
+    with pytest.raises(ValueError, match="share no task"):
+        table.benchmark_pair(first, second)

@@ -20,7 +20,7 @@ from antmaze_hirl.sb3_ext.config import ALGOS, LowLevelConfig, load_config
 from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
-from antmaze_hirl.sb3_ext.loading import algorithm_of, policy_class_of, save_policy
+from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, low_level_path, policy_class_of, save_policy
 
 # TQC is looked up on use (algo_class): sb3-contrib is an optional extra.
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG, "sac": SAC}
@@ -162,10 +162,11 @@ def train_low_level(
         resume: Continue from the latest checkpoint in ``out_dir`` (error if there is none or it was
             made with another body, algo, seed or config).
         config: Hyperparameters for ``algo``; default :func:`load_config` for ``body`` and ``algo``.
-        init_from: Warm start: a ``.zip`` of the same algorithm (a TD3 zip for TD3 or DDPG) with the same
-            networks whose weights and optimiser states the new model starts from (its replay buffer starts
-            empty). On resume it may be left out (the checkpoint holds the weights); if given, it must be the
-            one the run started from.
+        init_from: Warm start: a ``.zip`` (or a low-level name, such as the point's ``shipped``) of the same
+            algorithm (a TD3 zip for TD3 or DDPG) with the same networks, for the same body, whose weights and
+            optimiser states the new model starts from (its replay buffer starts empty; see
+            :func:`warm_start_parameters`). On resume it may be left out (the checkpoint holds the weights); if
+            given, it must be the one the run started from.
         init_buffer: Warm start's replay buffer: another run's checkpoint ``replay_buffer.pkl`` (a
             ``HerReplayBuffer`` of the same observation and action shapes), so that a fine-tune's critic
             does not relearn from an empty buffer. HER relabels its transitions with this run's reward,
@@ -182,8 +183,10 @@ def train_low_level(
     Raises:
         antmaze_hirl.sb3_ext.checkpoint.CheckpointError: On a missing, corrupt or mismatched checkpoint.
         FileExistsError: If a fresh run (``resume=False``) would overwrite a run in ``out_dir``.
+        FileNotFoundError: If there is no file at ``init_from``.
         ValueError: On a negative ``total_timesteps``, a frequency or episode count below 1, a ``config`` for
-            another algorithm, or an ``init_from`` saved by another algorithm.
+            another algorithm, or an ``init_from`` that :func:`warm_start_parameters` refuses (unknown name,
+            damaged zip, another algorithm, an ensemble, another body) or whose networks differ from ``config``'s.
 
     """
     if total_timesteps < 0:
@@ -209,18 +212,16 @@ def train_low_level(
                 f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir"
             )
         # On resume init_from is only the run's provenance, checked against the checkpoint; here it is read.
-        source = None if init_from is None else algorithm_of(init_from)
-        if source is not None and not issubclass(algorithm, source):
-            # A TD3 actor cannot initialise SAC's Gaussian one; set_parameters would fail on missing keys.
-            raise ValueError(
-                f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
-            )
-        if init_from is not None and issubclass(policy_class_of(init_from), EnsemblePolicy):
-            # Its actor has one head per member: no single-actor policy can take its weights.
-            raise ValueError(f"--init-from {init_from} is an action ensemble; start from one of its member zips")
+        parameters = None if init_from is None else warm_start_parameters(body, algo, init_from)
         model = make_model(body, algo, config, seed=seed, tensorboard_log=str(out_dir / "tb"))
-        if init_from is not None:
-            model.set_parameters(str(init_from), exact_match=True, device=model.device)
+        if parameters is not None:
+            try:
+                model.set_parameters(parameters, exact_match=True, device=model.device)
+            except (RuntimeError, ValueError) as error:  # torch's size mismatch, an optimiser of other groups
+                raise ValueError(
+                    f"--init-from {init_from} holds networks that differ from this config's: "
+                    f"{str(error).splitlines()[0]}"
+                ) from error
         if init_buffer is not None:
             load_warm_buffer(model, init_buffer)
     # The callbacks check their frequencies and episode counts here, before any training step.
@@ -242,6 +243,31 @@ def train_low_level(
         model.learn(remaining, callback=callbacks, reset_num_timesteps=False, progress_bar=progress_bar)
     save_policy(model, out_dir / "policy.zip")
     return model
+
+
+def warm_start_parameters(body: str, algo: str, init_from: str | Path) -> dict[str, dict[str, Any]]:
+    """The weights and optimiser states (SB3's ``get_parameters``) that ``init_from`` gives a new ``algo`` model.
+
+    ``init_from`` is a zip path or a low-level name of :data:`~antmaze_hirl.sb3_ext.loading.LOW_LEVEL_NAMES`.
+    Everything is checked before a model is built, so that a bad warm start is one error and no training.
+
+    Raises:
+        FileNotFoundError: If there is no file at ``init_from``.
+        ValueError: If ``init_from`` is an unknown name, not an SB3 zip or damaged, saved by another algorithm
+            (a TD3 actor cannot initialise SAC's Gaussian one), an action ensemble (its actor has one head per
+            member), or trained for another body; each names ``init_from``.
+    """
+    path = low_level_path(body, init_from)
+    if not path.is_file():
+        raise FileNotFoundError(f"--init-from {init_from}: no such file")
+    source = algorithm_of(path)
+    if not issubclass(algo_class(algo), source):
+        raise ValueError(
+            f"--init-from {init_from} holds a {source.__name__} policy; --algo {algo} cannot start from it"
+        )
+    if issubclass(policy_class_of(path), EnsemblePolicy):
+        raise ValueError(f"--init-from {init_from} is an action ensemble; start from one of its member zips")
+    return load_low_level(body, path).get_parameters()
 
 
 def load_warm_buffer(model: OffPolicyAlgorithm, path: str | Path) -> None:
@@ -276,4 +302,12 @@ def set_torch_threads(threads: int) -> None:
     torch.set_num_threads(threads)
 
 
-__all__ = ["algo_class", "load_warm_buffer", "make_model", "make_reach_env", "set_torch_threads", "train_low_level"]
+__all__ = [
+    "algo_class",
+    "load_warm_buffer",
+    "make_model",
+    "make_reach_env",
+    "set_torch_threads",
+    "train_low_level",
+    "warm_start_parameters",
+]
