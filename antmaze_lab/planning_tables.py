@@ -38,7 +38,10 @@ def screen_table(data: dict[str, Any]) -> str:
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
     maps = [name for name in MAPS if any(name in row for row in data["rows"])]
-    larger = sorted({key for row in data["rows"] for key in row if key.startswith("selection_")})
+    larger = sorted(
+        {key for row in data["rows"] for key in row if key.startswith("selection_")},
+        key=lambda key: int(key.removeprefix("selection_").split("x")[0]),  # 6x6 before 10x10
+    )
     maps = [*larger, *maps]  # larger random selection mazes (planner_check --selection-sizes), then fixed maps
     header = [
         "variant",

@@ -39,6 +39,7 @@ import numpy as np
 import yaml
 
 from antmaze_hirl.atomic_io import atomic_write_json
+from antmaze_hirl.experiments.config import LEARNERS, SELECTION_SEED
 from antmaze_hirl.experiments.uncertainty import (
     bootstrap_p,
     holm,
@@ -625,6 +626,10 @@ def _selection_body(
         return {**out, "verdict": TOO_FEW_SEEDS}
     first = mine[seeds[0]]
     for trial in [mine[s] for s in seeds] + [theirs[s] for s in seeds]:
+        if trial.split != check["split"]:
+            raise ValueError(f"{trial.path} was evaluated on the {trial.split!r} part, not {check['split']!r}")
+        if trial.maze_seeds[0] != SELECTION_SEED:
+            raise ValueError(f"{trial.path}: its mazes start at seed {trial.maze_seeds[0]}, not {SELECTION_SEED}")
         if trial.maze_seeds != first.maze_seeds:
             raise ValueError(f"{trial.path} was evaluated on other selection mazes than {first.path}")
     table = np.array([mine[s].success for s in seeds], dtype=float) - np.array([theirs[s].success for s in seeds])
@@ -712,15 +717,30 @@ def learner_beats(
     }
 
 
-def read_selection_trials(paths: Sequence[Path], learners: Sequence[str]) -> list[SelectionTrial]:
+def read_selection_trials(
+    paths: Sequence[Path], learners: Sequence[str], *, episodes: int | None = None
+) -> tuple[list[SelectionTrial], int]:
     """The trial files of ``learners`` among ``paths`` (folders of ``*.json``, or files), read per maze.
 
-    Files of other learners are skipped unread past their identity, so they need no per-maze outcomes.
+    Files of other learners, and (with ``episodes``) files of ``learners`` trained for another number of episodes,
+    are skipped unread past their identity, so they need no per-maze outcomes.
+
+    Returns:
+        The trials read, and how many files of ``learners`` were skipped for their episodes.
 
     Raises:
         ValueError: One line naming the file (see :func:`~antmaze_lab.selection_trials.read_selection_trial`).
     """
-    return [read_selection_trial(p) for p in trial_files(paths) if trial_identity(p)[1] in learners]
+    read, skipped = [], 0
+    for path in trial_files(paths):
+        _, variant, _, trained = trial_identity(path)
+        if variant not in learners:
+            continue
+        if episodes is not None and trained != episodes:
+            skipped += 1
+            continue
+        read.append(read_selection_trial(path))
+    return read, skipped
 
 
 def format_selection(found: dict[str, Any]) -> str:
@@ -926,8 +946,13 @@ def _learner_command(args: argparse.Namespace) -> int:
     """``learner``: print the learner-selection check (and write it with ``--json``); 2 on bad input."""
     try:
         spec = _spec(args)
+        if args.candidate not in LEARNERS:
+            raise ValueError(f"unknown learner {args.candidate!r}; choose from {sorted(LEARNERS)}")
         learners = (args.candidate, spec["learner"]["protocol2_learner"])
-        found = learner_beats(read_selection_trials(args.trials, learners), args.candidate, spec)
+        episodes = spec["learner"]["selection_check"]["episodes"]
+        trials, skipped = read_selection_trials(args.trials, learners, episodes=episodes)
+        found = learner_beats(trials, args.candidate, spec)
+        found["left_out"] += skipped
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -46,6 +46,7 @@ class SelectionTrial:
         maze_seeds: Each selection maze's reset seed, ascending.
         success: ``(mazes,)`` learner-only success, in the same order.
         evaluation_envs: Mazes played at once in lockstep (``None`` where the file does not say).
+        split: The layout partition's part the mazes came from (``selection_success["split"]``).
     """
 
     path: Path
@@ -56,6 +57,7 @@ class SelectionTrial:
     maze_seeds: tuple[int, ...]
     success: np.ndarray
     evaluation_envs: int | None
+    split: str = "selection"
 
 
 def _load(path: Path) -> dict[str, Any]:
@@ -116,6 +118,7 @@ def read_selection_trial(path: Path) -> SelectionTrial:
         maze_seeds=tuple(range(first, first + len(success))),
         success=success,
         evaluation_envs=trial.get("evaluation_envs"),
+        split=str(figures.get("split", "selection")),
     )
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 import time
 from collections import defaultdict
@@ -225,9 +226,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "--learner-zip", type=Path, help="with --shipped-failures: a saved learner instead (default: the shipped one)"
     )
     args = parser.parse_args(argv)
+    command = shlex.join(["python", "scripts/planner_check.py", *(argv if argv is not None else sys.argv[1:])])
     th.set_num_threads(1)
     if args.shipped_failures:
-        command = "python scripts/planner_check.py " + " ".join(argv or sys.argv[1:])
         result = {"command": command, "body": args.body, "tasks": args.tasks}
         sizes = tuple(int(n) for n in filter(None, args.selection_sizes.split(",")))
         maps = list(filter(None, args.maps.split(",")))
@@ -256,8 +257,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
             for size in (int(n) for n in filter(None, args.selection_sizes.split(","))):
                 larger = _env(args.body, split="selection", maze_size=size)
-                moved = moved_to(policy, larger)
-                row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved, larger, args.tasks, 7))
+                try:
+                    moved = moved_to(policy, larger)
+                    row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved, larger, args.tasks, 7))
+                except ValueError as error:  # a learner that cannot act on another map, as for --maps
+                    row[f"selection_{size}x{size}"] = {"error": str(error)}
             for name in filter(None, args.maps.split(",")):
                 try:
                     other = _env(args.body, maze_map=name)
@@ -269,7 +273,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             rows.append(row)
             brief = {k: (v["success"] if isinstance(v, dict) and "success" in v else v) for k, v in row.items()}
             print(json.dumps(brief), flush=True)
-    result = {"command": "python scripts/planner_check.py " + " ".join(argv or sys.argv[1:]), "rows": rows}
+    result = {"command": command, "rows": rows}
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(result, indent=1) + "\n")

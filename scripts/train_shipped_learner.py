@@ -68,6 +68,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"episode {episodes}: {trainer.total_expert_cost} labels", flush=True)
     env.close()
     path = shipped_learner_path(args.body)
+    if args.learner != LEARNER:  # never the shipped learner's name, so no --out-dir can overwrite it
+        path = path.with_name(f"{args.body}_{args.learner.removeprefix('next_cell_')}.zip")
     if args.out_dir is not None:
         path = args.out_dir / path.name
     trainer.learner.save(path)

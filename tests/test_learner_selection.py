@@ -59,7 +59,7 @@ def write_body(folder, body, candidate_rate, old_rate, seeds=range(5), old_seeds
 
 
 def check(folder, spec, task_classes=one_task_per_maze):
-    return pre.learner_beats(pre.read_selection_trials([folder], (CANDIDATE, OLD)), CANDIDATE, spec, task_classes)
+    return pre.learner_beats(pre.read_selection_trials([folder], (CANDIDATE, OLD))[0], CANDIDATE, spec, task_classes)
 
 
 def test_a_candidate_clearly_better_on_both_bodies_beats(tmp_path, spec):
@@ -160,11 +160,40 @@ def test_a_trial_without_per_maze_outcomes_is_refused_naming_the_file_and_the_fi
 
 def test_seeds_evaluated_on_other_mazes_are_refused(tmp_path, spec):
     write_body(tmp_path, "point", 0.9, 0.5)
-    write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES), first_seed=FIRST_MAZE + 1)
+    write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES + 1))  # one maze more: other mazes
     with pytest.raises(
         ValueError, match=r"point_next_cell_cnn_e100_seed4\.json was evaluated on other selection mazes"
     ):
         check(tmp_path, spec)
+
+
+def test_trials_on_mazes_that_are_not_the_selection_mazes_are_refused(tmp_path, spec):
+    write_body(tmp_path, "point", 0.9, 0.5)
+    write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES), first_seed=FIRST_MAZE + 1)
+    with pytest.raises(ValueError, match=r"seed4\.json: its mazes start at seed 3000001, not 3000000$"):
+        check(tmp_path, spec)
+    path = write_trial(tmp_path, "point", OLD, 4, np.ones(MAZES))
+    trial = json.loads(path.read_text())
+    trial["selection_success"]["split"] = "eval"
+    path.write_text(json.dumps(trial))
+    with pytest.raises(ValueError, match=r"seed4\.json was evaluated on the 'eval' part, not 'selection'$"):
+        check(tmp_path, spec)
+
+
+def test_an_unknown_candidate_is_one_line_and_exit_2(tmp_path, capsys):
+    write_body(tmp_path, "point", 0.9, 0.5)
+    assert pre.main(["learner", str(tmp_path), "--candidate", "nosuch"]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith("error: unknown learner 'nosuch'; choose from [") and error.count("\n") == 1
+
+
+def test_trials_of_another_length_are_left_out_even_without_per_maze_outcomes(tmp_path, capsys):
+    write_body(tmp_path, "point", 0.9, 0.5)
+    write_trial(tmp_path, "point", OLD, 7, np.ones(MAZES), episodes=30, outcomes=False)
+    out = tmp_path / "check" / "found.json"
+    assert pre.main(["learner", str(tmp_path), "--candidate", CANDIDATE, "--resamples", "200", "--json", str(out)]) == 0
+    assert "not decided" in capsys.readouterr().out  # the ant has no trials: read on complete bodies only
+    assert json.loads(out.read_text())["left_out"] == 1
 
 
 def test_two_files_of_one_trial_are_refused(tmp_path, spec):

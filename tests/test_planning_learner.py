@@ -7,7 +7,7 @@ import torch as th
 
 from antmaze_hirl.dagger import HighLevelPolicy
 from antmaze_hirl.dagger.high_level_policy import planning_rounds
-from antmaze_hirl.dagger.network import NEXT_CELL_MOVES, CellValueIteration
+from antmaze_hirl.dagger.network import BLOCKED_COST, NEXT_CELL_MOVES, CellValueIteration
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.experiments.config import learner_settings
@@ -156,13 +156,24 @@ def test_the_gated_learner_starts_without_preference_and_moves_to_a_larger_map(t
     learner = HighLevelPolicy.for_env(small, rng=np.random.default_rng(0), **GATE)
     obs, _ = small.reset(seed=0)
     batch = learner.encoder.encode_observations([obs])
-    logits = learner.network(th.from_numpy(batch.grids), th.from_numpy(batch.vectors))
+    grids = th.from_numpy(batch.grids)
+    logits = learner.network(grids, th.from_numpy(batch.vectors))
     assert th.equal(logits, th.zeros_like(logits))
+    # The gate starts as one more move cost of a usual size (BLOCKING_START), not as a block: about 1.2 a move.
+    added = BLOCKED_COST * learner.network.planner.blocking(grids)
+    assert float(added.max()) < 5.0 and float(added.min()) > 0.1
     moved = learner.on_map(big.unwrapped.geometry, pixels_per_cell=big.unwrapped.pixels_per_cell)
+    with th.no_grad():  # a gate of its own, so a reload that dropped or scrambled it would show in the planner's Q
+        moved.network.planner.blocking[2].bias.copy_(th.linspace(-6.0, 2.0, len(NEXT_CELL_MOVES)))
     loaded = HighLevelPolicy.load(moved.save(tmp_path / "gate.zip"))
     assert loaded.settings.learnt_blocking and loaded.network.planner.blocking is not None
     obs, _ = big.reset(seed=2)
-    np.testing.assert_array_equal(loaded.predict(obs), moved.predict(obs))
+    big_grids = th.from_numpy(moved.encoder.encode_observations([obs]).grids)
+    with th.no_grad():
+        assert th.equal(loaded.network.planner(big_grids), moved.network.planner(big_grids))
+        without_gate = CellValueIteration(moved.network.planner.iterations, moved.settings.channels)
+        without_gate.cost.load_state_dict(moved.network.planner.cost.state_dict())
+        assert not th.equal(without_gate(big_grids), moved.network.planner(big_grids))
 
 
 @pytest.mark.integration  # about 15 s on an idle core (60-90 s on a loaded one)
