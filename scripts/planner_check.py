@@ -77,7 +77,7 @@ def grid_rollout_ends(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) 
         task = maze.sample_task(rng)
         cell, goal = maze.geometry.xy_to_cell(task.start_xy), maze.geometry.xy_to_cell(task.goal_xy)
         length = len(shortest_path(task.layout.walls, cell, goal)) - 1
-        results[length].append(rollout_end(policy, task.layout.walls, cell, goal, task.goal_xy, at_rest))
+        results[length].append(rollout_end(policy, task.layout.walls, cell, goal, at_rest, task.goal_xy))
     return results
 
 
@@ -86,12 +86,13 @@ def rollout_end(
     walls: np.ndarray,
     cell: tuple[int, int],
     goal: tuple[int, int],
-    goal_xy: np.ndarray,
     at_rest: np.ndarray,
+    goal_xy: np.ndarray | None = None,
 ) -> str:
-    """One greedy next-cell rollout from ``cell`` to the ``goal`` cell (at ``goal_xy``) on ``walls``: how it ended
-    (:data:`ENDS`)."""
+    """One greedy next-cell rollout from ``cell`` to the ``goal`` cell (at ``goal_xy``, default its centre) on
+    ``walls``: how it ended (:data:`ENDS`)."""
     geometry = policy.geometry
+    goal_xy = geometry.cell_to_xy(goal) if goal_xy is None else goal_xy
     for _ in range(2 * (walls.shape[0] + walls.shape[1])):
         if cell == goal:
             return "success"
@@ -140,9 +141,8 @@ def shipped_failures(
         if name in SUITE_SPECS:  # the suite's own tasks, in task-id order, as the benchmark plays them
             at_rest = STATE_LAYOUT.body_observation(env.reset(seed=0)[0]["state"])
             rows[name]["suite_task_ends"] = [
-                rollout_end(policy, task.layout.walls, task.layout.start_cell, task.layout.goal_cell, xy, at_rest)
+                rollout_end(policy, task.layout.walls, task.layout.start_cell, task.layout.goal_cell, at_rest)
                 for task in suite_tasks(name)
-                for xy in [policy.geometry.cell_to_xy(task.layout.goal_cell)]
             ]
         env.close()
     return rows
@@ -228,16 +228,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     args = parser.parse_args(argv)
     command = shlex.join(["python", "scripts/planner_check.py", *(argv if argv is not None else sys.argv[1:])])
     th.set_num_threads(1)
+    sizes = tuple(int(n) for n in filter(None, args.selection_sizes.split(",")))
+    maps = list(filter(None, args.maps.split(",")))
     if args.shipped_failures:
         result = {"command": command, "body": args.body, "tasks": args.tasks}
-        sizes = tuple(int(n) for n in filter(None, args.selection_sizes.split(",")))
-        maps = list(filter(None, args.maps.split(",")))
         result["rows"] = shipped_failures(args.body, maps, args.tasks, sizes=sizes, learner=args.learner_zip)
         print(json.dumps({name: row["ends"] for name, row in result["rows"].items()}), flush=True)
-        if args.out:
-            args.out.parent.mkdir(parents=True, exist_ok=True)
-            args.out.write_text(json.dumps(result, indent=1) + "\n")
-        return result
+        return _written(result, args.out)
     settings_ = body_settings(args.body, held_out_layouts=True)
     config = ExperimentConfig(body=args.body, **settings_, protocol=2, held_out_layouts=True)
     rows = []
@@ -255,14 +252,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                 policy, train, args.labels, args.steps, np.random.default_rng(1000 + seed)
             )
             row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
-            for size in (int(n) for n in filter(None, args.selection_sizes.split(","))):
+            for size in sizes:
                 larger = _env(args.body, split="selection", maze_size=size)
                 try:
                     moved = moved_to(policy, larger)
                     row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved, larger, args.tasks, 7))
                 except ValueError as error:  # a learner that cannot act on another map, as for --maps
                     row[f"selection_{size}x{size}"] = {"error": str(error)}
-            for name in filter(None, args.maps.split(",")):
+            for name in maps:
                 try:
                     other = _env(args.body, maze_map=name)
                     moved = moved_to(policy, other, any_planner=args.move_any_planner)
@@ -273,10 +270,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             rows.append(row)
             brief = {k: (v["success"] if isinstance(v, dict) and "success" in v else v) for k, v in row.items()}
             print(json.dumps(brief), flush=True)
-    result = {"command": command, "rows": rows}
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(json.dumps(result, indent=1) + "\n")
+    return _written({"command": command, "rows": rows}, args.out)
+
+
+def _written(result: dict[str, Any], out: Path | None) -> dict[str, Any]:
+    """``result``, written to ``out`` first if given (one JSON file, its folder made)."""
+    if out:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(result, indent=1) + "\n")
     return result
 
 

@@ -265,5 +265,6 @@ def test_a_grid_rollout_names_how_it_ended(move, end):
     walls[1, 2] = False  # a free cell north of the corridor's middle: a diagonal from the start passes a corner
     at_rest = np.zeros(2)
     goal_xy = policy.geometry.cell_to_xy((2, 3))
-    assert planner_check.rollout_end(policy, walls, (2, 1), (2, 3), goal_xy, at_rest) == end
+    assert planner_check.rollout_end(policy, walls, (2, 1), (2, 3), at_rest, goal_xy) == end
+    assert planner_check.rollout_end(policy, walls, (2, 1), (2, 3), at_rest) == end  # the goal cell's centre
     assert end in planner_check.ENDS
