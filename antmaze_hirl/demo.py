@@ -108,7 +108,7 @@ def lockstep_outcomes(body: str, seeds: int, num_envs: int) -> list[str]:
     """:func:`serial_outcomes` on the demo's env and oracle, ``num_envs`` mazes at once in lockstep (no picture).
 
     The same seeds; a batched low-level forward pass may round the last bits differently from a batch of one,
-    which MuJoCo can turn into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often).
+    which MuJoCo can turn into another outcome now and then (the lab's ``antmaze_lab.lockstep_paths`` counts how often).
     Prints one line per seed, as :func:`serial_outcomes`.
     """
     env, oracle = demo_setup(body)

@@ -31,7 +31,7 @@ from antmaze_hirl.envs.vector import check_num_envs, copies_of, walk_in_lockstep
 OUTCOMES: tuple[str, ...] = ("success", "flip", "frozen", "timeout", "ended")
 """Every way a high-level episode can end, one spelling each: the goal reached, the ant on its back, the body
 stuck in place until the step limit (``frozen``, which only the in-maze protocol tells apart from a
-``timeout``, :func:`antmaze_hirl.experiments.in_maze.outcome`), the step limit, or any other end."""
+``timeout``: the lab's ``antmaze_lab.in_maze_protocol.outcome``), the step limit, or any other end."""
 
 
 @dataclass(frozen=True)

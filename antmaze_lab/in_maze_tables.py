@@ -1,6 +1,6 @@
 """Tables of the ant in mazes, printed from committed results files.
 
-Pages: ``docs/results/ant-in-mazes.md`` (``scripts/in_maze.py`` and ``scripts/select_low_level.py`` files).
+Pages: ``docs/results/ant-in-mazes.md`` (``antmaze_lab.in_maze`` and ``antmaze_lab.select_low_level`` files).
 
 ``python -m antmaze_lab.in_maze_tables SECTION`` prints one generated block (``--list`` names them):
 ``in-maze-stage6``, ``selection-stage6``, ``selection-ensembles``, ``selection-stage3``, ``selection-stage3-later``,
@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from antmaze_lab import tables
+from antmaze_lab.commands import command_arguments
 from antmaze_lab.tables import (
     Sections,
     families,
@@ -264,7 +265,7 @@ def run_policies(name: str) -> list[str]:
 
     A file merged from several runs holds more rows than its last run scored; the command names that run's own.
     """
-    arguments = shlex.split(load(name).get("command"))[2:]
+    arguments = command_arguments(load(name).get("command"))
     return list(itertools.takewhile(lambda argument: not argument.startswith("-"), arguments))
 
 
@@ -352,7 +353,7 @@ SMOOTHING = "in_maze/in_maze_smoothing.json"
 
 
 DISTANCES = "in_maze/in_maze_distance_*.json"
-"""The subgoal-distance sweep: one file per distance, each run written by ``scripts/in_maze.py --subgoal-distance``."""
+"""The subgoal-distance sweep: one file per distance, each run written by ``in_maze --subgoal-distance``."""
 
 
 def smoothing_rows() -> list[InMazeRow]:

@@ -1,10 +1,9 @@
-"""scripts/flip_warning.py: the tilt reflex, the flip lead and the reflex specs."""
+"""antmaze_lab.flip_warning: the tilt reflex, the flip lead and the reflex specs."""
 
 import numpy as np
 import pytest
-from script_helpers import load_script
 
-flip_warning = load_script("scripts/flip_warning.py")
+from antmaze_lab import flip_warning
 
 
 def ant_observation(roll_degrees):

@@ -1,4 +1,4 @@
-"""scripts/in_maze.py: step limits, outcome classes and a scaled-limit episode."""
+"""antmaze_lab.in_maze_protocol: step limits, outcome classes and a scaled-limit episode."""
 
 from pathlib import Path
 
@@ -9,8 +9,8 @@ from conftest import StillController
 
 from antmaze_hirl import rollout
 from antmaze_hirl.envs.layouts import validate_maze_map
-from antmaze_hirl.experiments import in_maze
 from antmaze_hirl.experts import PathOracle
+from antmaze_lab import in_maze_protocol as in_maze
 
 
 def test_step_limit_scales_with_the_shortest_path_around_walls():

@@ -1,4 +1,4 @@
-"""``scripts/low_level.py --algorithms``: two algorithms trained side by side, resumed, and scored in one run."""
+"""``python -m antmaze_lab.low_level --algorithms``: two algorithms trained side by side, resumed, scored in one run."""
 
 import json
 import subprocess
@@ -6,14 +6,15 @@ import sys
 from pathlib import Path
 
 import pytest
-from script_helpers import load_script
 
-low_level = load_script("scripts/low_level.py")
+from antmaze_lab import low_level
 
 # End to end (see pyproject.toml's markers): left out of the default unit tier, run by .ci/run.
 pytestmark = pytest.mark.integration
 
-SCRIPT = Path(__file__).parents[1] / "scripts" / "low_level.py"
+ROOT = Path(__file__).parents[1]
+SCRIPT = [sys.executable, "-m", "antmaze_lab.low_level"]
+"""Run from the repository root, as the docs give it (the lab is importable from there)."""
 
 
 def test_bad_algorithm_lists_get_one_line_errors(tmp_path):
@@ -29,7 +30,7 @@ def test_bad_algorithm_lists_get_one_line_errors(tmp_path):
         low_level.parse_algorithms(f"td3={config},sac=nowhere.yml")
     assert list(low_level.parse_algorithms(f"sac={config}, td3={config}")) == ["sac", "td3"]
     run = subprocess.run(
-        [sys.executable, str(SCRIPT), "--algorithms", f"td3={config}"], capture_output=True, text=True, check=False
+        [*SCRIPT, "--algorithms", f"td3={config}"], cwd=ROOT, capture_output=True, text=True, check=False
     )
     assert run.returncode == 2 and run.stderr.strip().splitlines()[-1].endswith(f"got 'td3={config}'")
 
@@ -50,10 +51,10 @@ def test_two_algorithms_train_in_turns_resume_and_are_scored_beside_the_shipped_
     config = tmp_path / "tiny.yml"
     config.write_text("ant:\n  learning_starts: 100\n  buffer_size: 2000\n")
     out = tmp_path / "algorithms.json"
-    command = [sys.executable, str(SCRIPT), "--algorithms", f"td3={config},sac={config}", "--budget", "400"]
+    command = [*SCRIPT, "--algorithms", f"td3={config},sac={config}", "--budget", "400"]
     command += ["--chunk", "200", "--episodes", "2", "--curve-episodes", "1", "--maze-episodes", "1"]
     command += ["--families", "ant4", "--runs-dir", str(tmp_path / "runs"), "--out", str(out)]
-    subprocess.run(command, check=True, capture_output=True, text=True)
+    subprocess.run(command, cwd=ROOT, check=True, capture_output=True, text=True)
     result = json.loads(out.read_text())
     assert list(result["training"]) == ["td3", "sac"]
     for figures in result["training"].values():
@@ -64,5 +65,7 @@ def test_two_algorithms_train_in_turns_resume_and_are_scored_beside_the_shipped_
     assert all(row["episodes"] == 2 and len(row["wilson_95"]) == 2 for row in result["eval_low"].values())
     assert len(result["in_maze"]) == 3 and Path(result["learning_curves_png"]).is_file()
     timing = (tmp_path / "runs" / "timing.json").read_text()
-    subprocess.run(command, check=True, capture_output=True, text=True)  # at the budget already: no new chunks
+    subprocess.run(
+        command, cwd=ROOT, check=True, capture_output=True, text=True
+    )  # at the budget already: no new chunks
     assert (tmp_path / "runs" / "timing.json").read_text() == timing

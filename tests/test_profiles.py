@@ -68,11 +68,8 @@ def test_the_ids_and_the_maze_families_are_the_values_of_before():
     assert [profiles.maze_env_id(body) for body in ("ant", "point")] == ids[2:]
     assert ENV_IDS["antmaze_hirl/PointMaze-v0"] == ("antmaze_hirl.sb3_ext.shipped:make_maze_env", {"body": "point"})
     assert inspect.signature(HighLevelMazeEnv).parameters["max_steps"].default == 500
-    from script_helpers import load_script
-
-    from antmaze_hirl.experiments import in_maze
-
-    select_low_level = load_script("scripts/select_low_level.py")
+    from antmaze_lab import in_maze_protocol as in_maze
+    from antmaze_lab import select_low_level
 
     assert in_maze.FAMILIES == ("ant3", "ant4", "u", "medium", "large")
     assert in_maze.SELECTION_FAMILIES == {"select4": 4, "select6": 6}

@@ -24,7 +24,7 @@ def imported_top_names(path: Path) -> list[tuple[int, str]]:
 
 @pytest.mark.parametrize("path", SCRIPTS, ids=lambda path: str(path.relative_to(ROOT)))
 def test_a_script_imports_no_other_script(path):
-    # What two scripts share lives in the package (antmaze_hirl.experiments.in_maze, ...), not in a script.
+    # What two scripts share lives in the package, or both are lab modules (antmaze_lab.in_maze_protocol, ...).
     for line, name in imported_top_names(path):
         assert name not in SCRIPT_NAMES and name != "<relative import>", (
             f"{path.relative_to(ROOT)}:{line} imports {name}: move what it needs into antmaze_hirl"

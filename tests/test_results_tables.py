@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from antmaze_lab import headline, in_maze_tables, tables
+from antmaze_lab.commands import command_arguments, recorded_command
 
 SECTIONS = tables.all_sections()
 """Every section, with the page module that prints it."""
@@ -301,6 +302,10 @@ def test_a_selection_table_lists_the_rows_its_run_scored(tmp_path, monkeypatch):
     write_results(tmp_path, name, {"command": command, "scores": scores})
     # A merged file scored more rows than its last run: the command names that run's own.
     assert in_maze_tables.run_policies(name) == ["b/snapshots/step_5000.zip", "a/snapshots/step_7000.zip"]
+    # A run since the lab split records the module it ran; the same options give the same rows.
+    moved = "python -m antmaze_lab.select_low_level b/snapshots/step_5000.zip --mazes 100"
+    write_results(tmp_path, "select_low_level/new.json", {"command": moved, "scores": scores})
+    assert in_maze_tables.run_policies("select_low_level/new.json") == ["b/snapshots/step_5000.zip"]
     assert in_maze_tables.scored_rows(name, str.upper) == [(key.upper(), key) for key in scores]
     ensembles = [
         in_maze_tables.ensemble_label(key) for key in (in_maze_tables.STAGE4, "train_runs/ensembles/t750_s3.zip")
@@ -315,3 +320,12 @@ def test_an_in_maze_row_is_the_policy_its_run_was_given(tmp_path, monkeypatch):
     row = in_maze_tables.trained_row("late", "in_maze/f.json", "0.5")
     assert row == in_maze_tables.InMazeRow("late", "in_maze/f.json", "/elsewhere/step_5000.zip smoothing=0.5")
     assert in_maze_tables.trained_row("plain", "in_maze/f.json").row == "/elsewhere/step_5000.zip"
+
+
+def test_a_lab_run_records_a_command_whose_options_read_back(tmp_path):
+    command = recorded_command("antmaze_lab.in_maze", ["--low-level", "a b.zip", "--out", str(tmp_path / "x.json")])
+    assert command.startswith("python -m antmaze_lab.in_maze --low-level 'a b.zip' --out ")
+    assert command_arguments(command) == ["--low-level", "a b.zip", "--out", str(tmp_path / "x.json")]
+    assert command_arguments("python scripts/in_maze.py --episodes 10") == ["--episodes", "10"]  # before the move
+    with pytest.raises(ValueError, match=r"^not a recorded run command .*: 'antmaze-hirl eval-low --seed 0'$"):
+        command_arguments("antmaze-hirl eval-low --seed 0")

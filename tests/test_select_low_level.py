@@ -1,4 +1,4 @@
-"""scripts/select_low_level.py: its mazes are selection sets, apart from every reported family."""
+"""antmaze_lab.select_low_level: its mazes are selection sets, apart from every reported family."""
 
 import json
 import sys
@@ -6,13 +6,11 @@ from pathlib import Path
 
 import pytest
 from conftest import StillController
-from script_helpers import load_script
 
 from antmaze_hirl.envs.layout_splits import layout_split
 from antmaze_hirl.envs.layouts import validate_maze_map
-from antmaze_hirl.experiments import in_maze
-
-select_low_level = load_script("scripts/select_low_level.py")
+from antmaze_lab import in_maze_protocol as in_maze
+from antmaze_lab import select_low_level
 
 SHIPPED = Path(__file__).parents[1] / "antmaze_hirl" / "policies" / "ant_td3.zip"
 
@@ -85,7 +83,7 @@ def test_the_large_selection_mazes_have_medium_s_grid_and_a_path_scaled_limit():
 
 
 def run_main(monkeypatch, *args):
-    monkeypatch.setattr(sys, "argv", ["select_low_level.py", *map(str, args)])
+    monkeypatch.setattr(sys, "argv", ["antmaze_lab.select_low_level", *map(str, args)])
     select_low_level.main()
 
 

@@ -163,11 +163,11 @@ class SeedTable:
 
     Attributes:
         held_out: Held-out mazes: the experiment's final evaluation (``evaluate_high_level``'s default) and
-            ``scripts/in_maze.py``.
-        low_level_selection_mazes: The mazes ``scripts/select_low_level.py`` picked the shipped ant on.
+            the lab's in-maze runs (``python -m antmaze_lab.in_maze``).
+        low_level_selection_mazes: The mazes the lab's ``select_low_level`` picked the shipped ant on.
         selection: The periodic evaluations' mazes under ``held_out_layouts`` (the ``"selection"`` part).
         low_level_curve: Subgoal seeds of ``train-low``'s held-out success curve (:class:`SuccessRateCallback`).
-        low_level_selection_subgoals: First subgoal seed of ``select_low_level.py``'s ``eval-low``.
+        low_level_selection_subgoals: First subgoal seed of the lab's ``select_low_level``'s ``eval-low``.
         low_level_report_subgoals: First subgoal seed of ``eval-low``'s reported set (its ``--seed`` default).
         suites: The benchmark suites' draws: suite ``i`` (in ``SUITE_SPECS`` order) draws its tasks from
             ``np.random.default_rng(suites + i)`` (``scripts/make_suites.py``).
@@ -236,7 +236,7 @@ MAZE_FAMILIES: dict[str, MazeFamily] = {
     "select4": MazeFamily("ant", "random", 4, "selection", DEFAULT_MAX_STEPS),
     "select6": MazeFamily("ant", "random", 6, "selection", None),
 }
-"""The maze families of ``scripts/in_maze.py`` and ``scripts/select_low_level.py``, by name."""
+"""The maze families of the lab's ``in_maze`` and ``select_low_level`` runs (``antmaze_lab/``), by name."""
 
 SUITE_FAMILIES: dict[str, MazeFamily] = {
     # The point's experiment family, its "eval" part (the ant's is ant4).

@@ -27,7 +27,7 @@ How the tasks were drawn (:func:`draw_suite_tasks`, rerun by ``scripts/make_suit
   the grid, and the start/goal pairs are fixed. A learner trained on the map itself is on OGBench's
   footing (same maze, fixed evaluation start/goal pairs), not on held-out mazes: a row says which.
   Low-level step limit: ``max(500, ceil(40 * shortest cell path in metres))``
-  (:func:`~antmaze_hirl.envs.profiles.path_scaled_step_limit`, ``scripts/in_maze.py``'s rule, a 0.5 m/s
+  (:func:`~antmaze_hirl.envs.profiles.path_scaled_step_limit`, the lab's in-maze rule, a 0.5 m/s
   average).
 """
 

@@ -65,7 +65,7 @@ def body_settings(
 SELECTION_SEED = SEEDS.selection
 """With ``held_out_layouts``, periodic evaluation ``i`` resets with seed ``SELECTION_SEED + i``: a seed
 range apart from the final evaluation's (from :data:`~antmaze_hirl.dagger.evaluation.HELD_OUT_SEED`) and from
-the 2,000,000 on of ``scripts/select_low_level.py``'s mazes, which chose the shipped ant low level."""
+the 2,000,000 on of the lab's ``select_low_level`` mazes, which chose the shipped ant low level."""
 
 
 PROTOCOLS = (1, 2)

@@ -21,7 +21,7 @@ The loop, per iteration ``i``:
 
 The student is an ordinary SB3 TD3 model with a plain single actor (the teacher's network settings, its actor
 started from one teacher head, the teacher's critic copied), saved as a normal zip: ``load_low_level``,
-``eval-low``, ``in_maze.py`` and ``train-low --init-from`` (a TD3+HER fine-tune with a flip or tilt penalty)
+``eval-low``, the lab's in-maze runs and ``train-low --init-from`` (a TD3+HER fine-tune with a flip or tilt penalty)
 all take it.
 
 A run folder (:func:`distill`) holds ``state.json`` (settings, teacher fingerprint, completed iterations, the

@@ -13,8 +13,9 @@
    stage 5 averages snapshots of stages 3-4's runs and has no curve of its own)
    as a PNG, beside the curves of the runs that chose its settings.
 
-Usage: python scripts/low_level.py [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
-Writes results/low_level/low_level.json and results/low_level/ant_learning_curve.png.
+Usage: python -m antmaze_lab.low_level [--steps 6000] [--blocks 4] [--episodes 200] [--sets 4]
+Writes results/low_level/low_level.json and results/low_level/ant_learning_curve.png. Files written before it
+moved into the lab record ``python scripts/low_level.py`` (earlier ``benchmarks/low_level.py``): the same options.
 
 **Algorithms side by side** (which SB3-compatible algorithm trains the best ant), a separate mode:
 ``--algorithms td3=FILE,sac=FILE`` trains one ant low level per algorithm from scratch, each with its
@@ -22,11 +23,11 @@ hyperparameter file (``train-low --hyperparams``), the same seed and the same st
 chunks (``--chunk``), so machine load and an interrupted session hit every algorithm alike; each run lives in
 ``--runs-dir/<algo>`` and resumes from its checkpoint, so the comparison can span sessions. At the budget it
 scores every final policy beside the shipped one in one pass: eval-low (``--episodes`` free-space subgoals
-from seed 0, up to 4 m) and in-maze success (``in_maze.py``'s families, ``--maze-episodes`` each), with 95%
+from seed 0, up to 4 m) and in-maze success (``antmaze_lab.in_maze``'s families, ``--maze-episodes`` each), with 95%
 Wilson intervals, plus each algorithm's training steps/s (median over its chunks) and its ratio to the first
 algorithm's.
 
-Usage: python scripts/low_level.py --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
+Usage: python -m antmaze_lab.low_level --algorithms td3=TD3.yml,sac=SAC.yml [--budget 500000] [--chunk 25000]
            [--runs-dir runs/algorithms] [--maze-episodes 100] [--families ant4,u,medium,large]
            [--out results/low_level/low_level_algorithms.json]
 (for instance td3=scripts/configs/ant_maze.yml,sac=scripts/configs/ant_maze_sac.yml: the maze setting).
@@ -38,7 +39,6 @@ import argparse
 import contextlib
 import csv
 import json
-import shlex
 import statistics
 import sys
 import tempfile
@@ -52,8 +52,6 @@ import antmaze_hirl
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.experiments.in_maze import parse_families
-from antmaze_hirl.experiments.in_maze import run as in_maze_run
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
 from antmaze_hirl.plotting import plot_learning_curves
@@ -61,6 +59,9 @@ from antmaze_hirl.sb3_ext import evaluate_reach, load_config, make_model, save_c
 from antmaze_hirl.sb3_ext.checkpoint import POINTER, CheckpointError, latest_checkpoint
 from antmaze_hirl.sb3_ext.config import ALGOS
 from antmaze_hirl.sb3_ext.loading import load_low_level
+from antmaze_lab.commands import recorded_command
+from antmaze_lab.in_maze_protocol import parse_families
+from antmaze_lab.in_maze_protocol import run as in_maze_run
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "low_level"
@@ -98,6 +99,7 @@ def plain_sb3_seconds(steps: int, seed: int) -> float:
 
 
 def training_ratio(steps: int, blocks: int) -> dict[str, float]:
+    """Seconds per ``steps`` training steps, ours against plain SB3, over ``blocks`` alternating blocks."""
     ours, saves, plain = [], [], []
     for block in range(blocks):  # alternate so drifts in machine load hit both sides alike
         elapsed, save = ours_seconds(steps, seed=block)
@@ -160,12 +162,14 @@ ANT_CURVES = {
 
 
 def read_curve(path: Path, offset: int = 0) -> tuple[list[int], list[float]]:
+    """A learning-curve CSV's steps (shifted by ``offset``) and success rates."""
     with path.open() as handle:
         rows = list(csv.DictReader(handle))
     return [offset + int(row["timesteps"]) for row in rows], [float(row["success_rate"]) for row in rows]
 
 
 def learning_curve_png() -> str:
+    """Plots the ant's committed learning curves; returns the PNG's path."""
     curves = {
         label: read_curve(RESULTS / name, offset)
         for label, (name, offset) in ANT_CURVES.items()
@@ -203,8 +207,11 @@ def steps_done(run_dir: Path) -> int:
 
 
 def latest_model(run_dir: Path) -> Path:
-    """The model of a run's latest checkpoint: what is scored, so a kill before ``policy.zip`` is written
-    (or a ``policy.zip`` left from an earlier chunk) cannot put another step count's policy in the table."""
+    """The model of a run's latest checkpoint: what is scored.
+
+    So a kill before ``policy.zip`` is written (or a ``policy.zip`` left from an earlier chunk) cannot put another
+    step count's policy in the table.
+    """
     return latest_checkpoint(run_dir / "checkpoints")[0] / "model.zip"
 
 
@@ -294,7 +301,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     with contextlib.suppress(ValueError):  # repo-relative where it lies in the repo: the JSON is committed
         png = Path(png).resolve().relative_to(ROOT)
     return {
-        "command": shlex.join(["python", "scripts/low_level.py", *sys.argv[1:]]),
+        "command": recorded_command("antmaze_lab.low_level", sys.argv[1:]),
         "version": antmaze_hirl.__version__,
         "hyperparams": {algo: str(file) for algo, file in algorithms.items()},
         "budget_steps": args.budget,
@@ -309,6 +316,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def main() -> None:
+    """The command line: the speed and success figures, or ``--algorithms``' side-by-side training."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
     parser.add_argument("--blocks", type=int, default=4)

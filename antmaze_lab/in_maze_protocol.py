@@ -1,8 +1,8 @@
 """In-maze success: the scripted oracle driving an ant low level through held-out mazes, the protocol.
 
-The episode and protocol code of ``scripts/in_maze.py`` (its command line), shared with
-``scripts/select_low_level.py``, ``scripts/flip_warning.py``, ``scripts/low_level.py`` and
-``benchmarks/lockstep_paths.py``:
+The episode and protocol code of :mod:`antmaze_lab.in_maze` (its command line), shared with the lab's
+:mod:`~antmaze_lab.select_low_level`, :mod:`~antmaze_lab.flip_warning`, :mod:`~antmaze_lab.low_level` and
+:mod:`~antmaze_lab.lockstep_paths` (whose workers import it by this name):
 
 * the maze families (:data:`FAMILIES`, reported; :data:`SELECTION_FAMILIES`, for picking a policy only), each
   built by :func:`family_env`: ``ant3`` and ``ant4`` at 500 steps, the standard maps and ``select6`` with a step
@@ -52,7 +52,7 @@ SELECTION_FAMILIES = {name: f.maze_size for name, f in profiles.MAZE_FAMILIES.it
 """Families for picking a policy, never reported: random layouts of this many free cells per side from the
 ``selection`` part of the layout partition (no wall grid of ``ant4``'s ``eval`` part or of training's ``train``
 part). ``select4`` is ``ant4``'s family (500 steps); ``select6`` has ``medium``'s 8x8 grid and, like the standard
-maps, a step limit scaled to the path. ``scripts/select_low_level.py`` plays them from maze seed 2,000,000."""
+maps, a step limit scaled to the path. ``antmaze_lab.select_low_level`` plays them from maze seed 2,000,000."""
 STEPS_PER_METRE = profiles.STEPS_PER_METRE
 """Step budget per metre of shortest cell path: a 0.5 m/s average, half the ~1 m/s of a straight walk."""
 MIN_STEPS = profiles.MIN_STEPS

@@ -10,8 +10,8 @@ the same mazes) and each maze family:
 * ``u``, ``medium``, ``large``: gymnasium-robotics' standard maps, random start corner and goal (at least 3 grid
   steps apart), with the step limit scaled to the episode's shortest path (:func:`step_limit`).
 
-``select4`` and ``select6`` (:data:`SELECTION_FAMILIES`) are for ``select_low_level.py`` only: ``--families`` takes
-the reported ones above.
+``select4`` and ``select6`` (:data:`SELECTION_FAMILIES`) are for ``antmaze_lab.select_low_level`` only:
+``--families`` takes the reported ones above.
 
 The oracle's subgoals are at most 2 m away (the ant experiment's ``subgoal_reach_m``). Episode ``i`` of every
 family resets with seed ``HELD_OUT_SEED + i`` (1,000,000 + i, as every held-out figure): for ``ant3`` these are the
@@ -34,19 +34,20 @@ so the figures do not depend on N (``seconds`` then sums the workers' time).
 ``--num-envs N`` (default :data:`LOCKSTEP_ENVS`) plays up to N mazes of a chunk at once in lockstep: the
 oracle labels every maze that needs a subgoal, the low level acts in one batch for every maze still walking.
 The same mazes and seeds; a batched forward pass may round the last bits differently, which MuJoCo can turn
-into another outcome now and then (``benchmarks/lockstep_paths.py`` counts how often). ``--num-envs 1`` plays
+into another outcome now and then (``antmaze_lab.lockstep_paths`` counts how often). ``--num-envs 1`` plays
 them one after another, the path every ``in_maze/in_maze*.json`` committed before lockstep was made with: use it to
 replay one exactly.
 
-Usage: python scripts/in_maze.py [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
+Usage: python -m antmaze_lab.in_maze [--episodes 100] [--families ant3,ant4,u,medium,large] [--low-level cand.zip ...]
            [--action-smoothing 0[,A...]] [--subgoal-reach-m 2.0] [--jobs 1] [--chunk-episodes 25] [--num-envs 25]
-Writes results/in_maze/in_maze.json (or ``--out``), with the command that made it, and prints a table.
+Writes results/in_maze/in_maze.json (or ``--out``), with the command that made it, and prints a table. Files
+written before it moved into the lab record ``python scripts/in_maze.py`` (earlier ``benchmarks/in_maze.py``):
+the same options replay them here.
 """
 
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -56,7 +57,8 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
-from antmaze_hirl.experiments.in_maze import (
+from antmaze_lab.commands import recorded_command
+from antmaze_lab.in_maze_protocol import (
     FAMILIES,
     FROZEN_RADIUS,
     FROZEN_SUBGOALS,
@@ -88,6 +90,7 @@ def table(results: dict[str, Any]) -> str:
 
 
 def main() -> None:
+    """The command line: play every low level and family, write the file, print the table."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--episodes", type=int, default=100, help="held-out mazes (episodes) per family")
     parser.add_argument("--families", default=",".join(FAMILIES), help=f"comma-separated subset of {FAMILIES}")
@@ -155,7 +158,7 @@ def main() -> None:
     atomic_write_json(
         args.out,
         {
-            "command": shlex.join(["python", "scripts/in_maze.py", *sys.argv[1:]]),
+            "command": recorded_command("antmaze_lab.in_maze", sys.argv[1:]),
             "subgoal_reach_m": subgoal_reach_m,
             "num_envs": args.num_envs,
             "step_limit": (

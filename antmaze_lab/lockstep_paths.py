@@ -1,4 +1,4 @@
-"""Serial against lockstep for in_maze.py, demo_success.py and eval-low: same outcomes out of N, and the speedup.
+"""Serial against lockstep for the in-maze runs, demo_success.py and eval-low: same outcomes out of N, the speedup.
 
 Each tool's serial path (``--num-envs 1``, the one results committed before lockstep were made with) and its
 lockstep path play the same seeds, side by side in one run:
@@ -15,8 +15,10 @@ With a controller that acts row by row the two paths are the same episodes bit f
 that); a batched forward pass of the shipped policies may round the last bits differently, and MuJoCo can
 amplify that into another outcome. This counts how often.
 
-    python benchmarks/lockstep_paths.py                 # about 10 min on 2 loaded cores
-    python benchmarks/lockstep_paths.py --mazes 10 --demo-seeds 4 --subgoals 20
+    python -m antmaze_lab.lockstep_paths                # about 10 min on 2 loaded cores
+    python -m antmaze_lab.lockstep_paths --mazes 10 --demo-seeds 4 --subgoals 20
+
+(``python benchmarks/lockstep_paths.py`` before it moved into the lab, with the same options.)
 """
 
 from __future__ import annotations
@@ -24,7 +26,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import shlex
 import sys
 import time
 from collections.abc import Callable
@@ -38,15 +39,17 @@ from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.dagger.evaluation import HELD_OUT_SEED
 from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.experiments import in_maze
 from antmaze_hirl.sb3_ext.evaluation import reach_outcomes
 from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
+from antmaze_lab import in_maze_protocol as in_maze
+from antmaze_lab.commands import recorded_command
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "lockstep_paths" / "lockstep_paths.json"
 
 
 def timed(play: Callable[[], list[Any]]) -> tuple[list[Any], float]:
+    """``play()``'s outcomes and its wall time, seconds."""
     start = time.perf_counter()
     outcomes = play()
     return outcomes, time.perf_counter() - start
@@ -79,6 +82,8 @@ def compare(tool: str, case: str, serial: Callable[[], list[Any]], lockstep: Cal
 
 
 def in_maze_rows(families: list[str], mazes: int) -> list[dict]:
+    """One row per in-maze family: the shipped ant on ``mazes`` held-out mazes, one at a time and in lockstep."""
+
     def play(family: str, num_envs: int) -> list[str]:
         seeds = range(HELD_OUT_SEED, HELD_OUT_SEED + mazes)
         return in_maze.run_chunk(None, 0.0, family, seeds, 2.0, num_envs)[2]["outcomes"]
@@ -95,6 +100,7 @@ def in_maze_rows(families: list[str], mazes: int) -> list[dict]:
 
 
 def demo_rows(seeds: int) -> list[dict]:
+    """One row per body: the demo's first ``seeds`` episodes, serial and in lockstep."""
     return [
         compare(
             "demo_success",
@@ -107,6 +113,7 @@ def demo_rows(seeds: int) -> list[dict]:
 
 
 def eval_low_rows(subgoals: int, num_envs: int = 25) -> list[dict]:
+    """One row per body: eval-low's ``subgoals`` reach episodes, serial and ``num_envs`` at once."""
     rows = []
     for body in ("ant", "point"):
         policy, env = load_low_level(body), ReachEnv(body)
@@ -120,6 +127,7 @@ def eval_low_rows(subgoals: int, num_envs: int = 25) -> list[dict]:
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """The command line: every row, written to ``--out`` and returned."""
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--families", default="ant3,u", help="in_maze families, comma-separated")
@@ -144,7 +152,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     load.append(os.getloadavg()[0])
     report = {
         "benchmark": "lockstep_paths",
-        "command": shlex.join(["python", "benchmarks/lockstep_paths.py", *argv]),
+        "command": recorded_command("antmaze_lab.lockstep_paths", argv),
         "machine": f"{platform.machine()} ({os.cpu_count()} CPUs), shared with other work while measured",
         "load_average_1min": [round(value, 2) for value in load],
         "rows": rows,

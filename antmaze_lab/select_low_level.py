@@ -7,14 +7,14 @@ Every ``<run>/snapshots/step_<n>.zip`` (written at each evaluation) is scored, a
 
 * ``eval_low``: free-space reaching as ``antmaze-hirl eval-low`` measures it, but on subgoal seeds
   ``--seed`` .. ``--seed + episodes - 1`` (default from 100,000), disjoint from the reported ones
-  (seeds 0-199: the README and ``scripts/low_level.py``) and from train-low's held-out curve (10,000-);
+  (seeds 0-199: the README and ``antmaze_lab.low_level``) and from train-low's held-out curve (10,000-);
 * the scripted oracle (2 m subgoals) driving the snapshot through ``--mazes`` random mazes per family, from maze
   seed 2,000,000 (every reported maze figure starts at 1,000,000, the paper experiment's periodic evaluation at
-  3,000,000), played by ``in_maze.py``'s machinery:
+  3,000,000), played by ``antmaze_lab.in_maze``'s machinery:
 
   - by default ``ant3``: the ant protocol's 3x3 mazes;
   - with ``--held-out-layouts``, ``select4``: 4x4 layouts (``ant4``'s family, 500 steps) from the ``selection``
-    part of the layout partition, which holds no wall grid of the reported ``eval`` part (``in_maze.py``'s
+    part of the layout partition, which holds no wall grid of the reported ``eval`` part (``antmaze_lab.in_maze``'s
     ``ant4``, the paper experiment's final evaluation) nor of the ``train`` part
     (``ReachEnv(maze_split="train")``);
   - with ``--large-mazes`` as well, ``select6``: 6x6 layouts of the same part (``medium``'s 8x8 grid), the step
@@ -29,18 +29,18 @@ A policy trained under action smoothing (``ReachEnv(action_smoothing=...)``, e.g
 ``scripts/configs/ant_maze_smoothed.yml``) is scored at its weight: every figure of a row runs with the same
 smoothing (the saved zip does not record it).
 
-Usage: python scripts/select_low_level.py runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
+Usage: python -m antmaze_lab.select_low_level runs/ant_chain [runs/ant_finetune ...] [policy.zip ...] [--min-step N]
            [--held-out-layouts [--large-mazes]] [--action-smoothing 0[,A...]] [--jobs N]
 Writes results/select_low_level/low_level_selection.json (``low_level_selection_held_out.json`` beside it with
 ``--held-out-layouts``, ``low_level_selection_held_out_large.json`` with ``--large-mazes`` too), with the command
-that made it.
+that made it. Files written before it moved into the lab record ``python scripts/select_low_level.py`` (earlier
+``benchmarks/select_low_level.py``): the same options replay them here.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -50,11 +50,12 @@ import torch
 from antmaze_hirl.atomic_io import atomic_write_json
 from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.reach import ReachEnv
-from antmaze_hirl.experiments.in_maze import map_tasks, parse_smoothing, row_name, row_names
-from antmaze_hirl.experiments.in_maze import run as play_families
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.sb3_ext.evaluation import evaluate_reach, snapshot_step
 from antmaze_hirl.sb3_ext.loading import load_low_level
+from antmaze_lab.commands import recorded_command
+from antmaze_lab.in_maze_protocol import map_tasks, parse_smoothing, row_name, row_names
+from antmaze_lab.in_maze_protocol import run as play_families
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "select_low_level"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
@@ -125,6 +126,7 @@ def score_rows(
 
 
 def main() -> None:
+    """The command line: score every snapshot and policy, write the file, print each row and the best."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
     first_seed = SEEDS.low_level_selection_subgoals
@@ -165,7 +167,7 @@ def main() -> None:
     if missing:
         parser.error(f"neither a policy file nor a run with a snapshots/ folder: {missing}")
     torch.set_num_threads(1)
-    command = shlex.join(["python", "scripts/select_low_level.py", *sys.argv[1:]])
+    command = recorded_command("antmaze_lab.select_low_level", sys.argv[1:])
     settings = {"body": "ant", "seed": args.seed, "episodes": args.episodes, "mazes": args.mazes, "families": families}
     cached = json.loads(args.out.read_text()) if args.out.exists() else {}
     scores = cached.get("scores", {}) if cached.get("settings") == settings else {}

@@ -1,8 +1,8 @@
 """What comes before a flip, and whether a reflex at inference can stop it (flips end the ant's walks in mazes).
 
 The scripted oracle (2 m subgoals) drives a low level (default the shipped ant) through ``--mazes`` ``select6``
-mazes (``in_maze.py``'s selection family: 6x6 layouts of the ``selection`` part of the layout partition, step
-limits scaled to the path, maze seed 2,000,000 as ``select_low_level.py``): no reported figure uses them, so
+mazes (``antmaze_lab.in_maze``'s selection family: 6x6 layouts of the ``selection`` part of the layout partition, step
+limits scaled to the path, maze seed 2,000,000 as ``antmaze_lab.select_low_level``): no reported figure uses them, so
 what is tuned here does not peek at the held-out sets.
 
 * **Warning.** Every low-level step's *uprightness* (world z of the torso's up axis: 1 upright, 0 on its
@@ -17,15 +17,16 @@ what is tuned here does not peek at the held-out sets.
 The dense reward term that the lead motivates is ``ReachEnv(tilt_penalty=...)``
 (``scripts/configs/ant_maze_tilt.yml``).
 
-Usage: python scripts/flip_warning.py [--mazes 100] [--low-level ZIP] [--thresholds 0.8,0.7,0.6,0.5]
+Usage: python -m antmaze_lab.flip_warning [--mazes 100] [--low-level ZIP] [--thresholds 0.8,0.7,0.6,0.5]
            [--reflexes 0@0.8,0.3@0.8] [--jobs 1]
 Writes results/flip_warning/flip_warning.json (or ``--out``), with the command that made it, and prints both tables.
+Files written before it moved into the lab record ``python scripts/flip_warning.py`` (earlier
+``benchmarks/flip_warning.py``): the same options replay them here.
 """
 
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -40,10 +41,11 @@ from antmaze_hirl.envs.profiles import SEEDS
 from antmaze_hirl.envs.simulator import uprightness
 from antmaze_hirl.experiments import wilson_interval
 from antmaze_hirl.experiments.config import BODY_DEFAULTS
-from antmaze_hirl.experiments.in_maze import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
 from antmaze_hirl.experiments.runner import low_level_identity
 from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
+from antmaze_lab.commands import recorded_command
+from antmaze_lab.in_maze_protocol import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
 
 FAMILY = "select6"
 QUATERNION = slice(1, 5)
@@ -51,7 +53,7 @@ QUATERNION = slice(1, 5)
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "flip_warning"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
-"""``select_low_level.py``'s maze seed of episode 0."""
+"""``antmaze_lab.select_low_level``'s maze seed of episode 0."""
 
 
 class TiltReflex:
@@ -113,8 +115,10 @@ def parse_reflexes(text: str) -> list[tuple[float, float]]:
 
 
 def play_chunk(path: Path | None, scale: float, threshold: float, seeds: range) -> dict[str, Any]:
-    """One chunk of ``select6`` episodes with a reflex: outcomes, steps the reflex acted, uprightness traces,
-    and the low level's fingerprint."""
+    """One chunk of ``select6`` episodes with a reflex.
+
+    Returns its outcomes, the steps the reflex acted, the uprightness traces and the low level's fingerprint.
+    """
     torch.set_num_threads(1)
     model = worker_low_level(path)
     reflex = TiltReflex(model, threshold, scale)
@@ -184,6 +188,7 @@ def reflex_row(outcomes: list[str], acted: int, steps: int) -> dict[str, Any]:
 
 
 def main() -> None:
+    """The command line: play every reflex row on the ``select6`` mazes, write the file, print the figures."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mazes", type=int, default=100, help="select6 mazes (episodes) per row")
     parser.add_argument("--low-level", type=Path, default=None, help="policy .zip (default: the shipped ant)")
@@ -220,7 +225,7 @@ def main() -> None:
     atomic_write_json(
         args.out,
         {
-            "command": shlex.join(["python", "scripts/flip_warning.py", *sys.argv[1:]]),
+            "command": recorded_command("antmaze_lab.flip_warning", sys.argv[1:]),
             "low_level_id": done[0]["low_level_id"],  # every chunk plays the same low level
             "family": FAMILY,
             "maze_seed": SELECTION_MAZE_SEED,
