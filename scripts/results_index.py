@@ -13,11 +13,16 @@ A superseded entry is removed from the tree: the entry that supersedes it names 
 or git does not record is written ``not recorded``, one that does not apply (no low level in an env
 benchmark) ``n/a``.
 
-``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, a removed
-entry still present, a superseded entry not listed as removed, or an entry's null or missing field);
-``--table`` prints the Markdown tables of ``docs/results/files.md`` (a generated block).
+A recorded command names the script of its day. ``moved`` maps each script that has since become a lab module
+(``scripts/in_maze.py``, earlier ``benchmarks/in_maze.py``) to that module (``antmaze_lab.in_maze``): the same
+options replay it as ``python -m antmaze_lab.in_maze ...`` from the repository root (:func:`replay_command`).
 
-Usage: python scripts/results_index.py [--check | --table]
+``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, a removed
+entry still present, a superseded entry not listed as removed, an entry's null or missing field, or a moved
+script still on disk or its module missing); ``--table`` prints the Markdown tables of ``docs/results/files.md``
+(a generated block); ``--replay ENTRY`` prints the command that replays an entry today.
+
+Usage: python scripts/results_index.py [--check | --table | --replay EXPERIMENT/ENTRY]
 """
 
 from __future__ import annotations
@@ -104,7 +109,25 @@ def problems(results: Path, index: dict[str, Any]) -> list[str]:
             by = f"{newer}'s supersedes names it" if newer else "no entry's supersedes names it"
             said = f"removed gives {named} as superseding it" if path in listed else "removed does not list it"
             lines.append(f"{path}: {by}, {said} (a superseded entry leaves the tree, named in both)")
+    for script, module in index.get("moved", {}).items():
+        if (ROOT / script).exists():
+            lines.append(f"{script}: moved to {module}, still on disk (a moved script leaves the tree)")
+        if not (ROOT / Path(*module.split("."))).with_suffix(".py").is_file():
+            lines.append(f"{script}: moved to {module}, which is not a module of this checkout")
     return lines
+
+
+def replay_command(command: str, moved: dict[str, str]) -> str:
+    """The command that replays recorded ``command`` today, from the repository root.
+
+    ``python scripts/in_maze.py --episodes 10`` with ``scripts/in_maze.py`` moved to ``antmaze_lab.in_maze`` is
+    ``python -m antmaze_lab.in_maze --episodes 10``: the same options, the script's module. Any other command
+    (not moved, ``antmaze-hirl ...``, ``not recorded``) is returned as it is.
+    """
+    words = command.split(" ", 2)
+    if len(words) >= 2 and words[0] == "python" and words[1] in moved:
+        return " ".join(["python", "-m", moved[words[1]], *words[2:]])
+    return command
 
 
 def expand_braces(token: str) -> list[str]:
@@ -182,6 +205,18 @@ def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
         f"| `{r['path']}` | `{r['superseded_by']}` | {r['commit']} | {cell(r.get('note', ''))} |"
         for r in index["removed"]
     ]
+    if index.get("moved"):
+        lines += [
+            "",
+            "### Moved scripts",
+            "",
+            "A command recorded as `python SCRIPT OPTIONS` replays as `python -m MODULE OPTIONS` from the repository "
+            "root (`python scripts/results_index.py --replay EXPERIMENT/ENTRY` prints it).",
+            "",
+            "| recorded script | module today |",
+            "|---|---|",
+        ]
+        lines += [f"| `{script}` | `{module}` |" for script, module in index["moved"].items()]
     return "\n".join(lines).rstrip()
 
 
@@ -190,6 +225,11 @@ def main(argv: list[str] | None = None) -> int:
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--check", action="store_true", help="compare results/index.json with the tree")
     mode.add_argument("--table", action="store_true", help="print the tables of docs/results/files.md")
+    mode.add_argument(
+        "--replay",
+        metavar="EXPERIMENT/ENTRY",
+        help="print the command that replays this entry today, e.g. in_maze/in_maze.json",
+    )
     args = parser.parse_args(argv)
     try:
         index = load_index()
@@ -199,6 +239,15 @@ def main(argv: list[str] | None = None) -> int:
         found = problems(RESULTS, index)
         print("\n".join(found) if found else f"{INDEX.relative_to(ROOT)}: matches results/")
         return 1 if found else 0
+    if args.replay:
+        experiment, _, name = args.replay.partition("/")
+        entry = index["experiments"].get(experiment, {"entries": {}})["entries"].get(name)
+        if entry is None:
+            parser.error(
+                f"no entry {args.replay!r} in {INDEX.relative_to(ROOT)} (EXPERIMENT/ENTRY, e.g. in_maze/in_maze.json)"
+            )
+        print(replay_command(entry["command"], index.get("moved", {})))
+        return 0
     print(table(index, quoting_pages(ROOT, entry_paths(index))))
     return 0
 

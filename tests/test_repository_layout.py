@@ -105,6 +105,26 @@ def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
     assert results_index.matches("leaderboard", "leaderboard/*.json")
 
 
+def test_a_moved_script_replays_as_its_lab_module_and_the_check_names_a_stale_move(tmp_path):
+    results_index = load_script("scripts/results_index.py")
+    moved = {"scripts/in_maze.py": "antmaze_lab.in_maze"}
+    recorded = "python scripts/in_maze.py --low-level 'a b.zip' --episodes 10"
+    assert (
+        results_index.replay_command(recorded, moved)
+        == "python -m antmaze_lab.in_maze --low-level 'a b.zip' --episodes 10"
+    )
+    assert results_index.replay_command("python scripts/in_maze.py", moved) == "python -m antmaze_lab.in_maze"
+    for kept in ("python scripts/paper_experiment.py --seeds 2", "antmaze-hirl eval-low --seed 0", "not recorded"):
+        assert results_index.replay_command(kept, moved) == kept
+    index = {"experiments": {}, "removed": [], "moved": moved}
+    assert results_index.problems(tmp_path, index) == []
+    index["moved"] = {"scripts/results_index.py": "antmaze_lab.nowhere"}
+    assert results_index.problems(tmp_path, index) == [
+        "scripts/results_index.py: moved to antmaze_lab.nowhere, still on disk (a moved script leaves the tree)",
+        "scripts/results_index.py: moved to antmaze_lab.nowhere, which is not a module of this checkout",
+    ]
+
+
 def test_benchmarks_holds_only_benchmark_scripts():
     # Results go to results/<experiment>/, configs and research scripts to scripts/ (docs/architecture.md).
     others = sorted(p.name for p in (ROOT / "benchmarks").iterdir() if p.suffix != ".py" and p.name != "__pycache__")
