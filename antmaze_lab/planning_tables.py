@@ -5,12 +5,17 @@
 DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``;
 ``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``);
 ``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes.
+
+A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
+file given to a one-file table), and ``tasks`` files that do not belong together (:func:`check_together`), are
+refused in one line naming the file, exit status 2.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import statistics
 import sys
 from collections import defaultdict
@@ -18,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from antmaze_hirl.experiments.uncertainty import rate_with_interval
+from antmaze_lab.commands import command_arguments
 
 MAPS = ("u", "medium", "large", "giant", "point-u", "point-medium", "point-large", "point-giant")
 
@@ -154,26 +160,157 @@ def tasks_table(ends: dict[str, Any], reports: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def file_kind(data: Any) -> str:
+    """What a results file is, by its fields: one of :data:`TABLE_FILES`' kinds, or ``"unknown"``."""
+    if isinstance(data, list) or not isinstance(data, dict):
+        return "unknown"
+    rows = data.get("rows")
+    if str(data.get("format", "")).startswith("antmaze_hirl.benchmark_result/"):
+        return "benchmark report"
+    if "variant" in data and "trial_seconds" in data:
+        return "trial"
+    if "learners" in data:
+        return "by-path"
+    if isinstance(rows, list) and all(isinstance(row, dict) and "variant" in row for row in rows):
+        return "screen"
+    if isinstance(rows, dict) and rows and all(isinstance(row, dict) for row in rows.values()):
+        if all("ends" in row for row in rows.values()):
+            return "ends"
+        if all("gradient_steps_per_s" in row for row in rows.values()):
+            return "speed"
+    return "unknown"
+
+
+TABLE_FILES = {
+    "screen": ("screen", None),
+    "by-path": ("by-path", None),
+    "trials": ("trial", "trial"),
+    "speed": ("speed", None),
+    "ends": ("ends", None),
+    "tasks": ("ends", "benchmark report"),
+}
+"""Per table: the kind of its first file, and of the files after it (``None``: it reads one file)."""
+
+
+def _learner(ends: dict[str, Any]) -> str:
+    """The learner an ends file scored: ``"shipped"``, or its ``--learner-zip`` (from the command if not recorded)."""
+    if "learner" in ends:
+        return str(ends["learner"])
+    arguments = command_arguments(ends["command"])
+    return arguments[arguments.index("--learner-zip") + 1] if "--learner-zip" in arguments else "shipped"
+
+
+def _policy(report: dict[str, Any]) -> str:
+    """The ``--policy`` a benchmark report was scored with (``planner``: the shipped planning learner)."""
+    words = shlex.split(report.get("command", ""))
+    return words[words.index("--policy") + 1] if "--policy" in words[:-1] else "not recorded"
+
+
+def check_together(ends: tuple[str, dict[str, Any]], reports: list[tuple[str, dict[str, Any]]]) -> None:
+    """Refuses ``tasks`` files that do not belong together, naming them.
+
+    Each report must be of the ends file's body and learner (the shipped learner's ends with ``--policy planner``
+    reports, a ``--learner-zip`` file's with that zip), of a suite the ends file rolled out, with as many tasks as
+    it rolled out there; the reports must be one run's (one suite each, the same seed and episodes per task).
+
+    Raises:
+        ValueError: One line naming the files that do not match, and how.
+    """
+    ends_name, ends_data = ends
+    learner = _learner(ends_data)
+    wanted = "planner" if learner == "shipped" else learner
+    suites = [name for name, row in ends_data["rows"].items() if "suite_task_ends" in row]
+    if not reports:
+        raise ValueError(f"tasks needs at least one benchmark report after {ends_name}")
+    first_name, first = reports[0]
+    seen: dict[str, str] = {}
+    for name, report in reports:
+        suite, policy = report["suite"], _policy(report)
+        if report["body"] != ends_data["body"]:
+            raise ValueError(f"{name} is a {report['body']} report, {ends_name} holds {ends_data['body']} rollouts")
+        if policy != wanted and Path(policy) != Path(wanted):
+            raise ValueError(f"{name} scored --policy {policy}, {ends_name} rolled out the {learner} learner")
+        if suite not in suites:
+            raise ValueError(f"{name} scores suite {suite!r}, {ends_name} rolled out {', '.join(suites) or 'no suite'}")
+        if len(report["tasks"]) != len(ends_data["rows"][suite]["suite_task_ends"]):
+            raise ValueError(
+                f"{name} has {len(report['tasks'])} tasks of {suite!r}, {ends_name} rolled out "
+                f"{len(ends_data['rows'][suite]['suite_task_ends'])}"
+            )
+        for key in ("seed", "episodes_per_task"):
+            if report.get(key) != first.get(key):
+                raise ValueError(
+                    f"{name} has {key} {report.get(key)}, {first_name} {first.get(key)} (one run's reports)"
+                )
+        if suite in seen:
+            raise ValueError(f"{seen[suite]} and {name} both score suite {suite!r} (one report a suite)")
+        seen[suite] = name
+
+
+def load_files(table: str, paths: list[Path]) -> list[Any]:
+    """The files of ``table``, each checked to be the kind it reads (:data:`TABLE_FILES`).
+
+    Raises:
+        ValueError: One line naming the file that is missing, not JSON or of another kind, or the files'
+            count if the table reads one.
+    """
+    head, rest = TABLE_FILES[table]
+    if rest is None and len(paths) != 1:
+        raise ValueError(f"{table} reads one {head} file, got {len(paths)}: {' '.join(map(str, paths))}")
+    if table == "tasks" and len(paths) < 2:
+        raise ValueError(f"tasks reads an ends file and at least one benchmark report, got {' '.join(map(str, paths))}")
+    loaded = []
+    for index, path in enumerate(paths):
+        try:
+            data = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise ValueError(f"{path}: no such file") from None
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{path} is not JSON: {error}") from None
+        wanted = head if index == 0 or table == "trials" else rest
+        if file_kind(data) != wanted:
+            raise ValueError(f"{path} is of kind {file_kind(data)!r}; {table} reads {wanted!r} files here")
+        loaded.append(data)
+    return loaded
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Prints the table named by the first argument from the files after it."""
+    """Prints the table named by the first argument from the files after it; a bad file: one line, exit 2."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("table", choices=("screen", "by-path", "trials", "speed", "ends", "tasks"))
-    parser.add_argument("files", type=Path, nargs="+")
+    parser.add_argument("table", choices=tuple(TABLE_FILES), help="the table to print (required)")
+    parser.add_argument(
+        "files", type=Path, nargs="+", help="its results files, as the module's description gives them (required)"
+    )
     args = parser.parse_args(argv)
-    loaded = [json.loads(path.read_text()) for path in args.files]
-    if args.table == "screen":
-        print(screen_table(loaded[0]))
-    elif args.table == "speed":
-        print(speed_table(loaded[0]))
-    elif args.table == "tasks":
-        print(tasks_table(loaded[0], loaded[1:]))
-    elif args.table == "ends":
-        print(ends_table(loaded[0]))
-    elif args.table == "by-path":
-        print(by_path_table(loaded[0]))
-    else:
-        print(trials_table(loaded))
+    try:
+        loaded = load_files(args.table, args.files)
+        if args.table == "tasks":
+            check_together(
+                (str(args.files[0]), loaded[0]), list(zip(map(str, args.files[1:]), loaded[1:], strict=True))
+            )
+        print(build(args.table, loaded))
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    except (KeyError, IndexError, TypeError) as error:  # a file of the right kind that lacks a field
+        print(f"error: {' '.join(map(str, args.files))}: a field is missing or malformed ({error!r})", file=sys.stderr)
+        return 2
     return 0
+
+
+def build(table: str, loaded: list[Any]) -> str:
+    """The Markdown of ``table`` from its loaded files."""
+    if table == "screen":
+        return screen_table(loaded[0])
+    if table == "speed":
+        return speed_table(loaded[0])
+    if table == "tasks":
+        return tasks_table(loaded[0], loaded[1:])
+    if table == "ends":
+        return ends_table(loaded[0])
+    if table == "by-path":
+        return by_path_table(loaded[0])
+    return trials_table(loaded)
 
 
 if __name__ == "__main__":

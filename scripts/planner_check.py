@@ -12,7 +12,12 @@ env must meet its own goals under DAgger (``scripts/learner_ablation.py``).
 
 Usage: python scripts/planner_check.py --body ant --variants next_cell_cnn,next_cell_plan --seeds 0,1
            [--labels 1000] [--steps 1500] [--tasks 200] [--maps medium,large,giant] [--selection-sizes 6,8]
-           [--out FILE]
+           [--move-any-planner] [--out FILE]
+       python scripts/planner_check.py --shipped-failures --body ant [--learner-zip ZIP] [--tasks 200]
+           [--maps u,medium,large,giant] [--selection-sizes 6,8] [--out FILE]
+
+Bad input (an unknown variant or map, a count below 1, a maze size without a selection part, a learner zip that
+is missing or another body's) is refused in one line naming the value, exit status 2, before any work.
 
 ``--selection-sizes`` scores the learner zero-shot on the ``selection`` part of random mazes larger than its
 family's: a screen for carrying to larger maps that reads no fixed map (the fixed maps are benchmark suites).
@@ -35,11 +40,11 @@ import torch as th
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, planning_rounds
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 from antmaze_hirl.dagger.shipped import load_shipped_learner
-from antmaze_hirl.envs.layouts import shortest_path
+from antmaze_hirl.envs.layouts import STANDARD_MAPS, shortest_path
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS
 from antmaze_hirl.envs.suites import fixed_map, suite_tasks
-from antmaze_hirl.experiments.config import ExperimentConfig, body_settings, learner_settings
+from antmaze_hirl.experiments.config import LEARNERS, ExperimentConfig, body_settings, learner_settings
 from antmaze_hirl.experts.oracle import sample_labelled_states
 from antmaze_hirl.sb3_ext.shipped import make_maze_env
 
@@ -122,15 +127,42 @@ def ends_summary(results: dict[int, list[str]]) -> dict[str, Any]:
     }
 
 
+MAPS = tuple(sorted({name for name, spec in SUITE_SPECS.items() if spec.source != "random"} | set(STANDARD_MAPS)))
+"""What ``--maps`` takes: the fixed-map suites' names (``giant`` and the point suites' included) and
+gymnasium-robotics' maps."""
+
+
+def load_learner(body: str, path: Path | None) -> HighLevelPolicy:
+    """The learner ``--shipped-failures`` scores: the shipped one of ``body``, or the saved learner at ``path``.
+
+    Raises:
+        ValueError: Naming the file, if there is none, it cannot be loaded, or it is another body's learner (its
+            cells are not ``body``'s).
+    """
+    if path is None:
+        return load_shipped_learner(body)
+    try:
+        learner = HighLevelPolicy.load(path)
+    except (FileNotFoundError, ValueError) as error:
+        raise ValueError(f"--learner-zip: {error}") from None
+    scale = load_shipped_learner(body).geometry.scale
+    if learner.geometry.scale != scale:
+        raise ValueError(
+            f"--learner-zip {path}: its cells are {learner.geometry.scale} m, the {body}'s are {scale} m "
+            "(another body's learner)"
+        )
+    return learner
+
+
 def shipped_failures(
-    body: str, maps: list[str], tasks: int, *, sizes: tuple[int, ...] = (), learner: Path | None = None
+    body: str, maps: list[str], tasks: int, *, sizes: tuple[int, ...] = (), learner: HighLevelPolicy | None = None
 ) -> dict[str, Any]:
     """How the shipped learner's grid rollouts end on the ``selection`` part of its family and on ``maps``.
 
     ``sizes`` adds the ``selection`` part of random mazes of those sizes (``selection_NxN``); ``learner`` scores a
-    saved learner of the body instead of the shipped one.
+    learner of the body (:func:`load_learner`) instead of the shipped one.
     """
-    trained = load_shipped_learner(body) if learner is None else HighLevelPolicy.load(learner)
+    trained = load_shipped_learner(body) if learner is None else learner
     config = ExperimentConfig(body=body, **body_settings(body, held_out_layouts=True), held_out_layouts=True)
     places = [("selection", config.maze_size), *((f"selection_{n}x{n}", n) for n in sizes), *((m, None) for m in maps)]
     rows: dict[str, Any] = {}
@@ -201,22 +233,81 @@ def summary(results: dict[int, list[bool]]) -> dict[str, Any]:
     }
 
 
+def names(option: str, text: str, known: tuple[str, ...]) -> list[str]:
+    """A comma-separated list of ``known`` names (empty entries dropped).
+
+    Raises:
+        ValueError: One line naming ``option``, the unknown name and the known ones.
+    """
+    chosen = list(filter(None, (name.strip() for name in text.split(","))))
+    for name in chosen:
+        if name not in known:
+            raise ValueError(f"{option}: unknown name {name!r}; choose from {', '.join(known)}")
+    return chosen
+
+
+def whole_numbers(option: str, text: str, *, least: int) -> tuple[int, ...]:
+    """A comma-separated list of whole numbers, each at least ``least`` (empty entries dropped).
+
+    Raises:
+        ValueError: One line naming ``option`` and the entry that is no such number.
+    """
+    values = []
+    for entry in filter(None, (entry.strip() for entry in text.split(","))):
+        try:
+            value = int(entry)
+        except ValueError:
+            raise ValueError(f"{option}: {entry!r} is not a whole number") from None
+        if value < least:
+            raise ValueError(f"{option}: {value} is below {least}")
+        values.append(value)
+    return tuple(values)
+
+
+def check_selection_sizes(body: str, sizes: tuple[int, ...]) -> None:
+    """Refuses a size whose random mazes have no ``selection`` part (too few wall grids to hold any out).
+
+    Raises:
+        ValueError: One line naming the size and why.
+    """
+    for size in sizes:
+        try:
+            env = _env(body, split="selection", maze_size=size)
+            env.unwrapped.sample_task(np.random.default_rng(0))
+            env.close()
+        except ValueError as error:
+            raise ValueError(f"--selection-sizes {size}: {error}") from None
+
+
 def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """The command line: the screen (``--variants``), or the shipped learner's rollout ends (``--shipped-failures``)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--body", choices=("point", "ant"), default="ant")
-    parser.add_argument("--variants", default="next_cell_cnn,next_cell_plan")
-    parser.add_argument("--seeds", default="0")
-    parser.add_argument("--labels", type=int, default=1000)
-    parser.add_argument("--steps", type=int, default=1500)
-    parser.add_argument("--tasks", type=int, default=200)
-    parser.add_argument("--maps", default="medium,large,giant", help="fixed maps, zero-shot (default: %(default)s)")
+    parser.add_argument("--body", choices=("point", "ant"), default="ant", help="the body (default: %(default)s)")
+    parser.add_argument(
+        "--variants",
+        default="next_cell_cnn,next_cell_plan",
+        help=f"comma-separated learners, of {', '.join(sorted(LEARNERS))} (default: %(default)s)",
+    )
+    parser.add_argument("--seeds", default="0", help="comma-separated learner seeds (default: %(default)s)")
+    parser.add_argument("--labels", type=int, default=1000, help="oracle labels fitted on (default: %(default)s)")
+    parser.add_argument("--steps", type=int, default=1500, help="gradient steps (default: %(default)s)")
+    parser.add_argument("--tasks", type=int, default=200, help="grid rollouts per place (default: %(default)s)")
+    parser.add_argument(
+        "--maps",
+        default="medium,large,giant",
+        help=f"fixed maps, zero-shot, of {', '.join(MAPS)} (default: %(default)s)",
+    )
     parser.add_argument(
         "--selection-sizes",
         default="",
         help="also zero-shot on the selection part of random NxN mazes of these sizes, e.g. 6,8 (default: none)",
     )
-    parser.add_argument("--out", type=Path)
-    parser.add_argument("--move-any-planner", action="store_true", help="also move planners that are not any_map")
+    parser.add_argument("--out", type=Path, help="the JSON file written (default: none, printed only)")
+    parser.add_argument(
+        "--move-any-planner",
+        action="store_true",
+        help="also move planners that are not any_map (default: off)",
+    )
     parser.add_argument(
         "--shipped-failures",
         action="store_true",
@@ -227,19 +318,34 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     args = parser.parse_args(argv)
     command = shlex.join(["python", "scripts/planner_check.py", *(argv if argv is not None else sys.argv[1:])])
+    try:
+        variants = names("--variants", args.variants, tuple(sorted(LEARNERS)))
+        seeds = whole_numbers("--seeds", args.seeds, least=0)
+        sizes = whole_numbers("--selection-sizes", args.selection_sizes, least=1)
+        maps = names("--maps", args.maps, MAPS)
+        for option in ("labels", "steps", "tasks"):
+            if getattr(args, option) < 1:
+                raise ValueError(f"--{option} must be at least 1, got {getattr(args, option)}")
+        if args.learner_zip is not None and not args.shipped_failures:
+            raise ValueError(f"--learner-zip {args.learner_zip} is read with --shipped-failures only")
+        if not (variants and seeds) and not args.shipped_failures:
+            raise ValueError(f"nothing to screen: --variants {args.variants!r} --seeds {args.seeds!r}")
+        check_selection_sizes(args.body, sizes)
+        learner = load_learner(args.body, args.learner_zip) if args.shipped_failures else None
+    except ValueError as error:
+        parser.error(str(error))
     th.set_num_threads(1)
-    sizes = tuple(int(n) for n in filter(None, args.selection_sizes.split(",")))
-    maps = list(filter(None, args.maps.split(",")))
     if args.shipped_failures:
         result = {"command": command, "body": args.body, "tasks": args.tasks}
-        result["rows"] = shipped_failures(args.body, maps, args.tasks, sizes=sizes, learner=args.learner_zip)
+        result["learner"] = "shipped" if args.learner_zip is None else str(args.learner_zip)
+        result["rows"] = shipped_failures(args.body, maps, args.tasks, sizes=sizes, learner=learner)
         print(json.dumps({name: row["ends"] for name, row in result["rows"].items()}), flush=True)
         return _written(result, args.out)
     settings_ = body_settings(args.body, held_out_layouts=True)
     config = ExperimentConfig(body=args.body, **settings_, protocol=2, held_out_layouts=True)
     rows = []
-    for variant in args.variants.split(","):
-        for seed in (int(s) for s in args.seeds.split(",")):
+    for variant in variants:
+        for seed in seeds:
             start = time.perf_counter()
             train = _env(args.body, split="train", maze_size=config.maze_size)
             rng = np.random.default_rng(seed)

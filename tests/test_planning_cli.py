@@ -1,0 +1,163 @@
+"""Bad input to the planning-learner commands: ``scripts/planner_check.py`` and ``python -m
+antmaze_lab.planning_tables`` refuse it in one line naming the value, exit status 2, before any work."""
+
+import json
+from pathlib import Path
+
+import pytest
+from script_helpers import load_script
+
+from antmaze_lab import planning_tables
+
+planner_check = load_script("scripts/planner_check.py")
+
+
+def refused(capsys, argv):
+    """The message of the one error line ``planner_check`` prints for ``argv``, after checking it exits 2."""
+    with pytest.raises(SystemExit) as stopped:
+        planner_check.main(argv)
+    assert stopped.value.code == 2
+    prog, message = capsys.readouterr().err.strip().splitlines()[-1].split(": error: ")
+    assert prog  # argparse's usage line, then "PROG: error: MESSAGE"
+    return message
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--selection-sizes", "x"], "--selection-sizes: 'x' is not a whole number"),
+        (["--selection-sizes", "6,0"], "--selection-sizes: 0 is below 1"),
+        (["--seeds", "0,a"], "--seeds: 'a' is not a whole number"),
+        (["--maps", "medium,nosuch"], "--maps: unknown name 'nosuch'; choose from giant, large, medium, open, "),
+        (["--variants", "next_cell_plan,nosuch"], "--variants: unknown name 'nosuch'; choose from heading_cnn, "),
+        (["--tasks", "-1"], "--tasks must be at least 1, got -1"),
+        (["--labels", "0"], "--labels must be at least 1, got 0"),
+        (["--learner-zip", "x.zip"], "--learner-zip x.zip is read with --shipped-failures only"),
+        (["--variants", ","], "nothing to screen: --variants ',' --seeds '0'"),
+        (["--shipped-failures", "--learner-zip", "/nowhere/x.zip"], "--learner-zip: no high-level policy at "),
+    ],
+)
+def test_planner_check_refuses_bad_input_in_one_line(capsys, argv, message):
+    assert refused(capsys, argv).startswith(message)
+
+
+def test_planner_check_refuses_another_bodys_learner_and_a_size_with_no_selection_part(capsys):
+    point = str(Path(__file__).parents[1] / "antmaze_hirl" / "learners" / "point_plan.zip")
+    line = refused(capsys, ["--shipped-failures", "--body", "ant", "--learner-zip", point])
+    assert line.endswith(f"--learner-zip {point}: its cells are 1.0 m, the ant's are 4.0 m (another body's learner)")
+    line = refused(capsys, ["--body", "point", "--selection-sizes", "3"])
+    assert line.startswith("--selection-sizes 3: no layout in split 'selection'")
+
+
+def test_every_planner_check_option_states_its_default(capsys):
+    with pytest.raises(SystemExit):
+        planner_check.main(["--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    for option in ("--body", "--variants", "--seeds", "--labels", "--steps", "--tasks", "--maps", "--out"):
+        assert f"{option} " in help_text
+    assert help_text.count("(default: ") == 12  # every option but --help
+
+
+ENDS = {
+    "command": "python scripts/planner_check.py --body ant --shipped-failures --maps u --tasks 2",
+    "body": "ant",
+    "tasks": 2,
+    "rows": {
+        "selection": {"tasks": 2, "ends": {"success": 2}, "ends_on_paths_of_7_cells_or_more": {"success": 0}},
+        "u": {
+            "tasks": 2,
+            "ends": {"success": 1},
+            "ends_on_paths_of_7_cells_or_more": {},
+            "suite_task_ends": ["success"],
+        },
+    },
+}
+
+
+def report(**fields):
+    """A benchmark report of the shipped ant learner on ``u`` (one task, two episodes), then ``fields``."""
+    episodes = [{"task_id": 0, "seed": 0, "success": True, "flipped": False}] * 2
+    base = {
+        "format": "antmaze_hirl.benchmark_result/1",
+        "suite": "u",
+        "body": "ant",
+        "seed": 0,
+        "episodes_per_task": 2,
+        "tasks": [{"task_id": 0}],
+        "episode_outcomes": episodes,
+        "command": "antmaze-hirl benchmark u --policy planner --episodes-per-task 2 --seed 0",
+    }
+    return base | fields
+
+
+def tables(tmp_path, capsys, table, *files):
+    """``planning_tables``' exit status and its output (stdout, or the error line), ``files`` written to tmp."""
+    paths = []
+    for index, data in enumerate(files):
+        path = tmp_path / f"f{index}.json"
+        path.write_text(json.dumps(data) if not isinstance(data, str) else data)
+        paths.append(str(path))
+    status = planning_tables.main([table, *paths])
+    out, err = capsys.readouterr()
+    return status, (out if status == 0 else err.strip()), paths
+
+
+def test_the_tasks_table_pairs_an_ends_file_with_the_reports_of_its_run(tmp_path, capsys):
+    status, out, _ = tables(tmp_path, capsys, "tasks", ENDS, report())
+    assert status == 0 and out.splitlines()[-1] == "| `u` | 0 | success | 2/2 | 0 |"
+
+
+@pytest.mark.parametrize(
+    ("other", "message"),
+    [
+        (report(body="point"), "{1} is a point report, {0} holds ant rollouts"),
+        (report(suite="medium"), "{1} scores suite 'medium', {0} rolled out u"),
+        (report(tasks=[{}, {}]), "{1} has 2 tasks of 'u', {0} rolled out 1"),
+        (report(command="antmaze-hirl benchmark u --policy mine.zip"), "{1} scored --policy mine.zip, {0} rolled out "),
+        (report(seed=1), "{2} has seed 1, {1} 0 (one run's reports)"),
+        (report(episodes_per_task=5), "{2} has episodes_per_task 5, {1} 2 (one run's reports)"),
+        (report(), "{1} and {2} both score suite 'u' (one report a suite)"),
+    ],
+)
+def test_the_tasks_table_refuses_files_that_do_not_belong_together(tmp_path, capsys, other, message):
+    files = [ENDS, other] if "{2}" not in message else [ENDS, report(), other]
+    status, err, paths = tables(tmp_path, capsys, "tasks", *files)
+    assert status == 2 and err.startswith("error: " + message.format(*paths)), err
+
+
+def test_the_tasks_table_reads_the_learner_an_ends_file_scored(tmp_path, capsys):
+    zipped = ENDS | {"command": ENDS["command"] + " --learner-zip runs/gate.zip"}
+    status, err, paths = tables(tmp_path, capsys, "tasks", zipped, report())
+    assert (status, err) == (
+        2,
+        f"error: {paths[1]} scored --policy planner, {paths[0]} rolled out the runs/gate.zip learner",
+    )
+    mine = report(command="antmaze-hirl benchmark u --policy runs/gate.zip")
+    assert tables(tmp_path, capsys, "tasks", zipped, mine)[0] == 0
+    recorded = ENDS | {"learner": "runs/gate.zip"}  # planner_check records it since the lab split
+    assert tables(tmp_path, capsys, "tasks", recorded, mine)[0] == 0
+
+
+def test_a_planning_table_refuses_a_file_it_does_not_read_in_one_line(tmp_path, capsys):
+    screen = {"command": "python scripts/planner_check.py", "rows": [{"variant": "next_cell_plan", "seed": 0}]}
+    status, err, paths = tables(tmp_path, capsys, "ends", screen)
+    assert (status, err) == (2, f"error: {paths[0]} is of kind 'screen'; ends reads 'ends' files here")
+    status, err, paths = tables(tmp_path, capsys, "screen", ENDS)
+    assert (status, err) == (2, f"error: {paths[0]} is of kind 'ends'; screen reads 'screen' files here")
+    status, err, paths = tables(tmp_path, capsys, "ends", ENDS, ENDS)
+    assert (status, err) == (2, f"error: ends reads one ends file, got 2: {paths[0]} {paths[1]}")
+    status, err, paths = tables(tmp_path, capsys, "tasks", ENDS)
+    assert (status, err) == (2, f"error: tasks reads an ends file and at least one benchmark report, got {paths[0]}")
+    status, err, paths = tables(tmp_path, capsys, "ends", "{not json")
+    assert status == 2 and err.startswith(f"error: {paths[0]} is not JSON: ")
+    assert planning_tables.main(["ends", str(tmp_path / "missing.json")]) == 2
+    assert capsys.readouterr().err == f"error: {tmp_path / 'missing.json'}: no such file\n"
+    broken = {"rows": {"u": {"ends": {"success": 1}}}}  # an ends file without its other fields
+    status, err, paths = tables(tmp_path, capsys, "ends", broken)
+    assert status == 2 and err.startswith(f"error: {paths[0]}: a field is missing or malformed (KeyError(")
+
+
+def test_the_planning_tables_positionals_say_they_are_required(capsys):
+    with pytest.raises(SystemExit):
+        planning_tables.main(["--help"])
+    assert " ".join(capsys.readouterr().out.split()).count("(required)") == 2
