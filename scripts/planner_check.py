@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import torch as th
 
+from antmaze_hirl.cli_validation import IntBounds, bounded_int
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy, planning_rounds
 from antmaze_hirl.dagger.network import NEXT_CELL_MOVES
 from antmaze_hirl.dagger.shipped import load_shipped_learner
@@ -289,9 +290,10 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         help=f"comma-separated learners, of {', '.join(sorted(LEARNERS))} (default: %(default)s)",
     )
     parser.add_argument("--seeds", default="0", help="comma-separated learner seeds (default: %(default)s)")
-    parser.add_argument("--labels", type=int, default=1000, help="oracle labels fitted on (default: %(default)s)")
-    parser.add_argument("--steps", type=int, default=1500, help="gradient steps (default: %(default)s)")
-    parser.add_argument("--tasks", type=int, default=200, help="grid rollouts per place (default: %(default)s)")
+    count = bounded_int(IntBounds(1, 1_000_000))
+    parser.add_argument("--labels", type=count, default=1000, help="oracle labels fitted on (default: %(default)s)")
+    parser.add_argument("--steps", type=count, default=1500, help="gradient steps (default: %(default)s)")
+    parser.add_argument("--tasks", type=count, default=200, help="grid rollouts per place (default: %(default)s)")
     parser.add_argument(
         "--maps",
         default="medium,large,giant",
@@ -323,9 +325,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         seeds = whole_numbers("--seeds", args.seeds, least=0)
         sizes = whole_numbers("--selection-sizes", args.selection_sizes, least=1)
         maps = names("--maps", args.maps, MAPS)
-        for option in ("labels", "steps", "tasks"):
-            if getattr(args, option) < 1:
-                raise ValueError(f"--{option} must be at least 1, got {getattr(args, option)}")
         if args.learner_zip is not None and not args.shipped_failures:
             raise ValueError(f"--learner-zip {args.learner_zip} is read with --shipped-failures only")
         if not (variants and seeds) and not args.shipped_failures:
