@@ -96,6 +96,12 @@ class LearnerSettings:
         learnt_blocking: With the ``"next_cell"`` head's value iteration: a learnt gate per move that can price
             it above any path on any map (:class:`~antmaze_hirl.dagger.network.CellValueIteration`); walls are
             learnt, not given, so it excludes ``block_walls``. Needs ``planning_iterations > 0``.
+        blocking_pressure: With ``learnt_blocking``: weight of a loss term in :meth:`HighLevelPolicy.fit`,
+            ``mean(-log b)`` over every move of every cell of the grid, that pushes each gate ``b`` towards
+            blocked; the labels' cross-entropy holds open the moves their paths make. Why: a margin loss
+            only prices a move into a wall above the training mazes' detours (a learnt cost of a few moves,
+            and walls walked into on larger maps); the pressure keeps pricing a move that no label makes,
+            whatever the map's size. 0 (the default): no such term.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -103,8 +109,8 @@ class LearnerSettings:
     Raises:
         ValueError: Naming the first bad value: ``subgoal_reach_m`` not positive, ``n_directions`` not a
             positive multiple of 4, ``planning_iterations`` negative, ``channels`` or ``hidden`` below 1,
-            ``head`` unknown, ``block_walls`` without the planning next-cell head, ``learning_rate`` not
-            positive or ``batch_size`` below 1.
+            ``head`` unknown, ``block_walls`` without the planning next-cell head, ``blocking_pressure``
+            negative or set without ``learnt_blocking``, ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
     subgoal_reach_m: float | None = None
@@ -119,6 +125,7 @@ class LearnerSettings:
     learning_rate: float = 1e-3
     batch_size: int = 64
     augment_symmetries: bool = True
+    blocking_pressure: float = 0.0
 
     def __post_init__(self) -> None:
         if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
@@ -137,6 +144,11 @@ class LearnerSettings:
             raise ValueError("learnt_blocking needs head='next_cell', planning_iterations > 0 and no block_walls")
         object.__setattr__(self, "any_map", bool(self.any_map))
         object.__setattr__(self, "learnt_blocking", bool(self.learnt_blocking))
+        if not self.blocking_pressure >= 0:
+            raise ValueError(f"blocking_pressure must be >= 0, got {self.blocking_pressure}")
+        if self.blocking_pressure and not self.learnt_blocking:
+            raise ValueError(f"blocking_pressure needs learnt_blocking, got {self.blocking_pressure} without it")
+        object.__setattr__(self, "blocking_pressure", float(self.blocking_pressure))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -422,9 +434,14 @@ class HighLevelPolicy:
             labels = targets[index]
             if settings.augment_symmetries:
                 minibatch, labels = augment(minibatch, labels, self.rng, planar_feature_dim=self.planar_feature_dim)
-            outputs = network(th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors))
+            grids = th.from_numpy(minibatch.grids)
+            outputs = network(grids, th.from_numpy(minibatch.vectors))
             if settings.head == "next_cell":
                 loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))
+                if settings.blocking_pressure:
+                    # -log b = softplus(-logit): the push towards blocked, on every move of every cell
+                    gate_logits = network.planner.blocking_logits(grids)
+                    loss = loss + settings.blocking_pressure * nn.functional.softplus(-gate_logits).mean()
             else:
                 logits, distance = outputs
                 bins = th.from_numpy(direction_bins(labels, settings.n_directions))

@@ -218,6 +218,16 @@ class CellValueIteration(nn.Module):
             with th.no_grad():
                 self.blocking[2].bias.fill_(BLOCKING_START)
 
+    def blocking_logits(self, grids: th.Tensor) -> th.Tensor:
+        """``(B, 9, S, S)`` logits of the learnt blocking gate (its ``b_a(s)`` is their sigmoid).
+
+        Raises:
+            ValueError: If the planner has no learnt gate.
+        """
+        if self.blocking is None:
+            raise ValueError("this planner has no learnt blocking gate (learnt_blocking=False)")
+        return self.blocking[:-1](grids)  # all but the closing sigmoid
+
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
         cost = self.cost(grids)
