@@ -225,6 +225,13 @@ def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int 
     return {"untrained": untrained, "trained": trained, "gain": trained - untrained}
 
 
+def ended_summary(ends: dict[int, list[str]]) -> dict[str, Any]:
+    """:func:`summary` of rollouts keyed by path length, with how many ended each way (:data:`ENDS`)."""
+    every = [end for outcomes in ends.values() for end in outcomes]
+    successes = {length: [end == "success" for end in outcomes] for length, outcomes in ends.items()}
+    return {**summary(successes), "ends": {end: every.count(end) for end in ENDS}}
+
+
 def summary(results: dict[int, list[bool]]) -> dict[str, Any]:
     everything = [s for outcomes in results.values() for s in outcomes]
     return {
@@ -356,12 +363,12 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             row["loss"] = fit_on_oracle_labels(
                 policy, train, args.labels, args.steps, np.random.default_rng(1000 + seed)
             )
-            row["selection"] = summary(grid_rollouts(policy, selection, args.tasks, 7))
+            row["selection"] = ended_summary(grid_rollout_ends(policy, selection, args.tasks, 7))
             for size in sizes:
                 larger = _env(args.body, split="selection", maze_size=size)
                 try:
                     moved = moved_to(policy, larger)
-                    row[f"selection_{size}x{size}"] = summary(grid_rollouts(moved, larger, args.tasks, 7))
+                    row[f"selection_{size}x{size}"] = ended_summary(grid_rollout_ends(moved, larger, args.tasks, 7))
                 except ValueError as error:  # a learner that cannot act on another map, as for --maps
                     row[f"selection_{size}x{size}"] = {"error": str(error)}
             for name in maps:
