@@ -294,6 +294,9 @@ def test_the_page_says_plainly_when_a_finished_parts_results_are_not_saved_yet(t
             "left on device), and the computer keeps trying. You can go on, but please tell the experimenter."
         )
         disk.free()
+        while session.state().get("unsaved"):  # until a retry gets through (wait_for_closed_trials raises meanwhile)
+            assert time.monotonic() < deadline + 60, "the closing's writes never got through"
+            time.sleep(0.05)
         assert session.wait_for_closed_trials(timeout=60)
         for item in ("mental_demand", "physical_demand", "temporal_demand", "performance", "effort", "frustration"):
             page.locator(f"input[name='{item}'][value='3']").check()
