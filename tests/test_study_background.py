@@ -274,26 +274,29 @@ def test_a_closed_trials_write_that_fails_once_is_retried_without_a_restart(tmp_
 
 def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retries_them(tmp_path, monkeypatch):
     folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
-    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 0.05)
-    monkeypatch.setattr(TrialClosing, "RETRY_MAX_SECONDS", 0.05)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
+    monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
     disk = ClosingDisk(monkeypatch, lambda path: True)  # every write of the closing fails
     session.next_episode()
     (closing,) = session._closing
-    until(lambda: len(disk.failed) >= 3)  # it keeps trying
+    until(lambda: disk.failed)
     state = session.state()
     assert closing.failing and state["phase"] == "questionnaire"
     assert state["unsaved"] == {"parts": [session.trial.label], "retrying": True, "error": "No space left on device"}
+    until(lambda: session.state() and len(disk.failed) >= 3)  # each request is another try
     with pytest.raises(RuntimeError, match="its writes are retried"):  # a stop does not wait on a full disk
         session.wait_for_closed_trials(timeout=60)
-    monkeypatch.setattr(TrialClosing, "RETRY_MAX_SECONDS", 3600.0)  # from now on only a request wakes it
-    until(lambda: len(disk.failed) >= 5)
+    tries = -1
+    while tries != len(disk.failed):  # a try woken by the last request has run (and failed): it waits the hour now
+        tries = len(disk.failed)
+        time.sleep(0.5)
     disk.free()
-    time.sleep(0.2)
-    assert not closing.done  # waiting out the hour
+    time.sleep(0.3)
+    assert len(disk.failed) == tries and not closing.done  # waiting out the hour
     assert "unsaved" in session.state()  # this request wakes it
     until(lambda: closing.done, 10.0)
     assert "unsaved" not in session.state() and closing.write_error is None
-    assert final_updates(folder)[0]["failed_writes"] == len(disk.failed)
+    assert final_updates(folder)[0]["failed_writes"] == tries
     session.close()
     assert_closed_trial_complete(folder)
 

@@ -1066,7 +1066,10 @@ class TrialClosing:
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     RETRY_FIRST_SECONDS = 1.0
-    """Seconds before the first retry of a failed write; also the least time between two tries."""
+    """Seconds before the first retry of a failed write."""
+
+    RETRY_GAP_SECONDS = 1.0
+    """The least time from one try to the next that a request wakes (:meth:`retry_now`)."""
 
     RETRY_MAX_SECONDS = 30.0
     """The longest wait between two tries: data wait at most this long once the disk has room again."""
@@ -1091,8 +1094,8 @@ class TrialClosing:
             return self._changed.wait_for(lambda: self.done or self.failing, timeout)
 
     def retry_now(self) -> None:
-        """Wakes a failing closing to try its writes again now (at most once per :attr:`RETRY_FIRST_SECONDS`)."""
-        if self.failing and self.session.timer() - self._last_try >= self.RETRY_FIRST_SECONDS:
+        """Wakes a failing closing to try its writes again now (at most once per :attr:`RETRY_GAP_SECONDS`)."""
+        if self.failing and self.session.timer() - self._last_try >= self.RETRY_GAP_SECONDS:
             self._wake.set()
 
     def stop(self) -> None:
