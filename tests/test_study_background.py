@@ -277,19 +277,29 @@ def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retrie
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
     monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
     disk = ClosingDisk(monkeypatch, lambda path: True)  # every write of the closing fails
+    tries_begun = []
+    real_write = TrialClosing._write
+
+    def counted_write(self, updates):
+        tries_begun.append(updates)
+        real_write(self, updates)
+
+    monkeypatch.setattr(TrialClosing, "_write", counted_write)
     session.next_episode()
     (closing,) = session._closing
-    until(lambda: disk.failed)
+    until(lambda: closing.failing)
     state = session.state()
-    assert closing.failing and state["phase"] == "questionnaire"
+    assert state["phase"] == "questionnaire"
     assert state["unsaved"] == {"parts": [session.trial.label], "retrying": True, "error": "No space left on device"}
     until(lambda: session.state() and len(disk.failed) >= 3)  # each request is another try
     with pytest.raises(RuntimeError, match="its writes are retried"):  # a stop does not wait on a full disk
         session.wait_for_closed_trials(timeout=60)
-    tries = -1
-    while tries != len(disk.failed):  # a try woken by the last request has run (and failed): it waits the hour now
-        tries = len(disk.failed)
-        time.sleep(0.5)
+
+    def idle():  # every try begun has failed and none is woken: it waits out the hour
+        return len(tries_begun) == len(disk.failed) and not closing._wake.is_set()
+
+    until(lambda: idle() and time.sleep(0.2) is None and idle())
+    tries = len(disk.failed)
     disk.free()
     time.sleep(0.3)
     assert len(disk.failed) == tries and not closing.done  # waiting out the hour
