@@ -23,7 +23,9 @@ update and final evaluation in it; "new" closes the trial at once and writes the
 and after the last.
 
 Usage: python benchmarks/study_latency.py [--part clicks|between|all] [--episodes 10] [--bodies point,ant]
-    [--methods dagger,noise,multi_policy,reward] [--participants 1,4] [--between-episodes 8] [--out FILE.json]
+    [--methods dagger,noise,multi_policy,reward] [--participants 1,4] [--between-episodes 8]
+    [--final-eval-episodes 5] [--eval-every 0] [--modes old,new] [--out FILE.json]
+Each row of ``--part between`` records the CPU seconds its run took (``cpu_seconds``: every thread of the process).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import platform
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -93,14 +96,23 @@ def measure(body: str, episodes: int, seed: int) -> dict:
 
 
 def measure_between(
-    body: str, method: str, participants: int, background: bool, episodes: int, click_seconds: float, seed: int
+    body: str,
+    method: str,
+    participants: int,
+    background: bool,
+    args: argparse.Namespace,
 ) -> dict:
     """The ``next`` waits of ``participants`` simulated participants playing one ``method`` trial at once."""
+    episodes, click_seconds, seed = args.between_episodes, args.click_seconds, args.seed
+    cpu_started = time.process_time()  # every thread of this process: the server's, the updates', the clients'
     with tempfile.TemporaryDirectory() as folder:
         save_plan(make_plan(body, [method], participants, episodes=episodes, practice=0, seed=seed), folder)
-        # The study's own evaluation settings, but for the last evaluation (reported apart, kept small here).
-        every = max(episodes // 2, 1)
-        settings = StudySettings.for_body(body, background_updates=background, eval_every=every, final_eval_episodes=5)
+        # The study's own evaluation settings, but for the last evaluation (reported apart, 5 mazes by default
+        # where a study's is 100: --final-eval-episodes 100 times a study's own).
+        every = args.eval_every or max(episodes // 2, 1)
+        settings = StudySettings.for_body(
+            body, background_updates=background, eval_every=every, final_eval_episodes=args.final_eval_episodes
+        )
         save_settings(settings, folder)
         results: dict[str, dict] = {}
         with StudyServer(folder).running() as server:
@@ -140,6 +152,8 @@ def measure_between(
         "labels_per_maze": round(float(np.mean([float(row["expert_cost"]) for row in rows])), 2),
         "scripted_time_per_maze": percentiles([float(row["time_on_task"]) for row in rows]),
         "evaluated_every": every,
+        "final_eval_episodes": args.final_eval_episodes,
+        "cpu_seconds": round(time.process_time() - cpu_started, 1),
     }
 
 
@@ -150,18 +164,22 @@ def run_between(args: argparse.Namespace, results: dict) -> None:
             for participants in (int(count) for count in args.participants.split(",")):
                 entry = {}
                 for mode, background in (("old", False), ("new", True)):
-                    entry[mode] = measure_between(
-                        body, method, participants, background, args.between_episodes, args.click_seconds, args.seed
-                    )
-                old, new = entry["old"]["between_mazes"], entry["new"]["between_mazes"]
+                    if mode in args.modes.split(","):
+                        entry[mode] = measure_between(body, method, participants, background, args)
+                empty = {"p50_ms": None, "p95_ms": None}
+                old = entry["old"]["between_mazes"] if "old" in entry else empty
+                new = entry["new"]["between_mazes"] if "new" in entry else empty
                 goal = GOAL_BETWEEN_P95_SECONDS.get(participants)
-                entry["new_over_old_p95"] = round(new["p95_ms"] / old["p95_ms"], 3) if old["p95_ms"] else None
+                both = old["p95_ms"] and new["p95_ms"] is not None
+                entry["new_over_old_p95"] = round(new["p95_ms"] / old["p95_ms"], 3) if both else None
                 entry["goal_p95_ms"] = goal * 1000 if goal is not None else None
                 entry["goal_met"] = _within(new, goal)
-                entry["goal_met_after_last_maze"] = _within(entry["new"]["after_last_maze"], goal)
+                last_old = entry["old"]["after_last_maze"] if "old" in entry else empty
+                last_new = entry["new"]["after_last_maze"] if "new" in entry else empty
+                entry["goal_met_after_last_maze"] = _within(last_new, goal)
                 table[f"{body}/{method}/{participants}"] = entry
                 atomic_write_json(args.out, results)  # each row as it is timed: a long run cut short keeps its rows
-                last_old, last_new = entry["old"]["after_last_maze"], entry["new"]["after_last_maze"]
+                lag = entry["new"]["final_update_lag"] if "new" in entry else empty
                 print(
                     f"{body:5s} {method:14s} {participants} participant(s): next p50/p95 old {old['p50_ms']}/"
                     f"{old['p95_ms']} ms, new {new['p50_ms']}/{new['p95_ms']} ms (p95 new/old "
@@ -169,8 +187,8 @@ def run_between(args: argparse.Namespace, results: dict) -> None:
                     f"{'met' if entry['goal_met'] else 'NOT met'}; after the last maze p50/p95 old "
                     f"{last_old['p50_ms']}/{last_old['p95_ms']} ms, new {last_new['p50_ms']}/{last_new['p95_ms']} ms "
                     f"({'met' if entry['goal_met_after_last_maze'] else 'NOT met'}); final update written "
-                    f"p50/p95 {entry['new']['final_update_lag']['p50_ms']}/"
-                    f"{entry['new']['final_update_lag']['p95_ms']} ms after",
+                    f"p50/p95 {lag['p50_ms']}/{lag['p95_ms']} ms after; CPU seconds "
+                    f"{ {mode: entry[mode]['cpu_seconds'] for mode in ('old', 'new') if mode in entry} }",
                     flush=True,
                 )
 
@@ -188,6 +206,13 @@ def main() -> None:
     parser.add_argument("--participants", default="1,4", help="participants at once, for --part between")
     parser.add_argument("--between-episodes", type=int, default=8, help="mazes per trial, for --part between")
     parser.add_argument("--click-seconds", type=float, default=1.0, help="mean delay before a simulated click")
+    parser.add_argument(
+        "--final-eval-episodes", type=int, default=5, help="mazes of a trial's final evaluation, for --part between"
+    )
+    parser.add_argument(
+        "--eval-every", type=int, default=0, help="mazes between evaluations, for --part between (0: half the mazes)"
+    )
+    parser.add_argument("--modes", default="old,new", help="old (update before the next maze), new, for --part between")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument(
         "--out",
@@ -195,6 +220,8 @@ def main() -> None:
         default=Path(__file__).resolve().parents[1] / "results" / "study_latency" / "study_latency.json",
     )
     args = parser.parse_args()
+    if not args.modes or not set(args.modes.split(",")) <= {"old", "new"}:
+        parser.error(f"--modes must be old, new or old,new, got {args.modes!r}")
     torch.set_num_threads(1)
     results = {
         "cpu": platform.processor() or platform.machine(),

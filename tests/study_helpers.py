@@ -1,5 +1,8 @@
 """Tiny point-body studies for the study tests (a few episodes, so a whole study runs in seconds)."""
 
+import errno
+import os
+import threading
 from pathlib import Path
 
 from antmaze_hirl.study.plan import make_plan, save_plan
@@ -100,3 +103,29 @@ def play_trial(session) -> None:
     while session.trial_index == trial and session.phase in ("intro", "label", "episode_over"):
         play_to_episode_end(session)
         session.next_episode()
+
+
+class ClosingDisk:
+    """A full disk for the closing threads alone: their ``os.fsync`` of a matching file raises ENOSPC.
+
+    ``fails`` is how many such fsyncs fail (``None``: every one, until :meth:`free`). fsync is the last step
+    of every durable write (atomic replace and append), so the bytes may already be in the file, as after a
+    real ENOSPC on flush; the writers must take them back.
+    """
+
+    def __init__(self, monkeypatch, matches, fails=None):
+        self.matches, self.fails, self.failed = matches, fails, []
+        real_fsync = os.fsync
+
+        def fsync(fd):
+            if self.fails is None or len(self.failed) < self.fails:
+                path = Path(os.readlink(f"/proc/self/fd/{fd}"))
+                if threading.current_thread().name.startswith("study-close-") and self.matches(path):
+                    self.failed.append(path.name)
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            return real_fsync(fd)
+
+        monkeypatch.setattr(os, "fsync", fsync)
+
+    def free(self):
+        self.fails = len(self.failed)

@@ -3,15 +3,18 @@
 import time
 
 import pytest
-from study_helpers import make_tiny_study, open_session, play_to_episode_end, play_trial
+import torch
+from study_helpers import ClosingDisk, make_tiny_study, open_session, play_to_episode_end, play_trial
 
 from antmaze_hirl.dagger import DAggerTrainer
-from antmaze_hirl.study.consistency import check_study_files
-from antmaze_hirl.study.data import read_episode_rows
-from antmaze_hirl.study.logs import read_json_records
+from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.study.checkpoint import CHECKPOINT_FILE
+from antmaze_hirl.study.consistency import check_records, check_study_files, closing_trials, read_progress
+from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
+from antmaze_hirl.study.logs import csv_cell, read_json_records
 from antmaze_hirl.study.plan import load_plan
 from antmaze_hirl.study.questionnaire import ITEM_KEYS
-from antmaze_hirl.study.session import ParticipantSession
+from antmaze_hirl.study.session import ParticipantSession, TrialClosing, _load_checkpoint
 from antmaze_hirl.study.store import Study
 
 SLOW_UPDATE_SECONDS = 5.0
@@ -216,3 +219,109 @@ def test_a_failed_close_after_the_last_maze_is_closed_by_the_restart(tmp_path, m
     assert (folder / "participants" / "P01" / "trial1" / "learner.zip").is_file()
     assert len(final_updates(folder)) == 1
     check_study_files(folder, load_plan(folder))
+
+
+WRITES_OF_A_CLOSING = {  # each durable write a closing makes, by the fsync that ends it
+    "checkpoint": lambda path: path.name.startswith(".checkpoint."),
+    "checkpoint's rename": lambda path: path.name == "trial1",
+    "rows": lambda path: path.name == "episodes.csv",
+    "final_update event": lambda path: path.name == "events.jsonl",
+    "learner": lambda path: path.name.startswith(".learner."),
+}
+
+
+def until(condition, seconds=60.0):
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.02)
+
+
+def assert_closed_trial_complete(folder):
+    """The start-up checks pass with nothing left to close, and the files hold every maze of trial 1 once."""
+    plan = load_plan(folder)
+    participant, path = plan.participants[0], folder / "participants" / "P01"
+    check_records(path, participant, *read_progress(path))
+    assert closing_trials(path, participant, *read_progress(path)) == []
+    rows = rows_of(folder)
+    assert [row["episode"] for row in rows] == ["0", "1"] and rows[-1]["eval_success"] != ""  # the final evaluation
+    saved = _load_checkpoint(path / "trial1" / CHECKPOINT_FILE, None)
+    assert saved.pending == []  # the checkpoint holds every maze done, and the rows are its rows
+    assert [{column: csv_cell(row.get(column)) for column in EPISODE_COLUMNS} for row in saved.rows] == rows
+    learner = HighLevelPolicy.load(path / "trial1" / "learner.zip")  # the learner after every update
+    for name, weights in saved.trainer.learner.network.state_dict().items():
+        assert torch.equal(learner.network.state_dict()[name], weights), name
+    assert Study(folder).resume_closing() is None  # a restart finds nothing to finish
+
+
+@pytest.mark.parametrize("write", list(WRITES_OF_A_CLOSING))
+def test_a_closed_trials_write_that_fails_once_is_retried_without_a_restart(tmp_path, monkeypatch, write):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 0.1)
+    disk = ClosingDisk(monkeypatch, WRITES_OF_A_CLOSING[write], fails=1)
+    assert session.next_episode()["phase"] == "questionnaire"
+    (closing,) = session._closing
+    until(lambda: closing.done)  # no request, no restart: the closing's own retry
+    assert len(disk.failed) == 1 and closing.failed_writes == 1
+    assert closing.error is None and closing.write_error is None and "unsaved" not in session.state()
+    assert_closed_trial_complete(folder)
+    (event,) = final_updates(folder)
+    assert event["failed_writes"] == (write != "learner") and event["updates"] == 1  # learner.zip comes after it
+    session.submit_questionnaire(1, {"ratings": dict.fromkeys(ITEM_KEYS, 3), "comment": ""})
+    session.close()
+    check_study_files(folder, load_plan(folder))  # study analyze's checks
+
+
+def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retries_them(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
+    monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
+    disk = ClosingDisk(monkeypatch, lambda path: True)  # every write of the closing fails
+    tries_begun = []
+    real_write = TrialClosing._write
+
+    def counted_write(self, updates):
+        tries_begun.append(updates)
+        real_write(self, updates)
+
+    monkeypatch.setattr(TrialClosing, "_write", counted_write)
+    session.next_episode()
+    (closing,) = session._closing
+    until(lambda: closing.failing)
+    state = session.state()
+    assert state["phase"] == "questionnaire"
+    assert state["unsaved"] == {"parts": [session.trial.label], "retrying": True, "error": "No space left on device"}
+    until(lambda: session.state() and len(disk.failed) >= 3)  # each request is another try
+    with pytest.raises(RuntimeError, match="its writes are retried"):  # a stop does not wait on a full disk
+        session.wait_for_closed_trials(timeout=60)
+
+    def idle():  # every try begun has failed and none is woken: it waits out the hour
+        return len(tries_begun) == len(disk.failed) and not closing._wake.is_set()
+
+    until(lambda: idle() and time.sleep(0.2) is None and idle())
+    tries = len(disk.failed)
+    disk.free()
+    time.sleep(0.3)
+    assert len(disk.failed) == tries and not closing.done  # waiting out the hour
+    assert "unsaved" in session.state()  # this request wakes it
+    until(lambda: closing.done, 10.0)
+    assert "unsaved" not in session.state() and closing.write_error is None
+    assert final_updates(folder)[0]["failed_writes"] == tries
+    session.close()
+    assert_closed_trial_complete(folder)
+
+
+def test_a_stop_while_a_closed_trials_writes_fail_is_prompt_and_the_restart_finishes_them(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)
+    disk = ClosingDisk(monkeypatch, lambda path: True)
+    session.next_episode()
+    until(lambda: disk.failed)
+    started = time.monotonic()
+    session.close()  # wakes the waiting closing: nothing more is written
+    assert time.monotonic() - started < 5.0
+    disk.free()
+    restarted = open_session(folder)  # the next start resumes it from the checkpoint
+    assert restarted.wait_for_closed_trials(timeout=60)
+    restarted.close()
+    assert_closed_trial_complete(folder)

@@ -3,6 +3,7 @@
 import csv
 import json
 import shutil
+import time
 from pathlib import Path
 
 import pytest
@@ -263,3 +264,44 @@ def click_until_next_query(page, state):
         "([q]) => !busy && state && (state.phase !== 'label' || state.query.id !== q)", arg=[query], timeout=120_000
     )
     return page.evaluate("() => state")
+
+
+def test_the_page_says_plainly_when_a_finished_parts_results_are_not_saved_yet(tmp_path, monkeypatch):
+    from study_helpers import ClosingDisk, play_trial
+
+    from antmaze_hirl.study.server import StudyServer
+    from antmaze_hirl.study.session import TrialClosing
+
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 0.05)
+    monkeypatch.setattr(TrialClosing, "RETRY_MAX_SECONDS", 0.05)
+    folder = make_tiny_study(
+        tmp_path / "study", participants=1, methods=("dagger",), episodes=1, practice=0, background_updates=True
+    )
+    disk = ClosingDisk(monkeypatch, lambda path: True)  # the finished part's last writes fail until freed
+    with StudyServer(folder).running() as server, playwright_api.sync_playwright() as p:
+        session = server.study.session("P01")
+        play_trial(session)  # to the questionnaire, through the session (the page's clicks are tested above)
+        deadline = time.monotonic() + 60
+        while not session.state().get("unsaved"):
+            assert time.monotonic() < deadline, "the closing's writes never failed"
+            time.sleep(0.05)
+        browser, page, errors = open_page(p, server.url)
+        page.wait_for_function("() => state && state.phase === 'questionnaire'")
+        notice = page.locator("#unsaved")
+        assert notice.is_visible()
+        assert notice.inner_text() == (
+            f"Not everything is saved yet: the results of {session.trial.label} could not be written (No space "
+            "left on device), and the computer keeps trying. You can go on, but please tell the experimenter."
+        )
+        disk.free()
+        while session.state().get("unsaved"):  # until a retry gets through (wait_for_closed_trials raises meanwhile)
+            assert time.monotonic() < deadline + 60, "the closing's writes never got through"
+            time.sleep(0.05)
+        assert session.wait_for_closed_trials(timeout=60)
+        for item in ("mental_demand", "physical_demand", "temporal_demand", "performance", "effort", "frustration"):
+            page.locator(f"input[name='{item}'][value='3']").check()
+        page.get_by_role("button", name="Submit").click()
+        page.wait_for_function("() => state && state.phase === 'done'")
+        assert not notice.is_visible()  # saved: the notice is gone
+        browser.close()
+    assert errors == []

@@ -284,7 +284,12 @@ class ParticipantSession:
         return self._query_id if self.phase == "label" and self._run is not None else None
 
     def state(self) -> dict[str, Any]:
-        """Everything the page shows, as JSON-ready data."""
+        """Everything the page shows, as JSON-ready data.
+
+        ``unsaved`` is there while a closed part's final writes fail (:class:`TrialClosing`): ``parts`` (their
+        labels), ``retrying`` (the server keeps trying) and ``error`` ("No space left on device"); asking for
+        the state wakes those retries.
+        """
         with self.lock:
             trial = self.trial
             state: dict[str, Any] = {
@@ -298,6 +303,16 @@ class ParticipantSession:
             }
             if self._last_trial is not None and self.phase in ("intro", "questionnaire", "done"):
                 state["last_trial"] = self._last_trial
+            unsaved = [closing for closing in self._closing if closing.failing or closing.error is not None]
+            if unsaved:  # a closed part's final writes fail: the participant's page says so
+                for closing in unsaved:
+                    closing.retry_now()  # this request is a reason to try again now
+                errors = [closing.write_error or closing.error for closing in unsaved]
+                state["unsaved"] = {
+                    "parts": [closing.trial.label for closing in unsaved],
+                    "retrying": all(closing.failing for closing in unsaved),
+                    "error": _plain_error(errors[0]),
+                }
             if trial is None:
                 return state
             state["trial"] = {
@@ -598,23 +613,30 @@ class ParticipantSession:
             self._release_trial()
 
     def wait_for_closed_trials(self, timeout: float | None = None) -> bool:
-        """Waits until every closed trial's final update and evaluation are written; whether they are.
+        """Waits until every closed trial's final update and evaluation are written, or fail; whether they are.
+
+        A closing whose writes fail does not hold this up: it raises while that closing goes on retrying
+        (:class:`TrialClosing`), so a stop never waits on a full disk.
 
         Raises:
-            RuntimeError: If one failed (its error chained; the next restore runs it again).
+            RuntimeError: If one failed or its writes fail now (its error chained; a failed write is retried
+                until the session closes, and the next restore runs whatever is left).
         """
         with self.lock:
             closings = list(self._closing)
         deadline = None if timeout is None else time.monotonic() + timeout
-        for closing in closings:
+        for closing in closings:  # each one, before any error is raised: a caller may stop the others next
             left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
             if not closing.wait(left):
                 return False
-            if closing.error is not None:
+        for closing in closings:
+            error = closing.error or closing.write_error
+            if error is not None:
+                retrying = " (its writes are retried)" if closing.failing else ""
                 raise RuntimeError(
-                    f"participant {self.participant.id}, trial {closing.trial.index}: the final update failed: "
-                    f"{closing.error!r}"
-                ) from closing.error
+                    f"participant {self.participant.id}, trial {closing.trial.index}: the final update failed"
+                    f"{retrying}: {error!r}"
+                ) from error
         return True
 
     def _release_trial(self) -> None:
@@ -887,7 +909,7 @@ class ParticipantSession:
         # The closed trial's updates, evaluation envs and queue go to ``closing`` (once its close is on disk).
         if closing is None:
             return
-        self._closing = [job for job in self._closing if not job.done]
+        self._closing = [job for job in self._closing if not job.done or job.error or job.write_error]
         self._closing.append(closing)
         self._updates = UpdateQueue()
         self._envs = self._env = None  # the closing's now: the next trial builds its own
@@ -994,6 +1016,17 @@ class TrialClosing:
     one whose closing has not finished (:func:`~antmaze_hirl.study.consistency.closing_trials`): a stop or a
     kill loses only the work in progress, and the next restore starts a closing from the checkpoint.
 
+    **A write that fails** (a full disk, an I/O error: any ``OSError``) is retried by this thread, from the
+    write that failed, with the updates' results kept in memory (nothing is computed again): after
+    :attr:`RETRY_FIRST_SECONDS`, doubling up to :attr:`RETRY_MAX_SECONDS` between tries, until the writes
+    succeed or :meth:`stop`. A request of the participant wakes it at once (:meth:`retry_now`), so a freed disk
+    is written before the page's next answer when it can be. The thread, not the participant's requests, owns
+    the retries because the participant may have no request left to make (the study's last part), and their
+    data must not wait on a restart; while it fails, :attr:`failing` is true and the participant's page says
+    so (``unsaved`` in :meth:`ParticipantSession.state`). The order of the writes, and so what a reader or a
+    restore finds after any of them, is the same as without a failure. Any other error ends the closing (kept
+    in :attr:`error`; the next restore runs it again).
+
     Args:
         session: The participant's session (its lock guards the shared logs).
         trial: The closed trial.
@@ -1018,29 +1051,57 @@ class TrialClosing:
         self.session, self.trial, self.resumed = session, trial, resumed
         self.folder = session.folder / f"trial{trial.index}"
         self.error: BaseException | None = None
+        self.write_error: OSError | None = None
+        """The last write's error while the writes fail (``None`` once they succeed)."""
+        self.failed_writes = 0
+        """How many tries of the writes failed (the ``final_update`` event logs those before it)."""
         self._state, self._csv_rows, self._envs, self._queue = state, csv_rows, envs, queue
         self._closed_at = session.timer()
+        self._last_try = -math.inf
         self._stopping = threading.Event()
+        self._wake = threading.Event()  # a retry now: a participant's request, or a stop
         self._done = threading.Event()
+        self._changed = threading.Condition()  # done, or a write failed: what wait() waits for
         name = f"study-close-{session.participant.id}-{trial.index}"
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+
+    RETRY_FIRST_SECONDS = 1.0
+    """Seconds before the first retry of a failed write."""
+
+    RETRY_GAP_SECONDS = 1.0
+    """The least time from one try to the next that a request wakes (:meth:`retry_now`)."""
+
+    RETRY_MAX_SECONDS = 30.0
+    """The longest wait between two tries: data wait at most this long once the disk has room again."""
 
     @property
     def done(self) -> bool:
         """Whether it has finished (written, failed, or stopped)."""
         return self._done.is_set()
 
+    @property
+    def failing(self) -> bool:
+        """Whether its writes fail and are being retried (:attr:`write_error` says why)."""
+        return self.write_error is not None and not self.done
+
     def start(self) -> None:
         """Starts the thread."""
         self._thread.start()
 
     def wait(self, timeout: float | None = None) -> bool:
-        """Waits until :attr:`done`; whether it is."""
-        return self._done.wait(timeout)
+        """Waits until :attr:`done` or :attr:`failing`; whether either is (``False`` once ``timeout`` passed)."""
+        with self._changed:
+            return self._changed.wait_for(lambda: self.done or self.failing, timeout)
+
+    def retry_now(self) -> None:
+        """Wakes a failing closing to try its writes again now (at most once per :attr:`RETRY_GAP_SECONDS`)."""
+        if self.failing and self.session.timer() - self._last_try >= self.RETRY_GAP_SECONDS:
+            self._wake.set()
 
     def stop(self) -> None:
         """Lets the update in progress end, writes nothing more (the next restore resumes), and waits."""
         self._stopping.set()
+        self._wake.set()
         if self._queue is not None:
             self._queue.stop()
         if self._thread.is_alive():
@@ -1048,7 +1109,9 @@ class TrialClosing:
 
     def _run(self) -> None:
         try:
-            self._finish()
+            updates = self._finish()
+            if updates is not None:
+                self._write_retrying(updates)
         except BaseException as error:  # kept for wait_for_closed_trials; the next restore runs it again
             self.error = error
             logger.error(
@@ -1062,9 +1125,12 @@ class TrialClosing:
                 self._queue.stop()
             if self._envs is not None:
                 self._envs.close()
-            self._done.set()
+            with self._changed:
+                self._done.set()
+                self._changed.notify_all()
 
-    def _finish(self) -> None:
+    def _finish(self) -> int | None:
+        # The updates and the final evaluation, in memory; how many updates ran (None: stopped meanwhile).
         session, trial, state = self.session, self.trial, self._state
         if self._envs is None:  # a restore: the trial's simulators again, for the evaluations
             self._envs = TrialEnvs(session.settings.experiment_config(trial.episodes))
@@ -1074,7 +1140,7 @@ class TrialClosing:
             for job in self._queue.pending():
                 while not job.wait(0.1):
                     if self._stopping.is_set():
-                        return
+                        return None
             finished = self._queue.take()
             if finished:
                 with session.lock:  # the session shows this state's counts until the questionnaire is answered
@@ -1085,10 +1151,42 @@ class TrialClosing:
                     state.pending = state.pending[len(finished) :]
             updates += len(finished)
         if self._stopping.is_set():
-            return
+            return None
         updates += _run_pending(state, self._envs, trial, session._evaluation_due, self._stopping.is_set)
-        if self._stopping.is_set():
-            return
+        return None if self._stopping.is_set() else updates
+
+    def _write_retrying(self, updates: int) -> None:
+        # The writes, again from the one that failed while they fail with an OSError (see the class docstring).
+        delay = self.RETRY_FIRST_SECONDS
+        while not self._stopping.is_set():
+            self._last_try = self.session.timer()
+            try:
+                self._write(updates)
+            except OSError as error:
+                self.failed_writes += 1
+                with self._changed:
+                    self.write_error = error
+                    self._changed.notify_all()
+                logger.error(
+                    "participant %s, trial %d: writing the final update failed (try %d; tried again within %g s, "
+                    "or at the participant's next request): %r",
+                    self.session.participant.id,
+                    self.trial.index,
+                    self.failed_writes,
+                    delay,
+                    error,
+                )
+            else:
+                self.write_error = None
+                return
+            self._wake.wait(delay)
+            self._wake.clear()
+            delay = min(delay * 2, self.RETRY_MAX_SECONDS)
+
+    def _write(self, updates: int) -> None:
+        # In order: checkpoint, missing rows, final_update, learner.zip. Each is whole or not at all (atomic
+        # replace; an append that fails is cut back), and a try skips what an earlier one wrote.
+        session, trial, state = self.session, self.trial, self._state
         _save_checkpoint(state, self.folder / CHECKPOINT_FILE)
         with session.lock:  # the live trial appends to the same logs
             for row in state.rows[self._csv_rows :]:
@@ -1097,9 +1195,21 @@ class TrialClosing:
             if trial.index not in session._records().final_updates:  # logged by a closing cut off after it
                 lag = round(max(session.timer() - self._closed_at, 0.0), 3)
                 session._log_event(
-                    "final_update", trial=trial.index, updates=updates, lag_seconds=lag, resumed=self.resumed
+                    "final_update",
+                    trial=trial.index,
+                    updates=updates,
+                    lag_seconds=lag,
+                    resumed=self.resumed,
+                    failed_writes=self.failed_writes,
                 )
         state.trainer.learner.save(self.folder / "learner.zip")
+
+
+def _plain_error(error: BaseException | None) -> str:
+    """An error as a short phrase for the page: an ``OSError``'s ``strerror`` ("No space left on device")."""
+    if isinstance(error, OSError) and error.strerror:
+        return error.strerror
+    return type(error).__name__ if error is not None else ""
 
 
 def _json_number(value: Any, name: str, bound: str = "") -> float:

@@ -324,6 +324,7 @@ async function render() {
     busy = wasBusy;
   }
   renderProgress();
+  renderUnsaved();
   $("paused").hidden = !state.paused;
   if (state.phase === "intro") {
     $("intro-title").textContent = state.trial.practice
@@ -353,6 +354,20 @@ async function render() {
   } else if (state.phase === "done") {
     show("done");
   }
+}
+
+// A finished part whose results the server could not write yet (a full disk): it keeps trying; the person should know.
+function renderUnsaved() {
+  const unsaved = state.unsaved;
+  const box = $("unsaved");
+  box.hidden = !unsaved;
+  if (!unsaved) { box.textContent = ""; return; }
+  const parts = unsaved.parts.join(", ");
+  const why = unsaved.error ? ` (${unsaved.error})` : "";
+  box.textContent = unsaved.retrying
+    ? `Not everything is saved yet: the results of ${parts} could not be written${why}, and the computer keeps `
+      + "trying. You can go on, but please tell the experimenter."
+    : `The results of ${parts} could not be saved${why}: please tell the experimenter.`;
 }
 
 // How many mazes this part has and about how long it and the rest take (the server's estimate).
