@@ -1,11 +1,11 @@
 """Low levels by name (the ant's ``ensemble`` stays loadable and replays the default), and bad low-level zips."""
 
 import dataclasses
+import importlib
 import json
 import zipfile
 
 import pytest
-from script_helpers import load_script
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.experiments.benchmark import load_report
@@ -159,7 +159,7 @@ SCRIPT_ARGV = {
     "in_maze": ["--episodes", "1", "--families", "ant3", "--low-level"],
     "select_low_level": ["--episodes", "1", "--mazes", "1"],  # the policy file goes last
 }
-"""Each lab script that plays a low-level zip, with the arguments before the bad value."""
+"""Each lab module that plays a low-level zip (``python -m antmaze_lab.X``), with the arguments before the bad value."""
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -170,7 +170,7 @@ def test_the_lab_scripts_refuse_a_bad_low_level_in_one_line_before_any_episode(
     value, message = damaged_zips(tmp_path)[case]
     if script == "select_low_level" and case in ("unknown name", "missing file"):
         message = "neither a policy file nor a run with a snapshots/ folder"  # it takes files and run folders
-    module = load_script(f"scripts/{script}.py")
+    module = importlib.import_module(f"antmaze_lab.{script}")
     out = tmp_path / "out.json"
     monkeypatch.setattr("sys.argv", [f"{script}.py", *SCRIPT_ARGV[script], str(value), "--out", str(out)])
     with pytest.raises(SystemExit) as exit_info:
