@@ -315,3 +315,70 @@ def test_an_in_maze_row_is_the_policy_its_run_was_given(tmp_path, monkeypatch):
     row = in_maze_tables.trained_row("late", "in_maze/f.json", "0.5")
     assert row == in_maze_tables.InMazeRow("late", "in_maze/f.json", "/elsewhere/step_5000.zip smoothing=0.5")
     assert in_maze_tables.trained_row("plain", "in_maze/f.json").row == "/elsewhere/step_5000.zip"
+
+
+def steady_row(successes, episodes, flips=1, steps=10_000, **extra):
+    rate = flips * 10_000 / steps
+    return {
+        "successes": successes,
+        "episodes": episodes,
+        "flips": flips,
+        "low_level_steps": steps,
+        "flips_per_10k_steps": rate,
+        "flips_per_10k_steps_ci95": [rate / 2, rate * 2],
+        **extra,
+    }
+
+
+def test_the_steady_ant_tables_order_the_suites_say_k_and_pool_eval_low(tmp_path, monkeypatch):
+    from antmaze_lab import low_level_tables
+
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+
+    def pair(suite, per_task, candidate):
+        return {
+            "suite": suite,
+            "episodes_per_task": per_task,
+            "tasks": "all",
+            "ensemble": steady_row(90, 100, file=f"{suite}_e.json", low_level="ensemble"),
+            "candidate": steady_row(candidate, 100, file=f"{suite}_c.json", low_level="student"),
+        }
+
+    in_maze = {
+        family: {
+            "ensemble": steady_row(48, 50, name="shipped", low_level_id="e"),
+            "candidate": steady_row(49, 50, name="s.zip", low_level_id="c"),
+        }
+        for family in ("ant3", "large")
+    }
+    sets = [
+        {"seed": seed, "episodes": 200, "ensemble": {"successes": 180}, "candidate": {"successes": hits}}
+        for seed, hits in ((0, 190), (200, 186))
+    ]
+    for side in ("ensemble", "candidate"):
+        sets[0][side]["low_level_id"] = side
+    pooled = {"ensemble": {"successes": 360, "episodes": 400}, "candidate": {"successes": 376, "episodes": 400}}
+    write_results(
+        tmp_path,
+        "steady_ant/s.json",
+        {
+            "benchmark": [pair("giant", 20, 80), pair("ant4", 1, 97)],
+            "in_maze": {"families": in_maze},
+            "eval_low": {"sets": sets, "pooled": pooled},
+        },
+    )
+    write_results(tmp_path, "steady_ant/old.json", {"benchmark": [pair("large", 20, 91)], "in_maze": None})
+    names = ["steady_ant/old.json", "steady_ant/s.json"]
+    maps = low_level_tables.steady_ant_maps(names).splitlines()[2:]
+    assert [line.split(" | ")[0] for line in maps] == ["| `ant4` (K = 1)"] * 2 + ["| `large`"] * 2 + ["| `giant`"] * 2
+    assert "| 97% [" in maps[1]
+    in_maze_lines = low_level_tables.steady_ant_in_maze(names).splitlines()[2:]
+    assert [line.split(" | ")[:2] for line in in_maze_lines] == [
+        ["| `ant3`, 50 mazes", "`shipped`: `e`"],
+        ["| `ant3`, 50 mazes", "`s.zip`: `c`"],
+        ["| `large`, 50 mazes", "`shipped`: `e`"],
+        ["| `large`, 50 mazes", "`s.zip`: `c`"],
+    ]
+    eval_low = low_level_tables.steady_ant_eval_low(names).splitlines()
+    assert eval_low[0] == "| low level | seed 0 (200) | seed 200 (200) | pooled |"
+    assert eval_low[3] == "| `candidate` | 95.0% [91.0, 97.3] | 93.0% [88.6, 95.8] | 376 of 400: 94.0% [91.2, 95.9] |"
