@@ -3,7 +3,8 @@
 Pages: ``docs/results/low-level.md`` and ``docs/guides/low-level.md``'s ``ensemble-speed``.
 
 ``python -m antmaze_lab.low_level_tables SECTION`` prints one generated block (``--list`` names them):
-``low-level-eval``, ``low-level-throughput``, ``low-level-selection``, ``env-throughput``, ``ensemble-speed``.
+``low-level-eval``, ``low-level-throughput``, ``low-level-selection``, ``env-throughput``, ``ensemble-speed``,
+``steady-ant-maps``, ``steady-ant-in-maze``, ``steady-ant-eval-low``.
 Loading, formatting and the command are :mod:`antmaze_lab.tables`'.
 """
 
@@ -156,37 +157,101 @@ def ensemble_speed() -> str:
 STEADY_ANT_SUMMARIES = ("steady_ant/summary.json", "steady_ant/summary_student199.json", "steady_ant/summary_tilt.json")
 """``scripts/steady_ant_table.py``'s summaries, each a candidate beside the ensemble on the same maps and episodes."""
 
+STEADY_ANT_SUITES = ("ant4", "u", "medium", "large", "giant")
+"""The order of the ant suites in the steady-ant tables (smallest first); a suite not listed comes last."""
+
+
+def flips_cells(row: dict[str, object]) -> list[str]:
+    """``flips / steps`` and ``rate [low, high]`` per 10,000 steps of a ``steady_ant_table.py`` row."""
+    low, high = row["flips_per_10k_steps_ci95"]  # type: ignore[misc]
+    return [f"{row['flips']} / {row['low_level_steps']:,}", f"{row['flips_per_10k_steps']:.2f} [{low:.2f}, {high:.2f}]"]
+
 
 @SECTIONS.add("steady-ant-maps")
 def steady_ant_maps(names: Sequence[str] = STEADY_ANT_SUMMARIES) -> str:
     """The oracle on the fixed maps with the ensemble and each one-network candidate: success and flips, intervals.
 
     The ensemble's row of a map is listed once however many summaries hold it on the same tasks (they read the
-    same file).
+    same file). A suite played with other than 20 episodes per task says its K.
     """
     rows: dict[tuple[str, str, str], list[object]] = {}
     for name in names:
         for pair in load(name).get("benchmark"):
             tasks = pair.get("tasks", "all")  # a pair read on a subset of the tasks says which
-            where = pair["suite"] if tasks == "all" else f"{pair['suite']}, tasks {','.join(map(str, tasks))}"
+            where = f"`{pair['suite']}`" + (
+                "" if pair["episodes_per_task"] == 20 else f" (K = {pair['episodes_per_task']})"
+            )
+            where += "" if tasks == "all" else f", tasks {','.join(map(str, tasks))}"
             for side in ("ensemble", "candidate"):
                 row = pair[side]
-                low, high = row["flips_per_10k_steps_ci95"]
                 rows.setdefault(
                     (pair["suite"], row["file"], str(tasks)),
-                    [
-                        f"`{where}`",
-                        f"`{row['low_level']}`",
-                        rate_cell(row["successes"], row["episodes"]),
-                        f"{row['flips']} / {row['low_level_steps']:,}",
-                        f"{row['flips_per_10k_steps']:.2f} [{low:.2f}, {high:.2f}]",
-                    ],
+                    [where, f"`{row['low_level']}`", rate_cell(row["successes"], row["episodes"]), *flips_cells(row)],
                 )
-    suites = list(dict.fromkeys(suite for suite, _, _ in rows))
+    order = {suite: rank for rank, suite in enumerate(STEADY_ANT_SUITES)}
+    suites = sorted(dict.fromkeys(suite for suite, _, _ in rows), key=lambda suite: order.get(suite, len(order)))
     return table(
         ["map (oracle, K = 20)", "low level", "success [95% CI]", "flips / low-level steps", "flips per 10k [95% CI]"],
         [rows[key] for suite in suites for key in rows if key[0] == suite],
     )
+
+
+@SECTIONS.add("steady-ant-in-maze")
+def steady_ant_in_maze(names: Sequence[str] = STEADY_ANT_SUMMARIES) -> str:
+    """``in_maze.py``'s held-out families with the ensemble and a candidate played side by side in one run.
+
+    Only the summaries holding in-maze rows contribute; each run's ensemble row is its own (other episodes).
+    """
+    rows: list[tuple[int, list[object]]] = []
+    for name in names:
+        in_maze = load(name).data.get("in_maze")  # older summaries may lack the field
+        if not in_maze:
+            continue
+        for rank, (family, entry) in enumerate(in_maze["families"].items()):
+            for side in ("ensemble", "candidate"):
+                row = entry[side]
+                low_level = f"`{row['name']}`: `{row['low_level_id']}`"
+                cells = [
+                    f"`{family}`, {row['episodes']} mazes",
+                    low_level,
+                    rate_cell(row["successes"], row["episodes"]),
+                ]
+                rows.append((rank, [*cells, *flips_cells(row)]))
+    return table(
+        [
+            "family (held-out mazes)",
+            "low level",
+            "success [95% CI]",
+            "flips / low-level steps",
+            "flips per 10k [95% CI]",
+        ],
+        [cells for _, cells in sorted(rows, key=lambda item: item[0])],
+    )
+
+
+@SECTIONS.add("steady-ant-eval-low")
+def steady_ant_eval_low(names: Sequence[str] = STEADY_ANT_SUMMARIES) -> str:
+    """``eval-low`` of the ensemble and a candidate on disjoint sets of held-out subgoals, per set and pooled."""
+    blocks = []
+    for name in names:
+        eval_low = load(name).data.get("eval_low")  # summaries made before --eval-low lack the field
+        if not eval_low:
+            continue
+        sets = eval_low["sets"]
+        header = ["low level", *(f"seed {row['seed']} ({row['episodes']})" for row in sets), "pooled"]
+        lines = []
+        for side in ("ensemble", "candidate"):
+            pooled = eval_low["pooled"][side]
+            hits, trials = pooled["successes"], pooled["episodes"]
+            lines.append(
+                [
+                    f"`{sets[0][side]['low_level_id']}`",
+                    *(rate_cell(row[side]["successes"], row["episodes"]) for row in sets),
+                    f"{hits} of {trials}: {rate_cell(hits, trials)}",
+                ]
+            )
+        blocks.append(table(header, lines))
+    return "\n\n".join(blocks)
 
 
 main = SECTIONS.main

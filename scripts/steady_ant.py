@@ -18,7 +18,7 @@ clone, one torch thread::
         >> /work/runs/steadyant/d1.log 2>&1 &
 
 The latest student is ``OUT/<state.json's "student">``; snapshots every ``--snapshot-every`` iterations stay in
-``OUT/students/``. Score one beside the shipped ensemble with ``scripts/in_maze.py --low-level ZIP`` and
+``OUT/students/``. Score one beside the shipped ensemble with ``python -m antmaze_lab.in_maze --low-level ZIP`` and
 ``antmaze-hirl benchmark large --policy oracle --low-level ZIP``.
 
 Usage: python scripts/steady_ant.py --out DIR [--resume] [--iterations 100] [--steps-per-iteration 20000]

@@ -2,11 +2,13 @@
 
 Reads
 
-* ``in_maze.py`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
+* ``antmaze_lab.in_maze`` rows of the ensemble and the candidate, same mazes and seeds: one file with both (the ensemble
   first) or two files of one row each (the ensemble's first);
 * pairs of ``antmaze-hirl benchmark`` reports (``--benchmark ENSEMBLE.json CANDIDATE.json``, repeatable), same
   suite, seed and episodes per task, differing only in ``--low-level`` (and perhaps ``--tasks``: a pair whose
   reports played other tasks is read on the tasks both played, its counts recounted from their episodes);
+* pairs of ``antmaze-hirl eval-low`` files on one set of subgoals (``--eval-low SEED ENSEMBLE.json
+  CANDIDATE.json``, repeatable, the sets disjoint: seeds at least the episodes apart), pooled over the sets;
 
 and writes one JSON (``--out``) and a Markdown table with, per family or suite and low level: success with its
 95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
@@ -21,12 +23,13 @@ spread (the reports' task bootstrap is printed beside it).
 ``--block`` iterations): a health check of the run, not a score.
 
 Usage: python scripts/steady_ant_table.py --in-maze E.json [C.json] --benchmark E.json C.json [...]
-           [--run STATE.json] --out summary.json
+           [--eval-low SEED E.json C.json ...] [--run STATE.json] --out summary.json
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import sys
 from pathlib import Path
@@ -62,7 +65,7 @@ def rate_row(successes: int, episodes: int, flips: int, steps: int) -> dict[str,
 
 
 def in_maze_rows(paths: list[Path]) -> dict[str, Any]:
-    """Per family: the ensemble's and the candidate's ``in_maze.py`` rows.
+    """Per family: the ensemble's and the candidate's ``antmaze_lab.in_maze`` rows.
 
     One file holding two rows (the ensemble first), or two files of one row each (the ensemble's first), made
     with the same episodes, seed and families.
@@ -172,6 +175,51 @@ def flip_rate_p(first: dict[str, Any], second: dict[str, Any]) -> float:
     return float(binomtest(second["flips"], flips, share).pvalue)
 
 
+def eval_low_sets(sets: list[tuple[str, Path, Path]]) -> dict[str, Any]:
+    """``eval-low`` files of the ensemble and the candidate per disjoint set of subgoals (its seed), and pooled.
+
+    Raises:
+        ValueError: If a seed is not an integer, a pair played other numbers of subgoals, or two sets overlap.
+    """
+    rows: list[dict[str, Any]] = []
+    for seed_text, *paths in sets:
+        try:
+            seed = int(seed_text)
+        except ValueError:
+            raise ValueError(f"--eval-low seed {seed_text!r} is not an integer") from None
+        files = [json.loads(Path(path).read_text()) for path in paths]
+        if files[0]["episodes"] != files[1]["episodes"]:
+            counts = f"{files[0]['episodes']} and {files[1]['episodes']}"
+            raise ValueError(f"{paths[0]} and {paths[1]} tried {counts} subgoals: not the same set")
+        row: dict[str, Any] = {"seed": seed, "episodes": files[0]["episodes"]}
+        for role, path, data in zip(("ensemble", "candidate"), paths, files, strict=True):
+            successes = round(data["success_rate"] * data["episodes"])
+            row[role] = {
+                "file": str(path),
+                "low_level_id": data.get("low_level_id"),
+                "num_envs": data.get("num_envs", 1),  # files made before lockstep played one subgoal at a time
+                "successes": successes,
+                "success_rate": successes / data["episodes"],
+                "success_ci95": list(wilson_interval(successes, data["episodes"])),
+            }
+        rows.append(row)
+    spans = sorted((row["seed"], row["seed"] + row["episodes"]) for row in rows)
+    for (_, end), (start, _) in itertools.pairwise(spans):
+        if start < end:
+            raise ValueError(f"eval-low sets from seeds {[seed for seed, _ in spans]} overlap (subgoal i uses seed+i)")
+    episodes = sum(row["episodes"] for row in rows)
+    pooled = {}
+    for role in ("ensemble", "candidate"):
+        successes = sum(row[role]["successes"] for row in rows)
+        pooled[role] = {
+            "successes": successes,
+            "episodes": episodes,
+            "success_rate": successes / episodes,
+            "success_ci95": list(wilson_interval(successes, episodes)),
+        }
+    return {"sets": rows, "pooled": pooled}
+
+
 def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
     """A distillation run's own curve from its ``state.json``: per block of iterations, the student-driven episodes.
 
@@ -200,6 +248,11 @@ def training_curve(state_path: Path, block: int) -> list[dict[str, Any]]:
     return rows
 
 
+def success_text(successes: int, episodes: int, interval: list[float]) -> str:
+    """``successes/episodes [low%, high%]``."""
+    return f"{successes}/{episodes} [{interval[0]:.0%}, {interval[1]:.0%}]"
+
+
 def table(summary: dict[str, Any]) -> str:
     """The Markdown table of the summary."""
     lines = [
@@ -208,16 +261,27 @@ def table(summary: dict[str, Any]) -> str:
     ]
 
     def line(where: str, role: str, row: dict[str, Any]) -> str:
-        low, high = row["success_ci95"]
         flow, fhigh = row["flips_per_10k_steps_ci95"]
         return (
-            f"| {where} | {role} | {row['successes']}/{row['episodes']} [{low:.0%}, {high:.0%}] | "
+            f"| {where} | {role} | {success_text(row['successes'], row['episodes'], row['success_ci95'])} | "
             f"{row['flips']} / {row['low_level_steps']:,} | "
             f"{row['flips_per_10k_steps']:.2f} [{flow:.2f}, {fhigh:.2f}] |"
         )
 
     for family, rows in (summary.get("in_maze") or {}).get("families", {}).items():
         lines += [line(f"in_maze {family}", role, rows[role]) for role in ("ensemble", "candidate")]
+    eval_low = summary.get("eval_low") or {}
+    for row in eval_low.get("sets", []):
+        lines += [
+            f"| eval-low seed {row['seed']} | {role}: {row[role]['low_level_id']} | "
+            f"{success_text(row[role]['successes'], row['episodes'], row[role]['success_ci95'])} | | |"
+            for role in ("ensemble", "candidate")
+        ]
+    if eval_low:
+        lines += [
+            f"| eval-low pooled | {role} | {success_text(row['successes'], row['episodes'], row['success_ci95'])} | | |"
+            for role, row in eval_low["pooled"].items()
+        ]
     for row in summary.get("training_curve") or []:
         first, last = row["iterations"]
         lines.append(line(f"training mazes, iterations {first}-{last}", "student", row))
@@ -245,10 +309,18 @@ def main(argv: list[str] | None = None) -> int:
         type=Path,
         nargs="+",
         default=None,
-        help="in_maze.py file(s): the ensemble's row, then the candidate's",
+        help="antmaze_lab.in_maze file(s): the ensemble's row, then the candidate's",
     )
     parser.add_argument(
         "--benchmark", type=Path, nargs=2, action="append", default=[], metavar=("ENSEMBLE", "CANDIDATE")
+    )
+    parser.add_argument(
+        "--eval-low",
+        nargs=3,
+        action="append",
+        default=[],
+        metavar=("SEED", "ENSEMBLE", "CANDIDATE"),
+        help="eval-low files of one set of subgoals (its --seed), the ensemble's first; repeatable (default: none)",
     )
     parser.add_argument("--run", type=Path, default=None, help="a distillation run's state.json: its own curve")
     parser.add_argument("--block", type=int, default=20, help="iterations per row of the run's curve")
@@ -258,6 +330,7 @@ def main(argv: list[str] | None = None) -> int:
         summary = {
             "in_maze": in_maze_rows(args.in_maze) if args.in_maze else None,
             "benchmark": [benchmark_pair(first, second) for first, second in args.benchmark],
+            "eval_low": eval_low_sets(args.eval_low) if args.eval_low else None,
             "training_curve": training_curve(args.run, args.block) if args.run else None,
         }
     except (OSError, ValueError, KeyError) as error:

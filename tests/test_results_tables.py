@@ -135,6 +135,10 @@ GUIDE_FIGURES = {
     "ray-sweep": "Serial over Ray: 0.83x for the grid alone, 0.70x with the start-up.",
     "steady-ant-maps": "| `giant` | `ensemble: TD3 8ae38455d9435335` | 79% [70.0, 85.8] | 19 / 131,033 | 1.45 [0.87, "
     "2.26] |",
+    "steady-ant-in-maze": "| `large`, 100 mazes | `results/steady_ant/student_d1_iter00199.zip`: "
+    "`sha256:0b2c0b6ba1af66bc` | 91% [83.8, 95.2] | 9 / 55,170 | 1.63 [0.75, 3.10] |",
+    "steady-ant-eval-low": "| `sha256:0b2c0b6ba1af66bc` | 93.0% [88.6, 95.8] | 91.0% [86.2, 94.2] | "
+    "93.5% [89.2, 96.2] | 93.0% [88.6, 95.8] | 741 of 800: 92.6% [90.6, 94.2] |",
 }
 """One line each guide's section prints from the committed files, as the guides quote it."""
 
@@ -329,3 +333,70 @@ def test_a_lab_run_records_a_command_whose_options_read_back(tmp_path):
     assert command_arguments("python scripts/in_maze.py --episodes 10") == ["--episodes", "10"]  # before the move
     with pytest.raises(ValueError, match=r"^not a recorded run command .*: 'antmaze-hirl eval-low --seed 0'$"):
         command_arguments("antmaze-hirl eval-low --seed 0")
+
+
+def steady_row(successes, episodes, flips=1, steps=10_000, **extra):
+    rate = flips * 10_000 / steps
+    return {
+        "successes": successes,
+        "episodes": episodes,
+        "flips": flips,
+        "low_level_steps": steps,
+        "flips_per_10k_steps": rate,
+        "flips_per_10k_steps_ci95": [rate / 2, rate * 2],
+        **extra,
+    }
+
+
+def test_the_steady_ant_tables_order_the_suites_say_k_and_pool_eval_low(tmp_path, monkeypatch):
+    from antmaze_lab import low_level_tables
+
+    monkeypatch.setattr(tables, "RESULTS", tmp_path)
+
+    def pair(suite, per_task, candidate):
+        return {
+            "suite": suite,
+            "episodes_per_task": per_task,
+            "tasks": "all",
+            "ensemble": steady_row(90, 100, file=f"{suite}_e.json", low_level="ensemble"),
+            "candidate": steady_row(candidate, 100, file=f"{suite}_c.json", low_level="student"),
+        }
+
+    in_maze = {
+        family: {
+            "ensemble": steady_row(48, 50, name="shipped", low_level_id="e"),
+            "candidate": steady_row(49, 50, name="s.zip", low_level_id="c"),
+        }
+        for family in ("ant3", "large")
+    }
+    sets = [
+        {"seed": seed, "episodes": 200, "ensemble": {"successes": 180}, "candidate": {"successes": hits}}
+        for seed, hits in ((0, 190), (200, 186))
+    ]
+    for side in ("ensemble", "candidate"):
+        sets[0][side]["low_level_id"] = side
+    pooled = {"ensemble": {"successes": 360, "episodes": 400}, "candidate": {"successes": 376, "episodes": 400}}
+    write_results(
+        tmp_path,
+        "steady_ant/s.json",
+        {
+            "benchmark": [pair("giant", 20, 80), pair("ant4", 1, 97)],
+            "in_maze": {"families": in_maze},
+            "eval_low": {"sets": sets, "pooled": pooled},
+        },
+    )
+    write_results(tmp_path, "steady_ant/old.json", {"benchmark": [pair("large", 20, 91)], "in_maze": None})
+    names = ["steady_ant/old.json", "steady_ant/s.json"]
+    maps = low_level_tables.steady_ant_maps(names).splitlines()[2:]
+    assert [line.split(" | ")[0] for line in maps] == ["| `ant4` (K = 1)"] * 2 + ["| `large`"] * 2 + ["| `giant`"] * 2
+    assert "| 97% [" in maps[1]
+    in_maze_lines = low_level_tables.steady_ant_in_maze(names).splitlines()[2:]
+    assert [line.split(" | ")[:2] for line in in_maze_lines] == [
+        ["| `ant3`, 50 mazes", "`shipped`: `e`"],
+        ["| `ant3`, 50 mazes", "`s.zip`: `c`"],
+        ["| `large`, 50 mazes", "`shipped`: `e`"],
+        ["| `large`, 50 mazes", "`s.zip`: `c`"],
+    ]
+    eval_low = low_level_tables.steady_ant_eval_low(names).splitlines()
+    assert eval_low[0] == "| low level | seed 0 (200) | seed 200 (200) | pooled |"
+    assert eval_low[3] == "| `candidate` | 95.0% [91.0, 97.3] | 93.0% [88.6, 95.8] | 376 of 400: 94.0% [91.2, 95.9] |"

@@ -117,3 +117,28 @@ def test_a_pair_whose_candidate_played_fewer_tasks_is_read_on_the_shared_tasks(t
     second.write_text(json.dumps(disjoint))
     with pytest.raises(ValueError, match="share no task"):
         table.benchmark_pair(first, second)
+
+
+def test_eval_low_sets_pool_disjoint_sets_and_refuse_overlaps(tmp_path, capsys):
+    def write(name, rate, episodes=200):
+        path = tmp_path / name
+        path.write_text(json.dumps({"success_rate": rate, "episodes": episodes, "low_level_id": name}))
+        return str(path)
+
+    sets = [("0", write("e0", 0.91), write("c0", 0.95)), ("200", write("e2", 0.93), write("c2", 0.92))]
+    summary = table.eval_low_sets(sets)
+    assert [row["candidate"]["successes"] for row in summary["sets"]] == [190, 184]
+    assert summary["sets"][0]["ensemble"]["num_envs"] == 1  # a file without the field played one at a time
+    assert summary["pooled"]["ensemble"]["successes"] == 182 + 186
+    assert summary["pooled"]["candidate"]["episodes"] == 400
+    low, high = summary["pooled"]["candidate"]["success_ci95"]
+    assert low < 374 / 400 < high
+    with pytest.raises(ValueError, match=r"seeds \[0, 100\] overlap"):
+        table.eval_low_sets([sets[0], ("100", *sets[1][1:])])
+    with pytest.raises(ValueError, match="tried 200 and 100 subgoals"):
+        table.eval_low_sets([("0", write("e", 0.9), write("c", 0.9, episodes=100))])
+    out = tmp_path / "s.json"
+    assert table.main(["--eval-low", "x", sets[0][1], sets[0][2], "--out", str(out)]) == 2
+    assert "seed 'x' is not an integer" in capsys.readouterr().err
+    assert table.main(["--eval-low", "0", sets[0][1], sets[0][2], "--out", str(out)]) == 0
+    assert "| eval-low pooled | candidate | 190/200 [" in json.loads(out.read_text())["table_markdown"]
