@@ -154,6 +154,23 @@ def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp
     check_study_files(folder, load_plan(folder))
 
 
+def test_a_closed_trials_rows_removed_after_its_final_update_are_damage_not_a_closing_to_resume(tmp_path, monkeypatch):
+    # With learner.zip gone too the trial looks like a closing cut off before its last rows, but its
+    # final_update is logged, which a closing writes only after them: the rows were removed, and the
+    # participant is stopped (409) naming the file instead of being repaired from the checkpoint.
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, 0.5)
+    assert session.next_episode()["phase"] == "questionnaire"
+    assert session.wait_for_closed_trials(timeout=60)
+    session.close()
+    participant = folder / "participants" / "P01"
+    (participant / "trial1" / "learner.zip").unlink()
+    episodes = participant / "episodes.csv"
+    episodes.write_text("".join(episodes.read_text().splitlines(keepends=True)[:-1]))  # its last row
+    with pytest.raises(ValueError, match=r"episodes\.csv has 1 of the 2 rows of finished trial 1"):
+        check_records(participant, load_plan(folder).participants[0], *read_progress(participant))
+    assert closing_trials(participant, load_plan(folder).participants[0], *read_progress(participant))  # as before
+
+
 def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_update_runs(tmp_path, monkeypatch):
     folder, session = at_the_last_maze(tmp_path, monkeypatch, 3.0, practice=2)
     started = time.monotonic()

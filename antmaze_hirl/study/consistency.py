@@ -180,7 +180,13 @@ def check_records(folder: Path, participant: ParticipantPlan, trial_index: int, 
             f"{progress} is behind the logs (trial {trial_index + 1} at {phase!r}, but {records.where(index, folder)} "
             f"has later records of trial {index}): it was rolled back or replaced; restore it from a backup"
         )
-    closing = {trial.index for trial in closing_trials(folder, participant, trial_index, phase)}
+    # A closing writes a trial's last rows before its final_update event (one lock), so rows may be missing
+    # only while that event is not logged: after it, missing rows were removed, never still to be written.
+    closing = {
+        trial.index
+        for trial in closing_trials(folder, participant, trial_index, phase)
+        if trial.index not in records.final_updates
+    }
     for trial in closed_trials(participant, trial_index, phase):
         rows = records.rows[trial.index]
         if rows != trial.episodes and not (trial.index in closing and rows < trial.episodes):
