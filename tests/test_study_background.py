@@ -1,5 +1,6 @@
 """Background updates: the next maze starts at once, the learner lags one maze, and nothing is lost on a restart."""
 
+import threading
 import time
 
 import pytest
@@ -8,6 +9,7 @@ from study_helpers import ClosingDisk, make_tiny_study, open_session, play_to_ep
 
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
+from antmaze_hirl.study import session as session_module
 from antmaze_hirl.study.checkpoint import CHECKPOINT_FILE
 from antmaze_hirl.study.consistency import check_records, check_study_files, closing_trials, read_progress
 from antmaze_hirl.study.data import EPISODE_COLUMNS, read_episode_rows
@@ -275,10 +277,19 @@ def assert_closed_trial_complete(folder):
 def test_a_closed_trials_write_that_fails_once_is_retried_without_a_restart(tmp_path, monkeypatch, write):
     folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 0.1)
+    checkpoints = []
+    real_save = session_module._save_checkpoint
+
+    def counted_save(*args):
+        checkpoints.extend([1] if threading.current_thread().name.startswith("study-close-") else [])
+        real_save(*args)
+
+    monkeypatch.setattr(session_module, "_save_checkpoint", counted_save)
     disk = ClosingDisk(monkeypatch, WRITES_OF_A_CLOSING[write], fails=1)
     assert session.next_episode()["phase"] == "questionnaire"
     (closing,) = session._closing
     until(lambda: closing.done)  # no request, no restart: the closing's own retry
+    assert len(checkpoints) == (2 if write.startswith("checkpoint") else 1)  # a retry starts at the failed write
     assert len(disk.failed) == 1 and closing.failed_writes == 1
     assert closing.error is None and closing.write_error is None and "unsaved" not in session.state()
     assert_closed_trial_complete(folder)
@@ -342,3 +353,27 @@ def test_a_stop_while_a_closed_trials_writes_fail_is_prompt_and_the_restart_fini
     assert restarted.wait_for_closed_trials(timeout=60)
     restarted.close()
     assert_closed_trial_complete(folder)
+
+
+def test_one_participants_failing_writes_do_not_cut_short_anothers_closing(tmp_path, monkeypatch):
+    # The study waits on every participant before it raises, so a stop that follows leaves the healthy
+    # (slow) closing written instead of ending it unwritten.
+    folder = make_tiny_study(
+        tmp_path / "study", participants=2, methods=("dagger",), episodes=2, practice=0, background_updates=True
+    )
+    slowed(monkeypatch, 1.5)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)
+    disk = ClosingDisk(monkeypatch, lambda path: "P01" in path.parts)  # P01's disk is full, P02's is not
+    study = Study(folder)
+    try:
+        for participant in ("P01", "P02"):
+            session = study.session(participant)
+            session.start_trial()
+            play_to_the_last_maze(session)
+            assert session.next_episode()["phase"] == "questionnaire"
+        with pytest.raises(RuntimeError, match=r"participant P01, trial 1: .*its writes are retried"):
+            study.wait_for_closed_trials(timeout=60)
+        assert disk.failed
+        assert (folder / "participants" / "P02" / "trial1" / "learner.zip").is_file()  # waited on, not cut short
+    finally:
+        study.close()

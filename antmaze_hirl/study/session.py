@@ -1056,6 +1056,7 @@ class TrialClosing:
         self.failed_writes = 0
         """How many tries of the writes failed (the ``final_update`` event logs those before it)."""
         self._state, self._csv_rows, self._envs, self._queue = state, csv_rows, envs, queue
+        self._checkpoint_written = False  # the state does not change between tries: one good write is enough
         self._closed_at = session.timer()
         self._last_try = -math.inf
         self._stopping = threading.Event()
@@ -1187,7 +1188,9 @@ class TrialClosing:
         # In order: checkpoint, missing rows, final_update, learner.zip. Each is whole or not at all (atomic
         # replace; an append that fails is cut back), and a try skips what an earlier one wrote.
         session, trial, state = self.session, self.trial, self._state
-        _save_checkpoint(state, self.folder / CHECKPOINT_FILE)
+        if not self._checkpoint_written:  # the largest file: rewritten, it would take the room freed for the rest
+            _save_checkpoint(state, self.folder / CHECKPOINT_FILE)
+            self._checkpoint_written = True
         with session.lock:  # the live trial appends to the same logs
             for row in state.rows[self._csv_rows :]:
                 session._append_row(row)

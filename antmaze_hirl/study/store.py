@@ -180,17 +180,27 @@ class Study:
     def wait_for_closed_trials(self, timeout: float | None = None) -> bool:
         """Waits until every open session's closed trials have their final updates written; whether they have.
 
+        Every session is waited on before any error is raised: one participant's failing writes (a full disk)
+        must not cut short another's healthy closing, which a caller that stops next would end unwritten.
+
         Raises:
-            RuntimeError: If one failed (:meth:`~antmaze_hirl.study.session.ParticipantSession.wait_for_closed_trials`).
+            RuntimeError: If one or more failed, naming each
+                (:meth:`~antmaze_hirl.study.session.ParticipantSession.wait_for_closed_trials`); the first chained.
         """
         deadline = None if timeout is None else time.monotonic() + timeout
         with self._lock:
             sessions = list(self._sessions.values())
+        errors: list[RuntimeError] = []
+        finished = True
         for session in sessions:
             left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
-            if not session.wait_for_closed_trials(left):
-                return False
-        return True
+            try:
+                finished = session.wait_for_closed_trials(left) and finished
+            except RuntimeError as error:
+                errors.append(error)
+        if errors:
+            raise RuntimeError("; ".join(str(error) for error in errors)) from errors[0]
+        return finished
 
     def _check_known(self, participant_id: str) -> None:
         if participant_id not in self._participants:
