@@ -267,6 +267,10 @@ def load_files(table: str, paths: list[Path]) -> list[Any]:
             raise ValueError(f"{path}: no such file") from None
         except json.JSONDecodeError as error:
             raise ValueError(f"{path} is not JSON: {error}") from None
+        except UnicodeDecodeError:
+            raise ValueError(f"{path} is not a text (JSON) file") from None
+        except OSError as error:  # a folder, no permission: named, not a traceback
+            raise ValueError(f"{path}: {error.strerror or error}") from None
         wanted = head if index == 0 or table == "trials" else rest
         if file_kind(data) != wanted:
             raise ValueError(f"{path} is of kind {file_kind(data)!r}; {table} reads {wanted!r} files here")

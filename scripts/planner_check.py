@@ -29,6 +29,7 @@ import argparse
 import json
 import shlex
 import sys
+import tempfile
 import time
 from collections import defaultdict
 from pathlib import Path
@@ -337,6 +338,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if not (variants and seeds) and not args.shipped_failures:
             raise ValueError(f"nothing to screen: --variants {args.variants!r} --seeds {args.seeds!r}")
         check_selection_sizes(args.body, sizes)
+        if args.out is not None:
+            check_writable(args.out)
         learner = load_learner(args.body, args.learner_zip) if args.shipped_failures else None
     except ValueError as error:
         parser.error(str(error))
@@ -383,6 +386,20 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             brief = {k: (v["success"] if isinstance(v, dict) and "success" in v else v) for k, v in row.items()}
             print(json.dumps(brief), flush=True)
     return _written({"command": command, "rows": rows}, args.out)
+
+
+def check_writable(out: Path) -> None:
+    """Refuses ``out`` before any work if its folder cannot be made or written (a run here takes minutes to hours).
+
+    Raises:
+        ValueError: Naming ``out`` and why.
+    """
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out.parent, prefix=f".{out.name}.", delete=True):
+            pass
+    except OSError as error:
+        raise ValueError(f"--out {out}: cannot write there ({error.strerror or error})") from None
 
 
 def _written(result: dict[str, Any], out: Path | None) -> dict[str, Any]:

@@ -35,6 +35,7 @@ def refused(capsys, argv):
         (["--learner-zip", "x.zip"], "--learner-zip x.zip is read with --shipped-failures only"),
         (["--variants", ","], "nothing to screen: --variants ',' --seeds '0'"),
         (["--shipped-failures", "--learner-zip", "/nowhere/x.zip"], "--learner-zip: no high-level policy at "),
+        (["--out", "/proc/nope/x.json"], "--out /proc/nope/x.json: cannot write there ("),
     ],
 )
 def test_planner_check_refuses_bad_input_in_one_line(capsys, argv, message):
@@ -152,6 +153,11 @@ def test_a_planning_table_refuses_a_file_it_does_not_read_in_one_line(tmp_path, 
     assert status == 2 and err.startswith(f"error: {paths[0]} is not JSON: ")
     assert planning_tables.main(["ends", str(tmp_path / "missing.json")]) == 2
     assert capsys.readouterr().err == f"error: {tmp_path / 'missing.json'}: no such file\n"
+    assert planning_tables.main(["ends", str(tmp_path)]) == 2  # a folder: named, no traceback
+    assert capsys.readouterr().err == f"error: {tmp_path}: Is a directory\n"
+    (tmp_path / "binary.json").write_bytes(b"\xc2\x00\xff")
+    assert planning_tables.main(["ends", str(tmp_path / "binary.json")]) == 2
+    assert capsys.readouterr().err == f"error: {tmp_path / 'binary.json'} is not a text (JSON) file\n"
     broken = {"rows": {"u": {"ends": {"success": 1}}}}  # an ends file without its other fields
     status, err, paths = tables(tmp_path, capsys, "ends", broken)
     assert status == 2 and err.startswith(f"error: {paths[0]}: a field is missing or malformed (KeyError(")
