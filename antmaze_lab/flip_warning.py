@@ -189,7 +189,11 @@ def reflex_row(outcomes: list[str], acted: int, steps: int) -> dict[str, Any]:
 
 def main() -> None:
     """The command line: play every reflex row on the ``select6`` mazes, write the file, print the figures."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.flip_warning",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--mazes", type=int, default=100, help="select6 mazes (episodes) per row")
     parser.add_argument("--low-level", type=Path, default=None, help="policy .zip (default: the shipped ant)")
     parser.add_argument("--thresholds", default="0.8,0.7,0.6,0.5", help="uprightness thresholds of the warning")

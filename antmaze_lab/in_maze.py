@@ -91,7 +91,9 @@ def table(results: dict[str, Any]) -> str:
 
 def main() -> None:
     """The command line: play every low level and family, write the file, print the table."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.in_maze", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--episodes", type=int, default=100, help="held-out mazes (episodes) per family")
     parser.add_argument("--families", default=",".join(FAMILIES), help=f"comma-separated subset of {FAMILIES}")
     parser.add_argument(

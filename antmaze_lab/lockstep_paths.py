@@ -129,7 +129,11 @@ def eval_low_rows(subgoals: int, num_envs: int = 25) -> list[dict]:
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     """The command line: every row, written to ``--out`` and returned."""
     argv = sys.argv[1:] if argv is None else argv
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.lockstep_paths",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--families", default="ant3,u", help="in_maze families, comma-separated")
     parser.add_argument("--mazes", type=int, default=50, help="in_maze mazes per family")
     parser.add_argument("--demo-seeds", type=int, default=20, help="demo seeds per body")

@@ -317,7 +317,11 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
 
 def main() -> None:
     """The command line: the speed and success figures, or ``--algorithms``' side-by-side training."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.low_level",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
     parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--episodes", type=int, default=200, help="eval-low subgoals per set")

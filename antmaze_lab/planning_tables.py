@@ -280,7 +280,7 @@ def load_files(table: str, paths: list[Path]) -> list[Any]:
 
 def main(argv: list[str] | None = None) -> int:
     """Prints the table named by the first argument from the files after it; a bad file: one line, exit 2."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m antmaze_lab.planning_tables", description=__doc__.splitlines()[0])
     parser.add_argument("table", choices=tuple(TABLE_FILES), help="the table to print (required)")
     parser.add_argument(
         "files", type=Path, nargs="+", help="its results files, as the module's description gives them (required)"

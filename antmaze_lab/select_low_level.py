@@ -127,7 +127,11 @@ def score_rows(
 
 def main() -> None:
     """The command line: score every snapshot and policy, write the file, print each row and the best."""
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="python -m antmaze_lab.select_low_level",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
     first_seed = SEEDS.low_level_selection_subgoals
     parser.add_argument("--seed", type=int, default=first_seed, help="first subgoal seed of the selection eval-low")
