@@ -117,16 +117,23 @@ def problems(results: Path, index: dict[str, Any]) -> list[str]:
     return lines
 
 
-def replay_command(command: str, moved: dict[str, str]) -> str:
-    """The command that replays recorded ``command`` today, from the repository root.
+def replay_command(command: str, moved: dict[str, str], renamed: dict[str, dict[str, str]] | None = None) -> str:
+    """The command that replays recorded ``command`` under today's code, from the repository root.
 
     ``python scripts/in_maze.py --episodes 10`` with ``scripts/in_maze.py`` moved to ``antmaze_lab.in_maze`` is
-    ``python -m antmaze_lab.in_maze --episodes 10``: the same options, the script's module. Any other command
-    (not moved, ``antmaze-hirl ...``, ``not recorded``) is returned as it is.
+    ``python -m antmaze_lab.in_maze --episodes 10``: the script's module, wherever ``python SCRIPT`` stands in
+    the command (after ``nice`` or an environment prefix too), and each option that ``renamed[module]`` maps
+    (``--subgoal-distance`` -> ``--subgoal-reach-m``) under its new name. Defaults may have changed since the
+    entry's commit, so this replays the run's options, not necessarily its figures: the exact run is that
+    commit's checkout. Any other command (not moved, ``antmaze-hirl ...``, ``not recorded``) is returned as it is.
     """
-    words = command.split(" ", 2)
-    if len(words) >= 2 and words[0] == "python" and words[1] in moved:
-        return " ".join(["python", "-m", moved[words[1]], *words[2:]])
+    for script, module in moved.items():
+        pattern = rf"(^|\s)python\s+{re.escape(script)}(?=\s|$)"
+        if re.search(pattern, command):
+            command = re.sub(pattern, rf"\1python -m {module}", command, count=1)
+            for old, new in (renamed or {}).get(module, {}).items():
+                command = re.sub(rf"(?<=\s){re.escape(old)}(?=[\s=]|$)", new, command)
+            return command
     return command
 
 
@@ -210,8 +217,10 @@ def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
             "",
             "### Moved scripts",
             "",
-            "A command recorded as `python SCRIPT OPTIONS` replays as `python -m MODULE OPTIONS` from the repository "
-            "root (`python scripts/results_index.py --replay EXPERIMENT/ENTRY` prints it).",
+            "A command recorded as `python SCRIPT OPTIONS` runs today as `python -m MODULE OPTIONS` from the "
+            "repository root, options renamed since under their new names (`renamed_options`; `python "
+            "scripts/results_index.py --replay EXPERIMENT/ENTRY` prints it). Defaults may have changed since the "
+            "run: the exact run is its commit.",
             "",
             "| recorded script | module today |",
             "|---|---|",
@@ -246,7 +255,9 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(
                 f"no entry {args.replay!r} in {INDEX.relative_to(ROOT)} (EXPERIMENT/ENTRY, e.g. in_maze/in_maze.json)"
             )
-        print(replay_command(entry["command"], index.get("moved", {})))
+        print(replay_command(entry["command"], index.get("moved", {}), index.get("renamed_options", {})))
+        made_at = entry.get("made_at", "not recorded")
+        print(f"# under today's code (defaults may differ); the run itself: made at {made_at}", file=sys.stderr)
         return 0
     print(table(index, quoting_pages(ROOT, entry_paths(index))))
     return 0

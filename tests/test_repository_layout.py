@@ -116,6 +116,14 @@ def test_a_moved_script_replays_as_its_lab_module_and_the_check_names_a_stale_mo
     assert results_index.replay_command("python scripts/in_maze.py", moved) == "python -m antmaze_lab.in_maze"
     for kept in ("python scripts/paper_experiment.py --seeds 2", "antmaze-hirl eval-low --seed 0", "not recorded"):
         assert results_index.replay_command(kept, moved) == kept
+    renamed = {"antmaze_lab.in_maze": {"--subgoal-distance": "--subgoal-reach-m"}}
+    prefixed = "OMP_NUM_THREADS=1 nice -n 5 python scripts/in_maze.py --subgoal-distance 3 --out x.json"
+    assert results_index.replay_command(prefixed, moved, renamed) == (
+        "OMP_NUM_THREADS=1 nice -n 5 python -m antmaze_lab.in_maze --subgoal-reach-m 3 --out x.json"
+    )
+    assert results_index.replay_command("python scripts/in_maze.py --subgoal-distance=3", moved, renamed) == (
+        "python -m antmaze_lab.in_maze --subgoal-reach-m=3"
+    )
     index = {"experiments": {}, "removed": [], "moved": moved}
     assert results_index.problems(tmp_path, index) == []
     index["moved"] = {"scripts/results_index.py": "antmaze_lab.nowhere"}
