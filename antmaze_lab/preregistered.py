@@ -942,6 +942,14 @@ def _spec(args: argparse.Namespace) -> dict[str, Any]:
     return spec
 
 
+def _shown(path: Path) -> str:
+    """``path`` relative to the repository root where it lies inside it (no machine's path in a committed file)."""
+    try:
+        return str(Path(path).resolve().relative_to(ROOT))
+    except ValueError:
+        return str(path)
+
+
 def _learner_command(args: argparse.Namespace) -> int:
     """``learner``: print the learner-selection check (and write it with ``--json``); 2 on bad input."""
     try:
@@ -957,7 +965,7 @@ def _learner_command(args: argparse.Namespace) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.json is not None:
-        found["preregistration"] = {"path": str(args.preregistration), "commit": _git_commit(args.preregistration)}
+        found["preregistration"] = {"path": _shown(args.preregistration), "commit": _git_commit(args.preregistration)}
         atomic_write_json(args.json, found)
     print(format_selection(found))
     return 0
