@@ -178,6 +178,7 @@ def test_the_lab_scripts_refuse_a_bad_low_level_in_one_line_before_any_episode(
     captured = capsys.readouterr()
     last = captured.err.strip().splitlines()[-1]  # argparse's usage, then the one error line
     assert exit_info.value.code == 2
-    assert last.startswith(f"python -m antmaze_lab.{script}: error: ") and message in last and str(value) in last, captured.err
+    assert last.startswith(f"python -m antmaze_lab.{script}: error: "), captured.err
+    assert message in last and str(value) in last, captured.err
     assert "Traceback" not in captured.err + captured.out
     assert not out.exists()
