@@ -64,7 +64,11 @@ def _env(body: str, *, split: str | None = None, maze_map: Any = None, maze_size
 
 def grid_rollouts(policy: HighLevelPolicy, env: Any, tasks: int, seed: int) -> dict[int, list[bool]]:
     """Greedy next-cell rollouts on ``tasks`` tasks of ``env``: success lists keyed by shortest path (cells)."""
-    ends = grid_rollout_ends(policy, env, tasks, seed)
+    return successes_of(grid_rollout_ends(policy, env, tasks, seed))
+
+
+def successes_of(ends: dict[int, list[str]]) -> dict[int, list[bool]]:
+    """Rollout ends keyed by path length, as success lists (an end is a success or not)."""
     return {length: [end == "success" for end in outcomes] for length, outcomes in ends.items()}
 
 
@@ -228,9 +232,7 @@ def learning_gain(seed: int, *, labels: int = 200, steps: int = 300, tasks: int 
 
 def ended_summary(ends: dict[int, list[str]]) -> dict[str, Any]:
     """:func:`summary` of rollouts keyed by path length, with how many ended each way (:data:`ENDS`)."""
-    every = [end for outcomes in ends.values() for end in outcomes]
-    successes = {length: [end == "success" for end in outcomes] for length, outcomes in ends.items()}
-    return {**summary(successes), "ends": {end: every.count(end) for end in ENDS}}
+    return {**summary(successes_of(ends)), "ends": ends_summary(ends)["ends"]}
 
 
 def summary(results: dict[int, list[bool]]) -> dict[str, Any]:
