@@ -7,8 +7,9 @@ DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FIL
 ``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes.
 
 A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
-file given to a one-file table), and ``tasks`` files that do not belong together (:func:`check_together`), are
-refused in one line naming the file, exit status 2.
+file given to a one-file table), and ``tasks`` or ``trials`` files that do not belong together
+(:func:`check_together`, :func:`check_trials`: trials of two bodies, or two of one variant and seed), are refused in
+one line naming the file, exit status 2.
 """
 
 from __future__ import annotations
@@ -247,6 +248,29 @@ def check_together(ends: tuple[str, dict[str, Any]], reports: list[tuple[str, di
         seen[suite] = name
 
 
+def check_trials(trials: list[tuple[str, dict[str, Any]]]) -> None:
+    """Refuses ``trials`` files whose rows could not be told apart or read against each other, naming them.
+
+    The files must be of one body: its selection mazes are what the rows' success is measured on, so a point
+    row beside an ant row compares nothing (the table has no body column, and each page's table is one body's).
+    No two files may be the same variant and seed (two runs of one trial: their rows would differ in nothing the
+    table names).
+
+    Raises:
+        ValueError: One line naming the files that do not belong together, and how.
+    """
+    first_name, first = trials[0]
+    seen: dict[tuple[str, int], str] = {}
+    for name, trial in trials:
+        if trial.get("body") != first.get("body"):
+            bodies = f"{name} is the {trial.get('body')}'s trial, {first_name} the {first.get('body')}'s"
+            raise ValueError(f"{bodies} (one body a table)")
+        key = (trial["variant"], trial["seed"])
+        if key in seen:
+            raise ValueError(f"{seen[key]} and {name} are both variant {key[0]} seed {key[1]} (one file a trial)")
+        seen[key] = name
+
+
 def load_files(table: str, paths: list[Path]) -> list[Any]:
     """The files of ``table``, each checked to be the kind it reads (:data:`TABLE_FILES`).
 
@@ -292,6 +316,8 @@ def main(argv: list[str] | None = None) -> int:
             check_together(
                 (str(args.files[0]), loaded[0]), list(zip(map(str, args.files[1:]), loaded[1:], strict=True))
             )
+        if args.table == "trials":
+            check_trials(list(zip(map(str, args.files), loaded, strict=True)))
         print(build(args.table, loaded))
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
