@@ -39,8 +39,20 @@ def _median_range(values: list[float]) -> str:
     return f"{100 * statistics.median(values):.0f}% ({100 * min(values):.0f}-{100 * max(values):.0f})"
 
 
+def _success_cell(parts: list[dict[str, Any]]) -> str:
+    """Grid-level success over seeds: median (range), or one seed's tasks solved with a Wilson 95% interval.
+
+    A range over one seed is a single value and says nothing of its spread; the interval needs the tasks, which
+    every screen file records (a part without them falls back to the range).
+    """
+    if len(parts) == 1 and "tasks" in parts[0]:
+        tasks = parts[0]["tasks"]
+        return _rate(round(parts[0]["success"] * tasks), tasks)
+    return _median_range([part["success"] for part in parts])
+
+
 def screen_table(data: dict[str, Any]) -> str:
-    """One row per variant: median (range) over seeds of each grid-level success."""
+    """One row per variant: median (range) over seeds of each grid-level success (one seed: :func:`_success_cell`)."""
     by_variant: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
@@ -61,11 +73,11 @@ def screen_table(data: dict[str, Any]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for variant, rows in by_variant.items():
         cells = [f"`{variant}`", ",".join(str(r["seed"]) for r in rows), str(rows[0]["labels"])]
-        cells.append(_median_range([r["untrained_selection"]["success"] for r in rows]))
-        cells.append(_median_range([r["selection"]["success"] for r in rows]))
+        cells.append(_success_cell([r["untrained_selection"] for r in rows]))
+        cells.append(_success_cell([r["selection"] for r in rows]))
         for name in maps:
-            values = [r[name]["success"] for r in rows if "success" in r.get(name, {})]
-            cells.append(_median_range(values) if values else "cannot act on the map")
+            parts = [r[name] for r in rows if "success" in r.get(name, {})]
+            cells.append(_success_cell(parts) if parts else "cannot act on the map")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

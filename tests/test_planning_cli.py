@@ -159,6 +159,23 @@ def test_the_trials_table_refuses_two_bodies_and_two_files_of_one_trial(tmp_path
     )
 
 
+def test_the_screen_table_gives_one_seeds_rates_with_their_interval_and_several_seeds_their_range(tmp_path, capsys):
+    def row(variant, seed, selection):
+        parts = {"untrained_selection": 0.0, "selection": selection, "selection_6x6": selection - 0.1}
+        return {"variant": variant, "seed": seed, "labels": 300} | {
+            name: {"success": success, "tasks": 100} for name, success in parts.items()
+        }
+
+    screen = {"command": "python scripts/planner_check.py", "rows": [row("a", 0, 0.9), row("b", 0, 0.5)]}
+    screen["rows"].append(row("b", 1, 0.7))
+    status, out, _ = tables(tmp_path, capsys, "screen", screen)
+    assert status == 0
+    a, b = out.splitlines()[2:]
+    # One seed: a range of one value says nothing; 90 of 100 tasks has a Wilson interval of 83-94%.
+    assert a == "| `a` | 0 | 300 | 0/100 (0%) [0, 4] | 90/100 (90%) [83, 94] | 80/100 (80%) [71, 87] |"
+    assert b == "| `b` | 0,1 | 300 | 0% (0-0) | 60% (50-70) | 50% (40-60) |"
+
+
 def test_a_planning_table_refuses_a_file_it_does_not_read_in_one_line(tmp_path, capsys):
     screen = {"command": "python scripts/planner_check.py", "rows": [{"variant": "next_cell_plan", "seed": 0}]}
     status, err, paths = tables(tmp_path, capsys, "ends", screen)
