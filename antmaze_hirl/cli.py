@@ -253,6 +253,9 @@ def _run_eval_low(args: argparse.Namespace) -> int:
         **evaluate_reach(policy, env, episodes=args.episodes, seed=args.seed, num_envs=num_envs),
         "num_envs": num_envs,
         "low_level_id": low_level_identity(args.body, policy),  # which weights these figures belong to
+        # The set of subgoals played: a reader pairing or pooling files checks these, not a name or its own notes.
+        "seed": args.seed,
+        "sample_radius_m": env.sample_radius_m,
     }
     print(json.dumps(result))
     if args.json is not None:

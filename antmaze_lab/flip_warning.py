@@ -187,8 +187,8 @@ def reflex_row(outcomes: list[str], acted: int, steps: int) -> dict[str, Any]:
     }
 
 
-def main() -> None:
-    """The command line: play every reflex row on the ``select6`` mazes, write the file, print the figures."""
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
     parser = argparse.ArgumentParser(
         prog="python -m antmaze_lab.flip_warning",
         description=__doc__,
@@ -200,6 +200,12 @@ def main() -> None:
     parser.add_argument("--reflexes", default="0@0.8,0.3@0.8,0.3@0.7,0.5@0.8", help="K@U entries, comma-separated")
     parser.add_argument("--jobs", type=int, default=1, help="worker processes (chunks of 25 mazes)")
     parser.add_argument("--out", type=Path, default=RESULTS / "flip_warning.json")
+    return parser
+
+
+def main() -> None:
+    """The command line: play every reflex row on the ``select6`` mazes, write the file, print the figures."""
+    parser = build_parser()
     args = parser.parse_args()
     try:
         reflexes = parse_reflexes(args.reflexes)

@@ -89,8 +89,8 @@ def table(results: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main() -> None:
-    """The command line: play every low level and family, write the file, print the table."""
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
     parser = argparse.ArgumentParser(
         prog="python -m antmaze_lab.in_maze", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
@@ -127,6 +127,12 @@ def main() -> None:
         "replays of results committed before lockstep",
     )
     parser.add_argument("--out", type=Path, default=RESULTS / "in_maze.json")
+    return parser
+
+
+def main() -> None:
+    """The command line: play every low level and family, write the file, print the table."""
+    parser = build_parser()
     args = parser.parse_args()
     try:
         families = parse_families(args.families)

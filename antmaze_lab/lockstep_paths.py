@@ -126,9 +126,8 @@ def eval_low_rows(subgoals: int, num_envs: int = 25) -> list[dict]:
     return rows
 
 
-def main(argv: list[str] | None = None) -> dict[str, Any]:
-    """The command line: every row, written to ``--out`` and returned."""
-    argv = sys.argv[1:] if argv is None else argv
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
     parser = argparse.ArgumentParser(
         prog="python -m antmaze_lab.lockstep_paths",
         description=__doc__,
@@ -139,6 +138,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser.add_argument("--demo-seeds", type=int, default=20, help="demo seeds per body")
     parser.add_argument("--subgoals", type=int, default=200, help="eval-low subgoals per body")
     parser.add_argument("--out", type=Path, default=RESULTS)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """The command line: every row, written to ``--out`` and returned."""
+    argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser()
     args = parser.parse_args(argv)
     try:
         families = in_maze.parse_families(args.families)

@@ -315,8 +315,8 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def main() -> None:
-    """The command line: the speed and success figures, or ``--algorithms``' side-by-side training."""
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
     parser = argparse.ArgumentParser(
         prog="python -m antmaze_lab.low_level",
         description=__doc__,
@@ -336,6 +336,12 @@ def main() -> None:
     side.add_argument("--maze-episodes", type=int, default=100, help="in-maze episodes per family")
     side.add_argument("--families", default="ant4,u,medium,large")
     side.add_argument("--out", type=Path, default=RESULTS / "low_level_algorithms.json")
+    return parser
+
+
+def main() -> None:
+    """The command line: the speed and success figures, or ``--algorithms``' side-by-side training."""
+    parser = build_parser()
     args = parser.parse_args()
     torch.set_num_threads(1)
     if args.algorithms is not None:

@@ -7,8 +7,9 @@ DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FIL
 ``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes.
 
 A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
-file given to a one-file table), and ``tasks`` files that do not belong together (:func:`check_together`), are
-refused in one line naming the file, exit status 2.
+file given to a one-file table), and ``tasks`` or ``trials`` files that do not belong together
+(:func:`check_together`, :func:`check_trials`: trials of two bodies, or two of one variant and seed), are refused in
+one line naming the file, exit status 2.
 """
 
 from __future__ import annotations
@@ -38,8 +39,20 @@ def _median_range(values: list[float]) -> str:
     return f"{100 * statistics.median(values):.0f}% ({100 * min(values):.0f}-{100 * max(values):.0f})"
 
 
+def _success_cell(parts: list[dict[str, Any]]) -> str:
+    """Grid-level success over seeds: median (range), or one seed's tasks solved with a Wilson 95% interval.
+
+    A range over one seed is a single value and says nothing of its spread; the interval needs the tasks, which
+    every screen file records (a part without them falls back to the range).
+    """
+    if len(parts) == 1 and "tasks" in parts[0]:
+        tasks = parts[0]["tasks"]
+        return _rate(round(parts[0]["success"] * tasks), tasks)
+    return _median_range([part["success"] for part in parts])
+
+
 def screen_table(data: dict[str, Any]) -> str:
-    """One row per variant: median (range) over seeds of each grid-level success."""
+    """One row per variant: median (range) over seeds of each grid-level success (one seed: :func:`_success_cell`)."""
     by_variant: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
@@ -60,11 +73,11 @@ def screen_table(data: dict[str, Any]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for variant, rows in by_variant.items():
         cells = [f"`{variant}`", ",".join(str(r["seed"]) for r in rows), str(rows[0]["labels"])]
-        cells.append(_median_range([r["untrained_selection"]["success"] for r in rows]))
-        cells.append(_median_range([r["selection"]["success"] for r in rows]))
+        cells.append(_success_cell([r["untrained_selection"] for r in rows]))
+        cells.append(_success_cell([r["selection"] for r in rows]))
         for name in maps:
-            values = [r[name]["success"] for r in rows if "success" in r.get(name, {})]
-            cells.append(_median_range(values) if values else "cannot act on the map")
+            parts = [r[name] for r in rows if "success" in r.get(name, {})]
+            cells.append(_success_cell(parts) if parts else "cannot act on the map")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -247,6 +260,29 @@ def check_together(ends: tuple[str, dict[str, Any]], reports: list[tuple[str, di
         seen[suite] = name
 
 
+def check_trials(trials: list[tuple[str, dict[str, Any]]]) -> None:
+    """Refuses ``trials`` files whose rows could not be told apart or read against each other, naming them.
+
+    The files must be of one body: its selection mazes are what the rows' success is measured on, so a point
+    row beside an ant row compares nothing (the table has no body column, and each page's table is one body's).
+    No two files may be the same variant and seed (two runs of one trial: their rows would differ in nothing the
+    table names).
+
+    Raises:
+        ValueError: One line naming the files that do not belong together, and how.
+    """
+    first_name, first = trials[0]
+    seen: dict[tuple[str, int], str] = {}
+    for name, trial in trials:
+        if trial.get("body") != first.get("body"):
+            bodies = f"{name} is the {trial.get('body')}'s trial, {first_name} the {first.get('body')}'s"
+            raise ValueError(f"{bodies} (one body a table)")
+        key = (trial["variant"], trial["seed"])
+        if key in seen:
+            raise ValueError(f"{seen[key]} and {name} are both variant {key[0]} seed {key[1]} (one file a trial)")
+        seen[key] = name
+
+
 def load_files(table: str, paths: list[Path]) -> list[Any]:
     """The files of ``table``, each checked to be the kind it reads (:data:`TABLE_FILES`).
 
@@ -292,6 +328,8 @@ def main(argv: list[str] | None = None) -> int:
             check_together(
                 (str(args.files[0]), loaded[0]), list(zip(map(str, args.files[1:]), loaded[1:], strict=True))
             )
+        if args.table == "trials":
+            check_trials(list(zip(map(str, args.files), loaded, strict=True)))
         print(build(args.table, loaded))
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)

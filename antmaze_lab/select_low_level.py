@@ -125,8 +125,8 @@ def score_rows(
     return rows
 
 
-def main() -> None:
-    """The command line: score every snapshot and policy, write the file, print each row and the best."""
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
     parser = argparse.ArgumentParser(
         prog="python -m antmaze_lab.select_low_level",
         description=__doc__,
@@ -151,6 +151,12 @@ def main() -> None:
     )
     parser.add_argument("--jobs", type=int, default=1, help="worker processes")
     parser.add_argument("--out", type=Path, default=None, help="default: see Usage")
+    return parser
+
+
+def main() -> None:
+    """The command line: score every snapshot and policy, write the file, print each row and the best."""
+    parser = build_parser()
     args = parser.parse_args()
     if args.out is None:
         suffix = ("_held_out" if args.held_out_layouts else "") + ("_large" if args.large_mazes else "")

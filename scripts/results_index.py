@@ -18,8 +18,9 @@ A recorded command names the script of its day. ``moved`` maps each script that 
 options replay it as ``python -m antmaze_lab.in_maze ...`` from the repository root (:func:`replay_command`).
 
 ``--check`` compares the index with the tree (exit 1 naming every entry missing from either side, a removed
-entry still present, a superseded entry not listed as removed, an entry's null or missing field, or a moved
-script still on disk or its module missing); ``--table`` prints the Markdown tables of ``docs/results/files.md``
+entry still present, a superseded entry not listed as removed, an entry's null or missing field, a moved
+script still on disk or its module missing, or a moved entry whose replayed options today's module does not
+parse: :func:`replay_problems`); ``--table`` prints the Markdown tables of ``docs/results/files.md``
 (a generated block); ``--replay ENTRY`` prints the command that replays an entry today.
 
 Usage: python scripts/results_index.py [--check | --table | --replay EXPERIMENT/ENTRY]
@@ -31,6 +32,8 @@ import argparse
 import fnmatch
 import json
 import re
+import shlex
+import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -137,6 +140,57 @@ def replay_command(command: str, moved: dict[str, str], renamed: dict[str, dict[
     return command
 
 
+SHELL_OPERATORS = frozenset({"&&", "||", ";", "|", "&", ">", ">>", "2>", "2>&1"})
+"""Words that end a command's options (a recorded command that went on with another, or a redirection)."""
+
+
+def replay_problems(index: dict[str, Any], root: Path = ROOT) -> list[str]:
+    """Each entry whose command does not replay under today's code, one line naming it (empty: all replay).
+
+    A moved entry's replayed command (:func:`replay_command`) must parse whole under its module's parser (the
+    module's ``build_parser()``, run as ``python -m antmaze_lab.commands`` from ``root``: this script cannot import
+    the lab), and no entry's command may still name a moved script after replay (a form :func:`replay_command`
+    does not read, such as ``python3 SCRIPT``).
+    """
+    moved, renamed = index.get("moved", {}), index.get("renamed_options", {})
+    lines: list[str] = []
+    items: list[dict[str, Any]] = []
+    for experiment, spec in index["experiments"].items():
+        for name, entry in spec["entries"].items():
+            recorded = entry["command"]
+            command = replay_command(recorded, moved, renamed)
+            for script in moved:
+                if re.search(rf"(?<![\w/.-]){re.escape(script)}(?=\s|$)", command):
+                    lines.append(f"{experiment}/{name}: its command still names {script} after replay: {command!r}")
+            if command == recorded:
+                continue
+            words = shlex.split(command)
+            start = words.index("-m") + 2  # replay_command wrote "python -m MODULE" in place of "python SCRIPT"
+            end = next((i for i, word in enumerate(words) if i >= start and word in SHELL_OPERATORS), len(words))
+            items.append({"entry": f"{experiment}/{name}", "module": words[start - 1], "arguments": words[start:end]})
+    if not items:
+        return lines
+    checked = subprocess.run(
+        [sys.executable, "-m", "antmaze_lab.commands"],
+        input=json.dumps(items),
+        capture_output=True,
+        text=True,
+        cwd=root,
+        check=False,
+    )
+    if checked.returncode != 0 or not checked.stdout.strip():
+        why = (checked.stderr.strip().splitlines() or ["no output"])[-1]
+        return [*lines, f"python -m antmaze_lab.commands could not parse the moved entries' options: {why}"]
+    modules = {item["entry"]: item["module"] for item in items}
+    failed = json.loads(checked.stdout.strip().splitlines()[-1])
+    lines += [
+        f"{entry}: its replayed options do not parse under {modules[entry]} ({message}); map a renamed option in "
+        "renamed_options"
+        for entry, message in failed.items()
+    ]
+    return lines
+
+
 def expand_braces(token: str) -> list[str]:
     """``a_{x,y}.json`` -> ``["a_x.json", "a_y.json"]`` (one level, as the pages write them)."""
     match = re.search(r"\{([^{}]*)\}", token)
@@ -219,8 +273,8 @@ def table(index: dict[str, Any], quoted: dict[str, list[str]]) -> str:
             "",
             "A command recorded as `python SCRIPT OPTIONS` runs today as `python -m MODULE OPTIONS` from the "
             "repository root, options renamed since under their new names (`renamed_options`; `python "
-            "scripts/results_index.py --replay EXPERIMENT/ENTRY` prints it). Defaults may have changed since the "
-            "run: the exact run is its commit.",
+            "scripts/results_index.py --replay EXPERIMENT/ENTRY` prints it; `--check` parses its options with the "
+            "module's parser). Defaults may have changed since the run: the exact run is its commit.",
             "",
             "| recorded script | module today |",
             "|---|---|",
@@ -245,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as error:
         parser.error(str(error))
     if args.check:
-        found = problems(RESULTS, index)
+        found = problems(RESULTS, index) + replay_problems(index)
         print("\n".join(found) if found else f"{INDEX.relative_to(ROOT)}: matches results/")
         return 1 if found else 0
     if args.replay:

@@ -8,7 +8,8 @@ Reads
   suite, seed and episodes per task, differing only in ``--low-level`` (and perhaps ``--tasks``: a pair whose
   reports played other tasks is read on the tasks both played, its counts recounted from their episodes);
 * pairs of ``antmaze-hirl eval-low`` files on one set of subgoals (``--eval-low SEED ENSEMBLE.json
-  CANDIDATE.json``, repeatable, the sets disjoint: seeds at least the episodes apart), pooled over the sets;
+  CANDIDATE.json``, repeatable, the sets disjoint: seeds at least the episodes apart), pooled over the sets; a file
+  that records its seed must record SEED (older files do not: their seed is taken from the command line, with a note);
 
 and writes one JSON (``--out``) and a Markdown table with, per family or suite and low level: success with its
 95% Wilson interval, flips and flips per 10,000 low-level steps with an exact Poisson 95% interval (Garwood).
@@ -175,11 +176,36 @@ def flip_rate_p(first: dict[str, Any], second: dict[str, Any]) -> float:
     return float(binomtest(second["flips"], flips, share).pvalue)
 
 
+EVAL_LOW_KEYS = ("success_rate", "episodes")
+"""The fields every ``eval-low`` file has; ``seed`` and ``sample_radius_m`` are recorded since the 28th session."""
+
+
+def eval_low_file(path: Path) -> dict[str, Any]:
+    """One ``eval-low`` JSON file.
+
+    Raises:
+        ValueError: If it is not JSON or lacks a field of :data:`EVAL_LOW_KEYS` (naming the file).
+    """
+    try:
+        data = json.loads(Path(path).read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError):
+        raise ValueError(f"{path} is not a JSON file") from None
+    missing = [key for key in EVAL_LOW_KEYS if not isinstance(data, dict) or key not in data]
+    if missing:
+        raise ValueError(f"{path} has no {missing[0]!r}: not an antmaze-hirl eval-low file")
+    return data
+
+
 def eval_low_sets(sets: list[tuple[str, Path, Path]]) -> dict[str, Any]:
     """``eval-low`` files of the ensemble and the candidate per disjoint set of subgoals (its seed), and pooled.
 
+    A file that records its ``seed`` (``eval-low`` does since the 28th session) must record the typed one; for an
+    older file the typed seed is taken on faith, and its role's ``seed_from`` says ``"command line"`` (else
+    ``"file"``).
+
     Raises:
-        ValueError: If a seed is not an integer, a pair played other numbers of subgoals, or two sets overlap.
+        ValueError: If a seed is not an integer or contradicts a file's, a pair played other numbers of subgoals or
+            other recorded radii, a pair's two files hold the same low level, or two sets overlap.
     """
     rows: list[dict[str, Any]] = []
     for seed_text, *paths in sets:
@@ -187,10 +213,21 @@ def eval_low_sets(sets: list[tuple[str, Path, Path]]) -> dict[str, Any]:
             seed = int(seed_text)
         except ValueError:
             raise ValueError(f"--eval-low seed {seed_text!r} is not an integer") from None
-        files = [json.loads(Path(path).read_text()) for path in paths]
+        files = [eval_low_file(path) for path in paths]
+        for path, data in zip(paths, files, strict=True):
+            if "seed" in data and data["seed"] != seed:
+                raise ValueError(f"{path} records seed {data['seed']}, not the typed {seed}: another set of subgoals")
         if files[0]["episodes"] != files[1]["episodes"]:
             counts = f"{files[0]['episodes']} and {files[1]['episodes']}"
             raise ValueError(f"{paths[0]} and {paths[1]} tried {counts} subgoals: not the same set")
+        radii = [data.get("sample_radius_m") for data in files]
+        if None not in radii and radii[0] != radii[1]:
+            raise ValueError(
+                f"{paths[0]} and {paths[1]} drew subgoals up to {radii[0]} and {radii[1]} m: not the same set"
+            )
+        identities = [data.get("low_level_id") for data in files]
+        if identities[0] is not None and identities[0] == identities[1]:
+            raise ValueError(f"{paths[0]} and {paths[1]} both hold low level {identities[0]}: not two low levels")
         row: dict[str, Any] = {"seed": seed, "episodes": files[0]["episodes"]}
         for role, path, data in zip(("ensemble", "candidate"), paths, files, strict=True):
             successes = round(data["success_rate"] * data["episodes"])
@@ -198,6 +235,7 @@ def eval_low_sets(sets: list[tuple[str, Path, Path]]) -> dict[str, Any]:
                 "file": str(path),
                 "low_level_id": data.get("low_level_id"),
                 "num_envs": data.get("num_envs", 1),  # files made before lockstep played one subgoal at a time
+                "seed_from": "file" if "seed" in data else "command line",
                 "successes": successes,
                 "success_rate": successes / data["episodes"],
                 "success_ci95": list(wilson_interval(successes, data["episodes"])),
@@ -336,6 +374,11 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError, KeyError) as error:
         print(f"steady_ant_table.py: error: {error}", file=sys.stderr)
         return 2
+    for row in (summary["eval_low"] or {}).get("sets", []):
+        for role in ("ensemble", "candidate"):
+            if row[role]["seed_from"] == "command line":
+                note = f"{row[role]['file']} records no seed: seed {row['seed']} is taken from the command line"
+                print(f"steady_ant_table.py: note: {note}", file=sys.stderr)
     summary["table_markdown"] = table(summary)
     summary["command"] = "python scripts/steady_ant_table.py " + " ".join(sys.argv[1:] if argv is None else argv)
     print(summary["table_markdown"])

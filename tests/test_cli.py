@@ -115,8 +115,12 @@ def test_eval_low_prints_and_writes_the_figures_of_seeded_subgoals(tmp_path, cap
     shipped = load_low_level("point")
     expected = evaluate_reach(shipped, ReachEnv("point", sample_radius_m=0.6), episodes=6, seed=3)
     identity = low_level_identity("point", shipped)
-    assert printed == json.loads(out.read_text()) == {**expected, "num_envs": 1, "low_level_id": identity}
+    recorded = {"num_envs": 1, "low_level_id": identity, "seed": 3, "sample_radius_m": 0.6}  # the set it played
+    assert printed == json.loads(out.read_text()) == {**expected, **recorded}
     assert printed["low_level_id"].startswith("sha256:")
+    assert main(["eval-low", "--body", "point", "--episodes", "1"]) == 0
+    default = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert (default["seed"], default["sample_radius_m"]) == (0, ReachEnv("point").sample_radius_m)  # the radius used
 
 
 def test_eval_low_in_lockstep_tries_the_serial_subgoals(capsys):

@@ -139,6 +139,43 @@ def test_the_tasks_table_reads_the_learner_an_ends_file_scored(tmp_path, capsys)
     assert tables(tmp_path, capsys, "tasks", recorded, mine)[0] == 0
 
 
+def trial(**fields):
+    """A DAgger trial file of ``scripts/learner_ablation.py`` (point, CNN, seed 0), then ``fields``."""
+    rate = {"rate": 0.5, "wilson_95": [0.3, 0.7]}
+    base = {"variant": "next_cell_cnn", "seed": 0, "body": "point", "labels": 800, "trial_seconds": 600}
+    return base | {"untrained_selection_success": rate, "selection_success": rate} | fields
+
+
+def test_the_trials_table_refuses_two_bodies_and_two_files_of_one_trial(tmp_path, capsys):
+    status, out, _ = tables(tmp_path, capsys, "trials", trial(), trial(seed=1), trial(variant="next_cell_gate"))
+    assert status == 0 and len(out.splitlines()) == 5  # header, rule, three trials
+    # The table has no body column: a point and an ant trial would print rows that differ in nothing.
+    status, err, paths = tables(tmp_path, capsys, "trials", trial(), trial(body="ant"))
+    assert (status, err) == (2, f"error: {paths[1]} is the ant's trial, {paths[0]} the point's (one body a table)")
+    status, err, paths = tables(tmp_path, capsys, "trials", trial(), trial(seed=1), trial(labels=900))
+    assert (status, err) == (
+        2,
+        f"error: {paths[0]} and {paths[2]} are both variant next_cell_cnn seed 0 (one file a trial)",
+    )
+
+
+def test_the_screen_table_gives_one_seeds_rates_with_their_interval_and_several_seeds_their_range(tmp_path, capsys):
+    def row(variant, seed, selection):
+        parts = {"untrained_selection": 0.0, "selection": selection, "selection_6x6": selection - 0.1}
+        return {"variant": variant, "seed": seed, "labels": 300} | {
+            name: {"success": success, "tasks": 100} for name, success in parts.items()
+        }
+
+    screen = {"command": "python scripts/planner_check.py", "rows": [row("a", 0, 0.9), row("b", 0, 0.5)]}
+    screen["rows"].append(row("b", 1, 0.7))
+    status, out, _ = tables(tmp_path, capsys, "screen", screen)
+    assert status == 0
+    a, b = out.splitlines()[2:]
+    # One seed: a range of one value says nothing; 90 of 100 tasks has a Wilson interval of 83-94%.
+    assert a == "| `a` | 0 | 300 | 0/100 (0%) [0, 4] | 90/100 (90%) [83, 94] | 80/100 (80%) [71, 87] |"
+    assert b == "| `b` | 0,1 | 300 | 0% (0-0) | 60% (50-70) | 50% (40-60) |"
+
+
 def test_a_planning_table_refuses_a_file_it_does_not_read_in_one_line(tmp_path, capsys):
     screen = {"command": "python scripts/planner_check.py", "rows": [{"variant": "next_cell_plan", "seed": 0}]}
     status, err, paths = tables(tmp_path, capsys, "ends", screen)

@@ -312,3 +312,37 @@ def test_blocking_pressure_prices_moves_into_walls_far_up_and_the_labelled_moves
     pressed_wall, pressed_label = gate_after_fit(1.0)
     assert pressed_wall > 10 * plain_wall
     assert plain_label < pressed_label < pressed_wall
+
+
+def pressure_fit(steps: int, two_passes: bool = False) -> tuple[HighLevelPolicy, float, int]:
+    """A pressured gate learner after ``steps`` steps of one seeded fit, its returned loss, and how many times the
+    gate's convolutions ran; ``two_passes`` prices the gate with a second pass of them, as the fit did before."""
+    env = point_env(maze_size=3)
+    learner = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE_PRESSURE, "blocking_pressure": 1.0})
+    data = sample_labelled_states(env, 30, subgoal_reach_m=learner.subgoal_reach_m, rng=np.random.default_rng(1))
+    batch = learner.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+    targets = learner.targets(np.stack(data.agents), np.stack(data.labels))
+    network = learner.network
+    if two_passes:  # the move logits from one pass, the pressure's gate logits from a second
+        one_pass = type(network).logits_and_blocking_logits
+        network.logits_and_blocking_logits = lambda grids, vectors: (
+            one_pass(network, grids, vectors)[0],
+            network.planner.blocking_logits(grids),
+        )
+    passes = []
+    network.planner.blocking[0].register_forward_hook(lambda *_: passes.append(1))
+    loss = learner.fit(batch, targets, steps=steps)
+    return learner, loss, len(passes)
+
+
+def test_the_blocking_pressure_runs_the_gates_convolutions_once_a_step_with_the_same_loss():
+    _, loss, passes = pressure_fit(steps=1)
+    assert passes == 1  # the fit ran them twice a step before: once for the logits, once for the pressure
+    _, old_loss, old_passes = pressure_fit(steps=1, two_passes=True)
+    assert old_passes == 2
+    assert loss == old_loss  # the same forward values: only the gradient's sums run in another order
+    learner, _, passes = pressure_fit(steps=20)
+    old, _, _ = pressure_fit(steps=20, two_passes=True)
+    assert passes == 20
+    for key, tensor in learner.network.state_dict().items():
+        assert th.allclose(tensor, old.network.state_dict()[key], rtol=1e-5, atol=1e-6), key

@@ -48,6 +48,7 @@ def test_the_results_index_matches_the_results_tree():
     results_index = load_script("scripts/results_index.py")
     index = results_index.load_index()
     assert results_index.problems(results_index.RESULTS, index) == []
+    assert results_index.replay_problems(index) == []  # every moved entry's options parse under today's module
 
 
 def full_entry(**fields):
@@ -130,6 +131,32 @@ def test_a_moved_script_replays_as_its_lab_module_and_the_check_names_a_stale_mo
     assert results_index.problems(tmp_path, index) == [
         "scripts/results_index.py: moved to antmaze_lab.nowhere, still on disk (a moved script leaves the tree)",
         "scripts/results_index.py: moved to antmaze_lab.nowhere, which is not a module of this checkout",
+    ]
+
+
+def test_the_check_parses_each_moved_entrys_replayed_options_with_its_modules_parser():
+    results_index = load_script("scripts/results_index.py")
+    moved = {"scripts/in_maze.py": "antmaze_lab.in_maze", "benchmarks/flip_warning.py": "antmaze_lab.flip_warning"}
+    commands = {
+        "renamed.json": "nice -n 5 python scripts/in_maze.py --subgoal-distance 3 --out 'a b.json'",
+        "not_renamed.json": "python benchmarks/flip_warning.py --subgoal-distance 3",
+        "bad_value.json": "python benchmarks/flip_warning.py --mazes many && echo done",
+        "python3.json": "python3 scripts/in_maze.py --episodes 1",
+        "not_moved.json": "antmaze-hirl eval-low --seed 0",
+    }
+    entries = {name: full_entry(command=command) for name, command in commands.items()}
+    index = {
+        "experiments": {"x": {"entries": entries}},
+        "moved": moved,
+        "renamed_options": {"antmaze_lab.in_maze": {"--subgoal-distance": "--subgoal-reach-m"}},
+    }
+    assert results_index.replay_problems(index) == [
+        "x/python3.json: its command still names scripts/in_maze.py after replay: "
+        "'python3 scripts/in_maze.py --episodes 1'",
+        "x/not_renamed.json: its replayed options do not parse under antmaze_lab.flip_warning (unrecognized "
+        "arguments: --subgoal-distance 3); map a renamed option in renamed_options",
+        "x/bad_value.json: its replayed options do not parse under antmaze_lab.flip_warning (argument --mazes: "
+        "invalid int value: 'many'); map a renamed option in renamed_options",
     ]
 
 

@@ -142,3 +142,33 @@ def test_eval_low_sets_pool_disjoint_sets_and_refuse_overlaps(tmp_path, capsys):
     assert "seed 'x' is not an integer" in capsys.readouterr().err
     assert table.main(["--eval-low", "0", sets[0][1], sets[0][2], "--out", str(out)]) == 0
     assert "| eval-low pooled | candidate | 190/200 [" in json.loads(out.read_text())["table_markdown"]
+    # Files made before eval-low recorded its seed: the typed seed is taken, and the script says so.
+    assert f"{sets[0][1]} records no seed: seed 0 is taken from the command line" in capsys.readouterr().err
+
+
+def test_eval_low_sets_read_the_seed_and_radius_the_files_record(tmp_path, capsys):
+    def write(name, seed, radius=4.0, identity=None, **fields):
+        path = tmp_path / name
+        data = {"success_rate": 0.9, "episodes": 200, "low_level_id": identity or name, "seed": seed}
+        path.write_text(json.dumps({**data, "sample_radius_m": radius, **fields}))
+        return str(path)
+
+    pair = ("200", write("e200", 200), write("c200", 200))
+    summary = table.eval_low_sets([pair])
+    assert [summary["sets"][0][role]["seed_from"] for role in ("ensemble", "candidate")] == ["file", "file"]
+    # A file of another set typed as this one: refused, though the typed seeds alone would not overlap.
+    with pytest.raises(ValueError, match=r"c0 records seed 0, not the typed 200: another set of subgoals$"):
+        table.eval_low_sets([("200", write("e0", 200), write("c0", 0))])
+    with pytest.raises(ValueError, match=r"drew subgoals up to 4.0 and 8.0 m: not the same set$"):
+        table.eval_low_sets([("200", write("e", 200), write("c", 200, radius=8.0))])
+    with pytest.raises(ValueError, match=r"both hold low level sha256:ab: not two low levels$"):
+        table.eval_low_sets([("200", write("e", 200, identity="sha256:ab"), write("c", 200, identity="sha256:ab"))])
+    (tmp_path / "partial.json").write_text(json.dumps({"success_rate": 0.9}))
+    with pytest.raises(ValueError, match=r"partial.json has no 'episodes': not an antmaze-hirl eval-low file$"):
+        table.eval_low_sets([("200", pair[1], str(tmp_path / "partial.json"))])
+    out = tmp_path / "s.json"
+    assert table.main(["--eval-low", "0", *pair[1:], "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("steady_ant_table.py: error: ") and "not the typed 0" in err
+    assert table.main(["--eval-low", "200", *pair[1:], "--out", str(out)]) == 0
+    assert "note" not in capsys.readouterr().err

@@ -339,6 +339,41 @@ def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retrie
     assert_closed_trial_complete(folder)
 
 
+def test_a_request_during_a_retry_is_that_retry_and_does_not_start_another_after_it(tmp_path, monkeypatch):
+    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
+    monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
+    disk = ClosingDisk(monkeypatch, lambda path: True)
+    in_second_try, release = threading.Event(), threading.Event()
+    tries_begun = []
+    real_write = TrialClosing._write
+
+    def held_write(self, updates):  # the second try (the first retry) waits for the test's request
+        tries_begun.append(updates)
+        if len(tries_begun) == 2:
+            in_second_try.set()
+            release.wait(30)
+        real_write(self, updates)
+
+    monkeypatch.setattr(TrialClosing, "_write", held_write)
+    session.next_episode()
+    (closing,) = session._closing
+    until(lambda: closing.failing)
+    assert "unsaved" in session.state()  # wakes the first retry
+    assert in_second_try.wait(30)
+    assert "unsaved" in session.state()  # asked while that retry runs: it is the retry asked for
+    release.set()
+    until(lambda: len(disk.failed) == 2)
+    time.sleep(0.5)
+    assert len(tries_begun) == 2 and not closing._wake.is_set()  # no third try until the hour or a request
+    disk.free()
+    assert "unsaved" in session.state()  # a request after the retry wakes the next
+    until(lambda: closing.done, 10.0)
+    assert len(tries_begun) == 3 and closing.write_error is None
+    session.close()
+    assert_closed_trial_complete(folder)
+
+
 def test_a_stop_while_a_closed_trials_writes_fail_is_prompt_and_the_restart_finishes_them(tmp_path, monkeypatch):
     folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)

@@ -293,6 +293,13 @@ def test_the_page_says_plainly_when_a_finished_parts_results_are_not_saved_yet(t
             f"Not everything is saved yet: the results of {session.trial.label} could not be written (No space "
             "left on device), and the computer keeps trying. You can go on, but please tell the experimenter."
         )
+        # An alert is announced again whenever its text is written: a render with the same notice writes nothing.
+        page.evaluate(
+            "() => { window.unsavedWrites = 0; new MutationObserver((m) => { window.unsavedWrites += m.length; })"
+            ".observe(document.getElementById('unsaved'), {childList: true, characterData: true, subtree: true}); }"
+        )
+        page.evaluate("async () => { await render(); await render(); }")
+        assert page.evaluate("() => new Promise((done) => setTimeout(() => done(window.unsavedWrites), 100))") == 0
         disk.free()
         while session.state().get("unsaved"):  # until a retry gets through (wait_for_closed_trials raises meanwhile)
             assert time.monotonic() < deadline + 60, "the closing's writes never got through"

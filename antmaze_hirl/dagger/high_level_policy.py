@@ -438,16 +438,16 @@ class HighLevelPolicy:
             labels = targets[index]
             if settings.augment_symmetries:
                 minibatch, labels = augment(minibatch, labels, self.rng, planar_feature_dim=self.planar_feature_dim)
-            grids = th.from_numpy(minibatch.grids)
-            outputs = network(grids, th.from_numpy(minibatch.vectors))
+            grids, vectors = th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors)
             if settings.head == "next_cell":
-                loss = nn.functional.cross_entropy(outputs, th.from_numpy(next_cell_classes(labels)))
+                # The gate's logits come from the same pass as the move logits: its convolutions run once a step.
+                logits, gate_logits = network.logits_and_blocking_logits(grids, vectors)
+                loss = nn.functional.cross_entropy(logits, th.from_numpy(next_cell_classes(labels)))
                 if settings.blocking_pressure:
                     # -log b = softplus(-logit): the push towards blocked, on every move of every cell
-                    gate_logits = network.planner.blocking_logits(grids)
                     loss = loss + settings.blocking_pressure * nn.functional.softplus(-gate_logits).mean()
             else:
-                logits, distance = outputs
+                logits, distance = network(grids, vectors)
                 bins = th.from_numpy(direction_bins(labels, settings.n_directions))
                 lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
                 loss = nn.functional.cross_entropy(logits, bins) + th.mean((distance - lengths) ** 2)

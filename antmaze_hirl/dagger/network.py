@@ -230,11 +230,21 @@ class CellValueIteration(nn.Module):
 
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
+        return self.q_and_blocking_logits(grids)[0]
+
+    def q_and_blocking_logits(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
+        """:meth:`forward`'s Q-values and the :meth:`blocking_logits` they were planned with.
+
+        The gate logits are ``None`` without a learnt gate. One pass of the gate's convolutions gives both, so a
+        loss on both (``blocking_pressure``) runs them once.
+        """
         cost = self.cost(grids)
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
+        gate_logits = None
         if self.blocking is not None:
-            cost = cost + BLOCKED_COST * self.blocking(grids)
+            gate_logits = self.blocking[:-1](grids)
+            cost = cost + BLOCKED_COST * self.blocking[-1](gate_logits)  # the closing sigmoid, as self.blocking(grids)
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
@@ -244,7 +254,7 @@ class CellValueIteration(nn.Module):
         centre = size // 2
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
-        return ahead - cost[:, :, centre, centre]
+        return ahead - cost[:, :, centre, centre], gate_logits
 
 
 def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
@@ -321,13 +331,21 @@ class NextCellNetwork(nn.Module):
 
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
         """Logits ``(B, 9)`` over the next cell."""
+        return self.logits_and_blocking_logits(grids, vectors)[0]
+
+    def logits_and_blocking_logits(self, grids: th.Tensor, vectors: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
+        """:meth:`forward`'s logits and the planner's learnt gate logits ``(B, 9, S, S)`` they were computed with.
+
+        From one pass (:meth:`CellValueIteration.q_and_blocking_logits`); the gate logits are ``None`` without a
+        learnt gate.
+        """
         if self.planner is None:
             assert self.head is not None
-            return self.head(grids, vectors)[0]
-        q = self.planner(grids)
+            return self.head(grids, vectors)[0], None
+        q, gate_logits = self.planner.q_and_blocking_logits(grids)
         if self.trust is not None:
-            return self.trust * q
+            return self.trust * q, gate_logits
         assert self.head is not None
         # The correction sees Q relative to its best move: the scale of Q grows with the iterations.
         relative = q - q.max(dim=1, keepdim=True).values.detach()
-        return q + self.head(th.cat([relative, vectors], dim=1))
+        return q + self.head(th.cat([relative, vectors], dim=1)), gate_logits

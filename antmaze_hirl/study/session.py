@@ -1059,6 +1059,7 @@ class TrialClosing:
         self._checkpoint_written = False  # the state does not change between tries: one good write is enough
         self._closed_at = session.timer()
         self._last_try = -math.inf
+        self._trying = False  # a try of the writes runs now (guarded, with _last_try, by _changed's lock)
         self._stopping = threading.Event()
         self._wake = threading.Event()  # a retry now: a participant's request, or a stop
         self._done = threading.Event()
@@ -1095,9 +1096,14 @@ class TrialClosing:
             return self._changed.wait_for(lambda: self.done or self.failing, timeout)
 
     def retry_now(self) -> None:
-        """Wakes a failing closing to try its writes again now (at most once per :attr:`RETRY_GAP_SECONDS`)."""
-        if self.failing and self.session.timer() - self._last_try >= self.RETRY_GAP_SECONDS:
-            self._wake.set()
+        """Wakes a failing closing to try its writes again now.
+
+        At most once per :attr:`RETRY_GAP_SECONDS`, and not while a try runs: that try is the retry asked for, and
+        a wake kept through it would start another at once after it.
+        """
+        with self._changed:
+            if self.failing and not self._trying and self.session.timer() - self._last_try >= self.RETRY_GAP_SECONDS:
+                self._wake.set()
 
     def stop(self) -> None:
         """Lets the update in progress end, writes nothing more (the next restore resumes), and waits."""
@@ -1160,13 +1166,15 @@ class TrialClosing:
         # The writes, again from the one that failed while they fail with an OSError (see the class docstring).
         delay = self.RETRY_FIRST_SECONDS
         while not self._stopping.is_set():
-            self._last_try = self.session.timer()
+            with self._changed:  # a wake from before this try is answered by it (retry_now refuses one during it)
+                self._trying, self._last_try = True, self.session.timer()
+                self._wake.clear()
             try:
                 self._write(updates)
             except OSError as error:
                 self.failed_writes += 1
                 with self._changed:
-                    self.write_error = error
+                    self.write_error, self._trying = error, False
                     self._changed.notify_all()
                 logger.error(
                     "participant %s, trial %d: writing the final update failed (try %d; tried again within %g s, "
@@ -1178,10 +1186,11 @@ class TrialClosing:
                     error,
                 )
             else:
-                self.write_error = None
+                with self._changed:
+                    self.write_error, self._trying = None, False
                 return
-            self._wake.wait(delay)
-            self._wake.clear()
+            if not self._stopping.is_set():  # stop() sets _stopping before it wakes: a stop from here on wakes this
+                self._wake.wait(delay)  # cleared only as the next try starts, so a wake after this try is never lost
             delay = min(delay * 2, self.RETRY_MAX_SECONDS)
 
     def _write(self, updates: int) -> None:

@@ -357,17 +357,21 @@ async function render() {
 }
 
 // A finished part whose results the server could not write yet (a full disk): it keeps trying; the person should know.
+// The box is an alert, which screen readers announce whenever its text is written: only a new text is written.
 function renderUnsaved() {
   const unsaved = state.unsaved;
   const box = $("unsaved");
   box.hidden = !unsaved;
-  if (!unsaved) { box.textContent = ""; return; }
-  const parts = unsaved.parts.join(", ");
-  const why = unsaved.error ? ` (${unsaved.error})` : "";
-  box.textContent = unsaved.retrying
-    ? `Not everything is saved yet: the results of ${parts} could not be written${why}, and the computer keeps `
-      + "trying. You can go on, but please tell the experimenter."
-    : `The results of ${parts} could not be saved${why}: please tell the experimenter.`;
+  let text = "";
+  if (unsaved) {
+    const parts = unsaved.parts.join(", ");
+    const why = unsaved.error ? ` (${unsaved.error})` : "";
+    text = unsaved.retrying
+      ? `Not everything is saved yet: the results of ${parts} could not be written${why}, and the computer keeps `
+        + "trying. You can go on, but please tell the experimenter."
+      : `The results of ${parts} could not be saved${why}: please tell the experimenter.`;
+  }
+  if (box.textContent !== text) { box.textContent = text; }
 }
 
 // How many mazes this part has and about how long it and the rest take (the server's estimate).
