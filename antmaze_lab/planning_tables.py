@@ -4,7 +4,8 @@
 ``by-path FILE``: success by shortest path length (``scripts/planner_by_path.py``); ``trials FILE [FILE ...]``:
 DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``;
 ``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``);
-``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes.
+``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes;
+``labels REPORT [REPORT ...]``: learners' benchmark reports at each label budget beside each suite's oracle report.
 
 A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
 file given to a one-file table), and ``tasks`` or ``trials`` files that do not belong together
@@ -173,6 +174,59 @@ def tasks_table(ends: dict[str, Any], reports: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def _labels(report: dict[str, Any]) -> int:
+    """The label budget of a learner's leaderboard submission (``"300 oracle labels (DAgger)"``: 300)."""
+    budget = str((report.get("submission") or {}).get("budget", ""))
+    words = budget.split()
+    if len(words) < 2 or not words[0].isdigit() or words[1:3] != ["oracle", "labels"]:
+        raise ValueError(f"{report['suite']}: {report['policy']} has no label budget (its budget: {budget!r})")
+    return int(words[0])
+
+
+def labels_table(reports: list[dict[str, Any]]) -> str:
+    """Per suite: its oracle's success, and a learner's at each label budget with its ratio to the oracle's.
+
+    Each success is given with its Wilson 95% interval; the ratio is of the two point estimates.
+
+    ``reports`` are ``antmaze-hirl benchmark`` reports: one oracle report a suite (``--policy oracle``) and the
+    learners' submissions (``--budget "N oracle labels (DAgger)"``), at most one a suite and budget. A learner's
+    policy name says "zero-shot" where it played a map it was never trained on.
+    """
+    oracle: dict[str, dict[str, Any]] = {}
+    learners: dict[str, dict[int, dict[str, Any]]] = defaultdict(dict)
+    for report in reports:
+        suite = report["suite"]
+        if report["policy"] == "oracle":
+            if suite in oracle:
+                raise ValueError(f"two oracle reports of suite {suite!r} (one a suite)")
+            oracle[suite] = report
+            continue
+        labels = _labels(report)
+        if labels in learners[suite]:
+            raise ValueError(f"two reports of suite {suite!r} at {labels} labels (one a suite and budget)")
+        learners[suite][labels] = report
+    missing = sorted(set(learners) - set(oracle))
+    if missing:
+        raise ValueError(f"no oracle report of suite(s) {', '.join(missing)}: the ratio needs one")
+    budgets = sorted({labels for by_labels in learners.values() for labels in by_labels})
+    header = "| suite | oracle | " + " | ".join(f"{labels:,} labels" for labels in budgets) + " |"
+    lines = [header, "|---" * (2 + len(budgets)) + "|"]
+    for suite, by_labels in learners.items():
+        reference = oracle[suite]
+        cells = []
+        for labels in budgets:
+            report = by_labels.get(labels)
+            if report is None:
+                cells.append("")
+                continue
+            ratio = report["success_rate"] / reference["success_rate"] if reference["success_rate"] else float("nan")
+            zero_shot = " zero-shot" if "zero-shot" in report["policy"] else ""
+            cells.append(f"{_rate(report['successes'], report['episodes'])}: {ratio:.2f}x{zero_shot}")
+        oracle_cell = _rate(reference["successes"], reference["episodes"])
+        lines.append(f"| `{suite}` | {oracle_cell} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def file_kind(data: Any) -> str:
     """What a results file is, by its fields: one of :data:`TABLE_FILES`' kinds, or ``"unknown"``."""
     if isinstance(data, list) or not isinstance(data, dict):
@@ -201,6 +255,7 @@ TABLE_FILES = {
     "speed": ("speed", None),
     "ends": ("ends", None),
     "tasks": ("ends", "benchmark report"),
+    "labels": ("benchmark report", "benchmark report"),
 }
 """Per table: the kind of its first file, and of the files after it (``None``: it reads one file)."""
 
@@ -352,6 +407,8 @@ def build(table: str, loaded: list[Any]) -> str:
         return ends_table(loaded[0])
     if table == "by-path":
         return by_path_table(loaded[0])
+    if table == "labels":
+        return labels_table(loaded)
     return trials_table(loaded)
 
 

@@ -204,3 +204,46 @@ def test_the_planning_tables_positionals_say_they_are_required(capsys):
     with pytest.raises(SystemExit):
         planning_tables.main(["--help"])
     assert " ".join(capsys.readouterr().out.split()).count("(required)") == 2
+
+
+def scored(suite, policy, successes, budget=None):
+    """A benchmark report of ``policy`` on ``suite``: ``successes`` of 100 episodes, a submission at ``budget``."""
+    fields = {"suite": suite, "policy": policy, "successes": successes, "episodes": 100}
+    fields["success_rate"] = successes / 100
+    if budget is not None:
+        fields["submission"] = {"budget": budget, "seed": 0}
+    return report(**fields)
+
+
+def test_the_labels_table_sets_each_budget_beside_the_suites_oracle(tmp_path, capsys):
+    files = [
+        scored("u", "oracle", 80),
+        scored("u", "learner.zip (zero-shot: trained on 6x6 maps)", 60, "1000 oracle labels (DAgger)"),
+        scored("u", "learner.zip (zero-shot: trained on 6x6 maps)", 40, "100 oracle labels (DAgger)"),
+        scored("ant4", "oracle", 100),
+        scored("ant4", "learner.zip", 50, "100 oracle labels (DAgger)"),
+    ]
+    status, out, _ = tables(tmp_path, capsys, "labels", *files)
+    assert status == 0
+    header, _, u_row, ant4_row = out.splitlines()
+    assert header == "| suite | oracle | 100 labels | 1,000 labels |"
+    assert u_row.startswith("| `u` | 80/100 (80%) [71, 87] | 40/100 (40%) [31, 50]: 0.50x zero-shot | 60/100 (60%)")
+    assert u_row.endswith(": 0.75x zero-shot |")
+    assert ant4_row.endswith("50/100 (50%) [40, 60]: 0.50x |  |")  # no zero-shot on its own family; no 1,000 row
+
+
+@pytest.mark.parametrize(
+    ("files", "message"),
+    [
+        ([scored("u", "learner.zip", 60, "100 oracle labels (DAgger)")], "no oracle report of suite(s) u"),
+        ([scored("u", "oracle", 80), scored("u", "oracle", 81)], "two oracle reports of suite 'u'"),
+        ([scored("u", "oracle", 80), scored("u", "a.zip", 1, "200k steps")], "u: a.zip has no label budget"),
+        (
+            [scored("u", "oracle", 80)] + [scored("u", "a.zip", 1, "100 oracle labels (DAgger)")] * 2,
+            "two reports of suite 'u' at 100 labels",
+        ),
+    ],
+)
+def test_the_labels_table_refuses_reports_it_cannot_set_side_by_side(tmp_path, capsys, files, message):
+    status, err, _ = tables(tmp_path, capsys, "labels", *files)
+    assert status == 2 and err.startswith("error: " + message), err
