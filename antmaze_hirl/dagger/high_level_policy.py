@@ -106,6 +106,12 @@ class LearnerSettings:
             moves of the value iteration's best path: at 0.1 on the ant's grid it traded moves into walls for
             rollouts that stay in their cell (``results/planning_learner/selection/looks/pressure_grid_ant.json``).
             0 (the default): no such term.
+        binary_blocking: With ``learnt_blocking``: the gate is a switch, each move open or blocked (its logit
+            above 0 adds :data:`~antmaze_hirl.dagger.network.BLOCKED_COST`), learnt through a surrogate
+            gradient (:class:`~antmaze_hirl.dagger.network.CellValueIteration`); every gate starts open. Why: a
+            continuous gate is priced like any cost, only as high as the training mazes' detours need (two
+            looks in ``results/planning_learner/selection/``), while a switch, once pushed across 0, blocks the
+            move on a map of any size. ``False`` (the default): the sigmoid gate.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -114,7 +120,8 @@ class LearnerSettings:
         ValueError: Naming the first bad value: ``subgoal_reach_m`` not positive, ``n_directions`` not a
             positive multiple of 4, ``planning_iterations`` negative, ``channels`` or ``hidden`` below 1,
             ``head`` unknown, ``block_walls`` without the planning next-cell head, ``blocking_pressure``
-            negative or set without ``learnt_blocking``, ``learning_rate`` not positive or ``batch_size`` below 1.
+            negative or set without ``learnt_blocking``, ``binary_blocking`` without ``learnt_blocking``,
+            ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
     subgoal_reach_m: float | None = None
@@ -130,6 +137,7 @@ class LearnerSettings:
     batch_size: int = 64
     augment_symmetries: bool = True
     blocking_pressure: float = 0.0
+    binary_blocking: bool = False
 
     def __post_init__(self) -> None:
         if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
@@ -153,6 +161,9 @@ class LearnerSettings:
         if self.blocking_pressure and not self.learnt_blocking:
             raise ValueError(f"blocking_pressure needs learnt_blocking, got {self.blocking_pressure} without it")
         object.__setattr__(self, "blocking_pressure", float(self.blocking_pressure))
+        if self.binary_blocking and not self.learnt_blocking:
+            raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
+        object.__setattr__(self, "binary_blocking", bool(self.binary_blocking))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -295,6 +306,7 @@ class HighLevelPolicy:
                     block_walls=settings.block_walls,
                     any_map=settings.any_map,
                     learnt_blocking=settings.learnt_blocking,
+                    binary_blocking=settings.binary_blocking,
                 )
             else:
                 self.network = SubgoalNetwork(

@@ -141,6 +141,26 @@ BLOCKING_START = -9.0
 the gate starts as one more move cost of a usual size, with a gradient of a usual size (``sigmoid'(-9)`` times
 :data:`BLOCKED_COST`, about 1.2), and labels raise it towards :data:`BLOCKED_COST` where a move must not be made."""
 
+BINARY_BLOCKING_START = -1.0
+"""Starting logit of the binary blocking gate (``binary_blocking``): below 0, so every move starts open, by about five
+times the spread an untrained network's logits have around their bias (so no move starts blocked)."""
+
+SURROGATE_COST = 1.0
+"""The binary gate's backward pass (``binary_blocking``): its gradient is that of a cost ``SURROGATE_COST * logit``,
+a move's usual cost a unit of logit. Linear, not a sigmoid's: a sigmoid's gradient fades as a gate moves away from
+0, and a labelled move whose gate had gone far past 0 would stay blocked."""
+
+REOPENING = 10.0
+"""With ``binary_blocking``, how many times steeper the surrogate is above 0 (blocked) than below (open): a label
+reopens its blocked move ten times faster than the moves a label does not make push an open one shut. A gate's
+view is local, so the same view is a labelled move on one path and an unlabelled one on another: with one slope,
+the two pushes balanced at the switch and kept about 5% of the labelled moves blocked on the ant's 4x4 labels."""
+
+LOGIT_FLOOR = 100.0
+"""With ``binary_blocking``, how far below its best move a move's Q reaches the logits (:class:`NextCellNetwork`):
+a move whose next cell the switches cut off from the goal is about ``-UNREACHED`` down, which made the trust's
+gradient swing by hundreds and held the trust near 0."""
+
 
 def blocked_moves(walls: th.Tensor) -> th.Tensor:
     """``(B, 9, S, S)`` 1.0 where a move leads into a wall (or off the grid) or squeezes between two walls.
@@ -181,26 +201,48 @@ class CellValueIteration(nn.Module):
     into a wall (``docs/results/planning-learner.md``). Unlike ``block_walls``, nothing is ruled out before a
     label: the gate starts closed to nothing (:data:`BLOCKING_START`) and is learnt.
 
+    With ``binary_blocking`` too the gate is a switch: a move is open (no added cost) or blocked
+    (:data:`BLOCKED_COST` added) as its gate logit is at most or above 0, so a blocked move stays blocked on a map
+    of any size however short the training mazes' detours were. A switch has no gradient; the backward pass
+    uses one of ``SURROGATE_COST * logit`` in its place (a straight-through estimator), at the agent's cell
+    only (see :meth:`forward`). Why: a
+    continuous gate (the sigmoid above) is still a cost, and the labels stop raising a cost as soon as it beats
+    the training mazes' detours (two looks in ``results/planning_learner/selection/``); a switch pushed across 0
+    is blocked for good. Every gate starts open (:data:`BINARY_BLOCKING_START`). A move once blocked gets no
+    gradient from the value iteration's maximum (it routes round it) except at the agent's own cell, where the
+    labels' cross-entropy reaches every move: so a labelled move wrongly blocked is reopened by its labels.
+
     Args:
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
         learnt_blocking: Add the learnt blocking gate.
+        binary_blocking: Make that gate a switch (open or blocked), learnt through a surrogate gradient.
 
     Raises:
-        ValueError: If ``iterations`` is below 1, or both ``block_walls`` and ``learnt_blocking`` are set.
+        ValueError: If ``iterations`` is below 1, both ``block_walls`` and ``learnt_blocking`` are set, or
+            ``binary_blocking`` is set without ``learnt_blocking``.
     """
 
     def __init__(
-        self, iterations: int, channels: int = 16, *, block_walls: bool = False, learnt_blocking: bool = False
+        self,
+        iterations: int,
+        channels: int = 16,
+        *,
+        block_walls: bool = False,
+        learnt_blocking: bool = False,
+        binary_blocking: bool = False,
     ) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
         if block_walls and learnt_blocking:
             raise ValueError("block_walls and learnt_blocking exclude each other: walls are either given or learnt")
+        if binary_blocking and not learnt_blocking:
+            raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
         self.iterations = iterations
         self.block_walls = block_walls
+        self.binary_blocking = binary_blocking
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -216,7 +258,7 @@ class CellValueIteration(nn.Module):
                 nn.Sigmoid(),
             )
             with th.no_grad():
-                self.blocking[2].bias.fill_(BLOCKING_START)
+                self.blocking[2].bias.fill_(BINARY_BLOCKING_START if binary_blocking else BLOCKING_START)
 
     def blocking_logits(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9, S, S)`` logits of the learnt blocking gate (its ``b_a(s)`` is their sigmoid).
@@ -228,23 +270,53 @@ class CellValueIteration(nn.Module):
             raise ValueError("this planner has no learnt blocking gate (learnt_blocking=False)")
         return self.blocking[:-1](grids)  # all but the closing sigmoid
 
+    def blocking_cost(self, grids: th.Tensor) -> th.Tensor:
+        """``(B, 9, S, S)`` cost the learnt gate adds to each move: :data:`BLOCKED_COST` times its ``b_a(s)``.
+
+        With ``binary_blocking``, ``b_a(s)`` is 1 where the gate's logit is above 0, else 0, and the gradient is
+        that of ``SURROGATE_COST * logit`` (straight through: the forward value is exactly the switch's).
+
+        Raises:
+            ValueError: If the planner has no learnt gate.
+        """
+        logits = self.blocking_logits(grids)
+        if not self.binary_blocking:
+            return BLOCKED_COST * th.sigmoid(logits)  # the closing nn.Sigmoid's op: the same figures
+        surrogate = SURROGATE_COST * (logits + (REOPENING - 1.0) * th.relu(logits))
+        return BLOCKED_COST * (logits > 0).to(logits.dtype) + (surrogate - surrogate.detach())
+
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
+        q, centre_gate = self.q_and_centre_gate(grids)
+        return q if centre_gate is None else q - centre_gate
+
+    def q_and_centre_gate(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
+        """:meth:`forward`'s Q before the learnt gate's cost at the agent's cell, and that ``(B, 9)`` cost.
+
+        The cost is ``None`` without a gate. Apart, so that a readout can scale the one and not the other
+        (:class:`NextCellNetwork` with ``binary_blocking``).
+        """
         cost = self.cost(grids)
+        centre = grids.shape[-1] // 2
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
+        centre_cost, centre_gate = cost[:, :, centre, centre], None
         if self.blocking is not None:
-            cost = cost + BLOCKED_COST * self.blocking(grids)
+            gate = self.blocking_cost(grids)
+            centre_gate = gate[:, :, centre, centre]
+            # The switch learns at the agent's cell only (the same values either way): through the maximum every
+            # move of every competing path is pushed up, and those paths are longer, a drift that blocked most
+            # free moves within 250 steps on the ant's 4x4 labels.
+            cost = cost + (gate.detach() if self.binary_blocking else gate)
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
         for _ in range(self.iterations - 1):
             # Holding V = 0 on the goal by a product, and no clamp: the fewest ops (the loop is the step's cost).
             value = (shifted(value, size) - cost).amax(dim=1) * not_goal
-        centre = size // 2
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
-        return ahead - cost[:, :, centre, centre]
+        return ahead - centre_cost, centre_gate
 
 
 def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
@@ -272,6 +344,7 @@ class NextCellNetwork(nn.Module):
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
         learnt_blocking: The planner learns which moves are never made (:class:`CellValueIteration`).
+        binary_blocking: That learnt gate is a switch, open or blocked (:class:`CellValueIteration`).
         any_map: The planning learner whose weights act on any map: the logits are the planner's Q alone,
             times a learnt trust that starts at 0 (so the untrained learner has no preference among moves),
             with no correction from the feature vector (whose goal offset grows with the map beyond anything
@@ -279,7 +352,8 @@ class NextCellNetwork(nn.Module):
             seeds in ``results/planning_learner/``; a correction from local inputs only did worse on the screen too).
 
     Raises:
-        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning.
+        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning, or ``binary_blocking``
+            without ``learnt_blocking``.
     """
 
     def __init__(
@@ -293,6 +367,7 @@ class NextCellNetwork(nn.Module):
         block_walls: bool = False,
         any_map: bool = False,
         learnt_blocking: bool = False,
+        binary_blocking: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
@@ -304,7 +379,11 @@ class NextCellNetwork(nn.Module):
         self.head: nn.Module | None = None
         if planning_iterations > 0:
             self.planner: CellValueIteration | None = CellValueIteration(
-                planning_iterations, channels, block_walls=block_walls, learnt_blocking=learnt_blocking
+                planning_iterations,
+                channels,
+                block_walls=block_walls,
+                learnt_blocking=learnt_blocking,
+                binary_blocking=binary_blocking,
             )
             if any_map:
                 # How far the logits follow the planner, learnt from 0: untrained, every move is as likely (the
@@ -324,6 +403,14 @@ class NextCellNetwork(nn.Module):
         if self.planner is None:
             assert self.head is not None
             return self.head(grids, vectors)[0]
+        if self.trust is not None and self.planner.binary_blocking:
+            # The switch's cost at the agent's cell is not scaled by the trust: a blocked move is out whatever the
+            # trust (it starts at 0), and the switch learns at the labels' pace. Q relative to its best move (the
+            # same softmax) is floored at LOGIT_FLOOR below it, so the trust sees no cut-off cell's UNREACHED.
+            q, centre_gate = self.planner.q_and_centre_gate(grids)
+            assert centre_gate is not None
+            relative = q - q.max(dim=1, keepdim=True).values.detach()
+            return self.trust * relative.clamp(min=-LOGIT_FLOOR) - centre_gate
         q = self.planner(grids)
         if self.trust is not None:
             return self.trust * q
