@@ -7,6 +7,8 @@ iteration network's Q at the agent's cell (Tamar et al., 2016) when it plans.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import torch as th
 from torch import nn
@@ -146,20 +148,51 @@ BINARY_BLOCKING_START = -1.0
 times the spread an untrained network's logits have around their bias (so no move starts blocked)."""
 
 SURROGATE_COST = 1.0
-"""The binary gate's backward pass (``binary_blocking``): its gradient is that of a cost ``SURROGATE_COST * logit``,
-a move's usual cost a unit of logit. Linear, not a sigmoid's: a sigmoid's gradient fades as a gate moves away from
-0, and a labelled move whose gate had gone far past 0 would stay blocked."""
+"""The binary gate's backward pass (``binary_blocking``, :class:`BlockingSwitch`): the gradient of a cost
+``SURROGATE_COST * logit``, a move's usual cost a unit of logit. Linear, not a sigmoid's: a sigmoid's gradient fades
+as a gate moves away from 0, and a labelled move whose gate had gone far past 0 would stay blocked."""
 
 REOPENING = 10.0
-"""With ``binary_blocking``, how many times steeper the surrogate is above 0 (blocked) than below (open): a label
-reopens its blocked move ten times faster than the moves a label does not make push an open one shut. A gate's
-view is local, so the same view is a labelled move on one path and an unlabelled one on another: with one slope,
-the two pushes balanced at the switch and kept about 5% of the labelled moves blocked on the ant's 4x4 labels."""
+"""With ``binary_blocking``, how many times steeper the surrogate is on a blocked move than on an open one: a label
+reopens its blocked move ten times faster than the moves a label does not make push an open one shut. A gate's view
+is local, so one view is a labelled move on one path and an unlabelled one on another: with one slope the two pushes
+balanced at the switch and kept about 5% of the labelled moves blocked on the ant's 4x4 labels."""
+
+OPEN_BAND = 3.0
+"""With ``binary_blocking``, how far below 0 an open gate's logit is still pushed further open by its labels. Below
+it only the push towards shut passes: otherwise the labels drove every open logit down without end (to about -18
+in 1,500 steps on the ant's 4x4 labels), moves into walls with them (the gates share their weights), and the wall
+moves, priced out by their learnt cost, were no longer pushed back up: only a quarter of the straight moves into a
+wall ended blocked. With the band, free moves settle just below it and moves into walls above 0."""
 
 LOGIT_FLOOR = 100.0
 """With ``binary_blocking``, how far below its best move a move's Q reaches the logits (:class:`NextCellNetwork`):
 a move whose next cell the switches cut off from the goal is about ``-UNREACHED`` down, which made the trust's
 gradient swing by hundreds and held the trust near 0."""
+
+
+class BlockingSwitch(th.autograd.Function):
+    """The binary gate's cost (``binary_blocking``): :data:`BLOCKED_COST` where a logit is above 0, else 0.
+
+    A switch has no gradient; the backward pass is a surrogate's (straight through), that of a cost
+    :data:`SURROGATE_COST` times the logit, shaped so that the labels can block and reopen a move but not drift
+    it: on a blocked move :data:`REOPENING` times steeper; on an open move whose logit is :data:`OPEN_BAND` or
+    more below 0, only the part that pushes it towards blocked passes.
+    """
+
+    @staticmethod
+    def forward(ctx: Any, logits: th.Tensor) -> th.Tensor:
+        """``BLOCKED_COST * 1[logits > 0]``, the logits' shape."""
+        ctx.save_for_backward(logits)
+        return BLOCKED_COST * (logits > 0).to(logits.dtype)
+
+    @staticmethod
+    def backward(ctx: Any, grad: th.Tensor) -> th.Tensor:
+        """The surrogate's gradient with respect to the logits (a negative one raises a logit: blocks)."""
+        (logits,) = ctx.saved_tensors
+        surrogate = SURROGATE_COST * grad
+        open_side = th.where(logits > -OPEN_BAND, surrogate, surrogate.clamp(max=0.0))
+        return th.where(logits > 0, REOPENING * surrogate, open_side)
 
 
 def blocked_moves(walls: th.Tensor) -> th.Tensor:
@@ -204,8 +237,8 @@ class CellValueIteration(nn.Module):
     With ``binary_blocking`` too the gate is a switch: a move is open (no added cost) or blocked
     (:data:`BLOCKED_COST` added) as its gate logit is at most or above 0, so a blocked move stays blocked on a map
     of any size however short the training mazes' detours were. A switch has no gradient; the backward pass
-    uses one of ``SURROGATE_COST * logit`` in its place (a straight-through estimator), at the agent's cell
-    only (see :meth:`forward`). Why: a
+    uses a surrogate's (:class:`BlockingSwitch`, a straight-through estimator), at the agent's cell only (see
+    :meth:`forward`). Why: a
     continuous gate (the sigmoid above) is still a cost, and the labels stop raising a cost as soon as it beats
     the training mazes' detours (two looks in ``results/planning_learner/selection/``); a switch pushed across 0
     is blocked for good. Every gate starts open (:data:`BINARY_BLOCKING_START`). A move once blocked gets no
@@ -273,8 +306,8 @@ class CellValueIteration(nn.Module):
     def blocking_cost(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9, S, S)`` cost the learnt gate adds to each move: :data:`BLOCKED_COST` times its ``b_a(s)``.
 
-        With ``binary_blocking``, ``b_a(s)`` is 1 where the gate's logit is above 0, else 0, and the gradient is
-        that of ``SURROGATE_COST * logit`` (straight through: the forward value is exactly the switch's).
+        With ``binary_blocking``, ``b_a(s)`` is 1 where the gate's logit is above 0, else 0, and the gradient a
+        surrogate's (:class:`BlockingSwitch`).
 
         Raises:
             ValueError: If the planner has no learnt gate.
@@ -282,8 +315,7 @@ class CellValueIteration(nn.Module):
         logits = self.blocking_logits(grids)
         if not self.binary_blocking:
             return BLOCKED_COST * th.sigmoid(logits)  # the closing nn.Sigmoid's op: the same figures
-        surrogate = SURROGATE_COST * (logits + (REOPENING - 1.0) * th.relu(logits))
-        return BLOCKED_COST * (logits > 0).to(logits.dtype) + (surrogate - surrogate.detach())
+        return BlockingSwitch.apply(logits)
 
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
