@@ -319,8 +319,9 @@ class CellValueIteration(nn.Module):
 
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
-        q, centre_gate = self.q_and_centre_gate(grids)
-        return q if centre_gate is None else q - centre_gate
+        ahead, centre_cost, centre_gate = self._ahead_and_centre_costs(grids)
+        # The gate's cost summed before it is taken away: the figures of the full cost map at the agent's cell.
+        return ahead - (centre_cost if centre_gate is None else centre_cost + centre_gate)
 
     def q_and_centre_gate(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
         """:meth:`forward`'s Q before the learnt gate's cost at the agent's cell, and that ``(B, 9)`` cost.
@@ -328,6 +329,11 @@ class CellValueIteration(nn.Module):
         The cost is ``None`` without a gate. Apart, so that a readout can scale the one and not the other
         (:class:`NextCellNetwork` with ``binary_blocking``).
         """
+        ahead, centre_cost, centre_gate = self._ahead_and_centre_costs(grids)
+        return ahead - centre_cost, centre_gate
+
+    def _ahead_and_centre_costs(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
+        """The value one move away of each move from the agent's cell, its learnt cost there, and its gate's."""
         cost = self.cost(grids)
         centre = grids.shape[-1] // 2
         if self.block_walls:
@@ -348,7 +354,7 @@ class CellValueIteration(nn.Module):
             value = (shifted(value, size) - cost).amax(dim=1) * not_goal
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
-        return ahead - centre_cost, centre_gate
+        return ahead, centre_cost, centre_gate
 
 
 def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
