@@ -167,13 +167,18 @@ def test_learnt_blocking_needs_a_planner_and_excludes_given_walls():
         CellValueIteration(3, block_walls=True, learnt_blocking=True)
 
 
-def test_the_gated_learner_starts_without_preference_and_moves_to_a_larger_map(tmp_path):
+def untrained_on_a_small_map(settings: dict) -> tuple:
+    """A learner of ``settings`` on a 3x3 point maze, a 7x7 one, the learner, and its grids and logits at a reset."""
     small, big = point_env(maze_size=3), point_env(maze_size=7)
-    learner = HighLevelPolicy.for_env(small, rng=np.random.default_rng(0), **GATE)
+    learner = HighLevelPolicy.for_env(small, rng=np.random.default_rng(0), **settings)
     obs, _ = small.reset(seed=0)
     batch = learner.encoder.encode_observations([obs])
     grids = th.from_numpy(batch.grids)
-    logits = learner.network(grids, th.from_numpy(batch.vectors))
+    return small, big, learner, grids, learner.network(grids, th.from_numpy(batch.vectors))
+
+
+def test_the_gated_learner_starts_without_preference_and_moves_to_a_larger_map(tmp_path):
+    _, big, learner, grids, logits = untrained_on_a_small_map(GATE)
     assert th.equal(logits, th.zeros_like(logits))
     # The gate starts as one more move cost of a usual size (BLOCKING_START), not as a block: about 1.2 a move.
     added = BLOCKED_COST * learner.network.planner.blocking(grids)
@@ -348,12 +353,8 @@ def test_binary_blocking_needs_the_learnt_gate():
 
 
 def test_the_switch_learner_starts_open_without_preference_and_saves_its_switch(tmp_path):
-    small, big = point_env(maze_size=3), point_env(maze_size=7)
-    learner = HighLevelPolicy.for_env(small, rng=np.random.default_rng(0), **SWITCH)
-    obs, _ = small.reset(seed=0)
-    batch = learner.encoder.encode_observations([obs])
-    grids = th.from_numpy(batch.grids)
-    assert th.equal(learner.network(grids, th.from_numpy(batch.vectors)), th.zeros((1, len(NEXT_CELL_MOVES))))
+    _, big, learner, grids, logits = untrained_on_a_small_map(SWITCH)
+    assert th.equal(logits, th.zeros((1, len(NEXT_CELL_MOVES))))
     assert float(learner.network.planner.blocking_logits(grids).max()) < 0.0  # every move open
     moved = learner.on_map(big.unwrapped.geometry, pixels_per_cell=big.unwrapped.pixels_per_cell)
     with th.no_grad():  # some switches shut, so that a reload that lost the switch (a sigmoid gate) would show
