@@ -436,19 +436,32 @@ class NextCellNetwork(nn.Module):
             self.planner = None
             self.head = SubgoalNetwork(grid_size, vector_dim, moves, channels, hidden)
 
+    def switch_readout(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        """The two parts of an ``any_map`` switch learner's logits: ``trust * relative - switch`` (:meth:`forward`).
+
+        ``relative``: the planner's Q less its best move's (the same softmax), floored at :data:`LOGIT_FLOOR` below
+        it, so the trust sees no cut-off cell's ``UNREACHED``; ``switch``: the switch's ``(B, 9)`` cost at the
+        agent's cell, not scaled by the trust, so a blocked move is out whatever the trust (it starts at 0) and
+        the switch learns at the labels' pace.
+
+        Raises:
+            ValueError: If this is not an ``any_map`` planner with ``binary_blocking``.
+        """
+        if self.trust is None or self.planner is None or not self.planner.binary_blocking:
+            raise ValueError("switch_readout needs an any_map planner with binary_blocking")
+        q, centre_gate = self.planner.q_and_centre_gate(grids)
+        assert centre_gate is not None
+        relative = q - q.max(dim=1, keepdim=True).values.detach()
+        return relative.clamp(min=-LOGIT_FLOOR), centre_gate
+
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
         """Logits ``(B, 9)`` over the next cell."""
         if self.planner is None:
             assert self.head is not None
             return self.head(grids, vectors)[0]
         if self.trust is not None and self.planner.binary_blocking:
-            # The switch's cost at the agent's cell is not scaled by the trust: a blocked move is out whatever the
-            # trust (it starts at 0), and the switch learns at the labels' pace. Q relative to its best move (the
-            # same softmax) is floored at LOGIT_FLOOR below it, so the trust sees no cut-off cell's UNREACHED.
-            q, centre_gate = self.planner.q_and_centre_gate(grids)
-            assert centre_gate is not None
-            relative = q - q.max(dim=1, keepdim=True).values.detach()
-            return self.trust * relative.clamp(min=-LOGIT_FLOOR) - centre_gate
+            relative, centre_gate = self.switch_readout(grids)
+            return self.trust * relative - centre_gate
         q = self.planner(grids)
         if self.trust is not None:
             return self.trust * q
