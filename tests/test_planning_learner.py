@@ -414,3 +414,52 @@ def test_the_switch_learns_to_shut_moves_into_walls_and_keeps_the_labelled_moves
     assert before == 0.0
     assert into_wall > 0.5
     assert labelled < 0.05
+
+
+def test_switch_flattening_is_checked():
+    env = point_env(maze_size=3)
+    for bad in (0.0, 1.5, float("nan")):
+        with pytest.raises(ValueError, match=r"switch_flattening must be in \(0, 1\], got"):
+            HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**SWITCH, "switch_flattening": bad})
+    with pytest.raises(
+        ValueError, match=r"switch_flattening needs binary_blocking, any_map, no blocking_pressure; got 0\.5"
+    ):
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "switch_flattening": 0.5})
+    with pytest.raises(ValueError, match="switch_readout needs an any_map planner with binary_blocking"):
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **GATE).network.switch_readout(
+            th.zeros((1, 2, 5, 5))
+        )
+
+
+def test_a_flattened_switch_learns_from_a_flatter_softmax_and_the_rest_as_before(tmp_path):
+    # At flattening 1 the two cross-entropies give every parameter the one cross-entropy's gradient; at 0.5 the
+    # switch's gradient changes and the trust's and costs' do not.
+    env = point_env(maze_size=3)
+    learner = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **learner_settings("next_cell_switch_flat", 5))
+    loaded = HighLevelPolicy.load(learner.save(tmp_path / "flat.zip"))
+    assert loaded.settings.switch_flattening == learner.settings.switch_flattening == 0.5
+    data = sample_labelled_states(env, 40, subgoal_reach_m=learner.subgoal_reach_m, rng=np.random.default_rng(1))
+    batch = learner.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+    classes = th.from_numpy(next_cell_classes(learner.targets(np.stack(data.agents), np.stack(data.labels))))
+    grids, vectors = th.from_numpy(batch.grids), th.from_numpy(batch.vectors)
+    network = learner.network
+    with th.no_grad():
+        network.trust.fill_(0.5)
+
+    def gradients(loss: th.Tensor) -> dict[str, th.Tensor]:
+        network.zero_grad()
+        loss.backward()
+        return {name: p.grad.clone() for name, p in network.named_parameters() if p.grad is not None}
+
+    one = gradients(th.nn.functional.cross_entropy(network(grids, vectors), classes))
+    flat = gradients(learner._flattened_switch_loss(grids, classes))
+    learner.settings = learner.settings.replace(switch_flattening=1.0)
+    same = gradients(learner._flattened_switch_loss(grids, classes))
+    switch = {name for name in one if name.startswith("planner.blocking")}
+    assert switch and set(one) == set(flat) == set(same)
+    for name in one:
+        th.testing.assert_close(same[name], one[name])
+        if name in switch:
+            assert not th.allclose(flat[name], one[name]), name
+        else:
+            th.testing.assert_close(flat[name], one[name])
