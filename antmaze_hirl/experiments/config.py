@@ -213,6 +213,15 @@ class ExperimentConfig(TrialSettings):
 PLANS = -1
 """Stands for ``rows + cols + 2`` value-iteration rounds on the trial's map (:func:`learner_settings`)."""
 
+_SWITCH: dict[str, Any] = {
+    "head": "next_cell",
+    "planning_iterations": PLANS,
+    "block_walls": False,
+    "any_map": True,
+    "learnt_blocking": True,
+    "binary_blocking": True,
+}
+
 LEARNERS: dict[str, dict[str, Any]] = {
     "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
     "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
@@ -234,23 +243,8 @@ LEARNERS: dict[str, dict[str, Any]] = {
         "learnt_blocking": True,
         "blocking_pressure": 0.1,
     },
-    "next_cell_switch": {
-        "head": "next_cell",
-        "planning_iterations": PLANS,
-        "block_walls": False,
-        "any_map": True,
-        "learnt_blocking": True,
-        "binary_blocking": True,
-    },
-    "next_cell_switch_flat": {
-        "head": "next_cell",
-        "planning_iterations": PLANS,
-        "block_walls": False,
-        "any_map": True,
-        "learnt_blocking": True,
-        "binary_blocking": True,
-        "switch_flattening": 0.5,
-    },
+    "next_cell_switch": _SWITCH,
+    "next_cell_switch_flat": {**_SWITCH, "switch_flattening": 0.5},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
 body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
