@@ -320,7 +320,6 @@ class CellValueIteration(nn.Module):
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
         ahead, centre_cost, centre_gate = self._ahead_and_centre_costs(grids)
-        # The gate's cost summed before it is taken away: the figures of the full cost map at the agent's cell.
         return ahead - (centre_cost if centre_gate is None else centre_cost + centre_gate)
 
     def q_and_centre_gate(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
@@ -333,19 +332,26 @@ class CellValueIteration(nn.Module):
         return ahead - centre_cost, centre_gate
 
     def _ahead_and_centre_costs(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor, th.Tensor | None]:
-        """The value one move away of each move from the agent's cell, its learnt cost there, and its gate's."""
+        """The value one move away of each move from the agent's cell, its cost there, and the switch's there.
+
+        Without ``binary_blocking`` the cost holds any gate's (the switch's is ``None``).
+        """
         cost = self.cost(grids)
         centre = grids.shape[-1] // 2
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
-        centre_cost, centre_gate = cost[:, :, centre, centre], None
-        if self.blocking is not None:
+        centre_cost: th.Tensor | None = None
+        centre_gate: th.Tensor | None = None
+        if self.binary_blocking:
+            centre_cost = cost[:, :, centre, centre]
             gate = self.blocking_cost(grids)
             centre_gate = gate[:, :, centre, centre]
             # The switch learns at the agent's cell only (the same values either way): through the maximum every
             # move of every competing path is pushed up, and those paths are longer, a drift that blocked most
             # free moves within 250 steps on the ant's 4x4 labels.
-            cost = cost + (gate.detach() if self.binary_blocking else gate)
+            cost = cost + gate.detach()
+        elif self.blocking is not None:
+            cost = cost + self.blocking_cost(grids)
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
@@ -354,6 +360,10 @@ class CellValueIteration(nn.Module):
             value = (shifted(value, size) - cost).amax(dim=1) * not_goal
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
         ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
+        if centre_cost is None:
+            # Read after the loop, as before the switch existed: autograd sums a tensor's gradients in the order
+            # its uses were recorded, and a replay of the earlier planners' trials needs their figures to the bit.
+            centre_cost = cost[:, :, centre, centre]
         return ahead, centre_cost, centre_gate
 
 
