@@ -350,6 +350,8 @@ def test_binary_blocking_needs_the_learnt_gate():
         HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**PLAN, "binary_blocking": True})
     with pytest.raises(ValueError, match="binary_blocking needs learnt_blocking"):
         CellValueIteration(3, binary_blocking=True)
+    with pytest.raises(ValueError, match="binary_blocking and blocking_pressure exclude each other"):
+        HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**SWITCH, "blocking_pressure": 0.1})
 
 
 def test_the_switch_learner_starts_open_without_preference_and_saves_its_switch(tmp_path):
@@ -421,9 +423,7 @@ def test_switch_flattening_is_checked():
     for bad in (0.0, 1.5, float("nan")):
         with pytest.raises(ValueError, match=r"switch_flattening must be in \(0, 1\], got"):
             HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**SWITCH, "switch_flattening": bad})
-    with pytest.raises(
-        ValueError, match=r"switch_flattening needs binary_blocking, any_map, no blocking_pressure; got 0\.5"
-    ):
+    with pytest.raises(ValueError, match=r"switch_flattening needs binary_blocking and any_map, got 0\.5"):
         HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **{**GATE, "switch_flattening": 0.5})
     with pytest.raises(ValueError, match="switch_readout needs an any_map planner with binary_blocking"):
         HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **GATE).network.switch_readout(

@@ -127,8 +127,8 @@ class LearnerSettings:
             positive multiple of 4, ``planning_iterations`` negative, ``channels`` or ``hidden`` below 1,
             ``head`` unknown, ``block_walls`` without the planning next-cell head, ``blocking_pressure``
             negative or set without ``learnt_blocking``, ``binary_blocking`` without ``learnt_blocking``,
-            ``switch_flattening`` outside ``(0, 1]``, or below 1 without ``binary_blocking`` and ``any_map`` or
-            with ``blocking_pressure``,
+            ``binary_blocking`` with ``blocking_pressure``, ``switch_flattening`` outside ``(0, 1]`` or below 1
+            without ``binary_blocking`` and ``any_map``,
             ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
@@ -172,13 +172,13 @@ class LearnerSettings:
         object.__setattr__(self, "blocking_pressure", float(self.blocking_pressure))
         if self.binary_blocking and not self.learnt_blocking:
             raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
+        if self.binary_blocking and self.blocking_pressure:
+            raise ValueError("binary_blocking and blocking_pressure exclude each other: the switch has its own push")
         object.__setattr__(self, "binary_blocking", bool(self.binary_blocking))
         if not 0 < self.switch_flattening <= 1:
             raise ValueError(f"switch_flattening must be in (0, 1], got {self.switch_flattening}")
-        if self.switch_flattening != 1.0 and not (self.binary_blocking and self.any_map and not self.blocking_pressure):
-            raise ValueError(
-                f"switch_flattening needs binary_blocking, any_map, no blocking_pressure; got {self.switch_flattening}"
-            )
+        if self.switch_flattening != 1.0 and not (self.binary_blocking and self.any_map):
+            raise ValueError(f"switch_flattening needs binary_blocking and any_map, got {self.switch_flattening}")
         object.__setattr__(self, "switch_flattening", float(self.switch_flattening))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
