@@ -106,6 +106,18 @@ class LearnerSettings:
             moves of the value iteration's best path: at 0.1 on the ant's grid it traded moves into walls for
             rollouts that stay in their cell (``results/planning_learner/selection/looks/pressure_grid_ant.json``).
             0 (the default): no such term.
+        binary_blocking: With ``learnt_blocking``: the gate is a switch, each move open or blocked (its logit
+            above 0 adds :data:`~antmaze_hirl.dagger.network.BLOCKED_COST`), learnt through a surrogate
+            gradient (:class:`~antmaze_hirl.dagger.network.CellValueIteration`); every gate starts open. Why: a
+            continuous gate is priced like any cost, only as high as the training mazes' detours need (two
+            looks in ``results/planning_learner/selection/``), while a switch, once pushed across 0, blocks the
+            move on a map of any size. ``False`` (the default): the sigmoid gate.
+        switch_flattening: With ``binary_blocking`` and ``any_map``: the switch learns from a second
+            cross-entropy whose softmax is this much flatter (the trust times it; Q and the trust held there),
+            the trust and the costs from the logits' own (:meth:`HighLevelPolicy.fit`). Why: with the logits'
+            own softmax, a move into a wall that the learnt costs price a few moves out on the 4x4 training mazes
+            has almost no weight, so its switch stops being pushed before it shuts (diagonal moves into a wall's
+            end, on 8x8 maps). 1.0 (the default): one cross-entropy.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -114,7 +126,10 @@ class LearnerSettings:
         ValueError: Naming the first bad value: ``subgoal_reach_m`` not positive, ``n_directions`` not a
             positive multiple of 4, ``planning_iterations`` negative, ``channels`` or ``hidden`` below 1,
             ``head`` unknown, ``block_walls`` without the planning next-cell head, ``blocking_pressure``
-            negative or set without ``learnt_blocking``, ``learning_rate`` not positive or ``batch_size`` below 1.
+            negative or set without ``learnt_blocking``, ``binary_blocking`` without ``learnt_blocking``,
+            ``binary_blocking`` with ``blocking_pressure``, ``switch_flattening`` outside ``(0, 1]`` or below 1
+            without ``binary_blocking`` and ``any_map``,
+            ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
     subgoal_reach_m: float | None = None
@@ -130,6 +145,8 @@ class LearnerSettings:
     batch_size: int = 64
     augment_symmetries: bool = True
     blocking_pressure: float = 0.0
+    binary_blocking: bool = False
+    switch_flattening: float = 1.0
 
     def __post_init__(self) -> None:
         if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
@@ -153,6 +170,16 @@ class LearnerSettings:
         if self.blocking_pressure and not self.learnt_blocking:
             raise ValueError(f"blocking_pressure needs learnt_blocking, got {self.blocking_pressure} without it")
         object.__setattr__(self, "blocking_pressure", float(self.blocking_pressure))
+        if self.binary_blocking and not self.learnt_blocking:
+            raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
+        if self.binary_blocking and self.blocking_pressure:
+            raise ValueError("binary_blocking and blocking_pressure exclude each other: the switch has its own push")
+        object.__setattr__(self, "binary_blocking", bool(self.binary_blocking))
+        if not 0 < self.switch_flattening <= 1:
+            raise ValueError(f"switch_flattening must be in (0, 1], got {self.switch_flattening}")
+        if self.switch_flattening != 1.0 and not (self.binary_blocking and self.any_map):
+            raise ValueError(f"switch_flattening needs binary_blocking and any_map, got {self.switch_flattening}")
+        object.__setattr__(self, "switch_flattening", float(self.switch_flattening))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -295,6 +322,7 @@ class HighLevelPolicy:
                     block_walls=settings.block_walls,
                     any_map=settings.any_map,
                     learnt_blocking=settings.learnt_blocking,
+                    binary_blocking=settings.binary_blocking,
                 )
             else:
                 self.network = SubgoalNetwork(
@@ -439,7 +467,9 @@ class HighLevelPolicy:
             if settings.augment_symmetries:
                 minibatch, labels = augment(minibatch, labels, self.rng, planar_feature_dim=self.planar_feature_dim)
             grids, vectors = th.from_numpy(minibatch.grids), th.from_numpy(minibatch.vectors)
-            if settings.head == "next_cell":
+            if settings.switch_flattening != 1.0:
+                loss = self._flattened_switch_loss(grids, th.from_numpy(next_cell_classes(labels)))
+            elif settings.head == "next_cell":
                 # The gate's logits come from the same pass as the move logits: its convolutions run once a step.
                 logits, gate_logits = network.logits_and_blocking_logits(grids, vectors)
                 loss = nn.functional.cross_entropy(logits, th.from_numpy(next_cell_classes(labels)))
@@ -457,6 +487,19 @@ class HighLevelPolicy:
             losses.append(loss.item())
         self.gradient_steps += steps
         return float(np.mean(losses[-10:]))
+
+    def _flattened_switch_loss(self, grids: th.Tensor, classes: th.Tensor) -> th.Tensor:
+        """The labels' cross-entropy with the switch learning from a flatter softmax (``switch_flattening``).
+
+        The trust and the costs learn from the logits' own cross-entropy, the switch not; the switch learns from
+        a second one over ``switch_flattening * trust * relative - switch`` (trust and Q held), in which a move
+        the learnt costs have priced a few moves out still has weight, so it is still pushed towards shut.
+        """
+        relative, switch = self.network.switch_readout(grids)
+        trust = self.network.trust
+        loss = nn.functional.cross_entropy(trust * relative - switch.detach(), classes)
+        flat = self.settings.switch_flattening * trust.detach() * relative.detach() - switch
+        return loss + nn.functional.cross_entropy(flat, classes)
 
     def fit_dataset(self, dataset: DemonstrationDataset, steps: int, indices: np.ndarray | None = None) -> float:
         """Runs :meth:`fit` on the dataset's labels (or the positions ``indices``, repeats allowed).

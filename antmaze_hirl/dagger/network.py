@@ -7,6 +7,8 @@ iteration network's Q at the agent's cell (Tamar et al., 2016) when it plans.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import torch as th
 from torch import nn
@@ -141,6 +143,57 @@ BLOCKING_START = -9.0
 the gate starts as one more move cost of a usual size, with a gradient of a usual size (``sigmoid'(-9)`` times
 :data:`BLOCKED_COST`, about 1.2), and labels raise it towards :data:`BLOCKED_COST` where a move must not be made."""
 
+BINARY_BLOCKING_START = -1.0
+"""Starting logit of the binary blocking gate (``binary_blocking``): below 0, so every move starts open, by about five
+times the spread an untrained network's logits have around their bias (so no move starts blocked)."""
+
+SURROGATE_COST = 1.0
+"""The binary gate's backward pass (``binary_blocking``, :class:`BlockingSwitch`): the gradient of a cost
+``SURROGATE_COST * logit``, a move's usual cost a unit of logit. Linear, not a sigmoid's: a sigmoid's gradient fades
+as a gate moves away from 0, and a labelled move whose gate had gone far past 0 would stay blocked."""
+
+REOPENING = 10.0
+"""With ``binary_blocking``, how many times steeper the surrogate is on a blocked move than on an open one: a label
+reopens its blocked move ten times faster than the moves a label does not make push an open one shut. A gate's view
+is local, so one view is a labelled move on one path and an unlabelled one on another: with one slope the two pushes
+balanced at the switch and kept about 5% of the labelled moves blocked on the ant's 4x4 labels."""
+
+OPEN_BAND = 3.0
+"""With ``binary_blocking``, how far below 0 an open gate's logit is still pushed further open by its labels. Below
+it only the push towards shut passes: otherwise the labels drove every open logit down without end (to about -18
+in 1,500 steps on the ant's 4x4 labels), moves into walls with them (the gates share their weights), and the wall
+moves, priced out by their learnt cost, were no longer pushed back up: only a quarter of the straight moves into a
+wall ended blocked. With the band, free moves settle just below it and moves into walls above 0."""
+
+LOGIT_FLOOR = 100.0
+"""With ``binary_blocking``, how far below its best move a move's Q reaches the logits (:class:`NextCellNetwork`):
+a move whose next cell the switches cut off from the goal is about ``-UNREACHED`` down, which made the trust's
+gradient swing by hundreds and held the trust near 0."""
+
+
+class BlockingSwitch(th.autograd.Function):
+    """The binary gate's cost (``binary_blocking``): :data:`BLOCKED_COST` where a logit is above 0, else 0.
+
+    A switch has no gradient; the backward pass is a surrogate's (straight through), that of a cost
+    :data:`SURROGATE_COST` times the logit, shaped so that the labels can block and reopen a move but not drift
+    it: on a blocked move :data:`REOPENING` times steeper; on an open move whose logit is :data:`OPEN_BAND` or
+    more below 0, only the part that pushes it towards blocked passes.
+    """
+
+    @staticmethod
+    def forward(ctx: Any, logits: th.Tensor) -> th.Tensor:
+        """``BLOCKED_COST * 1[logits > 0]``, the logits' shape."""
+        ctx.save_for_backward(logits)
+        return BLOCKED_COST * (logits > 0).to(logits.dtype)
+
+    @staticmethod
+    def backward(ctx: Any, grad: th.Tensor) -> th.Tensor:
+        """The surrogate's gradient with respect to the logits (a negative one raises a logit: blocks)."""
+        (logits,) = ctx.saved_tensors
+        surrogate = SURROGATE_COST * grad
+        open_side = th.where(logits > -OPEN_BAND, surrogate, surrogate.clamp(max=0.0))
+        return th.where(logits > 0, REOPENING * surrogate, open_side)
+
 
 def blocked_moves(walls: th.Tensor) -> th.Tensor:
     """``(B, 9, S, S)`` 1.0 where a move leads into a wall (or off the grid) or squeezes between two walls.
@@ -181,26 +234,48 @@ class CellValueIteration(nn.Module):
     into a wall (``docs/results/planning-learner.md``). Unlike ``block_walls``, nothing is ruled out before a
     label: the gate starts closed to nothing (:data:`BLOCKING_START`) and is learnt.
 
+    With ``binary_blocking`` too the gate is a switch: a move is open (no added cost) or blocked
+    (:data:`BLOCKED_COST` added) as its gate logit is at most or above 0, so a blocked move stays blocked on a map
+    of any size however short the training mazes' detours were. A switch has no gradient; the backward pass
+    uses a surrogate's (:class:`BlockingSwitch`, a straight-through estimator), at the agent's cell only (see
+    :meth:`forward`). Why: a
+    continuous gate (the sigmoid above) is still a cost, and the labels stop raising a cost as soon as it beats
+    the training mazes' detours (two looks in ``results/planning_learner/selection/``); a switch pushed across 0
+    is blocked for good. Every gate starts open (:data:`BINARY_BLOCKING_START`). A move once blocked gets no
+    gradient from the value iteration's maximum (it routes round it) except at the agent's own cell, where the
+    labels' cross-entropy reaches every move: so a labelled move wrongly blocked is reopened by its labels.
+
     Args:
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
         learnt_blocking: Add the learnt blocking gate.
+        binary_blocking: Make that gate a switch (open or blocked), learnt through a surrogate gradient.
 
     Raises:
-        ValueError: If ``iterations`` is below 1, or both ``block_walls`` and ``learnt_blocking`` are set.
+        ValueError: If ``iterations`` is below 1, both ``block_walls`` and ``learnt_blocking`` are set, or
+            ``binary_blocking`` is set without ``learnt_blocking``.
     """
 
     def __init__(
-        self, iterations: int, channels: int = 16, *, block_walls: bool = False, learnt_blocking: bool = False
+        self,
+        iterations: int,
+        channels: int = 16,
+        *,
+        block_walls: bool = False,
+        learnt_blocking: bool = False,
+        binary_blocking: bool = False,
     ) -> None:
         super().__init__()
         if iterations < 1:
             raise ValueError(f"iterations must be >= 1, got {iterations}")
         if block_walls and learnt_blocking:
             raise ValueError("block_walls and learnt_blocking exclude each other: walls are either given or learnt")
+        if binary_blocking and not learnt_blocking:
+            raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
         self.iterations = iterations
         self.block_walls = block_walls
+        self.binary_blocking = binary_blocking
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -216,7 +291,7 @@ class CellValueIteration(nn.Module):
                 nn.Sigmoid(),
             )
             with th.no_grad():
-                self.blocking[2].bias.fill_(BLOCKING_START)
+                self.blocking[2].bias.fill_(BINARY_BLOCKING_START if binary_blocking else BLOCKING_START)
 
     def blocking_logits(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9, S, S)`` logits of the learnt blocking gate (its ``b_a(s)`` is their sigmoid).
@@ -228,8 +303,25 @@ class CellValueIteration(nn.Module):
             raise ValueError("this planner has no learnt blocking gate (learnt_blocking=False)")
         return self.blocking[:-1](grids)  # all but the closing sigmoid
 
+    def blocking_cost(self, grids: th.Tensor) -> th.Tensor:
+        """``(B, 9, S, S)`` cost the learnt gate adds to each move: :data:`BLOCKED_COST` times its ``b_a(s)``.
+
+        With ``binary_blocking``, ``b_a(s)`` is 1 where the gate's logit is above 0, else 0, and the gradient a
+        surrogate's (:class:`BlockingSwitch`).
+
+        Raises:
+            ValueError: If the planner has no learnt gate.
+        """
+        logits = self.blocking_logits(grids)
+        if not self.binary_blocking:
+            return BLOCKED_COST * th.sigmoid(logits)  # the closing nn.Sigmoid's op: the same figures
+        return BlockingSwitch.apply(logits)
+
     def forward(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9)`` Q-values of the moves from the agent's cell."""
+        if self.binary_blocking:
+            q, centre_gate = self.q_and_centre_gate(grids)
+            return q - centre_gate
         return self.q_and_blocking_logits(grids)[0]
 
     def q_and_blocking_logits(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor | None]:
@@ -237,7 +329,12 @@ class CellValueIteration(nn.Module):
 
         The gate logits are ``None`` without a learnt gate. One pass of the gate's convolutions gives both, so a
         loss on both (``blocking_pressure``) runs them once.
+
+        Raises:
+            ValueError: For a switch (``binary_blocking``): its Q is :meth:`q_and_centre_gate`'s.
         """
+        if self.binary_blocking:
+            raise ValueError("a switch planner's Q comes from q_and_centre_gate (binary_blocking)")
         cost = self.cost(grids)
         if self.block_walls:
             cost = cost + BLOCKED_COST * blocked_moves((grids[:, 0] > 0.5).to(grids.dtype))
@@ -245,6 +342,30 @@ class CellValueIteration(nn.Module):
         if self.blocking is not None:
             gate_logits = self.blocking[:-1](grids)
             cost = cost + BLOCKED_COST * self.blocking[-1](gate_logits)  # the closing sigmoid, as self.blocking(grids)
+        centre = grids.shape[-1] // 2
+        return self._ahead(grids, cost) - cost[:, :, centre, centre], gate_logits
+
+    def q_and_centre_gate(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        """A switch planner's Q before the switch's cost at the agent's cell, and that ``(B, 9)`` cost.
+
+        Apart, so that a readout can scale the one and not the other (:class:`NextCellNetwork`).
+
+        Raises:
+            ValueError: Without ``binary_blocking``.
+        """
+        if not self.binary_blocking:
+            raise ValueError("q_and_centre_gate needs a switch planner (binary_blocking)")
+        cost = self.cost(grids)
+        centre = grids.shape[-1] // 2
+        centre_cost = cost[:, :, centre, centre]
+        gate = self.blocking_cost(grids)
+        # The switch learns at the agent's cell only (the same values either way): through the maximum every move of
+        # every competing path is pushed up, and those paths are longer, a drift that blocked most free moves within
+        # 250 steps on the ant's 4x4 labels.
+        return self._ahead(grids, cost + gate.detach()) - centre_cost, gate[:, :, centre, centre]
+
+    def _ahead(self, grids: th.Tensor, cost: th.Tensor) -> th.Tensor:
+        """``(B, 9)``: the value one move away of each move from the agent's cell, planned with ``cost``."""
         not_goal = (grids[:, 1] <= 0.5).to(grids.dtype)
         value = UNREACHED * not_goal
         size = grids.shape[-1]
@@ -253,8 +374,7 @@ class CellValueIteration(nn.Module):
             value = (shifted(value, size) - cost).amax(dim=1) * not_goal
         centre = size // 2
         # The last round only at the agent's cell: Q of each move is the value one move away less its cost.
-        ahead = th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
-        return ahead - cost[:, :, centre, centre], gate_logits
+        return th.stack([value[:, centre - dy, centre + dx] for dx, dy in NEXT_CELL_MOVES], dim=1)
 
 
 def shifted(value: th.Tensor, size: int, fill: float = UNREACHED) -> th.Tensor:
@@ -282,6 +402,7 @@ class NextCellNetwork(nn.Module):
         planning_iterations: Value-iteration rounds; 0: the CNN instead.
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
         learnt_blocking: The planner learns which moves are never made (:class:`CellValueIteration`).
+        binary_blocking: That learnt gate is a switch, open or blocked (:class:`CellValueIteration`).
         any_map: The planning learner whose weights act on any map: the logits are the planner's Q alone,
             times a learnt trust that starts at 0 (so the untrained learner has no preference among moves),
             with no correction from the feature vector (whose goal offset grows with the map beyond anything
@@ -289,7 +410,8 @@ class NextCellNetwork(nn.Module):
             seeds in ``results/planning_learner/``; a correction from local inputs only did worse on the screen too).
 
     Raises:
-        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning.
+        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning, or ``binary_blocking``
+            without ``learnt_blocking``.
     """
 
     def __init__(
@@ -303,6 +425,7 @@ class NextCellNetwork(nn.Module):
         block_walls: bool = False,
         any_map: bool = False,
         learnt_blocking: bool = False,
+        binary_blocking: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
@@ -314,7 +437,11 @@ class NextCellNetwork(nn.Module):
         self.head: nn.Module | None = None
         if planning_iterations > 0:
             self.planner: CellValueIteration | None = CellValueIteration(
-                planning_iterations, channels, block_walls=block_walls, learnt_blocking=learnt_blocking
+                planning_iterations,
+                channels,
+                block_walls=block_walls,
+                learnt_blocking=learnt_blocking,
+                binary_blocking=binary_blocking,
             )
             if any_map:
                 # How far the logits follow the planner, learnt from 0: untrained, every move is as likely (the
@@ -329,6 +456,24 @@ class NextCellNetwork(nn.Module):
             self.planner = None
             self.head = SubgoalNetwork(grid_size, vector_dim, moves, channels, hidden)
 
+    def switch_readout(self, grids: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        """The two parts of an ``any_map`` switch learner's logits: ``trust * relative - switch`` (:meth:`forward`).
+
+        ``relative``: the planner's Q less its best move's (the same softmax), floored at :data:`LOGIT_FLOOR` below
+        it, so the trust sees no cut-off cell's ``UNREACHED``; ``switch``: the switch's ``(B, 9)`` cost at the
+        agent's cell, not scaled by the trust, so a blocked move is out whatever the trust (it starts at 0) and
+        the switch learns at the labels' pace.
+
+        Raises:
+            ValueError: If this is not an ``any_map`` planner with ``binary_blocking``.
+        """
+        if self.trust is None or self.planner is None or not self.planner.binary_blocking:
+            raise ValueError("switch_readout needs an any_map planner with binary_blocking")
+        q, centre_gate = self.planner.q_and_centre_gate(grids)
+        assert centre_gate is not None
+        relative = q - q.max(dim=1, keepdim=True).values.detach()
+        return relative.clamp(min=-LOGIT_FLOOR), centre_gate
+
     def forward(self, grids: th.Tensor, vectors: th.Tensor) -> th.Tensor:
         """Logits ``(B, 9)`` over the next cell."""
         return self.logits_and_blocking_logits(grids, vectors)[0]
@@ -342,6 +487,9 @@ class NextCellNetwork(nn.Module):
         if self.planner is None:
             assert self.head is not None
             return self.head(grids, vectors)[0], None
+        if self.trust is not None and self.planner.binary_blocking:
+            relative, centre_gate = self.switch_readout(grids)
+            return self.trust * relative - centre_gate, None
         q, gate_logits = self.planner.q_and_blocking_logits(grids)
         if self.trust is not None:
             return self.trust * q, gate_logits

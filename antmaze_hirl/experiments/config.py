@@ -213,6 +213,15 @@ class ExperimentConfig(TrialSettings):
 PLANS = -1
 """Stands for ``rows + cols + 2`` value-iteration rounds on the trial's map (:func:`learner_settings`)."""
 
+_SWITCH: dict[str, Any] = {
+    "head": "next_cell",
+    "planning_iterations": PLANS,
+    "block_walls": False,
+    "any_map": True,
+    "learnt_blocking": True,
+    "binary_blocking": True,
+}
+
 LEARNERS: dict[str, dict[str, Any]] = {
     "heading_cnn": {"head": "heading", "planning_iterations": 0, "block_walls": False},
     "next_cell_cnn": {"head": "next_cell", "planning_iterations": 0, "block_walls": False},
@@ -234,6 +243,8 @@ LEARNERS: dict[str, dict[str, Any]] = {
         "learnt_blocking": True,
         "blocking_pressure": 0.1,
     },
+    "next_cell_switch": _SWITCH,
+    "next_cell_switch_flat": {**_SWITCH, "switch_flattening": 0.5},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
 body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
@@ -241,7 +252,9 @@ only the bird's-eye encoding; ``next_cell_vin`` reads the next cell out of value
 rules out the moves the walls block, which solves most mazes before any label. ``next_cell_plan`` is the planner
 whose weights act on any map; ``next_cell_gate`` adds a learnt gate that can price a move above any path
 (``LearnerSettings.learnt_blocking``); ``next_cell_gate_pressure`` also pushes that gate towards blocked on every
-move no label holds open (``LearnerSettings.blocking_pressure``)."""
+move no label holds open (``LearnerSettings.blocking_pressure``); ``next_cell_switch`` makes the gate a switch, each
+move open or blocked whatever the map's size (``LearnerSettings.binary_blocking``); ``next_cell_switch_flat`` lets
+the switch learn from a softmax twice as flat (``LearnerSettings.switch_flattening``)."""
 
 STRONG_PRIOR = "next_cell_vin_walls"
 """The learner that solves the held-out point mazes untrained (the point's default before protocol 2): a
