@@ -42,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out-dir", type=Path, default=None, help="default: the package's learners/ folder")
     parser.add_argument(
         "--learner",
-        choices=("next_cell_plan", "next_cell_gate", "next_cell_switch"),
+        choices=("next_cell_plan", "next_cell_gate", "next_cell_switch", "next_cell_switch_flat"),
         default=LEARNER,
         help="(default: %(default)s)",
     )
