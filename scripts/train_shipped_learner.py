@@ -8,7 +8,7 @@ fingerprint and the learner file's SHA-256). No evaluation maze is seen: score i
 ``antmaze-hirl benchmark SUITE --policy planner``.
 
 Usage: python scripts/train_shipped_learner.py --body ant [--labels 300] [--seed 0] [--out-dir DIR]
-           [--learner next_cell_gate|next_cell_switch]
+           [--learner next_cell_gate|next_cell_switch|next_cell_switch_flat]
 """
 
 from __future__ import annotations
