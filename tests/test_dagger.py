@@ -18,7 +18,14 @@ from antmaze_hirl.dagger import (
     evaluate_high_level,
 )
 from antmaze_hirl.dagger.agent import HierarchicalAgent
-from antmaze_hirl.dagger.features import ObservationEncoder, augment
+from antmaze_hirl.dagger.features import (
+    SYMMETRIES,
+    EncodedBatch,
+    ObservationEncoder,
+    augment,
+    transform_grids,
+    transform_planar,
+)
 from antmaze_hirl.dagger.strategies import StartQuery
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -145,6 +152,37 @@ def test_augmentation_keeps_grid_vector_and_label_consistent():
         np.testing.assert_allclose(vector[:2], [col - centre, centre - row], atol=1e-6)
         np.testing.assert_allclose(label, vector[:2], atol=1e-6)
     assert len({tuple(v[:2]) for v in augmented.vectors}) == 4  # the four diagonal directions all appear
+
+
+def augment_one_symmetry_at_a_time(batch, labels, rng, planar_feature_dim):
+    """augment as it was written before its one gather: a masked transform per symmetry of the square."""
+    grids, vectors, labels = batch.grids.copy(), batch.vectors.copy(), np.array(labels, dtype=np.float32)
+    choices = rng.integers(len(SYMMETRIES), size=len(batch))
+    for index, (k, flip) in enumerate(SYMMETRIES):
+        members = choices == index
+        if not members.any() or (k == 0 and not flip):
+            continue
+        grids[members] = transform_grids(grids[members], k, flip)
+        vectors[members, :planar_feature_dim] = transform_planar(vectors[members, :planar_feature_dim], k, flip)
+        labels[members] = transform_planar(labels[members], k, flip)
+    return EncodedBatch(grids, vectors), labels
+
+
+@pytest.mark.parametrize(("rows", "planar_feature_dim"), [(1, 4), (64, 4), (37, 6)])
+def test_augment_gives_the_per_symmetry_transforms_bit_for_bit(rows, planar_feature_dim):
+    # The learner's training batches depend on it: the same random draws must give the same batch to the bit.
+    rng = np.random.default_rng(rows)
+    batch = EncodedBatch(
+        rng.integers(0, 2, size=(rows, 2, 9, 9)).astype(np.float32)
+        * rng.normal(size=(rows, 2, 9, 9)).astype(np.float32),
+        rng.normal(size=(rows, 31)).astype(np.float32),
+    )
+    labels = rng.normal(size=(rows, 2)).astype(np.float32)
+    labels[0] = 0.0  # signed zeros must come out as the negations make them
+    mine, my_labels = augment(batch, labels, np.random.default_rng(7), planar_feature_dim=planar_feature_dim)
+    theirs, their_labels = augment_one_symmetry_at_a_time(batch, labels, np.random.default_rng(7), planar_feature_dim)
+    for new, old in ((mine.grids, theirs.grids), (mine.vectors, theirs.vectors), (my_labels, their_labels)):
+        assert new.dtype == old.dtype and new.tobytes() == old.tobytes()
 
 
 def test_blend_executes_the_beta_mix_and_counts_labels():

@@ -4,7 +4,9 @@ import json
 
 import numpy as np
 import pytest
+import torch as th
 from stable_baselines3 import TD3
+from stable_baselines3.td3.policies import Actor
 
 from antmaze_hirl.cli import main
 from antmaze_hirl.envs.reach import ReachEnv
@@ -135,6 +137,37 @@ def test_the_shipped_ant_is_stage_6_with_batched_heads():
     shipped = load_low_level("ant")
     assert isinstance(shipped.policy.actor.mu, BatchedMeanOfHeads) and shipped.policy.n_members == 7
     assert low_level_identity("ant", shipped) == "sha256:8ae38455d9435335"
+
+
+def reference_heads(mu, features):
+    """BatchedMeanOfHeads' mean as it was computed before its loop looked the layers up once per call."""
+    hidden = features.unsqueeze(0).expand(mu.n_heads, *features.shape)
+    linear = 0
+    for name in mu.order:
+        if name in mu.activations:
+            hidden = mu.activations[name](hidden)
+        else:
+            hidden = th.baddbmm(mu.biases[linear].unsqueeze(1), hidden, mu.weights[linear].transpose(1, 2))
+            linear += 1
+    return hidden.mean(dim=0)
+
+
+def test_the_shipped_ants_actor_acts_as_sb3s_actor_bit_for_bit():
+    # EnsembleActor.forward skips SB3's preprocess_obs (only .float() for these spaces) and BatchedMeanOfHeads
+    # looks its layers up once per call: the same torch calls, so the same actions to the last bit, for
+    # every batch size (a batched product rounds by its size, so each size is its own case).
+    actor = load_low_level("ant").policy.actor
+    assert actor.float_only_observations
+    rng = np.random.default_rng(0)
+    with th.no_grad():
+        for rows in range(1, 26):
+            obs = {
+                key: th.as_tensor(rng.normal(size=(rows, *space.shape)) * 3)
+                for key, space in actor.observation_space.spaces.items()
+            }
+            assert actor(obs).equal(Actor.forward(actor, obs))
+            features = actor.features_extractor({key: value.float() for key, value in obs.items()})
+            assert actor.mu(features).equal(reference_heads(actor.mu, features))
 
 
 def test_bad_members_are_refused_with_the_member_named(tmp_path, members):

@@ -26,3 +26,12 @@ def test_the_ant_step_is_ant_v5s_step_bit_for_bit(contact_forces):
 def test_an_action_of_the_wrong_size_is_still_refused():
     with pytest.raises(ValueError, match="Action dimension mismatch"):
         MazeSimulator("ant", WALLS).step(np.zeros(3))
+
+
+def test_posture_is_is_flipped_and_uprightness_read_together():
+    simulator = MazeSimulator("ant", WALLS)
+    simulator.reset(np.array([-4.0, -4.0]), 0)
+    for action in np.random.default_rng(1).uniform(-1.0, 1.0, (50, 8)):
+        simulator.step(action)
+        assert simulator.posture() == (simulator.is_flipped, simulator.uprightness)
+    assert MazeSimulator("point", WALLS).posture() == (False, 1.0)

@@ -32,6 +32,7 @@ from antmaze_hirl.dagger.network import (
     next_cell_classes,
     offsets_from_outputs,
 )
+from antmaze_hirl.dagger.optim import ZeroSafeAdam
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.profiles import BODY_PROFILES
 from antmaze_hirl.envs.protocol import maze_env
@@ -335,7 +336,8 @@ class HighLevelPolicy:
                 )
         # foreach: one kernel per update op over all tensors instead of a loop of small ones; the same
         # elementwise math, so the same weights bit for bit (benchmarks/trial_speed.py checks a trial's outcomes).
-        self.optimizer = th.optim.Adam(self.network.parameters(), lr=settings.learning_rate, foreach=True)
+        # ZeroSafeAdam is that step without torch's slow root of exact zeros, again the same weights bit for bit.
+        self.optimizer = ZeroSafeAdam(self.network.parameters(), lr=settings.learning_rate, foreach=True)
         self.gradient_steps = 0
         self.cache = EncodingCache()
 

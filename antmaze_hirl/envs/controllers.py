@@ -141,9 +141,12 @@ class PredictController:
             policy.set_training_mode(False)
         torch = sys.modules["torch"]
         spaces = policy.observation_space.spaces
+        # SB3's device property walks the policy's modules to its first parameter: read once per call, not once
+        # per key (the same tensors, so the same actions bit for bit).
+        device = policy.device
         with torch.no_grad():
             tensors = {
-                key: torch.as_tensor(np.array(value).reshape((-1, *spaces[key].shape)), device=policy.device)
+                key: torch.as_tensor(np.array(value).reshape((-1, *spaces[key].shape)), device=device)
                 for key, value in observations.items()
             }
             actions = policy._predict(tensors, deterministic=self.deterministic)
