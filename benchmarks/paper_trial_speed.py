@@ -233,7 +233,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "same_training": [row["labels"] for row in rows].count(serial["labels"]) == 2,
         "maze_plays_same_success": sum(a["success"] == b["success"] for a, b in pairs),
         "maze_plays": len(pairs),
-        # Issue 52's goal: an ant trial in <= 5 CPU-minutes (an earlier issue asked 3).
+        # The paper question's goal: an ant trial in <= 5 CPU-minutes (an earlier goal was 3).
         "goal_full_trial_s": 300,
     }
     print(
