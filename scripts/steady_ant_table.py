@@ -184,7 +184,9 @@ def eval_low_file(path: Path) -> dict[str, Any]:
     """One ``eval-low`` JSON file.
 
     Raises:
-        ValueError: If it is not JSON or lacks a field of :data:`EVAL_LOW_KEYS` (naming the file).
+        ValueError: If it is not JSON, lacks a field of :data:`EVAL_LOW_KEYS`, or holds a field of the wrong
+            type or range (``episodes`` an integer >= 1, ``success_rate`` in [0, 1], ``seed`` an integer), naming
+            the file.
     """
     try:
         data = json.loads(Path(path).read_text())
@@ -193,6 +195,13 @@ def eval_low_file(path: Path) -> dict[str, Any]:
     missing = [key for key in EVAL_LOW_KEYS if not isinstance(data, dict) or key not in data]
     if missing:
         raise ValueError(f"{path} has no {missing[0]!r}: not an antmaze-hirl eval-low file")
+    episodes, rate = data["episodes"], data["success_rate"]
+    if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+        raise ValueError(f"{path}: episodes must be an integer >= 1, got {episodes!r}")
+    if isinstance(rate, bool) or not isinstance(rate, int | float) or not 0 <= rate <= 1:
+        raise ValueError(f"{path}: success_rate must be a number in [0, 1], got {rate!r}")
+    if "seed" in data and (isinstance(data["seed"], bool) or not isinstance(data["seed"], int)):
+        raise ValueError(f"{path}: seed must be an integer, got {data['seed']!r}")
     return data
 
 

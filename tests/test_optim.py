@@ -36,7 +36,19 @@ def same_bits(a, b):
 @pytest.mark.parametrize("options", [{}, {"weight_decay": 0.01}])
 def test_the_weights_and_moments_are_torchs_bit_for_bit(options):
     # Weight decay is not reproduced: that case must run torch's own step, and so agree as well.
-    mine, my_optimizer = train(ZeroSafeAdam, 150, **options)
+    lean_steps = []
+    original = ZeroSafeAdam._lean_step
+
+    def counted(*args, **kwargs):
+        lean_steps.append(1)
+        return original(*args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(ZeroSafeAdam, "_lean_step", staticmethod(counted))
+        mine, my_optimizer = train(ZeroSafeAdam, 150, **options)
+    # Without weight decay the lean step must have run (else the test would only compare torch with torch);
+    # with it, torch's own step runs every time.
+    assert (len(lean_steps) > 100) if not options else not lean_steps, len(lean_steps)
     theirs, their_optimizer = train(th.optim.Adam, 150, **options)
     for (name, a), b in zip(mine.named_parameters(), theirs.parameters(), strict=True):
         assert same_bits(a.detach(), b.detach()), name

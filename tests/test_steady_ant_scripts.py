@@ -172,3 +172,21 @@ def test_eval_low_sets_read_the_seed_and_radius_the_files_record(tmp_path, capsy
     assert err.count("\n") == 1 and err.startswith("steady_ant_table.py: error: ") and "not the typed 0" in err
     assert table.main(["--eval-low", "200", *pair[1:], "--out", str(out)]) == 0
     assert "note" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"episodes": 0}, "episodes must be an integer >= 1, got 0"),
+        ({"episodes": 200.0}, "episodes must be an integer >= 1, got 200.0"),
+        ({"success_rate": "0.9"}, "success_rate must be a number in [0, 1], got '0.9'"),
+        ({"success_rate": 1.5}, "success_rate must be a number in [0, 1], got 1.5"),
+        ({"seed": "0"}, "seed must be an integer, got '0'"),
+    ],
+)
+def test_an_eval_low_file_with_a_field_of_the_wrong_type_is_refused_naming_it(tmp_path, capsys, fields, message):
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps({"success_rate": 0.9, "episodes": 200, "seed": 0, **fields}))
+    with pytest.raises(ValueError) as refused:
+        table.eval_low_file(path)
+    assert str(refused.value) == f"{path}: {message}"
