@@ -128,7 +128,7 @@ GUIDE_FIGURES = {
     "at N = 4, 126 steps/s at 1 thread against 164 at 2): the goal of no thread setting below 0.50x of the best holds",
     "lockstep-paths": "| `eval-low` | point | 200 | 200 | 200 | 200 / 200 | 0.67x (slower) |",
     "high-level-ppo": "| `antmaze_hirl/PointMaze-v0` | 256 | 12.89 | 49.13 | 8 | 3.81x |",
-    "paper-trial-speed": "The goal of <= 3 min per ant trial is **missed** (CPU, scaled: 19.8 min serial, 11.4 min",
+    "paper-trial-speed": "The goal of <= 5 min per ant trial is **missed** (CPU, scaled: 14.2 min serial, 9.8 min",
     "ensemble-speed": "| 7 | 851 us | 523 us | 1.63x (>= 1.5x: met) | 1.33x |",
     "untrained-learners": "| 0/30 and 2/30; 1/30 and 0/30 | 0/10, 0/10 | 2/30: 21.3% | 0/10: 27.8% | yes, yes |",
     "learner-selection": "| ant | `next_cell_cnn` | 1 of 100: 1% [0.2, 5.4] | 39 and 36 | 0.75 | 278 |",
