@@ -131,10 +131,8 @@ class MazeSimulator:
 
     def posture(self) -> tuple[bool, float]:
         """``(is_flipped, uprightness)`` (:attr:`is_flipped`, :attr:`uprightness`), the quaternion read once."""
-        if self.body != "ant":
-            return False, 1.0
-        upright = self.uprightness
-        return bool(upright < 0 or self.torso_height < 0.2), upright
+        upright = self.uprightness  # the point body's 1.0 comes from here too
+        return self.body == "ant" and bool(upright < 0 or self.torso_height < 0.2), upright
 
     def close(self) -> None:
         """Frees the MuJoCo renderer, if one was opened."""
