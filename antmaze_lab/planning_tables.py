@@ -53,7 +53,10 @@ def _success_cell(parts: list[dict[str, Any]]) -> str:
 
 
 def screen_table(data: dict[str, Any]) -> str:
-    """One row per variant: median (range) over seeds of each grid-level success (one seed: :func:`_success_cell`)."""
+    """One row per variant: median (range) over seeds of each grid-level success (one seed: :func:`_success_cell`).
+
+    A table holding both kinds of row ends with a note saying which statistic each kind shows.
+    """
     by_variant: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for row in data["rows"]:
         by_variant[row["variant"]].append(row)
@@ -80,6 +83,14 @@ def screen_table(data: dict[str, Any]) -> str:
             parts = [r[name] for r in rows if "success" in r.get(name, {})]
             cells.append(_success_cell(parts) if parts else "cannot act on the map")
         lines.append("| " + " | ".join(cells) + " |")
+    seeds_per_variant = {len(rows) for rows in by_variant.values()}
+    if 1 in seeds_per_variant and len(seeds_per_variant) > 1:  # two statistics share the columns: say which is which
+        lines += [
+            "",
+            "One-seed rows give that seed's tasks solved with a Wilson 95% interval; rows of several seeds give the "
+            "median (range) of success over seeds. The two are different statistics: compare a row with a row of "
+            "its own kind.",
+        ]
     return "\n".join(lines)
 
 

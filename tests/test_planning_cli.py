@@ -170,10 +170,15 @@ def test_the_screen_table_gives_one_seeds_rates_with_their_interval_and_several_
     screen["rows"].append(row("b", 1, 0.7))
     status, out, _ = tables(tmp_path, capsys, "screen", screen)
     assert status == 0
-    a, b = out.splitlines()[2:]
+    a, b, blank, note = out.splitlines()[2:]
     # One seed: a range of one value says nothing; 90 of 100 tasks has a Wilson interval of 83-94%.
     assert a == "| `a` | 0 | 300 | 0/100 (0%) [0, 4] | 90/100 (90%) [83, 94] | 80/100 (80%) [71, 87] |"
     assert b == "| `b` | 0,1 | 300 | 0% (0-0) | 60% (50-70) | 50% (40-60) |"
+    # Both kinds in one column: the table says which statistic each kind of row shows.
+    assert blank == "" and note.startswith("One-seed rows give that seed's tasks solved with a Wilson 95% interval")
+    screen["rows"].remove(row("a", 0, 0.9))
+    status, out, _ = tables(tmp_path, capsys, "screen", screen)
+    assert status == 0 and len(out.splitlines()) == 3  # one kind of row: no note
 
 
 def test_a_planning_table_refuses_a_file_it_does_not_read_in_one_line(tmp_path, capsys):
