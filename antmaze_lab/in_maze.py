@@ -71,6 +71,7 @@ from antmaze_lab.in_maze_protocol import (
     run,
     worker_low_level,
 )
+from antmaze_lab.tables import lab_parser
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "in_maze"
 
@@ -91,9 +92,7 @@ def table(results: dict[str, Any]) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.in_maze", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = lab_parser("antmaze_lab.in_maze", __doc__)
     parser.add_argument("--episodes", type=int, default=100, help="held-out mazes (episodes) per family")
     parser.add_argument("--families", default=",".join(FAMILIES), help=f"comma-separated subset of {FAMILIES}")
     parser.add_argument(
