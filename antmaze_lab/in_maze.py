@@ -71,7 +71,7 @@ from antmaze_lab.in_maze_protocol import (
     run,
     worker_low_level,
 )
-from antmaze_lab.tables import lab_parser
+from antmaze_lab.tables import lab_parser, refuse_below_one
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "in_maze"
 
@@ -139,9 +139,7 @@ def main() -> None:
         row_names([None, *(args.low_level or [])], tuple(smoothing))
     except ValueError as error:
         parser.error(str(error))
-    for name in ("episodes", "jobs", "chunk_episodes", "num_envs"):
-        if getattr(args, name) < 1:
-            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    refuse_below_one(parser, args, ("episodes", "jobs", "chunk_episodes", "num_envs"))
     if args.subgoal_reach_m is not None and not args.subgoal_reach_m > 0:
         parser.error(f"--subgoal-reach-m must be > 0 metres, got {args.subgoal_reach_m}")
     torch.set_num_threads(1)
