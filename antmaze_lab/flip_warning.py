@@ -46,6 +46,7 @@ from antmaze_hirl.experts import PathOracle
 from antmaze_hirl.rollout import play_episode
 from antmaze_lab.commands import recorded_command
 from antmaze_lab.in_maze_protocol import OUTCOMES, chunks_of, family_env, map_tasks, outcome, worker_low_level
+from antmaze_lab.tables import lab_parser
 
 FAMILY = "select6"
 QUATERNION = slice(1, 5)
@@ -189,11 +190,7 @@ def reflex_row(outcomes: list[str], acted: int, steps: int) -> dict[str, Any]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.flip_warning",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.flip_warning", __doc__)
     parser.add_argument("--mazes", type=int, default=100, help="select6 mazes (episodes) per row")
     parser.add_argument("--low-level", type=Path, default=None, help="policy .zip (default: the shipped ant)")
     parser.add_argument("--thresholds", default="0.8,0.7,0.6,0.5", help="uprightness thresholds of the warning")

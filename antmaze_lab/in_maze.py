@@ -71,6 +71,7 @@ from antmaze_lab.in_maze_protocol import (
     run,
     worker_low_level,
 )
+from antmaze_lab.tables import lab_parser, refuse_below_one
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "in_maze"
 
@@ -91,9 +92,7 @@ def table(results: dict[str, Any]) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.in_maze", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    parser = lab_parser("antmaze_lab.in_maze", __doc__)
     parser.add_argument("--episodes", type=int, default=100, help="held-out mazes (episodes) per family")
     parser.add_argument("--families", default=",".join(FAMILIES), help=f"comma-separated subset of {FAMILIES}")
     parser.add_argument(
@@ -140,9 +139,7 @@ def main() -> None:
         row_names([None, *(args.low_level or [])], tuple(smoothing))
     except ValueError as error:
         parser.error(str(error))
-    for name in ("episodes", "jobs", "chunk_episodes", "num_envs"):
-        if getattr(args, name) < 1:
-            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    refuse_below_one(parser, args, ("episodes", "jobs", "chunk_episodes", "num_envs"))
     if args.subgoal_reach_m is not None and not args.subgoal_reach_m > 0:
         parser.error(f"--subgoal-reach-m must be > 0 metres, got {args.subgoal_reach_m}")
     torch.set_num_threads(1)

@@ -44,6 +44,7 @@ from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_hirl.sb3_ext.shipped import load_shipped_policy
 from antmaze_lab import in_maze_protocol as in_maze
 from antmaze_lab.commands import recorded_command
+from antmaze_lab.tables import lab_parser, refuse_below_one
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "lockstep_paths" / "lockstep_paths.json"
 
@@ -128,11 +129,7 @@ def eval_low_rows(subgoals: int, num_envs: int = 25) -> list[dict]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.lockstep_paths",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.lockstep_paths", __doc__)
     parser.add_argument("--families", default="ant3,u", help="in_maze families, comma-separated")
     parser.add_argument("--mazes", type=int, default=50, help="in_maze mazes per family")
     parser.add_argument("--demo-seeds", type=int, default=20, help="demo seeds per body")
@@ -150,9 +147,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         families = in_maze.parse_families(args.families)
     except ValueError as error:
         parser.error(str(error))
-    for name in ("mazes", "demo_seeds", "subgoals"):
-        if getattr(args, name) < 1:
-            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+    refuse_below_one(parser, args, ("mazes", "demo_seeds", "subgoals"))
     torch.set_num_threads(1)
     for body in ("ant", "point"):  # loaded once and cached, before any timing: no path pays for it
         load_shipped_policy(body)

@@ -62,6 +62,7 @@ from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_lab.commands import recorded_command
 from antmaze_lab.in_maze_protocol import parse_families
 from antmaze_lab.in_maze_protocol import run as in_maze_run
+from antmaze_lab.tables import lab_parser, refuse_below_one
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "results" / "low_level"
@@ -317,11 +318,7 @@ def compare_algorithms(args: argparse.Namespace) -> dict[str, Any]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.low_level",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.low_level", __doc__)
     parser.add_argument("--steps", type=int, default=6000, help="training steps per block and side")
     parser.add_argument("--blocks", type=int, default=4)
     parser.add_argument("--episodes", type=int, default=200, help="eval-low subgoals per set")
@@ -345,9 +342,7 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(1)
     if args.algorithms is not None:
-        for name in ("budget", "chunk", "episodes", "curve_episodes", "maze_episodes"):
-            if getattr(args, name) < 1:
-                parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(args, name)}")
+        refuse_below_one(parser, args, ("budget", "chunk", "episodes", "curve_episodes", "maze_episodes"))
         try:
             result = compare_algorithms(args)
         except (ValueError, CheckpointError) as error:  # a run folder of other settings included

@@ -56,6 +56,7 @@ from antmaze_hirl.sb3_ext.loading import load_low_level
 from antmaze_lab.commands import recorded_command
 from antmaze_lab.in_maze_protocol import map_tasks, parse_smoothing, row_name, row_names
 from antmaze_lab.in_maze_protocol import run as play_families
+from antmaze_lab.tables import lab_parser, refuse_below_one
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "select_low_level"
 SELECTION_MAZE_SEED = SEEDS.low_level_selection_mazes
@@ -127,11 +128,7 @@ def score_rows(
 
 def build_parser() -> argparse.ArgumentParser:
     """The command line's parser (``scripts/results_index.py --check`` parses recorded options with it)."""
-    parser = argparse.ArgumentParser(
-        prog="python -m antmaze_lab.select_low_level",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    parser = lab_parser("antmaze_lab.select_low_level", __doc__)
     parser.add_argument("runs", nargs="+", type=Path, help="train-low run folders or policy .zip files")
     first_seed = SEEDS.low_level_selection_subgoals
     parser.add_argument("--seed", type=int, default=first_seed, help="first subgoal seed of the selection eval-low")
@@ -166,9 +163,7 @@ def main() -> None:
         families = selection_families(held_out_layouts=args.held_out_layouts, large_mazes=args.large_mazes)
     except ValueError as error:
         parser.error(str(error))
-    for name in ("episodes", "mazes", "jobs"):
-        if getattr(args, name) < 1:
-            parser.error(f"--{name} must be >= 1, got {getattr(args, name)}")
+    refuse_below_one(parser, args, ("episodes", "mazes", "jobs"))
     chosen = range(args.seed, args.seed + args.episodes)
     for reserved in RESERVED_SUBGOAL_SEEDS:
         if chosen.start < reserved.stop and reserved.start < chosen.stop:

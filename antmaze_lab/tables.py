@@ -179,6 +179,18 @@ def lab_parser(module: str, doc: str | None) -> argparse.ArgumentParser:
     )
 
 
+def refuse_below_one(parser: argparse.ArgumentParser, args: argparse.Namespace, names: Sequence[str]) -> None:
+    """Exits through ``parser.error`` (one line, status 2) at the first of the options ``names`` below 1.
+
+    ``names`` are the options' dests, in the order they are checked; the message spells the option as typed:
+    ``--chunk-episodes must be >= 1, got 0``.
+    """
+    for name in names:
+        value = getattr(args, name)
+        if value < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {value}")
+
+
 class Sections(dict[str, Callable[[], str]]):
     """A page module's section builders by the name its command takes, and that command.
 

@@ -51,6 +51,7 @@ from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env, make_trainer
 from antmaze_hirl.experts.oracle import PathOracle
+from antmaze_hirl.rollout import play_episode
 
 RESULTS = Path(__file__).resolve().parents[1] / "results" / "alg2_signal"
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}
@@ -61,15 +62,18 @@ SCORES = {"noise_old": NoiseQuery(symmetries=False, measure="variance"), "noise"
 
 
 def oracle_states(env, oracle, episodes: int, seed: int) -> list[dict]:
-    """Every observation of the oracle's episodes on ``env`` from seeds ``seed, seed + 1, ...``."""
+    """Every observation of the oracle's episodes on ``env`` from seeds ``seed, seed + 1, ...``.
+
+    The states the oracle is asked about: each episode's observations but its last (the one after the end).
+    """
     states = []
+
+    def recorded_oracle(observation: dict) -> np.ndarray:
+        states.append(observation)
+        return oracle(observation)
+
     for episode in range(episodes):
-        observation, _ = env.reset(seed=seed + episode)
-        done = False
-        while not done:
-            states.append(observation)
-            observation, _, terminated, truncated, _ = env.step(oracle(observation))
-            done = terminated or truncated
+        play_episode(env, recorded_oracle, seed=seed + episode)
     return states
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -104,21 +105,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if min(args.maze_sizes) < 2:
             raise ValueError(f"--maze-sizes must be >= 2, got {args.maze_sizes}")
-        settings = DistillSettings(
-            iterations=args.iterations,
-            steps_per_iteration=args.steps_per_iteration,
-            beta_decay=args.beta_decay,
-            action_noise_std=args.action_noise_std,
-            gradient_steps=args.gradient_steps,
-            batch_size=args.batch_size,
-            learning_rate=args.learning_rate,
-            max_rows=args.max_rows,
-            flip_window=args.flip_window,
-            flip_weight=args.flip_weight,
-            init_head=args.init_head if args.init_head >= 0 else None,
-            snapshot_every=args.snapshot_every,
-            seed=args.seed,
-        )
+        # Every DistillSettings field but beta0 is an option of the same name; --init-head -1 is a fresh actor.
+        given = {spec.name: getattr(args, spec.name) for spec in fields(DistillSettings) if spec.name in vars(args)}
+        settings = DistillSettings(**{**given, "init_head": args.init_head if args.init_head >= 0 else None})
         teacher = args.teacher if args.teacher is not None else shipped_policy_path("ant")
         subgoal_reach_m = float(BODY_PROFILES["ant"].subgoal_reach_m or 4.0)
         description = {

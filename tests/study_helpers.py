@@ -97,12 +97,17 @@ def play_to_episode_end(session) -> None:
         click_once(session)
 
 
+def play_one_episode(session) -> None:
+    """:func:`play_to_episode_end`, then closes the maze (``next_episode``)."""
+    play_to_episode_end(session)
+    session.next_episode()
+
+
 def play_trial(session) -> None:
     """Plays mazes until the trial closes (its questionnaire, or the next trial's intro after a practice)."""
     trial = session.trial_index
     while session.trial_index == trial and session.phase in ("intro", "label", "episode_over"):
-        play_to_episode_end(session)
-        session.next_episode()
+        play_one_episode(session)
 
 
 class ClosingDisk:

@@ -5,7 +5,7 @@ import time
 
 import pytest
 import torch
-from study_helpers import ClosingDisk, make_tiny_study, open_session, play_to_episode_end, play_trial
+from study_helpers import ClosingDisk, make_tiny_study, open_session, play_one_episode, play_to_episode_end, play_trial
 
 from antmaze_hirl.dagger import DAggerTrainer
 from antmaze_hirl.dagger.high_level_policy import HighLevelPolicy
@@ -79,8 +79,7 @@ def test_every_maze_records_its_learner_and_evaluations_land_on_the_schedule(tmp
 def test_a_restart_while_an_update_runs_finishes_it_and_loses_no_maze(tmp_path):
     folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=3, practice=0, background_updates=True)
     session = open_session(folder)
-    play_to_episode_end(session)
-    session.next_episode()  # maze 1 saved with its update still due; maze 2 is open
+    play_one_episode(session)  # maze 1 saved with its update still due; maze 2 is open
     session.close()  # a stop: the running update ends unused
     assert not (folder / "participants" / "P01" / "episodes.csv").exists()  # its row waits for the update
     restarted = open_session(folder)
@@ -112,8 +111,7 @@ def play_to_the_last_maze(session):
     """Plays every maze but the last (each update done before the next maze ends, as for a person)."""
     episodes = session.trial.episodes
     for _ in range(episodes - 1):
-        play_to_episode_end(session)
-        session.next_episode()
+        play_one_episode(session)
         for job in session._updates.pending():
             job.wait()
     play_to_episode_end(session)

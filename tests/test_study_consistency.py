@@ -15,6 +15,7 @@ from study_helpers import (
     fresh_copy,
     make_tiny_study,
     open_session,
+    play_one_episode,
     play_to_episode_end,
     play_trial,
     snapshot,
@@ -55,8 +56,7 @@ def in_trial_two_template(tmp_path_factory):
     session = open_session(folder)
     play_trial(session)
     session.submit_questionnaire(1, ANSWERS)
-    play_to_episode_end(session)
-    session.next_episode()
+    play_one_episode(session)
     session.close()
     return folder
 

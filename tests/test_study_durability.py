@@ -10,7 +10,7 @@ import httpx
 import numpy as np
 import pandas as pd
 import pytest
-from study_helpers import click_once, fresh_copy, make_tiny_study, open_session
+from study_helpers import fresh_copy, make_tiny_study, open_session, play_one_episode
 
 from antmaze_hirl.study.checkpoint import load_checkpoint, save_checkpoint
 from antmaze_hirl.study.data import CLICK_COLUMNS, EPISODE_COLUMNS, load_clicks, load_episodes
@@ -25,15 +25,6 @@ TOKEN = "durability-token-0123456789"
 
 def events_of(participant):
     return [record for _, record in read_json_records(participant / "events.jsonl")]
-
-
-def play_one_episode(session):
-    """Start (if at the intro), click to the end of one episode and close it."""
-    if session.phase == "intro":
-        session.start_trial()
-    while session.phase == "label":
-        click_once(session)
-    session.next_episode()
 
 
 @pytest.fixture(scope="module")

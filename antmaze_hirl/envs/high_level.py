@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 
+from antmaze_hirl.envs._constructor_args import record_constructor_arguments
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import as_controller, reset_controller
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -184,32 +185,13 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         render_mode: str | None = None,
         render_view: str = "schematic",
     ) -> None:
+        record_constructor_arguments(self, locals())  # first: locals() holds only the parameters
         if low_level is None:
             raise ValueError(
                 f"HighLevelMazeEnv needs a low-level controller: pass low_level=<SB3 model or callable obs -> "
                 f"action>, or make it with gym.make('{maze_env_id(str(body))}') to use the "
                 f"shipped policy"
             )
-        EzPickle.__init__(
-            self,
-            body,
-            maze_map,
-            maze_size=maze_size,
-            wall_fraction=wall_fraction,
-            min_goal_cells=min_goal_cells,
-            low_level=low_level,
-            horizon=horizon,
-            max_steps=max_steps,
-            success_radius_m=success_radius_m,
-            position_noise_cells=position_noise_cells,
-            pixels_per_cell=pixels_per_cell,
-            clip_subgoals=clip_subgoals,
-            min_subgoal_distance_m=min_subgoal_distance_m,
-            terminate_on_flip=terminate_on_flip,
-            reach_kwargs=reach_kwargs,
-            render_mode=render_mode,
-            render_view=render_view,
-        )
         spec = body_spec(body)
         if max_steps < 1:
             raise ValueError(f"max_steps must be >= 1, got {max_steps}")

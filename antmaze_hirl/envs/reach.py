@@ -11,6 +11,7 @@ from gymnasium import spaces
 from gymnasium.utils.ezpickle import EzPickle
 from gymnasium_robotics.core import GoalEnv
 
+from antmaze_hirl.envs._constructor_args import record_constructor_arguments
 from antmaze_hirl.envs.birdseye import BirdseyeRenderer
 from antmaze_hirl.envs.controllers import ActionSmoother
 from antmaze_hirl.envs.geometry import MazeGeometry
@@ -191,29 +192,7 @@ class ReachEnv(GoalEnv, EzPickle):
         tilt_penalty: float = 0.0,
         upright_threshold: float = 0.8,
     ) -> None:
-        EzPickle.__init__(
-            self,
-            body,
-            maze_map,
-            horizon=horizon,
-            sample_radius_m=sample_radius_m,
-            min_sample_radius_m=min_sample_radius_m,
-            success_radius_m=success_radius_m,
-            reward_type=reward_type,
-            action_scale=action_scale,
-            terminate_on_flip=terminate_on_flip,
-            chain_probability=chain_probability,
-            include_contact_forces=include_contact_forces,
-            render_mode=render_mode,
-            maze_probability=maze_probability,
-            maze_sizes=maze_sizes,
-            maze_wall_fraction=maze_wall_fraction,
-            maze_split=maze_split,
-            flip_penalty=flip_penalty,
-            action_smoothing=action_smoothing,
-            tilt_penalty=tilt_penalty,
-            upright_threshold=upright_threshold,
-        )
+        record_constructor_arguments(self, locals())  # first: locals() holds only the parameters
         spec = body_spec(body)
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)

@@ -62,6 +62,24 @@ def policy_kwargs(config: LowLevelConfig) -> dict[str, Any]:
     return kwargs
 
 
+SHARED_SB3_KEYS: tuple[str, ...] = (
+    "learning_rate",
+    "buffer_size",
+    "batch_size",
+    "gamma",
+    "tau",
+    "learning_starts",
+    "train_freq",
+    "gradient_steps",
+)
+"""The :class:`LowLevelConfig` fields that every SB3 off-policy algorithm takes under the same name, as they are."""
+
+
+def shared_kwargs(config: LowLevelConfig) -> dict[str, Any]:
+    """The constructor keywords every algorithm takes from ``config``: its :data:`SHARED_SB3_KEYS` fields by name."""
+    return {key: getattr(config, key) for key in SHARED_SB3_KEYS}
+
+
 def algo_kwargs(config: LowLevelConfig, n_actions: int) -> dict[str, Any]:
     """The constructor keywords only ``config.algo``'s family takes: exploration noise or entropy settings.
 
@@ -103,14 +121,7 @@ def make_model(
         # action_l2 > 0 only for TD3/DDPG (the config refuses it for the others): the penalty lives in TD3's critic.
         ActionPenaltyPolicy if config.action_l2 > 0 else "MultiInputPolicy",
         env,
-        learning_rate=config.learning_rate,
-        buffer_size=config.buffer_size,
-        batch_size=config.batch_size,
-        gamma=config.gamma,
-        tau=config.tau,
-        learning_starts=config.learning_starts,
-        train_freq=config.train_freq,
-        gradient_steps=config.gradient_steps,
+        **shared_kwargs(config),
         **algo_kwargs(config, env.action_space.shape[0]),
         replay_buffer_class=HerReplayBuffer,
         replay_buffer_kwargs={

@@ -383,10 +383,16 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
     async def state(participant_id: str) -> Any:
         return await run_in_threadpool((await session_of(participant_id)).state)
 
-    @app.post("/api/participants/{participant_id}/start")
-    async def start(participant_id: str, request: Request) -> Any:
-        await body_of(request, "start")
-        return await run_in_threadpool((await session_of(participant_id)).start_trial)
+    def session_action(route: str, method: str) -> None:
+        # POST .../{route}: an empty body (checked all the same), then the session's method with no arguments.
+        async def act(participant_id: str, request: Request) -> Any:
+            await body_of(request, route)
+            return await run_in_threadpool(getattr(await session_of(participant_id), method))
+
+        app.post(f"/api/participants/{{participant_id}}/{route}", name=method)(act)
+
+    for route, method in (("start", "start_trial"), ("next", "next_episode")):
+        session_action(route, method)
 
     @app.post("/api/participants/{participant_id}/label")
     async def label(participant_id: str, request: Request) -> Any:
@@ -395,11 +401,6 @@ def create_app(study: Study, *, token: str, allowed_hosts: Sequence[str] = LOOPB
         return await run_in_threadpool(
             session.label, payload.get("query"), payload.get("x"), payload.get("y"), payload.get("response_seconds")
         )
-
-    @app.post("/api/participants/{participant_id}/next")
-    async def next_episode(participant_id: str, request: Request) -> Any:
-        await body_of(request, "next")
-        return await run_in_threadpool((await session_of(participant_id)).next_episode)
 
     @app.post("/api/participants/{participant_id}/questionnaire")
     async def answers(participant_id: str, request: Request) -> Any:
