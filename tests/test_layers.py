@@ -17,10 +17,12 @@ PACKAGE = ROOT / "antmaze_hirl"
 LAYERS = (
     ("_lazy", "atomic_io", "cli_validation"),
     ("envs",),
-    ("experts", "sb3_ext", "rollout"),
+    # Playing episodes needs only the envs; its own layer lets every layer above play through it.
+    ("rollout",),
+    ("experts", "sb3_ext"),
     ("plotting", "registration"),
     ("dagger",),
-    # Both are the architecture's layer 4; the study kit runs the experiment protocol, so it sits on top.
+    # The study kit runs the experiment protocol, so it sits on top of it.
     ("experiments",),
     ("study",),
     ("demo",),

@@ -142,7 +142,7 @@ class StudyPlan:
 
 
 def _known_methods() -> list[str]:
-    # Imported here: the study kit (layer 4) reads the trainer's strategies (layer 3), not the reverse.
+    # Imported here: the study kit (layer 7) reads the trainer's strategies (dagger, layer 5), not the reverse.
     from antmaze_hirl.dagger.strategies import METHODS
 
     return list(METHODS)
