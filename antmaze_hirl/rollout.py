@@ -93,7 +93,12 @@ def subgoal_function(policy: Any) -> Callable[[dict[str, np.ndarray]], np.ndarra
 
 
 def play_episode(
-    env: Any, policy: Any, *, seed: int | None = None, options: dict[str, Any] | None = None
+    env: Any,
+    policy: Any,
+    *,
+    seed: int | None = None,
+    options: dict[str, Any] | None = None,
+    after_reset: Callable[[], None] | None = None,
 ) -> HighLevelEpisode:
     """Resets ``env`` (``seed``, ``options``) and lets ``policy`` choose subgoals (clipped to the maze) until the end.
 
@@ -103,6 +108,8 @@ def play_episode(
             SB3's ``(subgoal, state)`` tuple (:func:`subgoal_function`).
         seed: Seed of the reset.
         options: Options of the reset (e.g. a suite's ``{"task_id": k}``); ``None``: none.
+        after_reset: Called as ``after_reset()`` after the reset, before the first subgoal (e.g. to set the
+            episode's step budget from the layout the reset drew), as :func:`play_in_lockstep`'s.
 
     Raises:
         ValueError: If ``policy`` is neither callable nor has a ``predict``.
@@ -110,6 +117,8 @@ def play_episode(
     act = subgoal_function(policy)
     space = env.unwrapped.action_space
     obs, _ = env.reset(seed=seed, options=options)
+    if after_reset is not None:
+        after_reset()
     paths, subgoals, done, truncated, info = [], [], False, False, {}
     while not done:
         obs, _, terminated, truncated, info = env.step(np.clip(act(obs), space.low, space.high))

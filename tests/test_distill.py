@@ -2,16 +2,22 @@
 
 import json
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+import antmaze_hirl  # noqa: F401 - registers the ids
+from antmaze_hirl.envs.profiles import maze_env_id
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.experts.oracle import PathOracle
 from antmaze_hirl.sb3_ext import load_config, make_model
 from antmaze_hirl.sb3_ext.distill import (
     Dataset,
     DistillSettings,
     Episode,
+    HighLevelEpisodes,
     ReachEpisodes,
+    RecordingController,
     distill,
     flip_weights,
     make_student,
@@ -152,3 +158,21 @@ def test_a_new_run_can_start_from_an_earlier_student(tmp_path):
     with pytest.raises(ValueError, match="not a plain single-actor TD3 policy"):
         ensemble = shipped_policy_path("ant")
         distill(ensemble, tmp_path / "c", point_sources, still, body="ant", init_student=ensemble)
+
+
+def test_a_maze_source_sets_the_step_limit_from_the_layout_its_reset_drew():
+    controller = RecordingController()
+    controller.driver = lambda observation: np.zeros(2)  # the point stands still: only the limit ends the episode
+    env = gym.make(maze_env_id("point"), low_level=controller)
+    layouts = []
+
+    def limit(maze):
+        layouts.append(maze.layout)
+        return 7
+
+    source = HighLevelEpisodes(env, PathOracle.for_env(env), limit)
+    try:
+        assert source.play(3) == Episode(7, False, False) and controller.rows == 7
+        assert len(layouts) == 1 and layouts[0] is env.unwrapped.layout  # after the reset, not before
+    finally:
+        source.close()

@@ -48,6 +48,7 @@ from stable_baselines3.td3.policies import MultiInputPolicy
 
 from antmaze_hirl.atomic_io import atomic_write_json, atomic_write_with
 from antmaze_hirl.envs.reach import ReachEnv
+from antmaze_hirl.rollout import play_episode
 from antmaze_hirl.sb3_ext.action_penalty import ActionPenaltyPolicy
 from antmaze_hirl.sb3_ext.ensemble import BatchedMeanOfHeads, MeanOfHeads
 from antmaze_hirl.sb3_ext.loading import load_low_level, policy_fingerprint, save_policy
@@ -199,7 +200,8 @@ class HighLevelEpisodes:
 
     Args:
         env: A high-level maze env made with ``low_level=`` the run's :class:`RecordingController`.
-        high_level: ``observation -> subgoal`` (e.g. the scripted oracle).
+        high_level: ``observation -> subgoal`` (e.g. the scripted oracle), or any policy that
+            :func:`~antmaze_hirl.rollout.play_episode` plays (which clips its subgoals to the maze).
         step_limit: Optional ``env -> low-level step budget`` set after every reset (e.g. scaled to the path).
     """
 
@@ -211,14 +213,14 @@ class HighLevelEpisodes:
         self.step_limit = step_limit
 
     def play(self, seed: int) -> Episode:
-        """One episode from ``env.reset(seed=seed)`` to its end."""
-        obs, _ = self.env.reset(seed=seed)
+        """One episode from ``env.reset(seed=seed)`` to its end (:func:`~antmaze_hirl.rollout.play_episode`)."""
+        episode = play_episode(self.env, self.high_level, seed=seed, after_reset=self._limit_steps)
+        return Episode(int(episode.info["total_low_level_steps"]), episode.success, bool(episode.info["flipped"]))
+
+    def _limit_steps(self) -> None:
+        # The budget depends on the layout, which only the reset draws.
         if self.step_limit is not None:
             self.env.unwrapped.max_steps = int(self.step_limit(self.env.unwrapped))
-        while True:
-            obs, _, terminated, truncated, info = self.env.step(self.high_level(obs))
-            if terminated or truncated:
-                return Episode(int(info["total_low_level_steps"]), bool(info["is_success"]), bool(info["flipped"]))
 
     def close(self) -> None:
         """Closes the env."""
