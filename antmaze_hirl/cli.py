@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import apply_bounds
+from antmaze_hirl.cli_validation import SB3_ZIP_WARNING, apply_bounds
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -149,8 +149,8 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         "--init-from",
         type=Path,
         default=None,
-        help="warm start from this policy .zip's weights (or a low-level name: shipped); SB3 zips hold pickles that "
-        "can run code: load only files you trust (default: none)",
+        help="warm start from this policy .zip's weights (or a low-level name: shipped); "
+        f"{SB3_ZIP_WARNING} (default: none)",
     )
     parser.add_argument(
         "--init-buffer",
@@ -211,8 +211,8 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
         "--policy",
         type=Path,
         default=None,
-        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed (default: the shipped one); "
-        "SB3 zips hold pickles that can run code: load only files you trust",
+        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed; "
+        f"{SB3_ZIP_WARNING} (default: the shipped one)",
     )
     parser.add_argument("--episodes", type=int, default=200, help="subgoals to try")
     parser.add_argument(
@@ -275,8 +275,8 @@ def _add_ensemble_low(subparsers: _Subparsers) -> None:
         "members",
         nargs="+",
         type=Path,
-        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order; SB3 zips "
-        "hold pickles that can run code: load only files you trust (required)",
+        help="TD3/DDPG .zip files of that body, two or more heads in all; an ensemble's heads join in order; "
+        f"{SB3_ZIP_WARNING} (required)",
     )
     parser.add_argument("--out", type=Path, required=True, help="the ensemble's .zip (required)")
     parser.add_argument("--force", action="store_true", help="replace an existing file at --out")

@@ -9,6 +9,8 @@ so a new option cannot skip validation.
 Bounds are sanity limits, not tuning advice: seeds fit a 31-bit word so that the ``seed + i`` that
 evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; counts stop well before a
 typo exhausts memory or time; distances and rates are finite and positive.
+
+:data:`SB3_ZIP_WARNING` is the warning that every option loading an SB3 zip gives in its help.
 """
 
 from __future__ import annotations
@@ -24,6 +26,10 @@ MAX_SEED = 2**31 - 1
 
 MAX_STUDY_SEED = 2**32 - 1
 """Largest ``study init --seed`` (:data:`antmaze_hirl.study.plan.MAX_SEED`, not imported: it pulls numpy)."""
+
+SB3_ZIP_WARNING = "SB3 zips hold pickles that can run code: load only files you trust"
+"""The help of every option that loads an SB3 zip says this (``docs/guides/low-level.md``, "Load only policy
+files you trust")."""
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import shlex
 from pathlib import Path
 from typing import Any
 
+from antmaze_hirl.cli_validation import SB3_ZIP_WARNING
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS, check_suite_name
 from antmaze_hirl.experiments.benchmark import DEFAULT_NUM_ENVS, save_report, score_policy
 from antmaze_hirl.experiments.benchmark_policies import check_oracle_settings
@@ -53,8 +54,8 @@ def add_benchmark_arguments(parser: argparse.ArgumentParser) -> None:
         "--policy",
         required=True,
         help="oracle, random, planner (the planning learner shipped for the suite's body), or the path of an SB3 zip "
-        "of a high-level model or a saved DAgger learner; SB3 zips hold pickles that can run code: load only files "
-        "you trust (required)",
+        "of a high-level model or a saved DAgger learner; "
+        f"{SB3_ZIP_WARNING} (required)",
     )
     parser.add_argument(
         "--episodes-per-task",
