@@ -8,7 +8,7 @@ fingerprint and the learner file's SHA-256). No evaluation maze is seen: score i
 ``antmaze-hirl benchmark SUITE --policy planner``.
 
 Usage: python scripts/train_shipped_learner.py --body ant [--labels 300] [--seed 0] [--out-dir DIR]
-           [--learner next_cell_gate|next_cell_switch|next_cell_switch_flat]
+           [--learner next_cell_gate|next_cell_switch|next_cell_switch_flat|next_cell_switch_cell]
 """
 
 from __future__ import annotations
@@ -42,7 +42,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out-dir", type=Path, default=None, help="default: the package's learners/ folder")
     parser.add_argument(
         "--learner",
-        choices=("next_cell_plan", "next_cell_gate", "next_cell_switch", "next_cell_switch_flat"),
+        choices=(
+            "next_cell_plan",
+            "next_cell_gate",
+            "next_cell_switch",
+            "next_cell_switch_flat",
+            "next_cell_switch_cell",
+        ),
         default=LEARNER,
         help="(default: %(default)s)",
     )

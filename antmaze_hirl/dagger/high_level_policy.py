@@ -119,6 +119,12 @@ class LearnerSettings:
             own softmax, a move into a wall that the learnt costs price a few moves out on the 4x4 training mazes
             has almost no weight, so its switch stops being pushed before it shuts (diagonal moves into a wall's
             end, on 8x8 maps). 1.0 (the default): one cross-entropy.
+        cell_switch: With ``binary_blocking``: one switch per cell, read for every move into that cell, not one per
+            move (:class:`~antmaze_hirl.dagger.network.CellValueIteration`'s ``cell_blocking``). Learnt: which cells
+            are shut, from each cell's own view, every cell starting open; fixed: that a move's switch is its
+            destination cell's (a grid world's transition form). Why: a per-move gate reads a free move no label
+            made as it reads a wall and shut free moves; every labelled move enters a free cell, so the labels
+            hold the free cells' view open. ``False`` (the default): one switch per move.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -129,7 +135,7 @@ class LearnerSettings:
             ``head`` unknown, ``block_walls`` without the planning next-cell head, ``blocking_pressure``
             negative or set without ``learnt_blocking``, ``binary_blocking`` without ``learnt_blocking``,
             ``binary_blocking`` with ``blocking_pressure``, ``switch_flattening`` outside ``(0, 1]`` or below 1
-            without ``binary_blocking`` and ``any_map``,
+            without ``binary_blocking`` and ``any_map``, ``cell_switch`` without ``binary_blocking``,
             ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
@@ -148,6 +154,7 @@ class LearnerSettings:
     blocking_pressure: float = 0.0
     binary_blocking: bool = False
     switch_flattening: float = 1.0
+    cell_switch: bool = False
 
     def __post_init__(self) -> None:
         if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
@@ -181,6 +188,9 @@ class LearnerSettings:
         if self.switch_flattening != 1.0 and not (self.binary_blocking and self.any_map):
             raise ValueError(f"switch_flattening needs binary_blocking and any_map, got {self.switch_flattening}")
         object.__setattr__(self, "switch_flattening", float(self.switch_flattening))
+        if self.cell_switch and not self.binary_blocking:
+            raise ValueError("cell_switch needs binary_blocking: it makes the switch one per cell")
+        object.__setattr__(self, "cell_switch", bool(self.cell_switch))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -324,6 +334,7 @@ class HighLevelPolicy:
                     any_map=settings.any_map,
                     learnt_blocking=settings.learnt_blocking,
                     binary_blocking=settings.binary_blocking,
+                    cell_blocking=settings.cell_switch,
                 )
             else:
                 self.network = SubgoalNetwork(

@@ -245,16 +245,25 @@ class CellValueIteration(nn.Module):
     gradient from the value iteration's maximum (it routes round it) except at the agent's own cell, where the
     labels' cross-entropy reaches every move: so a labelled move wrongly blocked is reopened by its labels.
 
+    With ``cell_blocking`` too the switch is one per cell, not one per move: a move is blocked when the switch of the
+    cell it leads into is shut, and that switch is read from the cell's own view (the gate's convolutions, one
+    output channel). What is fixed is the value iteration's transition form: a move's added cost is its destination
+    cell's switch (as a grid world's transition depends on the cell moved into); what is learnt is which cells are
+    shut, from their views, starting with every cell open. Why: a per-move gate sees a free move that no label made
+    as it sees a wall (its view is the source cell's), and shut free moves; every labelled move leads into a free
+    cell, so labels open the free cells' shared view and only the cells the labels avoid are pushed shut.
+
     Args:
         iterations: Rounds of value propagation (at least the longest path, in cells).
         channels: Hidden channels of the cost map's convolutions.
         block_walls: Rule out the moves the walls block (their cost is :data:`BLOCKED_COST`).
         learnt_blocking: Add the learnt blocking gate.
         binary_blocking: Make that gate a switch (open or blocked), learnt through a surrogate gradient.
+        cell_blocking: One switch per cell, read for every move into it (needs ``binary_blocking``).
 
     Raises:
-        ValueError: If ``iterations`` is below 1, both ``block_walls`` and ``learnt_blocking`` are set, or
-            ``binary_blocking`` is set without ``learnt_blocking``.
+        ValueError: If ``iterations`` is below 1, both ``block_walls`` and ``learnt_blocking`` are set,
+            ``binary_blocking`` is set without ``learnt_blocking``, or ``cell_blocking`` without ``binary_blocking``.
     """
 
     def __init__(
@@ -265,6 +274,7 @@ class CellValueIteration(nn.Module):
         block_walls: bool = False,
         learnt_blocking: bool = False,
         binary_blocking: bool = False,
+        cell_blocking: bool = False,
     ) -> None:
         super().__init__()
         if iterations < 1:
@@ -273,9 +283,12 @@ class CellValueIteration(nn.Module):
             raise ValueError("block_walls and learnt_blocking exclude each other: walls are either given or learnt")
         if binary_blocking and not learnt_blocking:
             raise ValueError("binary_blocking needs learnt_blocking: it makes the learnt gate a switch")
+        if cell_blocking and not binary_blocking:
+            raise ValueError("cell_blocking needs binary_blocking: it makes the switch one per cell")
         self.iterations = iterations
         self.block_walls = block_walls
         self.binary_blocking = binary_blocking
+        self.cell_blocking = cell_blocking
         self.cost = nn.Sequential(
             nn.Conv2d(2, channels, 3, padding=1),
             nn.ReLU(),
@@ -287,7 +300,7 @@ class CellValueIteration(nn.Module):
             self.blocking = nn.Sequential(
                 nn.Conv2d(2, channels, 3, padding=1),
                 nn.ReLU(),
-                nn.Conv2d(channels, len(NEXT_CELL_MOVES), 3, padding=1),
+                nn.Conv2d(channels, 1 if cell_blocking else len(NEXT_CELL_MOVES), 3, padding=1),
                 nn.Sigmoid(),
             )
             with th.no_grad():
@@ -295,6 +308,8 @@ class CellValueIteration(nn.Module):
 
     def blocking_logits(self, grids: th.Tensor) -> th.Tensor:
         """``(B, 9, S, S)`` logits of the learnt blocking gate (its ``b_a(s)`` is their sigmoid).
+
+        With ``cell_blocking``, ``(B, 1, S, S)``: one switch logit per cell.
 
         Raises:
             ValueError: If the planner has no learnt gate.
@@ -315,6 +330,9 @@ class CellValueIteration(nn.Module):
         logits = self.blocking_logits(grids)
         if not self.binary_blocking:
             return BLOCKED_COST * th.sigmoid(logits)  # the closing nn.Sigmoid's op: the same figures
+        if self.cell_blocking:
+            # Each move's cost is the switch of the cell it leads into; beyond the grid the value is UNREACHED anyway.
+            return shifted(BlockingSwitch.apply(logits[:, 0]), grids.shape[-1], fill=0.0)
         return BlockingSwitch.apply(logits)
 
     def forward(self, grids: th.Tensor) -> th.Tensor:
@@ -403,6 +421,7 @@ class NextCellNetwork(nn.Module):
         block_walls: The planner rules out moves the walls block (:class:`CellValueIteration`).
         learnt_blocking: The planner learns which moves are never made (:class:`CellValueIteration`).
         binary_blocking: That learnt gate is a switch, open or blocked (:class:`CellValueIteration`).
+        cell_blocking: That switch is one per cell, read for the moves into it (:class:`CellValueIteration`).
         any_map: The planning learner whose weights act on any map: the logits are the planner's Q alone,
             times a learnt trust that starts at 0 (so the untrained learner has no preference among moves),
             with no correction from the feature vector (whose goal offset grows with the map beyond anything
@@ -410,8 +429,8 @@ class NextCellNetwork(nn.Module):
             seeds in ``results/planning_learner/``; a correction from local inputs only did worse on the screen too).
 
     Raises:
-        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning, or ``binary_blocking``
-            without ``learnt_blocking``.
+        ValueError: If ``any_map`` or ``learnt_blocking`` is given without planning, ``binary_blocking``
+            without ``learnt_blocking``, or ``cell_blocking`` without ``binary_blocking``.
     """
 
     def __init__(
@@ -426,6 +445,7 @@ class NextCellNetwork(nn.Module):
         any_map: bool = False,
         learnt_blocking: bool = False,
         binary_blocking: bool = False,
+        cell_blocking: bool = False,
     ) -> None:
         super().__init__()
         moves = len(NEXT_CELL_MOVES)
@@ -442,6 +462,7 @@ class NextCellNetwork(nn.Module):
                 block_walls=block_walls,
                 learnt_blocking=learnt_blocking,
                 binary_blocking=binary_blocking,
+                cell_blocking=cell_blocking,
             )
             if any_map:
                 # How far the logits follow the planner, learnt from 0: untrained, every move is as likely (the
