@@ -80,6 +80,18 @@ def click_once(session, clock: FakeClock | None = None, seconds: float = 2.0) ->
     return session.label(state["query"]["id"], float(x), float(y))
 
 
+def played_template(tmp_path_factory, play, **study) -> Path:
+    """A study folder (:func:`make_tiny_study` with ``study``) whose P01 ``play`` played, the session closed.
+
+    For module-scoped templates that each test gets a :func:`fresh_copy` of: playing is the slow part.
+    """
+    folder = make_tiny_study(tmp_path_factory.mktemp("template") / "study", **study)
+    session = open_session(folder)
+    play(session)
+    session.close()
+    return folder
+
+
 def fresh_copy(template: Path, tmp_path: Path) -> tuple[Path, Path]:
     """A copy of a played study ``template`` (made once per module) under ``tmp_path``: its folder and P01's."""
     import shutil

@@ -18,6 +18,7 @@ from study_helpers import (
     play_one_episode,
     play_to_episode_end,
     play_trial,
+    played_template,
     snapshot,
 )
 
@@ -52,13 +53,13 @@ def disk_full(monkeypatch):
 @pytest.fixture(scope="module")
 def in_trial_two_template(tmp_path_factory):
     """Two compared trials of two episodes (no practice): trial 1 done and rated, trial 2 one episode in."""
-    folder = make_tiny_study(tmp_path_factory.mktemp("template") / "study", methods=("dagger", "reward"), practice=0)
-    session = open_session(folder)
-    play_trial(session)
-    session.submit_questionnaire(1, ANSWERS)
-    play_one_episode(session)
-    session.close()
-    return folder
+
+    def play(session):
+        play_trial(session)
+        session.submit_questionnaire(1, ANSWERS)
+        play_one_episode(session)
+
+    return played_template(tmp_path_factory, play, methods=("dagger", "reward"), practice=0)
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ import httpx
 import numpy as np
 import pandas as pd
 import pytest
-from study_helpers import fresh_copy, make_tiny_study, open_session, play_one_episode
+from study_helpers import fresh_copy, make_tiny_study, open_session, play_one_episode, played_template
 
 from antmaze_hirl.study.checkpoint import load_checkpoint, save_checkpoint
 from antmaze_hirl.study.data import CLICK_COLUMNS, EPISODE_COLUMNS, load_clicks, load_episodes
@@ -30,11 +30,7 @@ def events_of(participant):
 @pytest.fixture(scope="module")
 def one_episode_template(tmp_path_factory):
     """A participant one episode into a three-episode trial (no practice), session closed as after a kill."""
-    folder = make_tiny_study(tmp_path_factory.mktemp("template") / "study", methods=("dagger",), episodes=3, practice=0)
-    session = open_session(folder)
-    play_one_episode(session)
-    session.close()
-    return folder
+    return played_template(tmp_path_factory, play_one_episode, methods=("dagger",), episodes=3, practice=0)
 
 
 @pytest.fixture
