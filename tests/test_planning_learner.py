@@ -526,7 +526,8 @@ def test_a_cell_switch_blocks_every_move_into_a_shut_cell_and_no_other():
     size = 7
     walls = th.from_numpy(np.random.default_rng(3).random((size, size)) < 0.4).float()
     grids = th.stack([walls, th.zeros_like(walls)])[None]
-    cost = planner.blocking_cost(grids)[0]
+    with th.no_grad():  # float() of a tensor that requires grad warns
+        cost = planner.blocking_cost(grids)[0]
     assert cost.shape == (len(NEXT_CELL_MOVES), size, size)
     for index, (dx, dy) in enumerate(NEXT_CELL_MOVES):
         for row in range(size):
