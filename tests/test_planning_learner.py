@@ -43,7 +43,7 @@ def test_the_untrained_planning_learner_has_no_preference_and_learns_to_trust_it
     assert th.equal(logits, th.zeros_like(logits))  # every move as likely: no goal-seeking prior before a label
     targets = np.array([[1.0, 0.0]], np.float32)
     learner.fit(batch, targets, steps=5)
-    assert float(learner.network.trust) > 0.0
+    assert float(learner.network.trust.detach()) > 0.0
 
 
 def test_any_map_is_checked_with_the_head_that_uses_it():
