@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import SB3_ZIP_WARNING, apply_bounds
+from antmaze_hirl.cli_validation import SB3_PICKLE_WARNING, SB3_ZIP_WARNING, apply_bounds
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -157,7 +157,7 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         type=Path,
         default=None,
         help="warm start's replay buffer: another run's checkpoints/ckpt-<n>/replay_buffer.pkl, relabelled with "
-        "this run's reward (default: an empty buffer)",
+        f"this run's reward; {SB3_PICKLE_WARNING} (default: an empty buffer)",
     )
     parser.add_argument(
         "--hyperparams",

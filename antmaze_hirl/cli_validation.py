@@ -10,7 +10,8 @@ Bounds are sanity limits, not tuning advice: seeds fit a 31-bit word so that the
 evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; counts stop well before a
 typo exhausts memory or time; distances and rates are finite and positive.
 
-:data:`SB3_ZIP_WARNING` is the warning that every option loading an SB3 zip gives in its help.
+:data:`SB3_ZIP_WARNING` is the warning that every option loading an SB3 zip gives in its help, and
+:data:`SB3_PICKLE_WARNING` the one every option loading an SB3 replay-buffer pickle gives.
 """
 
 from __future__ import annotations
@@ -30,6 +31,9 @@ MAX_STUDY_SEED = 2**32 - 1
 SB3_ZIP_WARNING = "SB3 zips hold pickles that can run code: load only files you trust"
 """The help of every option that loads an SB3 zip says this (``docs/guides/low-level.md``, "Load only policy
 files you trust")."""
+
+SB3_PICKLE_WARNING = "SB3 replay buffers are pickles that can run code: load only files you trust"
+"""The help of every option that loads an SB3 replay buffer (a plain pickle, ``load_replay_buffer``) says this."""
 
 
 @dataclass(frozen=True)
@@ -154,18 +158,30 @@ def _one_line_error(parser: argparse.ArgumentParser) -> Callable[[str], None]:
     return error
 
 
-def numeric_options(parser: argparse.ArgumentParser, command: str = "") -> list[tuple[str, argparse.Action]]:
-    """``(command, action)`` of every option of ``parser`` and its subcommands whose type is numeric."""
+def all_options(parser: argparse.ArgumentParser, command: str = "") -> list[tuple[str, argparse.Action]]:
+    """``(command, action)`` of every option and positional of ``parser`` and its subcommands, ``help`` included.
+
+    ``command`` is the subcommand path, ``"study init"`` for example, ``""`` for the top level.
+    """
     found = []
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             for name, sub in action.choices.items():
-                found.extend(numeric_options(sub, f"{command} {name}".strip()))
-        elif action.type in (int, float) or getattr(action, "bounds", None) is not None:
-            found.append((command, action))
-        elif getattr(action.type, "__name__", "") in ("_positive_int",):  # the backends' own int type
+                found.extend(all_options(sub, f"{command} {name}".strip()))
+        else:
             found.append((command, action))
     return found
+
+
+def numeric_options(parser: argparse.ArgumentParser, command: str = "") -> list[tuple[str, argparse.Action]]:
+    """``(command, action)`` of every option of ``parser`` and its subcommands whose type is numeric."""
+    return [(name, action) for name, action in all_options(parser, command) if _is_numeric(action)]
+
+
+def _is_numeric(action: argparse.Action) -> bool:
+    if action.type in (int, float) or getattr(action, "bounds", None) is not None:
+        return True
+    return getattr(action.type, "__name__", "") in ("_positive_int",)  # the backends' own int type
 
 
 def apply_bounds(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:

@@ -109,7 +109,8 @@ def play_episode(
         seed: Seed of the reset.
         options: Options of the reset (e.g. a suite's ``{"task_id": k}``); ``None``: none.
         after_reset: Called as ``after_reset()`` after the reset, before the first subgoal (e.g. to set the
-            episode's step budget from the layout the reset drew), as :func:`play_in_lockstep`'s.
+            episode's step budget from the layout the reset drew): the serial form of :func:`play_in_lockstep`'s
+            hook, which also gets the env index and the seed.
 
     Raises:
         ValueError: If ``policy`` is neither callable nor has a ``predict``.

@@ -76,6 +76,27 @@ def maze_sources(
     return sources
 
 
+NOT_OPTIONS = frozenset({"beta0"})
+"""The :class:`DistillSettings` fields this script has no option for (they keep the dataclass default)."""
+
+
+def distill_settings(args: argparse.Namespace) -> DistillSettings:
+    """The run's settings from the parsed options: each field but :data:`NOT_OPTIONS` from the option of its name.
+
+    ``--init-head -1`` is ``init_head=None``, a fresh actor.
+
+    Raises:
+        KeyError: If a field (not in :data:`NOT_OPTIONS`) has no option, naming it: a renamed or dropped option
+            must not fall back to the dataclass default unnoticed.
+    """
+    names = {spec.name for spec in fields(DistillSettings)} - NOT_OPTIONS
+    missing = sorted(names - vars(args).keys())
+    if missing:
+        raise KeyError(f"DistillSettings fields without a steady_ant.py option: {', '.join(missing)}")
+    given = {name: getattr(args, name) for name in names}
+    return DistillSettings(**{**given, "init_head": args.init_head if args.init_head >= 0 else None})
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", type=Path, required=True, help="the run folder (checkpoints every iteration)")
@@ -105,9 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if min(args.maze_sizes) < 2:
             raise ValueError(f"--maze-sizes must be >= 2, got {args.maze_sizes}")
-        # Every DistillSettings field but beta0 is an option of the same name; --init-head -1 is a fresh actor.
-        given = {spec.name: getattr(args, spec.name) for spec in fields(DistillSettings) if spec.name in vars(args)}
-        settings = DistillSettings(**{**given, "init_head": args.init_head if args.init_head >= 0 else None})
+        settings = distill_settings(args)
         teacher = args.teacher if args.teacher is not None else shipped_policy_path("ant")
         subgoal_reach_m = float(BODY_PROFILES["ant"].subgoal_reach_m or 4.0)
         description = {

@@ -3,6 +3,7 @@ import base64
 import dataclasses
 import importlib.util
 import json
+import re
 import subprocess
 import sys
 import zipfile
@@ -15,6 +16,7 @@ from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
+from antmaze_hirl.cli_validation import SB3_PICKLE_WARNING, SB3_ZIP_WARNING, all_options
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.config import DEFAULT_METHODS, ExperimentConfig, body_settings
 from antmaze_hirl.sb3_ext import CheckpointError
@@ -59,6 +61,39 @@ def test_every_subcommand_help_shows_defaults_an_example_and_no_markup(command, 
         assert "(default:" in shown or "(required)" in shown, f"{command} {action.option_strings}: {shown!r}"
         # Whitespace-blind: argparse wraps lines, and breaks a word longer than the column (a long default).
         assert "".join((shown % {"default": action.default}).split()) in "".join(text.split())
+
+
+LOADING_OPTIONS = {
+    ("train-low", "--init-from"): SB3_ZIP_WARNING,
+    ("train-low", "--init-buffer"): SB3_PICKLE_WARNING,
+    ("eval-low", "--policy"): SB3_ZIP_WARNING,
+    ("ensemble-low", "members"): SB3_ZIP_WARNING,
+    ("benchmark", "--policy"): SB3_ZIP_WARNING,
+    ("benchmark", "--low-level"): SB3_ZIP_WARNING,
+}
+"""Every option that loads an SB3 zip or pickle, with the warning its help must carry."""
+
+WRITTEN_NOT_LOADED = {("train-low", "--out"), ("ensemble-low", "--out")}
+"""Options whose help names a zip that the command writes, not loads."""
+
+
+def _named_options():
+    return {
+        (command, (action.option_strings or [action.dest])[0]): action
+        for command, action in all_options(build_parser())
+    }
+
+
+def test_every_option_that_loads_a_zip_or_pickle_warns_in_its_help():
+    options = _named_options()
+    for key, warning in LOADING_OPTIONS.items():
+        assert key in options, f"{key} is listed but the parsers have no such option"
+        assert warning in options[key].help, f"{key}: {options[key].help!r}"
+    # An option added later that names a zip or pickle must join one of the two lists.
+    mentions = re.compile(r"zip|\.pkl|pickle|replay buffer", re.IGNORECASE)
+    named = {key for key, action in options.items() if action.help and mentions.search(action.help)}
+    assert named - LOADING_OPTIONS.keys() - WRITTEN_NOT_LOADED == set()
+    assert WRITTEN_NOT_LOADED <= named  # the exemptions still exist and still name a zip
 
 
 def test_top_level_help_has_no_markup(capsys):

@@ -4,6 +4,7 @@ import inspect
 
 import numpy as np
 import pytest
+from gymnasium.utils.ezpickle import EzPickle
 
 from antmaze_hirl.envs._constructor_args import record_constructor_arguments
 from antmaze_hirl.envs.high_level import HighLevelMazeEnv
@@ -22,9 +23,37 @@ def test_every_parameter_is_recorded_body_and_map_by_position(env_class):
     env.close()
 
 
-def test_a_positional_name_missing_from_the_parameters_is_refused():
-    class Recorder:
-        pass
+class OnlyBody:
+    def __init__(self, body):
+        record_constructor_arguments(self, locals(), OnlyBody)  # type: ignore[arg-type]
 
+
+class Late:
+    def __init__(self, body, maze_map):
+        size = 3  # bound before the call: locals() now holds more than the parameters
+        record_constructor_arguments(self, locals(), Late)  # type: ignore[arg-type]
+        self.size = size
+
+
+class WithExtra(ReachEnv):
+    """As the suite and split envs: the parent records its own parameters, then the subclass records again."""
+
+    def __init__(self, body="point", maze_map="open", *, extra=1):
+        super().__init__(body, maze_map)
+        EzPickle.__init__(self, body, maze_map, extra=extra)
+
+
+def test_a_positional_name_missing_from_the_parameters_is_refused():
     with pytest.raises(KeyError, match="maze_map"):
-        record_constructor_arguments(Recorder(), {"self": None, "body": "ant"})  # type: ignore[arg-type]
+        OnlyBody("ant")
+
+
+def test_a_call_after_the_constructor_bound_another_name_is_refused_naming_it():
+    with pytest.raises(ValueError, match=r"Late: not its parameters: extra \['size'\], missing \[\]"):
+        Late("ant", "open")
+
+
+def test_a_subclass_with_other_parameters_builds_its_parent_checked_against_the_parent():
+    env = WithExtra(extra=2)
+    assert env._ezpickle_args == ("point", "open") and env._ezpickle_kwargs == {"extra": 2}
+    env.close()

@@ -13,7 +13,7 @@ WALLS[2, 2] = True  # one inner wall, centred at (-2, 2) m; the start below it l
 @pytest.mark.parametrize("contact_forces", [False, True])
 def test_the_ant_step_is_ant_v5s_step_bit_for_bit(contact_forces):
     fast, reference = (MazeSimulator("ant", WALLS, include_contact_forces=contact_forces) for _ in range(2))
-    start = np.array([-2.0, -1.2])  # 0.8 m below the inner wall's face
+    start = np.array([-2.0, -1.2])  # 1.2 m below the inner wall's face (y = 0)
     assert all(np.array_equal(a, b) for a, b in zip(fast.reset(start, 3), reference.reset(start, 3), strict=True))
     actions = np.random.default_rng(0).uniform(-1.0, 1.0, (300, 8))
     model = fast._mujoco_env.model

@@ -190,3 +190,15 @@ def test_an_eval_low_file_with_a_field_of_the_wrong_type_is_refused_naming_it(tm
     with pytest.raises(ValueError) as refused:
         table.eval_low_file(path)
     assert str(refused.value) == f"{path}: {message}"
+
+
+def test_every_distill_setting_but_beta0_is_an_option_and_a_missing_one_fails_loudly(tmp_path, monkeypatch):
+    import argparse
+
+    got = []
+    monkeypatch.setattr(steady_ant, "distill", lambda teacher, out, sources, settings, **_: got.append(settings))
+    assert steady_ant.main(["--out", str(tmp_path / "r"), "--batch-size", "7", "--init-head", "-1"]) == 0
+    assert got == [steady_ant.DistillSettings(batch_size=7, init_head=None)]
+    options = {name: 1 for name in ("iterations", "seed")}
+    with pytest.raises(KeyError, match="batch_size"):
+        steady_ant.distill_settings(argparse.Namespace(**options, init_head=0))

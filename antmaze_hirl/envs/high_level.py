@@ -185,7 +185,7 @@ class HighLevelMazeEnv(gym.Env, EzPickle):
         render_mode: str | None = None,
         render_view: str = "schematic",
     ) -> None:
-        record_constructor_arguments(self, locals())  # first: locals() holds only the parameters
+        record_constructor_arguments(self, locals(), HighLevelMazeEnv)  # first: locals() holds only the parameters
         if low_level is None:
             raise ValueError(
                 f"HighLevelMazeEnv needs a low-level controller: pass low_level=<SB3 model or callable obs -> "

@@ -192,7 +192,7 @@ class ReachEnv(GoalEnv, EzPickle):
         tilt_penalty: float = 0.0,
         upright_threshold: float = 0.8,
     ) -> None:
-        record_constructor_arguments(self, locals())  # first: locals() holds only the parameters
+        record_constructor_arguments(self, locals(), ReachEnv)  # first: locals() holds only the parameters
         spec = body_spec(body)
         self.body = body
         self.horizon = int(horizon if horizon is not None else spec.default_horizon)

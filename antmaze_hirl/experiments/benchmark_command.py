@@ -111,7 +111,7 @@ def add_benchmark_arguments(parser: argparse.ArgumentParser) -> None:
         "--low-level",
         default=None,
         help="the low level: a zip path or a name, shipped or (the ant's) ensemble; the report records its "
-        "fingerprint (default: the body's shipped low level)",
+        f"fingerprint; {SB3_ZIP_WARNING} (default: the body's shipped low level)",
     )
     parser.add_argument(
         "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"

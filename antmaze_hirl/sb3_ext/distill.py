@@ -201,13 +201,13 @@ class HighLevelEpisodes:
     Args:
         env: A high-level maze env made with ``low_level=`` the run's :class:`RecordingController`.
         high_level: ``observation -> subgoal`` (e.g. the scripted oracle), or any policy that
-            :func:`~antmaze_hirl.rollout.play_episode` plays (which clips its subgoals to the maze).
+            :func:`~antmaze_hirl.rollout.play_episode` plays (an object with ``predict``). A subgoal outside the
+            maze is clipped to it, as ``play_episode`` does, not refused by ``env.step`` (as it was before
+            these episodes were played by ``play_episode``).
         step_limit: Optional ``env -> low-level step budget`` set after every reset (e.g. scaled to the path).
     """
 
-    def __init__(
-        self, env: Any, high_level: Callable[[Any], np.ndarray], step_limit: Callable[[Any], int] | None = None
-    ) -> None:
+    def __init__(self, env: Any, high_level: Any, step_limit: Callable[[Any], int] | None = None) -> None:
         self.env = env
         self.high_level = high_level
         self.step_limit = step_limit
