@@ -190,28 +190,3 @@ def test_an_eval_low_file_with_a_field_of_the_wrong_type_is_refused_naming_it(tm
     with pytest.raises(ValueError) as refused:
         table.eval_low_file(path)
     assert str(refused.value) == f"{path}: {message}"
-
-
-damped_benchmark = load_script("scripts/benchmark_tilt_damped.py")
-
-
-@pytest.mark.parametrize(
-    ("argv", "message"),
-    [
-        (["point5"], "suite must be an ant suite"),
-        (["nowhere"], "suite must be an ant suite"),
-        (["u", "--upper-uprightness", "0.6", "--lower-uprightness", "0.8"], "lower_uprightness < upper_uprightness"),
-        (["u", "--min-scale", "2"], "min_scale must lie in [0, 1], got 2.0"),
-    ],
-)
-def test_the_damped_benchmark_refuses_bad_input_in_one_line(tmp_path, capsys, argv, message):
-    settings = {"--upper-uprightness": "0.8", "--lower-uprightness": "0.6", "--min-scale": "0.3"}
-    for flag, value in settings.items():
-        if flag not in argv:
-            argv = [*argv, flag, value]
-    with pytest.raises(SystemExit) as exit_info:
-        damped_benchmark.main([*argv, "--low-level", "ensemble", "--json", str(tmp_path / "r.json")])
-    assert exit_info.value.code == 2
-    error = capsys.readouterr().err.strip().splitlines()[-1]
-    assert message in error
-    assert not (tmp_path / "r.json").exists()

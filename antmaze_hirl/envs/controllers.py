@@ -286,8 +286,9 @@ class TiltDampedController:
     inner controller (:meth:`batched`). What it changes is fixed by hand (the three numbers); the policy
     it wraps is unchanged.
 
-    Why: a flipping ant pushes harder while it tilts than one that recovers from the same tilt
-    (``results/steady_ant/README.md``, the flip diagnosis), so less torque once it tilts may let it settle.
+    Why a candidate: a flipping ant pushes harder while it tilts than one that recovers from the same tilt, so
+    less torque once it tilts might let it settle. ``results/steady_ant/README.md`` (the session-29 flip diagnosis)
+    measured whether it does.
 
     Args:
         controller: The controller (or SB3 model) whose actions are damped.
