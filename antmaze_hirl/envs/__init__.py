@@ -28,6 +28,7 @@ _EXPORTS = {
     "PredictController": "antmaze_hirl.envs.controllers",
     "ReachEnv": "antmaze_hirl.envs.reach",
     "SmoothedController": "antmaze_hirl.envs.controllers",
+    "TiltDampedController": "antmaze_hirl.envs.controllers",
     "STATE_LAYOUT": "antmaze_hirl.envs.state_layout",
     "HighLevelStateLayout": "antmaze_hirl.envs.state_layout",
     "Task": "antmaze_hirl.envs.task",

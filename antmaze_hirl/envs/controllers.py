@@ -271,6 +271,84 @@ class SmoothedController:
         return _SmoothedBatch(as_batch_controller(self.controller, num_envs), self.alpha, num_envs)
 
 
+ANT_QUATERNION_INDEX = 1
+"""Where the torso quaternion ``(qw, qx, qy, qz)`` starts in the ant's ``observation`` (after the torso height)."""
+
+
+class TiltDampedController:
+    """Another controller's actions, clipped to ``[-1, 1]`` and scaled down while the ant's torso tilts.
+
+    A default-off safety filter against the ant's flips (nothing uses it unless wrapped so explicitly). Its
+    input is the *uprightness* of the torso, the world z of its up axis (1 upright, 0 on its side), read from
+    the torso quaternion in the observation. At or above ``upper_uprightness`` the actions pass unchanged; at or
+    below ``lower_uprightness`` they are multiplied by ``min_scale``; in between the multiplier falls
+    linearly. Stateless: each row of a batch is damped by its own uprightness, so it batches with its
+    inner controller (:meth:`batched`). What it changes is fixed by hand (the three numbers); the policy
+    it wraps is unchanged.
+
+    Why a candidate: a flipping ant pushes harder while it tilts than one that recovers from the same tilt, so
+    less torque once it tilts might let it settle. ``results/steady_ant/README.md`` (the session-29 flip diagnosis)
+    measured whether it does.
+
+    Args:
+        controller: The controller (or SB3 model) whose actions are damped.
+        upper_uprightness: Uprightness at or above which actions pass unchanged, in ``(-1, 1]``.
+        lower_uprightness: Uprightness at or below which actions are scaled by ``min_scale``; below ``upper``.
+        min_scale: The multiplier at ``lower_uprightness`` and below, in ``[0, 1]``.
+        quaternion_index: Where the torso quaternion starts in ``observation`` (the ant's layout by default).
+
+    Raises:
+        ValueError: If the uprightness bounds are not ``-1 <= lower < upper <= 1``, ``min_scale`` is outside
+            ``[0, 1]``, or ``quaternion_index`` is negative.
+    """
+
+    def __init__(
+        self,
+        controller: Any,
+        *,
+        upper_uprightness: float,
+        lower_uprightness: float,
+        min_scale: float,
+        quaternion_index: int = ANT_QUATERNION_INDEX,
+    ) -> None:
+        if not -1.0 <= lower_uprightness < upper_uprightness <= 1.0:
+            raise ValueError(
+                f"tilt damping needs -1 <= lower_uprightness < upper_uprightness <= 1, got lower "
+                f"{lower_uprightness!r} and upper {upper_uprightness!r}"
+            )
+        if not 0.0 <= min_scale <= 1.0:
+            raise ValueError(f"tilt damping min_scale must lie in [0, 1], got {min_scale!r}")
+        if quaternion_index < 0:
+            raise ValueError(f"quaternion_index must be >= 0, got {quaternion_index!r}")
+        self.controller = as_controller(controller)
+        self.upper_uprightness = float(upper_uprightness)
+        self.lower_uprightness = float(lower_uprightness)
+        self.min_scale = float(min_scale)
+        self.quaternion_index = int(quaternion_index)
+
+    def scale(self, body_observations: np.ndarray) -> np.ndarray:
+        """The action multiplier for each row of ``body_observations`` (``(n, dim)``, or one ``(dim,)`` row)."""
+        quaternion = np.asarray(body_observations, dtype=np.float64)[
+            ..., self.quaternion_index : self.quaternion_index + 4
+        ]
+        upright = 1.0 - 2.0 * (quaternion[..., 1] ** 2 + quaternion[..., 2] ** 2)
+        share = (upright - self.lower_uprightness) / (self.upper_uprightness - self.lower_uprightness)
+        return self.min_scale + (1.0 - self.min_scale) * np.clip(share, 0.0, 1.0)
+
+    def reset(self) -> None:
+        """Resets the inner controller, if it has state (this filter has none)."""
+        reset_controller(self.controller)
+
+    def __call__(self, observation: GoalObservation) -> np.ndarray:
+        """The inner controller's action for ``observation``, clipped and damped by the torso's tilt."""
+        action = np.clip(np.asarray(self.controller(observation), dtype=np.float64), -1.0, 1.0)
+        return self.scale(observation["observation"]) * action
+
+    def batched(self, num_envs: int) -> BatchController:
+        """A batch controller for ``num_envs`` sub-envs: the inner controller batched, each row damped by its tilt."""
+        return _TiltDampedBatch(as_batch_controller(self.controller, num_envs), self)
+
+
 class PointGoToController:
     """Scripted PD controller that drives the point mass straight at its subgoal.
 
@@ -357,10 +435,24 @@ class _SmoothedBatch(BatchController):
         self.inner.reset(env_index)
 
 
+class _TiltDampedBatch(BatchController):
+    # TiltDampedController's batch form: the inner batch, then each row scaled by its own uprightness.
+    def __init__(self, inner: BatchController, damping: TiltDampedController) -> None:
+        self.inner = inner
+        self.damping = damping
+
+    def __call__(self, observations: GoalObservation, env_indices: np.ndarray) -> np.ndarray:
+        actions = np.clip(np.asarray(self.inner(observations, env_indices), dtype=np.float64), -1.0, 1.0)
+        return self.damping.scale(observations["observation"])[:, None] * actions
+
+    def reset(self, env_index: int) -> None:
+        self.inner.reset(env_index)
+
+
 def as_batch_controller(controller: Any, num_envs: int) -> BatchController:
     """The batch form of ``controller`` (as :func:`as_controller` accepts it) for ``num_envs`` sub-envs.
 
-    * An object with ``batched(num_envs)`` (:class:`SmoothedController`) makes its own, with state per sub-env.
+    * An object with ``batched(num_envs)`` (:class:`SmoothedController`, :class:`TiltDampedController`) makes its own.
     * A stateless :class:`BatchActor` (:class:`PredictController`, :class:`PointGoToController`, SB3 models)
       acts for all rows in one call.
     * Any other callable cannot batch: it is called row by row, with a one-line warning; one with a
