@@ -65,9 +65,12 @@ def maze_sources(
         oracle = PathOracle.for_env(env, subgoal_reach_m=subgoal_reach_m)
         limit = None
         if size > FIXED_BUDGET_SIZES:
+            # The family's own budget, read once: the env's max_steps is overwritten by each episode's limit, so
+            # reading it inside the limit would give each episode the largest budget of all episodes before it.
+            fixed_budget = int(env.unwrapped.max_steps)
 
-            def limit(inner: Any) -> int:
-                return max(inner.max_steps, scaled_step_limit(inner.layout, inner.geometry.scale))
+            def limit(inner: Any, fixed_budget: int = fixed_budget) -> int:
+                return max(fixed_budget, scaled_step_limit(inner.layout, inner.geometry.scale))
 
         sources.append(HighLevelEpisodes(env, oracle, limit))
     if reach:

@@ -202,3 +202,22 @@ def test_every_distill_setting_but_beta0_is_an_option_and_a_missing_one_fails_lo
     options = {name: 1 for name in ("iterations", "seed")}
     with pytest.raises(KeyError, match="batch_size"):
         steady_ant.distill_settings(argparse.Namespace(**options, init_head=0))
+
+
+def test_each_larger_maze_episode_gets_its_own_paths_budget_not_the_largest_so_far():
+    from antmaze_hirl.envs.suites import scaled_step_limit
+    from antmaze_hirl.sb3_ext.distill import RecordingController
+
+    (source,) = steady_ant.maze_sources(RecordingController(), [6], reach=False, subgoal_reach_m=2.0)
+    inner = source.env.unwrapped
+    fixed_budget = inner.max_steps
+    budgets = []
+    for seed in range(8):
+        source.env.reset(seed=seed)
+        budget = source.step_limit(inner)
+        inner.max_steps = budget  # what playing the episode sets, as HighLevelEpisodes.play does after its reset
+        assert budget == max(fixed_budget, scaled_step_limit(inner.layout, inner.geometry.scale))
+        budgets.append(budget)
+    # Some episode's path is shorter than an earlier one's: its budget must come out smaller, not carried over.
+    assert any(later < earlier for i, earlier in enumerate(budgets) for later in budgets[i + 1 :]), budgets
+    source.close()
