@@ -36,11 +36,9 @@ class UpdateGate:
     would wait for it.
     """
 
-    def __init__(self, monkeypatch, *, opened=False):
-        self.started, self.finished = [], []
+    def __init__(self, monkeypatch):
+        self.started, self.finished = [], []  # when each update reached the gate, and when it finished
         self._open = threading.Event()
-        if opened:
-            self._open.set()
         real_update, real_close = DAggerTrainer._update, ParticipantSession.close
 
         def held_update(trainer, steps):
