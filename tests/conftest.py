@@ -1,9 +1,12 @@
+import copy
 import dataclasses
 import os
 import sys
+from collections import OrderedDict
 from pathlib import Path
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 import torch
@@ -40,6 +43,33 @@ def pytest_configure(config):
     if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
         sys.addaudithook(_refuse_committed_results)  # for the rest of the process: a hook cannot be removed
         UNIT_TIER_GUARD = True
+
+
+COMPILED_MODELS_KEPT = 48
+"""MuJoCo models a test process keeps compiled, by XML text (a point maze holds an 11 MiB skybox: ~0.6 GiB)."""
+_compile_mujoco_xml = mujoco.MjModel.from_xml_path
+_compiled_models: OrderedDict[bytes, mujoco.MjModel] = OrderedDict()
+
+
+def _copy_of_compiled_model(filename, *args, **kwargs):
+    # Tests build the same mazes again and again (seeded layouts, one env per test), and gymnasium-robotics
+    # writes each maze's XML to a fresh temp file and compiles it: about a quarter of the unit tier's CPU
+    # time went to compiling models it had compiled before. A compile is deterministic, so a copy of the
+    # model compiled from the same XML text (mj_copyModel, ~5 ms) is the model a compile returns; each
+    # caller gets its own copy, which it may change (the target marker's size, say).
+    if args or kwargs:  # assets or a VFS: compiled as asked
+        return _compile_mujoco_xml(filename, *args, **kwargs)
+    key = Path(filename).read_bytes()
+    model = _compiled_models.pop(key, None)
+    if model is None:
+        model = _compile_mujoco_xml(filename)
+    _compiled_models[key] = model
+    while len(_compiled_models) > COMPILED_MODELS_KEPT:
+        _compiled_models.popitem(last=False)
+    return copy.copy(model)
+
+
+mujoco.MjModel.from_xml_path = staticmethod(_copy_of_compiled_model)
 
 
 class StillController:

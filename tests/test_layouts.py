@@ -74,14 +74,31 @@ def test_corner_cells_of_u_maze():
     assert corner_cells(validate_maze_map("u")) == [(1, 1), (1, 3), (3, 1), (3, 3)]
 
 
-@settings(max_examples=2000, deadline=None)
-@given(
-    seed=st.integers(0, 2**32 - 1),
-    n_rows=st.integers(2, 8),
-    n_cols=st.integers(2, 8),
-    wall_fraction=st.floats(0.0, 0.6),
-)
+LAYOUT_DRAWS = {
+    "seed": st.integers(0, 2**32 - 1),
+    "n_rows": st.integers(2, 8),
+    "n_cols": st.integers(2, 8),
+    "wall_fraction": st.floats(0.0, 0.6),
+}
+
+
+@settings(max_examples=300, deadline=None)
+@given(**LAYOUT_DRAWS)
 def test_generated_layouts_are_connected_with_reachable_start_and_goal(seed, n_rows, n_cols, wall_fraction):
+    check_generated_layout(seed, n_rows, n_cols, wall_fraction)
+
+
+@pytest.mark.slow  # the same property on 2,000 draws (about 10 s); the unit tier's test above draws 300
+@settings(max_examples=2000, deadline=None)
+@given(**LAYOUT_DRAWS)
+def test_generated_layouts_are_connected_with_reachable_start_and_goal_on_many_draws(
+    seed, n_rows, n_cols, wall_fraction
+):
+    check_generated_layout(seed, n_rows, n_cols, wall_fraction)
+
+
+def check_generated_layout(seed, n_rows, n_cols, wall_fraction):
+    """The layout of these draws is connected, its start in a corner and its goal reachable and apart."""
     layout = generate_layout(
         np.random.default_rng(seed), n_rows=n_rows, n_cols=n_cols, wall_fraction=wall_fraction, min_goal_cells=1
     )

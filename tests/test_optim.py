@@ -29,6 +29,10 @@ def train(optimizer_class, steps, **options):
     return network, optimizer
 
 
+STEPS = 60
+"""Training steps of each run compared (any step whose rounding differs breaks the bits from there on)."""
+
+
 def same_bits(a, b):
     return a.dtype == b.dtype and a.shape == b.shape and bool((a.view(th.int32) == b.view(th.int32)).all())
 
@@ -45,11 +49,11 @@ def test_the_weights_and_moments_are_torchs_bit_for_bit(options):
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(ZeroSafeAdam, "_lean_step", staticmethod(counted))
-        mine, my_optimizer = train(ZeroSafeAdam, 150, **options)
+        mine, my_optimizer = train(ZeroSafeAdam, STEPS, **options)
     # Without weight decay the lean step must have run (else the test would only compare torch with torch);
     # with it, torch's own step runs every time.
-    assert (len(lean_steps) > 100) if not options else not lean_steps, len(lean_steps)
-    theirs, their_optimizer = train(th.optim.Adam, 150, **options)
+    assert (len(lean_steps) > STEPS * 2 // 3) if not options else not lean_steps, len(lean_steps)
+    theirs, their_optimizer = train(th.optim.Adam, STEPS, **options)
     for (name, a), b in zip(mine.named_parameters(), theirs.parameters(), strict=True):
         assert same_bits(a.detach(), b.detach()), name
         if b in their_optimizer.state:

@@ -41,10 +41,19 @@ def test_the_default_picture_is_the_schematic_it_always_was():
     env.close()
 
 
-def test_a_rendered_high_level_episode_has_one_frame_per_low_level_step():
+@pytest.fixture(scope="module")
+def trail_episode():
+    """Task 0 played once by the oracle with the trail view: the frames (read only) and the last info."""
     env = gym.make(SUITE_ID, render_mode="rgb_array_list", render_view="trail")
     frames, info = play_oracle_episode(env)
     env.close()
+    for frame in frames:
+        frame.flags.writeable = False  # shared by the tests below
+    return frames, info
+
+
+def test_a_rendered_high_level_episode_has_one_frame_per_low_level_step(trail_episode):
+    frames, info = trail_episode
     assert info["is_success"] and info["attempts"] > 1
     assert len(frames) == info["total_low_level_steps"] + 1  # the reset's frame, then one per low-level step
     assert all(frame.dtype == np.uint8 and frame.shape == frames[0].shape and frame.shape[2] == 3 for frame in frames)
@@ -52,10 +61,8 @@ def test_a_rendered_high_level_episode_has_one_frame_per_low_level_step():
     assert moved > len(frames) // 2  # the body walks between frames
 
 
-def test_the_trail_view_draws_the_path_and_the_current_subgoal():
-    env = gym.make(SUITE_ID, render_mode="rgb_array_list", render_view="trail")
-    frames, _ = play_oracle_episode(env)
-    env.close()
+def test_the_trail_view_draws_the_path_and_the_current_subgoal(trail_episode):
+    frames, _ = trail_episode
 
     def count(frame, colour):
         return int(np.all(frame == colour, axis=-1).sum())

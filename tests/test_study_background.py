@@ -19,36 +19,63 @@ from antmaze_hirl.study.questionnaire import ITEM_KEYS
 from antmaze_hirl.study.session import ParticipantSession, TrialClosing, _load_checkpoint
 from antmaze_hirl.study.store import Study
 
-SLOW_UPDATE_SECONDS = 5.0
+GATE_SECONDS = 60.0
+"""The longest a held update waits for its gate: a request that waited for the update would hang this long."""
 
 
 def rows_of(folder):
     return read_episode_rows(folder / "participants" / "P01" / "episodes.csv")
 
 
+class UpdateGate:
+    """Learner updates that wait until the test opens the gate (an update slower than any maze), instead of a sleep.
+
+    A request that waited for an update would hang until :data:`GATE_SECONDS`, so a test asserts that a request
+    returned with the update still held (:attr:`finished` short), which does not depend on the machine's speed.
+    A session's close opens the gate: a stop lets the update in progress finish (``UpdateQueue.stop``), so it
+    would wait for it.
+    """
+
+    def __init__(self, monkeypatch):
+        self.started, self.finished = [], []  # when each update reached the gate, and when it finished
+        self._open = threading.Event()
+        real_update, real_close = DAggerTrainer._update, ParticipantSession.close
+
+        def held_update(trainer, steps):
+            self.started.append(time.monotonic())
+            assert self._open.wait(GATE_SECONDS), "the gate of the update was never opened"
+            real_update(trainer, steps)
+            self.finished.append(time.monotonic())
+
+        def close(session):
+            self.open()
+            real_close(session)
+
+        monkeypatch.setattr(DAggerTrainer, "_update", held_update)
+        monkeypatch.setattr(ParticipantSession, "close", close)
+
+    def open(self):
+        self._open.set()
+
+    def close(self):
+        self._open.clear()
+
+
 def test_next_does_not_wait_for_a_slow_update(tmp_path, monkeypatch):
     folder = make_tiny_study(tmp_path / "study", methods=("dagger",), episodes=3, practice=0, background_updates=True)
-    real_update = DAggerTrainer._update
-    updating = []
-
-    def slow_update(self, steps):
-        updating.append(time.monotonic())
-        time.sleep(SLOW_UPDATE_SECONDS)
-        real_update(self, steps)
-
-    monkeypatch.setattr(DAggerTrainer, "_update", slow_update)
+    gate = UpdateGate(monkeypatch)
     session = open_session(folder)
-    waits = []
-    for _ in range(2):  # the two mazes before the last, each played while the update before it runs
+    for maze in range(2):  # the two mazes before the last, each played while the update before it runs
         play_to_episode_end(session)
-        started = time.monotonic()
         state = session.next_episode()
-        waits.append(time.monotonic() - started)
         assert state["phase"] == "label"
+        assert len(gate.finished) == maze  # the maze is saved and the next built while its update is held
+        gate.open()
         for job in session._updates.pending():  # a person whose maze lasts longer than the update
             job.wait()
-    assert len(updating) == 2  # both updates ran, in the background
-    assert max(waits) < SLOW_UPDATE_SECONDS - 1.5, waits  # the maze is saved and the next built, no more
+        gate.close()
+    assert len(gate.finished) == 2  # both updates ran, in the background
+    gate.open()
     play_trial(session)
     assert session.wait_for_closed_trials(timeout=60)  # the last maze's update, after the trial closed
     session.close()
@@ -91,50 +118,54 @@ def test_a_restart_while_an_update_runs_finishes_it_and_loses_no_maze(tmp_path):
     assert [row["episode"] for row in rows_of(folder)] == ["0", "1", "2"]
 
 
-def slowed(monkeypatch, seconds=SLOW_UPDATE_SECONDS):
-    """Every learner update takes ``seconds`` longer (a loaded machine, a big ensemble)."""
-    real_update = DAggerTrainer._update
-
-    def slow_update(self, steps):
-        time.sleep(seconds)
-        real_update(self, steps)
-
-    monkeypatch.setattr(DAggerTrainer, "_update", slow_update)
-
-
 def final_updates(folder):
     events = read_json_records(folder / "participants" / "P01" / "events.jsonl")
     return [record for _, record in events if record["event"] == "final_update"]
 
 
-def play_to_the_last_maze(session):
-    """Plays every maze but the last (each update done before the next maze ends, as for a person)."""
+def play_to_the_last_maze(session, gate=None):
+    """Plays every maze but the last (each update done before the next maze ends, as for a person).
+
+    With a ``gate``, each update is let through once its next maze has started, and the gate is closed again
+    at the last maze's end.
+    """
     episodes = session.trial.episodes
     for _ in range(episodes - 1):
-        play_one_episode(session)
+        play_to_episode_end(session)
+        session.next_episode()
+        if gate is not None:
+            gate.open()
         for job in session._updates.pending():
             job.wait()
+        if gate is not None:
+            gate.close()
     play_to_episode_end(session)
 
 
-def at_the_last_maze(tmp_path, monkeypatch, slow_seconds=SLOW_UPDATE_SECONDS, practice=0):
-    """A 2-maze background-update study with slowed updates, its session at the end of the first part's last maze."""
+def at_the_last_maze(tmp_path, monkeypatch, held=True, practice=0):
+    """A 2-maze background-update study, its session at the end of the first part's last maze: the study folder,
+    the session and the :class:`UpdateGate`, counting from here (closed: the updates from here on are held;
+    ``held=False``: open)."""
     folder = make_tiny_study(
         tmp_path / "study", methods=("dagger",), episodes=2, practice=practice, background_updates=True
     )
-    slowed(monkeypatch, slow_seconds)
+    gate = UpdateGate(monkeypatch)
     session = open_session(folder)
-    play_to_the_last_maze(session)
-    return folder, session
+    play_to_the_last_maze(session, gate)
+    gate.started.clear()  # the gate counts the updates from here on
+    gate.finished.clear()
+    if not held:
+        gate.open()
+    return folder, session, gate
 
 
 def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch)
-    started = time.monotonic()
+    folder, session, gate = at_the_last_maze(tmp_path, monkeypatch)
+    closing = time.monotonic()
     state = session.next_episode()
-    waited = time.monotonic() - started
+    closed = time.monotonic()
     assert state["phase"] == "questionnaire" and state["last_trial"]["episodes"] == 2
-    assert waited < SLOW_UPDATE_SECONDS - 1.5, waited  # the part ends without its update
+    assert gate.finished == []  # the part ends without its update (held until the gate opens below)
     trial = folder / "participants" / "P01" / "trial1"
     assert not (trial / "learner.zip").exists()  # the final learner is not written yet
     assert [row["episode"] for row in rows_of(folder)] == ["0"]  # its row waits for the final evaluation
@@ -142,15 +173,19 @@ def test_the_last_maze_closes_the_part_at_once_and_its_update_finishes_after(tmp
         check_study_files(folder, load_plan(folder))
     assert Study(folder).progress("P01") == (0, "questionnaire")  # not damage: the picker lists it as it is
     answered = session.submit_questionnaire(1, {"ratings": dict.fromkeys(ITEM_KEYS, 3), "comment": ""})
-    assert answered["phase"] == "done"  # answered while the update runs
+    assert answered["phase"] == "done"  # answered while the update is held
+    time.sleep(0.2)  # a lag the final_update event must show
+    opened = time.monotonic()
+    gate.open()
     assert session.wait_for_closed_trials(timeout=60)
+    written = time.monotonic()
     session.close()
     rows = rows_of(folder)
     assert [row["episode"] for row in rows] == ["0", "1"] and rows[-1]["eval_success"] != ""  # the final evaluation
     assert (trial / "learner.zip").is_file()
     (event,) = final_updates(folder)
     assert event["updates"] == 1 and not event["resumed"]
-    assert event["lag_seconds"] >= SLOW_UPDATE_SECONDS - 0.5  # the data state the lag
+    assert opened - closed - 0.001 <= event["lag_seconds"] <= written - closing + 0.001  # the data state the lag
     check_study_files(folder, load_plan(folder))
 
 
@@ -158,7 +193,7 @@ def test_a_closed_trials_rows_removed_after_its_final_update_are_damage_not_a_cl
     # With learner.zip gone too the trial looks like a closing cut off before its last rows, but its
     # final_update is logged, which a closing writes only after them: the rows were removed, and the
     # participant is stopped (409) naming the file instead of being repaired from the checkpoint.
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, 0.5)
+    folder, session, _ = at_the_last_maze(tmp_path, monkeypatch, held=False)
     assert session.next_episode()["phase"] == "questionnaire"
     assert session.wait_for_closed_trials(timeout=60)
     session.close()
@@ -172,11 +207,12 @@ def test_a_closed_trials_rows_removed_after_its_final_update_are_damage_not_a_cl
 
 
 def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_update_runs(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, 3.0, practice=2)
-    started = time.monotonic()
+    folder, session, gate = at_the_last_maze(tmp_path, monkeypatch, practice=2)
     assert session.next_episode()["phase"] == "intro"
     assert session.start_trial()["phase"] == "label"
-    assert time.monotonic() - started < 3.0 - 1.0  # neither waits for the practice's last update
+    assert gate.finished == []  # neither waits for the practice's last update (held until here)
+    gate.open()
+    assert session.wait_for_closed_trials(timeout=60)  # the practice's closing, done within the maze as for a person
     play_trial(session)
     assert session.wait_for_closed_trials(timeout=60)
     session.close()
@@ -191,9 +227,10 @@ def test_after_a_practice_the_next_part_opens_and_starts_while_the_practice_upda
 
 
 def test_a_stop_while_a_closed_trial_updates_is_resumed_when_the_server_starts(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, 2.0)
+    folder, session, gate = at_the_last_maze(tmp_path, monkeypatch)
     assert session.next_episode()["phase"] == "questionnaire"
-    session.close()  # a stop: the running update ends unused, nothing of it is written
+    assert gate.finished == []
+    session.close()  # a stop while the update is held (the stop lets it end): it ends unused, nothing is written
     trial = folder / "participants" / "P01" / "trial1"
     assert not (trial / "learner.zip").exists() and len(rows_of(folder)) == 1 and not final_updates(folder)
     study = Study(folder)  # a server start: the participant need not come back for the update to finish
@@ -273,7 +310,7 @@ def assert_closed_trial_complete(folder):
 
 @pytest.mark.parametrize("write", list(WRITES_OF_A_CLOSING))
 def test_a_closed_trials_write_that_fails_once_is_retried_without_a_restart(tmp_path, monkeypatch, write):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    folder, session, _ = at_the_last_maze(tmp_path, monkeypatch, held=False)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 0.1)
     checkpoints = []
     real_save = session_module._save_checkpoint
@@ -299,7 +336,7 @@ def test_a_closed_trials_write_that_fails_once_is_retried_without_a_restart(tmp_
 
 
 def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retries_them(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    folder, session, _ = at_the_last_maze(tmp_path, monkeypatch, held=False)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
     monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
     disk = ClosingDisk(monkeypatch, lambda path: True)  # every write of the closing fails
@@ -338,7 +375,7 @@ def test_while_a_closed_trials_writes_fail_the_page_says_so_and_a_request_retrie
 
 
 def test_a_request_during_a_retry_is_that_retry_and_does_not_start_another_after_it(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    folder, session, _ = at_the_last_maze(tmp_path, monkeypatch, held=False)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)  # only a request wakes it here
     monkeypatch.setattr(TrialClosing, "RETRY_GAP_SECONDS", 0.0)
     disk = ClosingDisk(monkeypatch, lambda path: True)
@@ -373,7 +410,7 @@ def test_a_request_during_a_retry_is_that_retry_and_does_not_start_another_after
 
 
 def test_a_stop_while_a_closed_trials_writes_fail_is_prompt_and_the_restart_finishes_them(tmp_path, monkeypatch):
-    folder, session = at_the_last_maze(tmp_path, monkeypatch, slow_seconds=0.0)
+    folder, session, _ = at_the_last_maze(tmp_path, monkeypatch, held=False)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)
     disk = ClosingDisk(monkeypatch, lambda path: True)
     session.next_episode()
@@ -394,19 +431,22 @@ def test_one_participants_failing_writes_do_not_cut_short_anothers_closing(tmp_p
     folder = make_tiny_study(
         tmp_path / "study", participants=2, methods=("dagger",), episodes=2, practice=0, background_updates=True
     )
-    slowed(monkeypatch, 1.5)
+    gate = UpdateGate(monkeypatch)
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)
     disk = ClosingDisk(monkeypatch, lambda path: "P01" in path.parts)  # P01's disk is full, P02's is not
     study = Study(folder)
+    slow = threading.Timer(0.5, gate.open)  # P02's final update, held until the study waits on it
     try:
         for participant in ("P01", "P02"):
             session = study.session(participant)
             session.start_trial()
-            play_to_the_last_maze(session)
+            play_to_the_last_maze(session, gate)  # P02's first update lets P01's final update through
             assert session.next_episode()["phase"] == "questionnaire"
+        slow.start()
         with pytest.raises(RuntimeError, match=r"participant P01, trial 1: .*its writes are retried"):
             study.wait_for_closed_trials(timeout=60)
         assert disk.failed
         assert (folder / "participants" / "P02" / "trial1" / "learner.zip").is_file()  # waited on, not cut short
     finally:
+        slow.cancel()
         study.close()
