@@ -50,7 +50,11 @@ def lab_imports(source: Path | ast.AST) -> list[tuple[int, str]]:
                 found += [(node.lineno, text.replace("/", ".").removesuffix(".py")) for text in texts]
         elif isinstance(node, (ast.List, ast.Tuple)):
             texts = [_text(element) or "" for element in node.elts]
-            run = [after for before, after in pairwise(["", *texts]) if before == "-m" or ("/" in after and " " not in after)]
+            run = [
+                after
+                for before, after in pairwise(["", *texts])
+                if before == "-m" or ("/" in after and " " not in after)
+            ]
             found += [(node.lineno, text.replace("/", ".")) for text in run]
     return [(line, name) for line, name in found if name.split(".")[0] in LAB]
 
