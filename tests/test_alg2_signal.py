@@ -20,6 +20,8 @@ from antmaze_hirl.dagger.symmetric_views import class_directions, class_permutat
 from antmaze_hirl.envs import PointGoToController
 from antmaze_hirl.envs.layouts import bfs_distances, generate_layout
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/alg2_signal.py): the integration tier
+
 alg2_signal = load_script("scripts/alg2_signal.py")
 
 GENERIC = {"head": "next_cell", "planning_iterations": 0, "block_walls": False}

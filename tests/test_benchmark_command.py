@@ -229,6 +229,7 @@ def test_the_leaderboard_page_is_generated_from_the_committed_reports_of_the_cur
         assert f"`{path.name}` |" in rows
 
 
+@pytest.mark.integration  # a lab check (antmaze_lab.leaderboard)
 def test_the_leaderboard_prints_the_one_section_asked_for(capsys):
 
     from antmaze_lab import leaderboard

@@ -5,6 +5,8 @@ import json
 import pytest
 from script_helpers import load_script
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/benchmark_dagger.py): the integration tier
+
 script = load_script("scripts/benchmark_dagger.py")
 
 

@@ -11,6 +11,8 @@ from antmaze_hirl.experiments.uncertainty import paired_comparison, signed_rank_
 from antmaze_lab import claims as cl
 from antmaze_lab import paper_claims as pc
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.claims and paper_claims): the integration tier
+
 CLAIM = {claim.number: claim for claim in cl.CLAIMS}
 
 ROOT = Path(__file__).resolve().parents[1]

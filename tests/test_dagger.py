@@ -33,7 +33,6 @@ from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
 GEOMETRY = MazeGeometry(5, 5, 1.0)
-learning_margins = load_script("scripts/learning_margins.py")  # each learning check's figure, one per seed
 
 
 def demo(episode, step):
@@ -256,6 +255,7 @@ def test_dagger_moves_the_learner_towards_the_experts_labels():
     # spread from 0.15 to 0.61 (median 0.27, mean 0.34, sd 0.17), so one seed is no test; the mean of 5
     # consecutive seeds spread from 0.29 to 0.39, and the bound 0.7 on the mean of seeds 0-4 sits 0.3 above it:
     # `python scripts/learning_margins.py dagger_ratio --seeds 0-9 --window 5`.
+    learning_margins = load_script("scripts/learning_margins.py")  # each check's figure, one per seed
     ratios = [learning_margins.dagger_distance_ratio(seed) for seed in range(5)]
     assert np.mean(ratios) < 0.7, ratios
 
@@ -268,7 +268,7 @@ def test_dagger_learns_small_mazes_end_to_end():
     # function this calls. Not the point's default planning learner: it solves these mazes untrained (30 of 30),
     # and training can lower it (25 of 30 after 20 episodes on seed 0 since the random streams of 0.2.0), the
     # protocol's "strong prior" finding, reported by its ablation, not a property to assert here.
-    gain = learning_margins.dagger_end_to_end_gain(0)
+    gain = load_script("scripts/learning_margins.py").dagger_end_to_end_gain(0)
     assert gain >= 0.4, gain
 
 

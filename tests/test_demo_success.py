@@ -5,6 +5,8 @@ from script_helpers import load_script
 
 from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/demo_success.py): the integration tier
+
 demo_success = load_script("scripts/demo_success.py")
 
 

@@ -3,8 +3,11 @@
 from pathlib import Path
 
 import griffe
+import pytest
 import yaml
 from script_helpers import load_script
+
+pytestmark = pytest.mark.integration  # a lab check (scripts/griffe_sphinx_roles.py): the integration tier
 
 ROOT = Path(__file__).resolve().parents[1]
 roles = load_script("scripts/griffe_sphinx_roles.py")

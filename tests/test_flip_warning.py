@@ -5,6 +5,8 @@ import pytest
 
 from antmaze_lab import flip_warning
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.flip_warning): the integration tier
+
 
 def ant_observation(roll_degrees):
     """An ant goal observation whose torso is rolled about x by ``roll_degrees``."""

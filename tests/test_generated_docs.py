@@ -3,6 +3,8 @@ from pathlib import Path
 import pytest
 from script_helpers import load_script
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/generate_docs.py): the integration tier
+
 ROOT = Path(__file__).resolve().parents[1]
 generate_docs = load_script("scripts/generate_docs.py")
 

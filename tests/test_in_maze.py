@@ -12,6 +12,8 @@ from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_hirl.experts import PathOracle
 from antmaze_lab import in_maze_protocol as in_maze
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.in_maze_protocol): the integration tier
+
 
 def test_step_limit_scales_with_the_shortest_path_around_walls():
     walls = validate_maze_map("u")  # rows 1-3 free, a wall at (2, 1)-(2, 2): the path goes round it

@@ -10,10 +10,10 @@ from antmaze_hirl import PathOracle
 from antmaze_hirl.dagger import DAggerTrainer, RewardBasedQuery
 from antmaze_hirl.dagger.interop import BCLearner, to_transitions
 
-learning_margins = load_script("scripts/learning_margins.py")  # the BC check's figure, one per seed
 
-
+@pytest.mark.integration  # a lab check: the labels and the figure come from scripts/learning_margins.py
 def test_labels_export_to_imitation_transitions_and_bc_trains_on_them():
+    learning_margins = load_script("scripts/learning_margins.py")  # the BC check's figure, one per seed
     trainer = learning_margins.exported_labels(0)  # two DAgger episodes on a 3x3 point maze
     env = trainer.env
     transitions = to_transitions(trainer.dataset)

@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
@@ -17,20 +18,44 @@ LAB = ("scripts", "antmaze_lab", "benchmarks")
 """The lab's top-level packages and folders: the paper's runners, reports and speed tools."""
 
 
-def lab_imports(path: Path) -> list[tuple[int, str]]:
-    """Each import of a lab module in ``path``, at any depth: import statements, and ``importlib.import_module`` /
-    ``__import__`` / ``spec_from_file_location`` calls whose first string names one (by module or by path)."""
+LOADERS = ("import_module", "__import__", "spec_from_file_location", "run_path", "load_script")
+"""The calls that import or load a module by name or by path (``load_script``: the tests' loader of scripts)."""
+
+
+def _text(node: ast.AST) -> str | None:
+    """A string constant's text, or an f-string's leading text (``f"antmaze_lab.{name}"``: ``antmaze_lab.``)."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.JoinedStr) and node.values and isinstance(node.values[0], ast.Constant):
+        return str(node.values[0].value)
+    return None
+
+
+def lab_imports(source: Path | ast.AST) -> list[tuple[int, str]]:
+    """Each import of a lab module in ``source`` (a file or a parsed node), at any depth: import statements,
+    ``importlib.import_module`` / ``__import__`` / ``spec_from_file_location`` / ``run_path`` / ``load_script``
+    calls whose strings name one (by module or by path), and command lines that run one (``[..., "-m",
+    "antmaze_lab.x"]`` or ``["python", "scripts/x.py"]``)."""
+    tree = ast.parse(source.read_text(), filename=str(source)) if isinstance(source, Path) else source
     found = []
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             found += [(node.lineno, alias.name) for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module is not None and node.level == 0:
             found.append((node.lineno, node.module))
         elif isinstance(node, ast.Call):
             called = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
-            texts = [arg.value for arg in node.args if isinstance(arg, ast.Constant) and isinstance(arg.value, str)]
-            if called in ("import_module", "__import__", "spec_from_file_location", "run_path") and texts:
+            texts = [text for arg in node.args if (text := _text(arg)) is not None]
+            if called in LOADERS and texts:
                 found += [(node.lineno, text.replace("/", ".").removesuffix(".py")) for text in texts]
+        elif isinstance(node, (ast.List, ast.Tuple)):
+            texts = [_text(element) or "" for element in node.elts]
+            run = [
+                after
+                for before, after in pairwise(["", *texts])
+                if before == "-m" or ("/" in after and " " not in after)
+            ]
+            found += [(node.lineno, text.replace("/", ".")) for text in run]
     return [(line, name) for line, name in found if name.split(".")[0] in LAB]
 
 
@@ -77,3 +102,72 @@ def test_the_unit_tier_refuses_to_read_the_committed_results():
     with pytest.raises(PermissionError, match=r"^the unit tier reads no committed results: .*index\.json; mark the"):
         (Path(COMMITTED_RESULTS) / "index.json").read_text()
     assert (ROOT / "pyproject.toml").read_text()  # the rest of the checkout reads as ever
+
+
+LEFT_OUT = ("integration", "slow")
+"""The markers that take a test out of the unit tier (pyproject.toml's addopts)."""
+PENDING_MARKS = {"test_steady_ant_scripts.py"}
+"""Lab test files that another branch edits now: each gets its ``pytestmark`` when that branch is merged (this
+test fails once one no longer reaches the lab from the unit tier, so the entry goes with it)."""
+
+
+def _marks_out(marker: ast.AST) -> bool:
+    """Whether ``marker`` (a decorator, or a ``pytestmark`` value) is ``pytest.mark.integration`` or ``.slow``, called
+    or not, or a list of markers holding one. A ``pytest.param(..., marks=...)`` marks one case, not the test."""
+    if isinstance(marker, (ast.List, ast.Tuple)):
+        return any(_marks_out(element) for element in marker.elts)
+    marker = marker.func if isinstance(marker, ast.Call) else marker
+    return isinstance(marker, ast.Attribute) and marker.attr in LEFT_OUT
+
+
+def unit_tier_lab_imports(path: Path) -> list[tuple[int, str]]:
+    """Each import of a lab module (:func:`lab_imports`) in the test module ``path`` that the unit tier runs: none
+    where a module-level ``pytestmark`` marks the whole file integration or slow; else each outside the top-level
+    tests and classes that are so marked (module-level code and fixtures run for every test of the file)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in tree.body:
+        targets = node.targets if isinstance(node, ast.Assign) else []
+        if any(getattr(target, "id", "") == "pytestmark" for target in targets) and _marks_out(node.value):
+            return []
+    found = []
+    for node in tree.body:
+        definition = isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
+        if not (definition and any(_marks_out(decorator) for decorator in node.decorator_list)):
+            found += lab_imports(node)
+    return found
+
+
+def test_the_unit_tier_never_imports_the_lab(tmp_path):
+    # The lab's checks run in the integration tier (CONTRIBUTING.md): a unit-tier test that imports antmaze_lab or
+    # loads a script of scripts/ or benchmarks/ is marked integration. First the scan itself, on a crafted module.
+    crafted = tmp_path / "test_crafted.py"
+    crafted.write_text(
+        "import pytest\n"
+        "COMMAND = [sys.executable, '-m', 'antmaze_lab.in_maze']\n"
+        "def test_unit(name):\n"
+        "    importlib.import_module(f'antmaze_lab.{name}')\n"
+        "    load_script('benchmarks/trial_speed.py')\n"
+        "@pytest.mark.parametrize('x', [pytest.param(1, marks=pytest.mark.integration)])\n"
+        "def test_one_case_marked(x):\n"
+        "    from antmaze_lab import tables\n"
+        "@pytest.mark.integration  # a lab check\n"
+        "def test_lab():\n"
+        "    from antmaze_lab import tables\n"
+        "@pytest.mark.slow(reason='long')\n"
+        "class TestLab:\n"
+        "    def test_run(self):\n"
+        "        subprocess.run(['python', 'scripts/in_maze.py'])\n"
+    )
+    assert [line for line, _ in unit_tier_lab_imports(crafted)] == [2, 4, 5, 8]
+    crafted.write_text("import pytest\nfrom antmaze_lab import tables\npytestmark = [pytest.mark.integration]\n")
+    assert unit_tier_lab_imports(crafted) == []
+
+    found = {
+        path.name: lines
+        for path in sorted(Path(__file__).parent.glob("*.py"))
+        if (lines := unit_tier_lab_imports(path))
+    }
+    stale = sorted(PENDING_MARKS - set(found))
+    assert not stale, f"{stale} no longer import the lab in the unit tier: remove them from PENDING_MARKS"
+    unmarked = {name: lines for name, lines in found.items() if name not in PENDING_MARKS}
+    assert not unmarked, f"unit-tier tests import the lab (line, module): {unmarked}; mark them integration"

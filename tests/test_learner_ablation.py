@@ -11,6 +11,8 @@ from antmaze_hirl.experiments.config import ExperimentConfig, body_settings
 from antmaze_hirl.experiments.runner import make_env
 from antmaze_hirl.experts import PathOracle
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/learner_ablation.py): the integration tier
+
 learner_ablation = load_script("scripts/learner_ablation.py")
 
 

@@ -14,6 +14,8 @@ from antmaze_hirl.experiments.runner import make_env
 from antmaze_lab import preregistered as pre
 from antmaze_lab.selection_trials import read_selection_trial, selection_task_classes
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.selection_trials): the integration tier
+
 ROOT = Path(__file__).resolve().parents[1]
 CANDIDATE, OLD = "next_cell_plan", "next_cell_cnn"
 MAZES = 50

@@ -163,6 +163,7 @@ SCRIPT_ARGV = {
 """Each lab module that plays a low-level zip (``python -m antmaze_lab.X``), with the arguments before the bad value."""
 
 
+@pytest.mark.integration  # a lab check (antmaze_lab.in_maze and select_low_level)
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("script", sorted(SCRIPT_ARGV))
 def test_the_lab_scripts_refuse_a_bad_low_level_in_one_line_before_any_episode(

@@ -3,7 +3,10 @@
 import json
 import sys
 
+import pytest
 from script_helpers import load_script
+
+pytestmark = pytest.mark.integration  # a lab check (scripts/next_cell_labels.py): the integration tier
 
 next_cell_labels = load_script("scripts/next_cell_labels.py")
 

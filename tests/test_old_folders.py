@@ -114,6 +114,7 @@ def test_an_old_summarys_config_reads_as_what_it_was_made_with(tmp_path):
     assert read_summary(tmp_path)["config"] == {**asdict(PROTOCOL_1_ANT), "low_level": "sha256:test"}
 
 
+@pytest.mark.integration  # a lab check (scripts/rewrite_reports.py)
 def test_rewrite_reports_runs_an_old_folder_with_its_recorded_settings(tmp_path, monkeypatch):
     rewrite_reports = load_script("scripts/rewrite_reports.py")
     recorded = recorded_config(PROTOCOL_1_ANT, lacking=("protocol", "learner", "evaluation_envs"))

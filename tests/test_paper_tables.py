@@ -10,6 +10,8 @@ from test_experiments import crafted_rows
 from antmaze_hirl.experiments import summarise
 from antmaze_lab import paper_tables
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.paper_tables): the integration tier
+
 
 def test_tables_print_the_summary_figures():
     summary = {"methods": summarise(crafted_rows(), ["dagger", "noise"]), "trial_seconds": {"dagger_seed0": 90}}

@@ -5,6 +5,8 @@ from types import SimpleNamespace
 import pytest
 from script_helpers import load_script
 
+pytestmark = pytest.mark.integration  # a lab check (benchmarks/paper_trial_speed.py): the integration tier
+
 bench = load_script("benchmarks/paper_trial_speed.py")
 
 

@@ -9,6 +9,8 @@ from script_helpers import load_script
 
 from antmaze_lab import planning_tables
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/planner_check.py): the integration tier
+
 planner_check = load_script("scripts/planner_check.py")
 
 

@@ -270,6 +270,7 @@ class FixedMove(th.nn.Module):
         return logits
 
 
+@pytest.mark.integration  # a lab check (scripts/planner_check.py)
 @pytest.mark.parametrize(
     ("move", "end"),
     [((1, 0), "success"), ((0, 1), "into_wall"), ((1, 1), "past_corner"), ((0, 0), "stay"), ((-1, 0), "into_wall")],

@@ -13,6 +13,8 @@ from setuptools import find_packages
 from antmaze_lab import preregistered as pre
 from antmaze_lab.folders import BodyEvaluations, MethodEvaluations, symmetry_check
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.preregistered and folders): the integration tier
+
 ROOT = Path(__file__).resolve().parents[1]
 EPISODES = np.arange(0, 101, 10)
 

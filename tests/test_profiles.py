@@ -56,6 +56,7 @@ def test_the_seed_table_is_the_values_of_before():
     assert build_parser().parse_args(["eval-low", "--body", "point"]).seed == profiles.SEEDS.low_level_report_subgoals
 
 
+@pytest.mark.integration  # a lab check: reads antmaze_lab's families and selection seeds
 def test_the_ids_and_the_maze_families_are_the_values_of_before():
     ids = [
         "antmaze_hirl/AntReach-v0",

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/protocol2_rerun.sh): the integration tier
+
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "protocol2_rerun.sh"
 
 

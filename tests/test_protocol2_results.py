@@ -8,6 +8,8 @@ import pytest
 
 from antmaze_lab import claims, protocol_tables, tables
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab's protocol-2 tables and claims): the integration tier
+
 ROOT = Path(__file__).resolve().parents[1]
 FOLDERS = ROOT / "results" / "protocol2"
 PAGE = ROOT / "docs" / "results" / "protocol2.md"

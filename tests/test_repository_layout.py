@@ -22,6 +22,7 @@ def imported_top_names(path: Path) -> list[tuple[int, str]]:
     return found
 
 
+@pytest.mark.integration  # a lab check (the scripts' imports)
 @pytest.mark.parametrize("path", SCRIPTS, ids=lambda path: str(path.relative_to(ROOT)))
 def test_a_script_imports_no_other_script(path):
     # What two scripts share lives in the package, or both are lab modules (antmaze_lab.in_maze_protocol, ...).
@@ -57,6 +58,7 @@ def full_entry(**fields):
     return entry | {"machine": "not recorded", "supersedes": [], "note": ""} | fields
 
 
+@pytest.mark.integration  # a lab check (scripts/results_index.py)
 def test_the_results_index_check_names_an_unindexed_entry_and_a_removed_one_still_there(tmp_path):
     results_index = load_script("scripts/results_index.py")
     (tmp_path / "in_maze").mkdir()
@@ -78,6 +80,7 @@ def test_the_results_index_check_names_an_unindexed_entry_and_a_removed_one_stil
     ]
 
 
+@pytest.mark.integration  # a lab check (scripts/results_index.py)
 @pytest.mark.parametrize("field", ["command", "committed_in", "made_at", "low_level", "machine", "supersedes", "note"])
 def test_the_results_index_check_refuses_an_entrys_null_or_missing_field_naming_both(tmp_path, field):
     results_index = load_script("scripts/results_index.py")
@@ -97,6 +100,7 @@ def test_the_results_index_check_refuses_an_entrys_null_or_missing_field_naming_
     ]
 
 
+@pytest.mark.integration  # a lab check (scripts/results_index.py)
 def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
     results_index = load_script("scripts/results_index.py")
     assert results_index.expand_braces("a_{x,y}.json") == ["a_x.json", "a_y.json"]
@@ -106,6 +110,7 @@ def test_a_page_quotes_an_entry_by_path_pattern_or_braces():
     assert results_index.matches("leaderboard", "leaderboard/*.json")
 
 
+@pytest.mark.integration  # a lab check (scripts/results_index.py)
 def test_a_moved_script_replays_as_its_lab_module_and_the_check_names_a_stale_move(tmp_path):
     results_index = load_script("scripts/results_index.py")
     moved = {"scripts/in_maze.py": "antmaze_lab.in_maze"}
@@ -134,6 +139,7 @@ def test_a_moved_script_replays_as_its_lab_module_and_the_check_names_a_stale_mo
     ]
 
 
+@pytest.mark.integration  # a lab check (scripts/results_index.py)
 def test_the_check_parses_each_moved_entrys_replayed_options_with_its_modules_parser():
     results_index = load_script("scripts/results_index.py")
     moved = {"scripts/in_maze.py": "antmaze_lab.in_maze", "benchmarks/flip_warning.py": "antmaze_lab.flip_warning"}
@@ -160,6 +166,7 @@ def test_the_check_parses_each_moved_entrys_replayed_options_with_its_modules_pa
     ]
 
 
+@pytest.mark.integration  # a lab check (benchmarks/)
 def test_benchmarks_holds_only_benchmark_scripts():
     # Results go to results/<experiment>/, configs and research scripts to scripts/ (docs/architecture.md).
     others = sorted(p.name for p in (ROOT / "benchmarks").iterdir() if p.suffix != ".py" and p.name != "__pycache__")

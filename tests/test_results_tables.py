@@ -10,6 +10,8 @@ import pytest
 from antmaze_lab import headline, in_maze_tables, tables
 from antmaze_lab.commands import command_arguments, recorded_command
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab's results tables): the integration tier
+
 SECTIONS = tables.all_sections()
 """Every section, with the page module that prints it."""
 

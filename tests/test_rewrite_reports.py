@@ -8,6 +8,8 @@ import pytest
 from conftest import copy_results
 from script_helpers import load_script
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/rewrite_reports.py): the integration tier
+
 ROOT = Path(__file__).resolve().parents[1]
 rewrite_reports = load_script("scripts/rewrite_reports.py")
 

@@ -11,6 +11,8 @@ from script_helpers import load_script
 
 from antmaze_hirl.envs.state_layout import STATE_LAYOUT
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/rl_baselines.py): the integration tier
+
 rl_baselines = load_script("scripts/rl_baselines.py")
 
 

@@ -12,6 +12,8 @@ from antmaze_hirl.envs.layouts import validate_maze_map
 from antmaze_lab import in_maze_protocol as in_maze
 from antmaze_lab import select_low_level
 
+pytestmark = pytest.mark.integration  # a lab check (antmaze_lab.select_low_level): the integration tier
+
 SHIPPED = Path(__file__).parents[1] / "antmaze_hirl" / "policies" / "ant_td3.zip"
 
 
