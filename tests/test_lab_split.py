@@ -106,9 +106,6 @@ def test_the_unit_tier_refuses_to_read_the_committed_results():
 
 LEFT_OUT = ("integration", "slow")
 """The markers that take a test out of the unit tier (pyproject.toml's addopts)."""
-PENDING_MARKS = {"test_steady_ant_scripts.py"}
-"""Lab test files that another branch edits now: each gets its ``pytestmark`` when that branch is merged (this
-test fails once one no longer reaches the lab from the unit tier, so the entry goes with it)."""
 
 
 def _marks_out(marker: ast.AST) -> bool:
@@ -167,7 +164,4 @@ def test_the_unit_tier_never_imports_the_lab(tmp_path):
         for path in sorted(Path(__file__).parent.glob("*.py"))
         if (lines := unit_tier_lab_imports(path))
     }
-    stale = sorted(PENDING_MARKS - set(found))
-    assert not stale, f"{stale} no longer import the lab in the unit tier: remove them from PENDING_MARKS"
-    unmarked = {name: lines for name, lines in found.items() if name not in PENDING_MARKS}
-    assert not unmarked, f"unit-tier tests import the lab (line, module): {unmarked}; mark them integration"
+    assert not found, f"unit-tier tests import the lab (line, module): {found}; mark them integration"

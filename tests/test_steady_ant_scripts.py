@@ -5,6 +5,8 @@ import json
 import pytest
 from script_helpers import load_script
 
+pytestmark = pytest.mark.integration  # a lab check (scripts/steady_ant*.py): the integration tier
+
 steady_ant = load_script("scripts/steady_ant.py")
 table = load_script("scripts/steady_ant_table.py")
 
