@@ -501,6 +501,8 @@ def _fail(message: str) -> NoReturn:
 
 def _record(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     refuse_below_one(parser, args, ["episodes", "num_envs"])
+    if not args.out.parent.is_dir():
+        _fail(f"--out {args.out}: no folder {args.out.parent}")  # before the run, not after it
     try:
         damping = parse_tilt_damping(args.tilt_damping) if args.tilt_damping is not None else None
         rows, outcomes, seconds = record(
