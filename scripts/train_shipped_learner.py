@@ -8,7 +8,8 @@ fingerprint and the learner file's SHA-256). No evaluation maze is seen: score i
 ``antmaze-hirl benchmark SUITE --policy planner``.
 
 Usage: python scripts/train_shipped_learner.py --body ant [--labels 300] [--seed 0] [--out-dir DIR]
-           [--learner next_cell_gate|next_cell_switch|next_cell_switch_flat|next_cell_switch_cell]
+           [--learner next_cell_gate|next_cell_switch|next_cell_switch_flat|next_cell_switch_cell|
+           next_cell_switch_seen]
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
             "next_cell_switch",
             "next_cell_switch_flat",
             "next_cell_switch_cell",
+            "next_cell_switch_seen",
         ),
         default=LEARNER,
         help="(default: %(default)s)",
@@ -97,6 +99,10 @@ def main(argv: list[str] | None = None) -> int:
         "low_level": policy_fingerprint(load_shipped_policy(args.body)),
         "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
     }
+    outcomes = getattr(trainer.learner, "outcomes", ())
+    if len(outcomes):  # the moves its episodes tried, made or blocked (experience_blocking_weight only)
+        blocked = outcomes.arrays()[2]
+        record["move_outcomes"] = {"recorded": len(blocked), "blocked": int(blocked.sum())}
     atomic_write_json(path.with_suffix(".json"), record)
     print(f"wrote {path} ({record['labels']} labels, {episodes} episodes, {record['seconds']} s)")
     return 0

@@ -9,7 +9,8 @@ import pytest
 import torch as th
 
 from antmaze_hirl.dagger import HighLevelPolicy
-from antmaze_hirl.dagger.high_level_policy import planning_rounds
+from antmaze_hirl.dagger.features import EncodedBatch
+from antmaze_hirl.dagger.high_level_policy import LearnerSettings, planning_rounds
 from antmaze_hirl.dagger.network import (
     BLOCKED_COST,
     NEXT_CELL_MOVES,
@@ -567,3 +568,86 @@ def test_the_cell_switch_learns_to_shut_walls_and_keeps_free_cells_open(seed):
     assert into_wall > 0.8
     assert labelled < 0.05
     assert free < 0.2
+
+
+def test_experience_blocking_weight_needs_the_switch_and_is_checked():
+    with pytest.raises(ValueError, match="experience_blocking_weight needs binary_blocking"):
+        LearnerSettings(**{**learner_settings("next_cell_gate", 3), "experience_blocking_weight": 1.0})
+    for bad in (-1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="experience_blocking_weight must be finite"):
+            LearnerSettings(**{**SWITCH, "experience_blocking_weight": bad})
+
+
+def switch_after_outcomes(seed: int, weight: float, steps: int = 150) -> tuple[float, float, float, float]:
+    """Shares of recorded moves shut, before and after fitting a switch learner on labels and outcome records.
+
+    Records crafted from oracle-labelled states of 3x3 point mazes: each straight move from each state, blocked
+    where it leads into a wall, else made (diagonals left out: whether a body squeezes past a wall's corner is the
+    body's). Returns blocked moves shut before and after the fit, and made moves shut before and after.
+    """
+    env = point_env(maze_size=3)
+    learner = HighLevelPolicy.for_env(
+        env, rng=np.random.default_rng(seed), **{**SWITCH, "experience_blocking_weight": weight}
+    )
+    data = sample_labelled_states(
+        env, 100, subgoal_reach_m=learner.subgoal_reach_m, rng=np.random.default_rng(100 + seed)
+    )
+    batch = learner.encoder.encode(data.walls, data.agents, data.goals, data.bodies)
+    centre = batch.grids.shape[-1] // 2
+    moves = [(dx, dy) for dx, dy in NEXT_CELL_MOVES if abs(dx) + abs(dy) == 1]
+    steps_tried = np.array([move for _ in range(len(batch)) for move in moves], dtype=np.float32)
+    tried = EncodedBatch(np.repeat(batch.grids, len(moves), axis=0), np.repeat(batch.vectors, len(moves), axis=0))
+    blocked = np.array([grid[0, centre - dy, centre + dx] > 0.5 for grid in batch.grids for dx, dy in moves])
+    learner.outcomes.add(tried, steps_tried, blocked)
+    classes = th.from_numpy(next_cell_classes(steps_tried))
+
+    def shut() -> np.ndarray:
+        with th.no_grad():
+            logits = learner.network.planner.blocking_logits(th.from_numpy(tried.grids))[:, :, centre, centre]
+        return (logits.gather(1, classes[:, None])[:, 0] > 0).numpy()
+
+    before = shut()
+    learner.fit(batch, learner.targets(np.stack(data.agents), np.stack(data.labels)), steps=steps)
+    after = shut()
+    return (
+        float(before[blocked].mean()),
+        float(after[blocked].mean()),
+        float(before[~blocked].mean()),
+        float(after[~blocked].mean()),
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_moves_recorded_blocked_are_shut_and_moves_recorded_made_open_by_the_experience_term(seed):
+    # Measured over seeds 0-5 (uncommitted script, session 29): with the term 97.6-100% of the blocked moves shut
+    # and 1.0-7.7% of the made ones; without it (the labels alone, 150 steps) 0-2.3% of the blocked moves shut.
+    with_term = switch_after_outcomes(seed, 1.0)
+    without = switch_after_outcomes(seed, 0.0)
+    assert with_term[0] == 0.0 and with_term[2] == 0.0  # every switch starts open
+    assert with_term[1] > 0.9
+    assert with_term[3] < 0.15
+    assert without[1] < 0.2  # the labels alone do not shut them
+
+
+def test_a_step_is_recorded_blocked_when_its_walk_missed_the_cell_and_made_when_it_entered_it():
+    env = point_env(maze_size=3)
+    learner = HighLevelPolicy.for_env(
+        env, rng=np.random.default_rng(0), **{**SWITCH, "experience_blocking_weight": 1.0}
+    )
+    observation, _ = env.reset(seed=0)
+    geometry = learner.geometry
+    start = np.asarray(observation["state"][:2], dtype=np.float64)
+    east = start + np.array([geometry.scale, 0.0])
+    missed = {"agent_path": [start, start], "subgoal_reached": False, "flipped": False, "is_success": False}
+    entered = {**missed, "agent_path": [start, east]}
+    learner.observe_step(observation, east, missed)
+    learner.observe_step(observation, east, entered)
+    learner.observe_step(observation, east, {**missed, "subgoal_reached": True})  # reached short of it: no record
+    learner.observe_step(observation, east, {**missed, "flipped": True})  # a fall: no record
+    learner.observe_step(observation, start, missed)  # a stay: no record
+    _, steps, blocked = learner.outcomes.arrays()
+    assert steps.tolist() == [[1.0, 0.0], [1.0, 0.0]]
+    assert blocked.tolist() == [1.0, 0.0]
+    plain = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **SWITCH)
+    plain.observe_step(observation, east, missed)
+    assert len(plain.outcomes) == 0  # weight 0: nothing recorded

@@ -125,6 +125,16 @@ class LearnerSettings:
             destination cell's (a grid world's transition form). Why: a per-move gate reads a free move no label
             made as it reads a wall and shut free moves; every labelled move enters a free cell, so the labels
             hold the free cells' view open. ``False`` (the default): one switch per move.
+        experience_blocking_weight: With ``binary_blocking``: weight of a loss term in :meth:`HighLevelPolicy.fit`
+            on the moves the learner's own training episodes tried (:meth:`HighLevelPolicy.observe_step`, fed by
+            the DAgger trainer with what it already executes: no env step and no label more): a logistic loss on
+            the switch logit of each tried move (the per-move switch at the source cell, or with ``cell_switch``
+            the destination cell's), towards shut for a move whose walk ended outside the cell moved towards
+            (subgoal not reached, no fall, no goal) and towards open for a move whose walk entered that cell.
+            Learnt: which moves are blocked, from what happened; the walls are only an input. Why: DAgger's labels
+            lie near goals and rarely rank a wall move above the label, so the cross-entropy seldom pushes a wall's
+            switch shut (``results/planning_learner/selection/README.md``, eighth look), while the learner's own
+            walks into walls are blocked moves it has seen. 0 (the default): no such term, nothing recorded.
         learning_rate: Adam step size.
         batch_size: Minibatch size of :meth:`HighLevelPolicy.fit`.
         augment_symmetries: Train on random rotations/mirrors of each sample.
@@ -136,6 +146,7 @@ class LearnerSettings:
             negative or set without ``learnt_blocking``, ``binary_blocking`` without ``learnt_blocking``,
             ``binary_blocking`` with ``blocking_pressure``, ``switch_flattening`` outside ``(0, 1]`` or below 1
             without ``binary_blocking`` and ``any_map``, ``cell_switch`` without ``binary_blocking``,
+            ``experience_blocking_weight`` negative, not finite or set without ``binary_blocking``,
             ``learning_rate`` not positive or ``batch_size`` below 1.
     """
 
@@ -155,6 +166,7 @@ class LearnerSettings:
     binary_blocking: bool = False
     switch_flattening: float = 1.0
     cell_switch: bool = False
+    experience_blocking_weight: float = 0.0
 
     def __post_init__(self) -> None:
         if self.subgoal_reach_m is not None and not self.subgoal_reach_m > 0:
@@ -191,6 +203,12 @@ class LearnerSettings:
         if self.cell_switch and not self.binary_blocking:
             raise ValueError("cell_switch needs binary_blocking: it makes the switch one per cell")
         object.__setattr__(self, "cell_switch", bool(self.cell_switch))
+        weight = self.experience_blocking_weight
+        if not (weight >= 0 and math.isfinite(weight)):
+            raise ValueError(f"experience_blocking_weight must be finite and >= 0, got {weight}")
+        if weight and not self.binary_blocking:
+            raise ValueError(f"experience_blocking_weight needs binary_blocking, got {weight} without it")
+        object.__setattr__(self, "experience_blocking_weight", float(weight))
         for name in ("channels", "hidden", "batch_size"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)}")
@@ -277,6 +295,39 @@ class EncodingCache:
         )
 
 
+class MoveOutcomes:
+    """The moves a learner's training episodes tried and what became of them (``experience_blocking_weight``).
+
+    A row: the encoded observation the move was tried from, its ``(dx, dy)`` cell step, and 1.0 where the move was
+    blocked (the walk ended outside the cell it moved towards) or 0.0 where it was made (the walk entered it).
+    """
+
+    def __init__(self) -> None:
+        self._rows: list[tuple[np.ndarray, np.ndarray, np.ndarray, float]] = []
+        self._arrays: tuple[EncodedBatch, np.ndarray, np.ndarray] | None = None
+
+    def __len__(self) -> int:
+        return len(self._rows)
+
+    def add(self, batch: EncodedBatch, steps: np.ndarray, blocked: np.ndarray) -> None:
+        """Appends one row per sample of ``batch``: its cell step (``(B, 2)``) and whether it was blocked (``(B,)``)."""
+        steps, blocked = np.asarray(steps, dtype=np.float32), np.asarray(blocked, dtype=np.float32)
+        for row in zip(batch.grids, batch.vectors, steps, blocked, strict=True):
+            self._rows.append((row[0], row[1], row[2], float(row[3])))
+        self._arrays = None
+
+    def arrays(self) -> tuple[EncodedBatch, np.ndarray, np.ndarray]:
+        """Every row stacked: the encodings, the cell steps ``(N, 2)`` and the blocked flags ``(N,)``."""
+        if self._arrays is None:
+            grids, vectors, steps, blocked = zip(*self._rows, strict=True)
+            self._arrays = (
+                EncodedBatch(np.stack(grids), np.stack(vectors)),
+                np.stack(steps),
+                np.asarray(blocked, dtype=np.float32),
+            )
+        return self._arrays
+
+
 class HighLevelPolicy:
     """The high-level learner of :class:`~antmaze_hirl.dagger.DAggerTrainer`: subgoals from a network it fits.
 
@@ -300,6 +351,8 @@ class HighLevelPolicy:
             :class:`~antmaze_hirl.dagger.network.NextCellNetwork` (``"next_cell"``).
         encoder: Turns observations into the network's inputs.
         gradient_steps: Gradient steps taken so far.
+        outcomes: The moves its training episodes tried and their outcomes (:meth:`observe_step`; kept only with
+            ``experience_blocking_weight``, not saved).
     """
 
     def __init__(
@@ -351,6 +404,7 @@ class HighLevelPolicy:
         self.optimizer = ZeroSafeAdam(self.network.parameters(), lr=settings.learning_rate, foreach=True)
         self.gradient_steps = 0
         self.cache = EncodingCache()
+        self.outcomes = MoveOutcomes()
 
     @classmethod
     def for_env(cls, env: Any, *, rng: np.random.Generator, **overrides: Any) -> HighLevelPolicy:
@@ -450,6 +504,34 @@ class HighLevelPolicy:
         """Same as :meth:`predict`, so the learner serves as an expert-like callable."""
         return self.predict(observation)
 
+    def observe_step(self, observation: dict[str, np.ndarray], subgoal: np.ndarray, info: dict[str, Any]) -> None:
+        """Records what became of a high-level step its trainer executed (``experience_blocking_weight`` only).
+
+        The move is the cell step to ``subgoal``'s cell (:meth:`cell_steps`, as a label's). It was made if the
+        walk (``info["agent_path"]``) entered the cell moved towards; blocked if it did not and the walk ended
+        without reaching the subgoal, without a fall (``flipped``) and without the goal. Anything else (a stay,
+        a subgoal reached short of the cell, a fall) is not recorded. Nothing is recorded, and nothing drawn,
+        when the weight is 0.
+
+        Args:
+            observation: The high-level observation the step started from.
+            subgoal: The subgoal the env executed, metres.
+            info: The env's step info (``agent_path``, ``subgoal_reached``, ``flipped``, ``is_success``).
+        """
+        if not self.settings.experience_blocking_weight:
+            return
+        agent_xy = np.asarray(STATE_LAYOUT.agent_xy(observation["state"]), dtype=np.float64)
+        step = self.cell_steps(agent_xy[None], np.asarray(subgoal, dtype=np.float64)[None])[0]
+        if not step.any():
+            return
+        last = np.array([self.geometry.n_rows - 1, self.geometry.n_cols - 1])
+        target = np.clip(self.geometry.xy_to_cell(agent_xy), 0, last) + np.array([-int(step[1]), int(step[0])])
+        cells = np.clip([self.geometry.xy_to_cell(xy) for xy in np.asarray(info["agent_path"])], 0, last)
+        entered = bool((cells == target).all(axis=1).any())
+        if not entered and (info["subgoal_reached"] or info["flipped"] or info["is_success"]):
+            return
+        self.outcomes.add(self.encoder.encode_observations([observation]), step[None], np.array([not entered]))
+
     def targets(self, agent_xy: np.ndarray, subgoals: np.ndarray) -> np.ndarray:
         """Training targets: expert offsets in units of ``subgoal_reach_m``, shortened to length 1 at most.
 
@@ -494,12 +576,34 @@ class HighLevelPolicy:
                 bins = th.from_numpy(direction_bins(labels, settings.n_directions))
                 lengths = th.from_numpy(np.linalg.norm(labels, axis=1))
                 loss = nn.functional.cross_entropy(logits, bins) + th.mean((distance - lengths) ** 2)
+            if settings.experience_blocking_weight and len(self.outcomes):
+                loss = loss + settings.experience_blocking_weight * self._experience_loss()
             self.optimizer.zero_grad()
             loss.backward()
             self.optimizer.step()
             losses.append(loss.item())
         self.gradient_steps += steps
         return float(np.mean(losses[-10:]))
+
+    def _experience_loss(self) -> th.Tensor:
+        """A minibatch's logistic loss of the tried moves' switch logits against their outcomes (1: blocked).
+
+        The logit read is the switch the value iteration applies to that move from the agent's cell: the move's
+        own at the grid centre, or with ``cell_switch`` the destination cell's. Symmetries as for the labels.
+        """
+        batch, steps, blocked = self.outcomes.arrays()
+        index = self.rng.integers(len(blocked), size=min(self.settings.batch_size, len(blocked)))
+        minibatch, steps = EncodedBatch(batch.grids[index], batch.vectors[index]), steps[index]
+        if self.settings.augment_symmetries:
+            minibatch, steps = augment(minibatch, steps, self.rng, planar_feature_dim=self.planar_feature_dim)
+        logits = self.network.planner.blocking_logits(th.from_numpy(minibatch.grids))
+        centre, rows = logits.shape[-1] // 2, th.arange(len(index))
+        moves = np.rint(steps).astype(np.int64)
+        if self.settings.cell_switch:
+            tried = logits[rows, 0, th.from_numpy(centre - moves[:, 1]), th.from_numpy(centre + moves[:, 0])]
+        else:
+            tried = logits[rows, th.from_numpy(next_cell_classes(steps)), centre, centre]
+        return nn.functional.binary_cross_entropy_with_logits(tried, th.from_numpy(blocked[index]))
 
     def _flattened_switch_loss(self, grids: th.Tensor, classes: th.Tensor) -> th.Tensor:
         """The labels' cross-entropy with the switch learning from a flatter softmax (``switch_flattening``).

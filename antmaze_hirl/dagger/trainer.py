@@ -356,6 +356,7 @@ class DAggerTrainer:
         beta = 1.0 if gating else self.beta  # a gating strategy's asked steps run the expert's subgoal
         episode, cost, step, done, info = self.episodes_done, 0, 0, False, {}
         unasked: list[tuple[dict[str, np.ndarray], np.ndarray, int]] = []  # for labels after a failure
+        observe_step = getattr(self.learner, "observe_step", None)  # optional: HighLevelPolicy's draws nothing
         while not done:
             # The learner's proposal is computed before the label so a person can be shown it; it is
             # deterministic and draws no randomness, so the order leaves the numbers unchanged.
@@ -394,6 +395,8 @@ class DAggerTrainer:
             done = terminated or truncated
             step += 1
             self.strategy.on_step(before, subgoal, info)
+            if observe_step is not None:  # what the step did, for a learner that learns blocked moves from it
+                observe_step(before, subgoal, info)
             executed.append(ExecutedStep(subgoal, expert_subgoal, info, done, before))
         success = bool(info["is_success"])
         # Pruning sees the labels that were executed (those that led to the failure), not the ones asked after it.

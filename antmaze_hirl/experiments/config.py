@@ -246,6 +246,7 @@ LEARNERS: dict[str, dict[str, Any]] = {
     "next_cell_switch": _SWITCH,
     "next_cell_switch_flat": {**_SWITCH, "switch_flattening": 0.5},
     "next_cell_switch_cell": {**_SWITCH, "cell_switch": True},
+    "next_cell_switch_seen": {**_SWITCH, "experience_blocking_weight": 1.0},
 }
 """The named high-level learners: :class:`~antmaze_hirl.dagger.HighLevelPolicy` settings, every setting a
 body's default sets given explicitly (the variants of ``scripts/learner_ablation.py``). CNN learners see
@@ -256,7 +257,9 @@ whose weights act on any map; ``next_cell_gate`` adds a learnt gate that can pri
 move no label holds open (``LearnerSettings.blocking_pressure``); ``next_cell_switch`` makes the gate a switch, each
 move open or blocked whatever the map's size (``LearnerSettings.binary_blocking``); ``next_cell_switch_flat`` lets
 the switch learn from a softmax twice as flat (``LearnerSettings.switch_flattening``); ``next_cell_switch_cell`` has
-one switch per cell, read for the moves into it (``LearnerSettings.cell_switch``)."""
+one switch per cell, read for the moves into it (``LearnerSettings.cell_switch``); ``next_cell_switch_seen`` also
+learns each move's switch from the moves its own DAgger episodes made or failed to make
+(``LearnerSettings.experience_blocking_weight``)."""
 
 STRONG_PRIOR = "next_cell_vin_walls"
 """The learner that solves the held-out point mazes untrained (the point's default before protocol 2): a
