@@ -1,13 +1,9 @@
-"""scripts/demo_success.py: the lockstep path plays the demo's own episodes."""
+"""The demo's lockstep path plays the demo's own episodes; scripts/demo_success.py records the mode."""
 
 import pytest
 from script_helpers import load_script
 
 from antmaze_hirl.demo import lockstep_outcomes, serial_outcomes
-
-pytestmark = pytest.mark.integration  # a lab check (scripts/demo_success.py): the integration tier
-
-demo_success = load_script("scripts/demo_success.py")
 
 
 def test_lockstep_gives_the_demos_outcomes_on_the_point(capsys):
@@ -19,7 +15,9 @@ def test_lockstep_gives_the_demos_outcomes_on_the_point(capsys):
     assert capsys.readouterr().out.splitlines() == serial_lines  # same subgoals and steps, seed by seed
 
 
+@pytest.mark.integration  # a lab check (scripts/demo_success.py)
 def test_measure_records_the_mode():
+    demo_success = load_script("scripts/demo_success.py")
     figures = demo_success.measure("point", 1, num_envs=2)
     assert figures["num_envs"] == 2 and figures["episodes"] == 1
     with pytest.raises(ValueError, match="unknown body 'cat'"):
