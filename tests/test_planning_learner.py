@@ -651,3 +651,24 @@ def test_a_step_is_recorded_blocked_when_its_walk_missed_the_cell_and_made_when_
     plain = HighLevelPolicy.for_env(env, rng=np.random.default_rng(0), **SWITCH)
     plain.observe_step(observation, east, missed)
     assert len(plain.outcomes) == 0  # weight 0: nothing recorded
+
+
+def test_the_trainer_hands_every_executed_step_to_the_learners_observe_step():
+    from antmaze_hirl import PathOracle
+    from antmaze_hirl.dagger import DAggerTrainer
+
+    env = point_env(maze_size=3)
+    rng = np.random.default_rng(0)
+    learner = HighLevelPolicy.for_env(env, rng=rng, **{**SWITCH, "experience_blocking_weight": 1.0})
+    seen = []
+    observe_step = learner.observe_step
+
+    def recording(observation, subgoal, info):
+        seen.append(info["agent_path"])
+        observe_step(observation, subgoal, info)
+
+    learner.observe_step = recording
+    trainer = DAggerTrainer(env=env, expert=PathOracle.for_env(env), learner=learner, rng=rng, gradient_steps=1)
+    record = trainer.run_episode()
+    assert len(seen) == record.attempts > 0  # one call per executed subgoal, with its walk
+    assert len(learner.outcomes) > 0  # and the learner kept what its moves did
