@@ -619,7 +619,7 @@ def switch_after_outcomes(seed: int, weight: float, steps: int = 150) -> tuple[f
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_moves_recorded_blocked_are_shut_and_moves_recorded_made_open_by_the_experience_term(seed):
-    # Measured over seeds 0-5 (uncommitted script, session 29): with the term 97.6-100% of the blocked moves shut
+    # Measured over seeds 0-5 by an uncommitted script (session 29): with the term 97.6-100% of the blocked moves shut
     # and 1.0-7.7% of the made ones; without it (the labels alone, 150 steps) 0-2.3% of the blocked moves shut.
     with_term = switch_after_outcomes(seed, 1.0)
     without = switch_after_outcomes(seed, 0.0)
