@@ -60,6 +60,8 @@ def _copy_of_compiled_model(filename, *args, **kwargs):
     if args or kwargs:  # assets or a VFS: compiled as asked
         return _compile_mujoco_xml(filename, *args, **kwargs)
     key = Path(filename).read_bytes()
+    if any(name in key for name in (b"file=", b"meshdir=", b"texturedir=", b"assetdir=")):
+        return _compile_mujoco_xml(filename)  # files named relative to the XML's folder: one text, other models
     model = _compiled_models.pop(key, None)
     if model is None:
         model = _compile_mujoco_xml(filename)
