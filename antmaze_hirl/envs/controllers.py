@@ -14,6 +14,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from antmaze_hirl.envs.bodies import uprightness
+
 GoalObservation = dict[str, np.ndarray]
 
 SMALL_BATCH_ROWS = 256
@@ -331,7 +333,7 @@ class TiltDampedController:
         quaternion = np.asarray(body_observations, dtype=np.float64)[
             ..., self.quaternion_index : self.quaternion_index + 4
         ]
-        upright = 1.0 - 2.0 * (quaternion[..., 1] ** 2 + quaternion[..., 2] ** 2)
+        upright = uprightness(quaternion)
         share = (upright - self.lower_uprightness) / (self.upper_uprightness - self.lower_uprightness)
         return self.min_scale + (1.0 - self.min_scale) * np.clip(share, 0.0, 1.0)
 

@@ -10,22 +10,16 @@ from gymnasium_robotics.envs.maze.ant_maze_v5 import AntMazeEnv
 from gymnasium_robotics.envs.maze.maze_v4 import MazeEnv
 from gymnasium_robotics.envs.maze.point_maze import PointMazeEnv
 
-from antmaze_hirl.envs.bodies import BODY_SPECS, Body, BodySpec, body_spec
+from antmaze_hirl.envs.bodies import BODY_SPECS, Body, BodySpec, body_spec, uprightness
 from antmaze_hirl.envs.geometry import MazeGeometry
 from antmaze_hirl.envs.layouts import walls_to_maze_map
 
-__all__ = ["BODY_SPECS", "Body", "BodySpec", "MazeSimulator", "body_spec"]
+__all__ = ["BODY_SPECS", "Body", "BodySpec", "MazeSimulator", "body_spec", "uprightness"]
 
 TARGET_MARKER_RADIUS_CELLS = 0.06
 """Radius of the red subgoal marker in the MuJoCo view, in cells (gymnasium-robotics draws 0.2)."""
 TARGET_MARKER_ALPHA = 0.5
 """Its opacity (gymnasium-robotics: 0.7), so that the body shows through where they overlap."""
-
-
-def uprightness(quaternion: np.ndarray) -> float:
-    """World z component of a body's up axis, ``1 - 2 (qx^2 + qy^2)`` for unit quaternion ``(qw, qx, qy, qz)``."""
-    _, qx, qy, _ = quaternion
-    return float(1 - 2 * (qx * qx + qy * qy))
 
 
 class MazeSimulator:
