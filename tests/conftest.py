@@ -22,26 +22,38 @@ from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 # One thread: small networks gain nothing from two, and results stay the same on every machine.
 torch.set_num_threads(1)
 
-COMMITTED_RESULTS = str(Path(__file__).resolve().parents[1] / "results") + os.sep
+_ROOT = Path(__file__).resolve().parents[1]
+COMMITTED_RESULTS = str(_ROOT / "results") + os.sep
 """The lab's committed results, which the unit tier never reads (its checks are integration tests)."""
+LAB_CODE = tuple(str(_ROOT / folder) + os.sep for folder in ("antmaze_lab", "scripts", "benchmarks"))
+"""The lab's code, which the unit tier never runs: its checks are integration tests (CONTRIBUTING.md)."""
 UNIT_TIER_GUARD = False
-"""Whether this run refuses to open a file under :data:`COMMITTED_RESULTS`: a run that leaves out integration."""
+"""Whether this run refuses to open a file under :data:`COMMITTED_RESULTS` or to run the lab's code
+(:data:`LAB_CODE`): a run that leaves out integration."""
 
 
-def _refuse_committed_results(event, args):
-    # An audit hook (sys.addaudithook): open() and its kin raise "open" before they touch the file.
+def _unit_tier_guard(event, args):
+    # An audit hook (sys.addaudithook): open() and its kin raise "open" before they touch the file, and exec()
+    # raises "exec" with the code object it runs, which is how every import or path load of a module runs its
+    # body. So the guard sees the lab however a test reaches it (an import, importlib by name or path, a helper
+    # module that imports it), where the static scan of tests/test_lab_split.py sees only the forms it parses.
     if event == "open" and isinstance(args[0], (str, os.PathLike)):
         path = os.path.abspath(os.fspath(args[0]))
         if isinstance(path, str) and path.startswith(COMMITTED_RESULTS):
             raise PermissionError(
                 f"the unit tier reads no committed results: {path}; mark the test integration (pyproject.toml)"
             )
+    elif event == "exec" and str(getattr(args[0], "co_filename", "")).startswith(LAB_CODE):
+        raise ImportError(
+            f"the unit tier runs none of the lab's code: {args[0].co_filename}; mark the test integration "
+            "(pyproject.toml)"
+        )
 
 
 def pytest_configure(config):
     global UNIT_TIER_GUARD
     if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
-        sys.addaudithook(_refuse_committed_results)  # for the rest of the process: a hook cannot be removed
+        sys.addaudithook(_unit_tier_guard)  # for the rest of the process: a hook cannot be removed
         UNIT_TIER_GUARD = True
 
 

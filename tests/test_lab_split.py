@@ -2,6 +2,7 @@
 unit tier reads no committed results (the lab's data; its checks run in the integration tier)."""
 
 import ast
+import importlib.util
 import shutil
 import subprocess
 import sys
@@ -10,7 +11,7 @@ from itertools import pairwise
 from pathlib import Path
 
 import pytest
-from conftest import COMMITTED_RESULTS, UNIT_TIER_GUARD
+from conftest import COMMITTED_RESULTS, LAB_CODE, UNIT_TIER_GUARD
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "antmaze_hirl"
@@ -102,6 +103,23 @@ def test_the_unit_tier_refuses_to_read_the_committed_results():
     with pytest.raises(PermissionError, match=r"^the unit tier reads no committed results: .*index\.json; mark the"):
         (Path(COMMITTED_RESULTS) / "index.json").read_text()
     assert (ROOT / "pyproject.toml").read_text()  # the rest of the checkout reads as ever
+
+
+def test_the_unit_tier_refuses_to_run_the_lab_however_it_is_reached(tmp_path):
+    # The static scan below parses the forms it knows; the guard sees the lab's code when it runs, whatever led
+    # there: here a helper module outside the lab that imports it, and a load by path under a name of our own.
+    if not UNIT_TIER_GUARD:
+        pytest.skip("the guard is on in the unit tier only (-m 'not integration')")
+    assert set(LAB_CODE) == {str(ROOT / folder) + "/" for folder in LAB}
+    helper = tmp_path / "indirect_helper.py"
+    helper.write_text("import importlib\nNAME = 'antmaze_' + 'lab.preregistered'\nimportlib.import_module(NAME)\n")
+    spec = importlib.util.spec_from_file_location("indirect_helper", helper)
+    with pytest.raises(ImportError, match=r"^the unit tier runs none of the lab's code: .*antmaze_lab.*; mark the"):
+        spec.loader.exec_module(importlib.util.module_from_spec(spec))
+    spec = importlib.util.spec_from_file_location("renamed", ROOT / "benchmarks" / "trial_speed.py")
+    with pytest.raises(ImportError, match=r"benchmarks.trial_speed\.py; mark the test integration"):
+        spec.loader.exec_module(importlib.util.module_from_spec(spec))
+    assert not [name for name in sys.modules if name.split(".")[0] in LAB]
 
 
 LEFT_OUT = ("integration", "slow")
