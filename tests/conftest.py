@@ -1,3 +1,4 @@
+import ast
 import copy
 import dataclasses
 import os
@@ -55,6 +56,38 @@ def pytest_configure(config):
     if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
         sys.addaudithook(_unit_tier_guard)  # for the rest of the process: a hook cannot be removed
         UNIT_TIER_GUARD = True
+
+
+LEFT_OUT = ("integration", "slow")
+"""The markers that take a test out of the unit tier (pyproject.toml's addopts)."""
+
+
+def marks_out(marker: ast.AST) -> bool:
+    """Whether ``marker`` (a decorator, or a ``pytestmark`` value) is ``pytest.mark.integration`` or ``.slow``, called
+    or not, or a list of markers holding one. A ``pytest.param(..., marks=...)`` marks one case, not the test."""
+    if isinstance(marker, (ast.List, ast.Tuple)):
+        return any(marks_out(element) for element in marker.elts)
+    marker = marker.func if isinstance(marker, ast.Call) else marker
+    return isinstance(marker, ast.Attribute) and marker.attr in LEFT_OUT
+
+
+def marked_out_whole(tree: ast.Module) -> bool:
+    """Whether a test module's top-level ``pytestmark`` takes all of it out of the unit tier."""
+    return any(
+        any(getattr(target, "id", "") == "pytestmark" for target in node.targets) and marks_out(node.value)
+        for node in tree.body
+        if isinstance(node, ast.Assign)
+    )
+
+
+def pytest_ignore_collect(collection_path, config):
+    # A module marked integration or slow as a whole has no test in the unit tier, yet collecting it would import
+    # it in every worker, and with it the lab scripts most of these modules load at import: seconds of each
+    # worker's start-up, and lab code run in a tier that runs none. Read from the source, not by importing it.
+    if UNIT_TIER_GUARD and collection_path.suffix == ".py" and collection_path.name.startswith("test_"):
+        if marked_out_whole(ast.parse(collection_path.read_bytes(), filename=str(collection_path))):
+            return True
+    return None
 
 
 COMPILED_MODELS_KEPT = 48

@@ -11,7 +11,7 @@ from itertools import pairwise
 from pathlib import Path
 
 import pytest
-from conftest import COMMITTED_RESULTS, LAB_CODE, UNIT_TIER_GUARD
+from conftest import COMMITTED_RESULTS, LAB_CODE, UNIT_TIER_GUARD, marked_out_whole, marks_out
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "antmaze_hirl"
@@ -122,32 +122,17 @@ def test_the_unit_tier_refuses_to_run_the_lab_however_it_is_reached(tmp_path):
     assert not [name for name in sys.modules if name.split(".")[0] in LAB]
 
 
-LEFT_OUT = ("integration", "slow")
-"""The markers that take a test out of the unit tier (pyproject.toml's addopts)."""
-
-
-def _marks_out(marker: ast.AST) -> bool:
-    """Whether ``marker`` (a decorator, or a ``pytestmark`` value) is ``pytest.mark.integration`` or ``.slow``, called
-    or not, or a list of markers holding one. A ``pytest.param(..., marks=...)`` marks one case, not the test."""
-    if isinstance(marker, (ast.List, ast.Tuple)):
-        return any(_marks_out(element) for element in marker.elts)
-    marker = marker.func if isinstance(marker, ast.Call) else marker
-    return isinstance(marker, ast.Attribute) and marker.attr in LEFT_OUT
-
-
 def unit_tier_lab_imports(path: Path) -> list[tuple[int, str]]:
     """Each import of a lab module (:func:`lab_imports`) in the test module ``path`` that the unit tier runs: none
     where a module-level ``pytestmark`` marks the whole file integration or slow; else each outside the top-level
     tests and classes that are so marked (module-level code and fixtures run for every test of the file)."""
     tree = ast.parse(path.read_text(), filename=str(path))
-    for node in tree.body:
-        targets = node.targets if isinstance(node, ast.Assign) else []
-        if any(getattr(target, "id", "") == "pytestmark" for target in targets) and _marks_out(node.value):
-            return []
+    if marked_out_whole(tree):
+        return []
     found = []
     for node in tree.body:
         definition = isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-        if not (definition and any(_marks_out(decorator) for decorator in node.decorator_list)):
+        if not (definition and any(marks_out(decorator) for decorator in node.decorator_list)):
             found += lab_imports(node)
     return found
 
