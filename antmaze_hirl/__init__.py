@@ -22,6 +22,7 @@ _EXPORTS = {
     "load_low_level": "antmaze_hirl.sb3_ext.loading",
 }
 
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
+__getattr__, __dir__, _lazy_all = lazy_exports(__name__, _EXPORTS, globals())
 
-__all__ = ["ENV_IDS", "__version__", "register_envs", *_EXPORTS]
+# Besides the lazy exports, the names defined or imported above; written out so that linters see the re-exports.
+__all__ = ["ENV_IDS", "__version__", "register_envs", *_lazy_all]

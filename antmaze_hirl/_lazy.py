@@ -14,8 +14,8 @@ from typing import Any
 
 def lazy_exports(
     package: str, exports: Mapping[str, str], eager: Mapping[str, Any]
-) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
-    """A module ``__getattr__`` and ``__dir__`` that import each export's module on first access.
+) -> tuple[Callable[[str], Any], Callable[[], list[str]], list[str]]:
+    """A package's ``__getattr__``, ``__dir__`` and ``__all__``, importing each export's module on first access.
 
     Args:
         package: The package's ``__name__`` (for the error message).
@@ -24,7 +24,8 @@ def lazy_exports(
             is cached there, so the import happens once.
 
     Returns:
-        ``(__getattr__, __dir__)`` to assign in the package's ``__init__``.
+        ``(__getattr__, __dir__, __all__)`` to assign in the package's ``__init__``; ``__all__`` lists
+        ``exports``' names in their order (a package that also exports names it defines itself adds those).
     """
 
     def __getattr__(name: str) -> Any:
@@ -38,4 +39,4 @@ def lazy_exports(
     def __dir__() -> list[str]:
         return sorted({*eager, *exports})
 
-    return __getattr__, __dir__
+    return __getattr__, __dir__, list(exports)

@@ -1,6 +1,7 @@
 """The package's import graph is a DAG whose bottom is ``envs``, and the light entry points stay light."""
 
 import ast
+import importlib
 import subprocess
 import sys
 from pathlib import Path
@@ -118,3 +119,10 @@ def test_root_exports_resolve_lazily_and_are_listed():
     assert set(antmaze_hirl.__all__) <= set(dir(antmaze_hirl))
     with pytest.raises(AttributeError, match="has no attribute 'Nope'"):
         _ = antmaze_hirl.Nope
+
+
+@pytest.mark.parametrize("package", ["antmaze_hirl.envs", "antmaze_hirl.sb3_ext", "antmaze_hirl.experiments"])
+def test_a_lazy_package_lists_exactly_its_exports(package):
+    module = importlib.import_module(package)
+    assert module.__all__ == list(module._EXPORTS)
+    assert set(module.__all__) <= set(dir(module))

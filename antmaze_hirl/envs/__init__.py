@@ -40,6 +40,4 @@ _EXPORTS = {
     "validate_maze_map": "antmaze_hirl.envs.layouts",
 }
 
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
-
-__all__ = list(_EXPORTS)
+__getattr__, __dir__, __all__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -19,6 +19,4 @@ _EXPORTS = {
     "wilson_interval": "antmaze_hirl.experiments.uncertainty",
 }
 
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
-
-__all__ = list(_EXPORTS)
+__getattr__, __dir__, __all__ = lazy_exports(__name__, _EXPORTS, globals())

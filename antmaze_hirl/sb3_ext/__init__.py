@@ -22,6 +22,4 @@ _EXPORTS = {
     "train_low_level": "antmaze_hirl.sb3_ext.training",
 }
 
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
-
-__all__ = list(_EXPORTS)
+__getattr__, __dir__, __all__ = lazy_exports(__name__, _EXPORTS, globals())
