@@ -13,7 +13,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import SB3_PICKLE_WARNING, SB3_ZIP_WARNING, apply_bounds
+from antmaze_hirl.cli_validation import LOW_LEVEL_VALUE, SB3_PICKLE_WARNING, SB3_ZIP_WARNING, apply_bounds
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -208,11 +208,7 @@ def _add_eval_low(subparsers: _Subparsers) -> None:
     )
     parser.add_argument("--body", choices=_BODIES, required=True, help="body the policy walks (required)")
     parser.add_argument(
-        "--policy",
-        type=Path,
-        default=None,
-        help="an SB3 off-policy .zip: TD3, DDPG, SAC, or TQC with sb3-contrib installed; "
-        f"{SB3_ZIP_WARNING} (default: the shipped one)",
+        "--policy", type=Path, default=None, help=f"{LOW_LEVEL_VALUE}; {SB3_ZIP_WARNING} (default: the shipped one)"
     )
     parser.add_argument("--episodes", type=int, default=200, help="subgoals to try")
     parser.add_argument(

@@ -11,7 +11,8 @@ evaluations and trials derive still fit the 32-bit seeds NumPy and SB3 take; cou
 typo exhausts memory or time; distances and rates are finite and positive.
 
 :data:`SB3_ZIP_WARNING` is the warning that every option loading an SB3 zip gives in its help, and
-:data:`SB3_PICKLE_WARNING` the one every option loading an SB3 replay-buffer pickle gives.
+:data:`SB3_PICKLE_WARNING` the one every option loading an SB3 replay-buffer pickle gives;
+:data:`LOW_LEVEL_VALUE` says what an option naming a low-level policy takes.
 """
 
 from __future__ import annotations
@@ -31,6 +32,14 @@ MAX_STUDY_SEED = 2**32 - 1
 SB3_ZIP_WARNING = "SB3 zips hold pickles that can run code: load only files you trust"
 """The help of every option that loads an SB3 zip says this (``docs/guides/low-level.md``, "Load only policy
 files you trust")."""
+
+LOW_LEVEL_VALUE = (
+    "an SB3 off-policy .zip (TD3, DDPG, SAC, or TQC with sb3-contrib installed) or a low-level name: shipped, "
+    "or the ant's ensemble"
+)
+"""What an option that names a low-level policy to load takes (``load_low_level``'s ``path``), as its help says it.
+The names are :data:`antmaze_hirl.sb3_ext.loading.LOW_LEVEL_NAMES`'; they are written out here because that module
+imports SB3, which building the parser must not."""
 
 SB3_PICKLE_WARNING = "SB3 replay buffers are pickles that can run code: load only files you trust"
 """The help of every option that loads an SB3 replay buffer (a plain pickle, ``load_replay_buffer``) says this."""

@@ -16,10 +16,11 @@ from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
-from antmaze_hirl.cli_validation import SB3_PICKLE_WARNING, SB3_ZIP_WARNING, all_options
+from antmaze_hirl.cli_validation import LOW_LEVEL_VALUE, SB3_PICKLE_WARNING, SB3_ZIP_WARNING, all_options
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.config import DEFAULT_METHODS, ExperimentConfig, body_settings
 from antmaze_hirl.sb3_ext import CheckpointError
+from antmaze_hirl.sb3_ext.loading import LOW_LEVEL_NAMES
 
 COMMANDS = ["demo", "train-low", "eval-low", "ensemble-low", "experiment", "study", "benchmark", "submit"]
 STUDY_COMMANDS = ["init", "serve", "simulate", "analyze", "export"]
@@ -94,6 +95,19 @@ def test_every_option_that_loads_a_zip_or_pickle_warns_in_its_help():
     named = {key for key, action in options.items() if action.help and mentions.search(action.help)}
     assert named - LOADING_OPTIONS.keys() - WRITTEN_NOT_LOADED == set()
     assert WRITTEN_NOT_LOADED <= named  # the exemptions still exist and still name a zip
+
+
+LOW_LEVEL_OPTIONS = (("eval-low", "--policy"), ("benchmark", "--low-level"))
+"""Options that load a low level by path or name (``load_low_level``'s ``path``)."""
+
+
+def test_options_that_load_a_low_level_say_which_names_they_take():
+    options = _named_options()
+    for key in LOW_LEVEL_OPTIONS:
+        assert LOW_LEVEL_VALUE in options[key].help, f"{key}: {options[key].help!r}"
+    # The help's words are written out (loading's module imports SB3): a name added there must join them.
+    for name in {name for names in LOW_LEVEL_NAMES.values() for name in names}:
+        assert re.search(rf"\b{name}\b", LOW_LEVEL_VALUE), f"LOW_LEVEL_VALUE does not name {name!r}"
 
 
 def test_top_level_help_has_no_markup(capsys):

@@ -11,7 +11,7 @@ import shlex
 from pathlib import Path
 from typing import Any
 
-from antmaze_hirl.cli_validation import SB3_ZIP_WARNING
+from antmaze_hirl.cli_validation import LOW_LEVEL_VALUE, SB3_ZIP_WARNING
 from antmaze_hirl.envs.suite_specs import SUITE_SPECS, check_suite_name
 from antmaze_hirl.experiments.benchmark import DEFAULT_NUM_ENVS, save_report, score_policy
 from antmaze_hirl.experiments.benchmark_policies import check_oracle_settings
@@ -110,8 +110,8 @@ def add_benchmark_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--low-level",
         default=None,
-        help="the low level: a zip path or a name, shipped or (the ant's) ensemble; the report records its "
-        f"fingerprint; {SB3_ZIP_WARNING} (default: the body's shipped low level)",
+        help=f"the low level: {LOW_LEVEL_VALUE}; the report records its fingerprint; {SB3_ZIP_WARNING} "
+        "(default: the body's shipped low level)",
     )
     parser.add_argument(
         "--per-task", action="store_true", help="print one line per task (always done with 10 tasks or fewer)"
