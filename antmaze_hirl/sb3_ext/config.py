@@ -22,9 +22,28 @@ _TD3_FAMILY = ("td3", "ddpg")  # SB3's DDPG is TD3 without the delay and target 
 _SAC_FAMILY = ("sac", "tqc")  # sb3-contrib's TQC is SAC with a distributional critic
 
 
+WARMUP_ACTIONS = ("uniform", "policy")
+"""``warmup_actions`` values: SB3's uniformly random actions, or the model's own policy with its exploration."""
+
+
+def check_warm_start_options(warmup_actions: Any, actor_frozen_steps: Any) -> None:
+    """One-line ``ValueError`` for an unknown ``warmup_actions`` or an ``actor_frozen_steps`` that is < 0 or no int."""
+    if warmup_actions not in WARMUP_ACTIONS:
+        raise ValueError(f"warmup_actions must be one of {list(WARMUP_ACTIONS)}, got {warmup_actions!r}")
+    if not isinstance(actor_frozen_steps, numbers.Integral) or isinstance(actor_frozen_steps, bool):
+        raise ValueError(f"actor_frozen_steps must be an int, got {actor_frozen_steps!r}")
+    if actor_frozen_steps < 0:
+        raise ValueError(f"actor_frozen_steps must be >= 0, got {actor_frozen_steps}")
+
+
 def _only(*algos: str) -> dict[str, tuple[str, ...]]:
     """Field metadata: the algorithms that read this key (the others must leave it at its default)."""
     return {"algos": algos}
+
+
+# Field metadata of keys added after runs were checkpointed: at their default they stay out of to_dict, so a
+# checkpoint written before the key existed still matches its config on --resume.
+_LATER = {"omit_at_default": True}
 
 
 # Checked at construction: a YAML typo (``3e-4`` is a string in YAML 1.1) would otherwise fail deep inside SB3.
@@ -42,10 +61,15 @@ class LowLevelConfig:
     penalty, :class:`ActionPenaltyPolicy`; 0 = SB3's own policy). SAC/TQC only: ``ent_coef`` (``"auto"``,
     ``"auto_<initial>"`` or a fixed float), ``target_entropy`` (``"auto"`` = minus the action size, or a
     float) and ``target_update_interval``. TQC only: ``n_quantiles`` and ``top_quantiles_to_drop_per_net``.
+    Fine-tuning a warm start (:mod:`antmaze_hirl.sb3_ext.warm_start`): ``warmup_actions`` (``"uniform"``,
+    SB3's random actions before ``learning_starts``, or ``"policy"``, the warm-started policy's own with its
+    usual exploration) and, TD3/DDPG only, ``actor_frozen_steps`` (the first gradient steps update the critics
+    only; 0 = none). Both need ``train_low_level``'s ``init_from``.
 
     Raises:
-        ValueError: If a number or flag has the wrong type, ``action_l2`` is negative, an entropy setting
-            is malformed, or a key of another algorithm is set (one line, naming the key).
+        ValueError: If a number or flag has the wrong type, ``action_l2`` or ``actor_frozen_steps`` is negative,
+            an entropy setting is malformed, ``warmup_actions`` is unknown, or a key of another algorithm is set
+            (one line, naming the key).
     """
 
     learning_rate: float = 1e-3
@@ -69,6 +93,8 @@ class LowLevelConfig:
     target_update_interval: int = field(default=1, metadata=_only(*_SAC_FAMILY))
     n_quantiles: int = field(default=25, metadata=_only("tqc"))
     top_quantiles_to_drop_per_net: int = field(default=2, metadata=_only("tqc"))
+    warmup_actions: str = field(default="uniform", metadata=_LATER)
+    actor_frozen_steps: int = field(default=0, metadata={**_only(*_TD3_FAMILY), **_LATER})
 
     def __post_init__(self) -> None:
         for spec in dataclasses.fields(self):
@@ -87,6 +113,7 @@ class LowLevelConfig:
         if self.action_l2 < 0:
             raise ValueError(f"action_l2 must be >= 0, got {self.action_l2}")
         _check_entropy(self.ent_coef, self.target_entropy)
+        check_warm_start_options(self.warmup_actions, self.actor_frozen_steps)
 
     def replace(self, **changes: Any) -> LowLevelConfig:
         """A copy with ``changes`` applied (unknown keys raise ``TypeError``)."""
@@ -96,9 +123,15 @@ class LowLevelConfig:
         """Plain-JSON form of the keys ``algo`` reads, stored in checkpoints to detect a mismatched resume.
 
         Neither ``algo`` (the checkpoint records it apart) nor other algorithms' keys are in it, so a TD3
-        checkpoint written before SAC was added still matches its config on ``--resume``.
+        checkpoint written before SAC was added still matches its config on ``--resume``; for the same reason
+        ``warmup_actions`` and ``actor_frozen_steps`` are in it only when they differ from their defaults.
         """
-        data = {spec.name: getattr(self, spec.name) for spec in dataclasses.fields(self) if applies(spec, self.algo)}
+        data = {
+            spec.name: getattr(self, spec.name)
+            for spec in dataclasses.fields(self)
+            if applies(spec, self.algo)
+            and not (spec.metadata.get("omit_at_default") and getattr(self, spec.name) == spec.default)
+        }
         data["net_arch"] = list(self.net_arch)
         del data["algo"]
         return data

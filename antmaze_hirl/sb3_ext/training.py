@@ -21,6 +21,7 @@ from antmaze_hirl.sb3_ext.ensemble import EnsemblePolicy
 from antmaze_hirl.sb3_ext.evaluation import SuccessRateCallback
 from antmaze_hirl.sb3_ext.extractors import RelativeGoalExtractor
 from antmaze_hirl.sb3_ext.loading import algorithm_of, load_low_level, low_level_path, policy_class_of, save_policy
+from antmaze_hirl.sb3_ext.warm_start import with_warm_start
 
 # TQC is looked up on use (algo_class): sb3-contrib is an optional extra.
 ALGO_CLASSES: dict[str, type[OffPolicyAlgorithm]] = {"td3": TD3, "ddpg": DDPG, "sac": SAC}
@@ -98,6 +99,18 @@ def algo_kwargs(config: LowLevelConfig, n_actions: int) -> dict[str, Any]:
     return kwargs
 
 
+def warm_start_kwargs(config: LowLevelConfig) -> dict[str, Any]:
+    """The :class:`~antmaze_hirl.sb3_ext.warm_start.WarmStartMixin` keywords ``config`` sets; empty at defaults."""
+    kwargs = {"warmup_actions": config.warmup_actions, "actor_frozen_steps": config.actor_frozen_steps}
+    return kwargs if kwargs != {"warmup_actions": "uniform", "actor_frozen_steps": 0} else {}
+
+
+def training_class(algo: str, config: LowLevelConfig) -> type[OffPolicyAlgorithm]:
+    """The class that trains ``algo`` under ``config``: SB3's own, or with the warm-start hooks when it sets them."""
+    algorithm = algo_class(algo)
+    return with_warm_start(algorithm) if warm_start_kwargs(config) else algorithm
+
+
 def _check_config_algo(config: LowLevelConfig, algo: str) -> None:
     # TD3 and DDPG read the same keys; any other pair would train with keys the config's author did not set.
     if config.algo != algo and {config.algo, algo} != {"td3", "ddpg"}:
@@ -115,7 +128,7 @@ def make_model(
         ValueError: If ``algo`` is unknown (or TQC is not installed), or ``config`` is for another algorithm.
     """
     _check_config_algo(config, algo)
-    algorithm = algo_class(algo)
+    algorithm = training_class(algo, config)
     env = make_reach_env(body, config)
     return algorithm(
         # action_l2 > 0 only for TD3/DDPG (the config refuses it for the others): the penalty lives in TD3's critic.
@@ -123,6 +136,7 @@ def make_model(
         env,
         **shared_kwargs(config),
         **algo_kwargs(config, env.action_space.shape[0]),
+        **warm_start_kwargs(config),
         replay_buffer_class=HerReplayBuffer,
         replay_buffer_kwargs={
             "n_sampled_goal": config.n_sampled_goal,
@@ -164,6 +178,12 @@ def train_low_level(
     TensorBoard logs in ``out_dir/tb`` and the final policy ``out_dir/policy.zip`` (model only, no replay
     buffer: what ships and what ``eval-low`` loads).
 
+    A fine-tune of ``init_from`` may set ``config.warmup_actions = "policy"`` (fill the buffer up to
+    ``learning_starts`` with the warm policy's own noisy actions, not uniform ones) and, for TD3/DDPG,
+    ``config.actor_frozen_steps`` (its first gradient steps fit the critics only); see
+    :mod:`antmaze_hirl.sb3_ext.warm_start`. They are part of the config, so the checkpoint keeps them and
+    ``resume`` needs the same.
+
     Args:
         body: ``"ant"`` or ``"point"``.
         algo: ``"td3"``, ``"ddpg"``, ``"sac"`` or ``"tqc"`` (with sb3-contrib installed).
@@ -184,6 +204,7 @@ def train_low_level(
             from their stored infos (an entry they lack counts as its default: a buffer recorded without
             ``info["uprightness"]`` carries no tilt penalty); its unrelabelled transitions keep their
             stored rewards. Resume rules as ``init_from``.
+
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
@@ -196,15 +217,16 @@ def train_low_level(
         FileExistsError: If a fresh run (``resume=False``) would overwrite a run in ``out_dir``.
         FileNotFoundError: If there is no file at ``init_from``.
         ValueError: On a negative ``total_timesteps``, a frequency or episode count below 1, a ``config`` for
-            another algorithm, or an ``init_from`` that :func:`warm_start_parameters` refuses (unknown name,
-            damaged zip, another algorithm, an ensemble, another body) or whose networks differ from ``config``'s.
+            another algorithm, a fresh run whose ``config`` sets a warm-start option without ``init_from``, or an
+            ``init_from`` that :func:`warm_start_parameters` refuses (unknown name, damaged zip, another
+            algorithm, an ensemble, another body) or whose networks differ from ``config``'s.
 
     """
     if total_timesteps < 0:
         raise ValueError(f"total_timesteps must be >= 0, got {total_timesteps}")
     config = config if config is not None else load_config(body, algo=algo)
     _check_config_algo(config, algo)
-    algorithm = algo_class(algo)
+    algorithm = training_class(algo, config)
     out_dir = Path(out_dir)
     checkpoint_dir = out_dir / "checkpoints"
     identity = {"body": body, "algo": algo, "seed": seed, "config": config.to_dict()}
@@ -215,9 +237,15 @@ def train_low_level(
         folder, state = latest_checkpoint(checkpoint_dir, expected={**identity, **given})
         for key in starts:  # later checkpoints keep where the run started from
             run_state[key] = state.get(key)
+        # The config matched the checkpoint's, so this is the class (and warm-start options) the run began with.
         model = algorithm.load(folder / "model.zip", env=make_reach_env(body, config))
         model.load_replay_buffer(folder / "replay_buffer.pkl")
     else:
+        if init_from is None and warm_start_kwargs(config):
+            raise ValueError(
+                "warmup_actions 'policy' and actor_frozen_steps > 0 fine-tune a warm start: "
+                "give init_from (--init-from)"
+            )
         if (checkpoint_dir / "latest.json").exists():
             raise FileExistsError(
                 f"{checkpoint_dir} already holds a run; pass resume=True (--resume) or another out dir"
@@ -320,5 +348,7 @@ __all__ = [
     "make_reach_env",
     "set_torch_threads",
     "train_low_level",
+    "training_class",
+    "warm_start_kwargs",
     "warm_start_parameters",
 ]
