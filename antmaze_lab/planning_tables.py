@@ -4,13 +4,16 @@
 ``by-path FILE``: success by shortest path length (``scripts/planner_by_path.py``); ``trials FILE [FILE ...]``:
 DAgger trials of ``scripts/learner_ablation.py`` (one JSON a trial); ``speed FILE``: ``benchmarks/learner_speed.py``;
 ``ends FILE``: how the shipped learner's grid rollouts end (``scripts/planner_check.py --shipped-failures``);
+``ends-seeds LEARNER:SEED=FILE [...]``: those ends of several learners and training seeds side by side, with each
+learner's medians over its seeds;
 ``tasks ENDS REPORT [REPORT ...]``: those ends on each suite task beside the benchmark reports' episodes;
 ``labels REPORT [REPORT ...]``: learners' benchmark reports at each label budget beside each suite's oracle report.
 
 A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
 file given to a one-file table), and ``tasks`` or ``trials`` files that do not belong together
-(:func:`check_together`, :func:`check_trials`: trials of two bodies, or two of one variant and seed), are refused in
-one line naming the file, exit status 2.
+(:func:`check_together`, :func:`check_trials`: trials of two bodies, or two of one variant and seed), and
+``ends-seeds`` arguments that are not ``LEARNER:SEED=FILE`` or files not rolled out alike (:func:`seed_labels`,
+:func:`check_seeds`), are refused in one line naming the file or argument, exit status 2.
 """
 
 from __future__ import annotations
@@ -147,6 +150,11 @@ def speed_table(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _where(place: str) -> str:
+    """A place of an ends file as its tables name it: the family's selection part, or a map rolled out zero-shot."""
+    return "selection part" if place == "selection" else f"`{place}` (zero-shot)"
+
+
 def ends_table(data: dict[str, Any]) -> str:
     """How the shipped learner's grid rollouts end (``planner_check.py --shipped-failures``), one row a place."""
     rows = data["rows"]
@@ -156,13 +164,54 @@ def ends_table(data: dict[str, Any]) -> str:
     for name, row in rows.items():
         long = row["ends_on_paths_of_7_cells_or_more"]
         failed_long = sum(count for end, count in long.items() if end != "success")
-        where = "selection part" if name == "selection" else f"`{name}` (zero-shot)"
-        cells = [where, str(row["tasks"]), *[str(row["ends"][end]) for end in ends]]
+        cells = [_where(name), str(row["tasks"]), *[str(row["ends"][end]) for end in ends]]
         if not sum(long.values()):
             cells.append("no such path")
         else:
             cells.append(f"{long['into_wall']} of {failed_long} failures" if failed_long else "no failure")
         lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+ENDS_READ = ("success", "into_wall")
+"""The ends ``ends-seeds`` gives first, and takes the median of."""
+OTHER_ENDS = ("stay", "past_corner", "timeout")
+"""The ends ``ends-seeds`` gives in brackets after success and into a wall, in that order."""
+
+
+def ends_seeds_table(labels: list[tuple[str, str]], ends: list[dict[str, Any]]) -> str:
+    """Per learner and training seed, how its grid rollouts end on each place; then the learner's medians.
+
+    ``labels`` are each file's (learner, seed), ``ends`` the files (``planner_check.py --shipped-failures``), rolled
+    out alike (:func:`check_seeds`). A cell is success / into a wall (stay, past a corner, timeout) of the place's
+    tasks; a learner's median row gives the medians over its seeds of success and of into a wall, in bold. The
+    learners keep the order of their first file, the seeds the order given.
+    """
+    places = ends[0]["rows"]
+    header = ["learner", "seed", *[f"{_where(place)}, {row['tasks']} tasks" for place, row in places.items()]]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    by_learner: dict[str, list[tuple[str, dict[str, Any]]]] = defaultdict(list)
+    for (learner, seed), data in zip(labels, ends, strict=True):
+        by_learner[learner].append((seed, data))
+    for learner, seeds in by_learner.items():
+        for seed, data in seeds:
+            cells = [f"`{learner}`", seed]
+            for place in places:
+                counts = data["rows"][place]["ends"]
+                other = ", ".join(str(counts[end]) for end in OTHER_ENDS)
+                cells.append(f"{counts['success']} / {counts['into_wall']} ({other})")
+            lines.append("| " + " | ".join(cells) + " |")
+        medians = []
+        for place in places:
+            counts = [data["rows"][place]["ends"] for _, data in seeds]
+            success, wall = (statistics.median(count[end] for count in counts) for end in ENDS_READ)
+            medians.append(f"**{success:g} / {wall:g}**")
+        lines.append("| " + " | ".join([f"`{learner}`", "**median**", *medians]) + " |")
+    lines += [
+        "",
+        "Each cell: success / into a wall (stay, past a corner, timeout), of the tasks its column names; a median "
+        "row gives the medians over the learner's seeds of success and of into a wall.",
+    ]
     return "\n".join(lines)
 
 
@@ -265,6 +314,7 @@ TABLE_FILES = {
     "trials": ("trial", "trial"),
     "speed": ("speed", None),
     "ends": ("ends", None),
+    "ends-seeds": ("ends", "ends"),
     "tasks": ("ends", "benchmark report"),
     "labels": ("benchmark report", "benchmark report"),
 }
@@ -349,6 +399,54 @@ def check_trials(trials: list[tuple[str, dict[str, Any]]]) -> None:
         seen[key] = name
 
 
+def seed_labels(arguments: list[str]) -> list[tuple[str, str, Path]]:
+    """Each ``LEARNER:SEED=FILE`` argument of ``ends-seeds`` as (learner, seed, file).
+
+    The labels are given, not read: an ends file records the learner's zip, not its variant or training seed. The
+    file is what follows the first ``=``, the learner what precedes the first ``:``; neither label may be empty.
+
+    Raises:
+        ValueError: One line naming the argument that is not of that form, or the two of one learner and seed.
+    """
+    labelled: list[tuple[str, str, Path]] = []
+    seen: dict[tuple[str, str], str] = {}
+    for argument in arguments:
+        label, equals, path = argument.partition("=")
+        learner, colon, seed = label.partition(":")
+        if not (equals and colon and learner.strip() and seed.strip() and path):
+            raise ValueError(f"ends-seeds reads LEARNER:SEED=FILE arguments, got {argument!r}")
+        if (learner, seed) in seen:
+            raise ValueError(
+                f"{seen[learner, seed]} and {path} are both learner {learner} seed {seed} (one file a seed)"
+            )
+        seen[learner, seed] = path
+        labelled.append((learner, seed, Path(path)))
+    return labelled
+
+
+def _rolled_out(ends: dict[str, Any]) -> str:
+    """What an ends file rolled out: its body, and each place with its tasks (``ant: selection 200, ...``)."""
+    return f"{ends['body']}: " + ", ".join(f"{place} {row['tasks']}" for place, row in ends["rows"].items())
+
+
+def check_seeds(files: list[tuple[str, dict[str, Any]]]) -> None:
+    """Refuses ``ends-seeds`` files that were not rolled out alike, naming them.
+
+    The files must be of one body, with the same places in the same order and as many tasks on each: the table
+    sets them in one column a place, and a median over seeds of counts out of different totals is no count.
+
+    Raises:
+        ValueError: One line naming the file that differs from the first, and both files' places and tasks.
+    """
+    first_name, first = files[0]
+    for name, ends in files[1:]:
+        if _rolled_out(ends) != _rolled_out(first):
+            raise ValueError(
+                f"{name} rolled out {_rolled_out(ends)}; {first_name} {_rolled_out(first)} (one body, places and "
+                "tasks a table)"
+            )
+
+
 def load_files(table: str, paths: list[Path]) -> list[Any]:
     """The files of ``table``, each checked to be the kind it reads (:data:`TABLE_FILES`).
 
@@ -384,19 +482,20 @@ def main(argv: list[str] | None = None) -> int:
     """Prints the table named by the first argument from the files after it; a bad file: one line, exit 2."""
     parser = argparse.ArgumentParser(prog="python -m antmaze_lab.planning_tables", description=__doc__.splitlines()[0])
     parser.add_argument("table", choices=tuple(TABLE_FILES), help="the table to print (required)")
-    parser.add_argument(
-        "files", type=Path, nargs="+", help="its results files, as the module's description gives them (required)"
-    )
+    parser.add_argument("files", nargs="+", help="its results files, as the module's description gives them (required)")
     args = parser.parse_args(argv)
     try:
-        loaded = load_files(args.table, args.files)
+        labelled = seed_labels(args.files) if args.table == "ends-seeds" else []
+        paths = [path for *_, path in labelled] if labelled else [Path(file) for file in args.files]
+        loaded = load_files(args.table, paths)
         if args.table == "tasks":
             check_together(
                 (str(args.files[0]), loaded[0]), list(zip(map(str, args.files[1:]), loaded[1:], strict=True))
             )
-        if args.table == "trials":
-            check_trials(list(zip(map(str, args.files), loaded, strict=True)))
-        print(build(args.table, loaded))
+        if args.table in ("trials", "ends-seeds"):
+            check = check_trials if args.table == "trials" else check_seeds
+            check(list(zip(map(str, paths), loaded, strict=True)))
+        print(build(args.table, loaded, [(learner, seed) for learner, seed, _ in labelled]))
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -406,8 +505,10 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def build(table: str, loaded: list[Any]) -> str:
-    """The Markdown of ``table`` from its loaded files."""
+def build(table: str, loaded: list[Any], labels: list[tuple[str, str]] | None = None) -> str:
+    """The Markdown of ``table`` from its loaded files (``ends-seeds``: and each file's (learner, seed) labels)."""
+    if table == "ends-seeds":
+        return ends_seeds_table(labels or [], loaded)
     if table == "screen":
         return screen_table(loaded[0])
     if table == "speed":

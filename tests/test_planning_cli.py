@@ -254,3 +254,84 @@ def test_the_labels_table_sets_each_budget_beside_the_suites_oracle(tmp_path, ca
 def test_the_labels_table_refuses_reports_it_cannot_set_side_by_side(tmp_path, capsys, files, message):
     status, err, _ = tables(tmp_path, capsys, "labels", *files)
     assert status == 2 and err.startswith("error: " + message), err
+
+
+def seed_ends(*per_place, body="ant", tasks=10):
+    """An ends file of ``planner_check.py --shipped-failures``: per place (selection, then ``selection_8x8``),
+    its (success, into_wall, stay, past_corner, timeout) counts of ``tasks``."""
+    rows = {}
+    for place, counts in zip(("selection", "selection_8x8"), per_place, strict=False):
+        ends = dict(zip(("success", "into_wall", "stay", "past_corner", "timeout"), counts, strict=True))
+        rows[place] = {"tasks": tasks, "ends": ends, "ends_on_paths_of_7_cells_or_more": {}}
+    return {"command": "python scripts/planner_check.py --shipped-failures", "body": body, "tasks": tasks, "rows": rows}
+
+
+def seed_tables(tmp_path, capsys, *labelled):
+    """``planning_tables ends-seeds``' exit status, output (or error line) and files, from (label, file) pairs."""
+    arguments, paths = [], []
+    for index, (label, data) in enumerate(labelled):
+        path = tmp_path / f"s{index}.json"
+        path.write_text(json.dumps(data))
+        arguments.append(f"{label}={path}")
+        paths.append(str(path))
+    status = planning_tables.main(["ends-seeds", *arguments])
+    out, err = capsys.readouterr()
+    return status, (out if status == 0 else err.strip()), paths
+
+
+def test_the_ends_seeds_table_gives_each_seeds_ends_and_each_learners_medians(tmp_path, capsys):
+    files = [
+        ("switch:0 (ninth look)", seed_ends((9, 1, 0, 10, 0), (6, 3, 0, 1, 10), tasks=20)),
+        ("switch:1", seed_ends((3, 0, 1, 2, 14), (8, 1, 0, 0, 11), tasks=20)),
+        ("switch:2", seed_ends((7, 5, 0, 0, 8), (2, 8, 0, 0, 10), tasks=20)),
+        ("plan:0", seed_ends((5, 5, 0, 0, 10), (4, 6, 0, 0, 10), tasks=20)),
+        ("plan:1", seed_ends((6, 3, 0, 1, 10), (1, 9, 0, 0, 10), tasks=20)),
+    ]
+    status, out, _ = seed_tables(tmp_path, capsys, *files)
+    assert status == 0
+    lines = out.splitlines()
+    assert lines[0] == "| learner | seed | selection part, 20 tasks | `selection_8x8` (zero-shot), 20 tasks |"
+    assert (
+        lines[2] == "| `switch` | 0 (ninth look) | 9 / 1 (0, 10, 0) | 6 / 3 (0, 1, 10) |"
+    )  # stay, past corner, timeout
+    assert lines[3] == "| `switch` | 1 | 3 / 0 (1, 2, 14) | 8 / 1 (0, 0, 11) |"
+    # Medians, neither means nor one seed's row: success 7 of (9, 3, 7) and 6 of (6, 8, 2), into a wall 1 of
+    # (1, 0, 5) and 3 of (3, 1, 8); the means would be 6.3, 5.3, 2 and 4.
+    assert lines[5] == "| `switch` | **median** | **7 / 1** | **6 / 3** |"
+    # Two seeds: the median is half-way, and a learner's median reads its own seeds only.
+    assert lines[6:9] == [
+        "| `plan` | 0 | 5 / 5 (0, 0, 10) | 4 / 6 (0, 0, 10) |",
+        "| `plan` | 1 | 6 / 3 (0, 1, 10) | 1 / 9 (0, 0, 10) |",
+        "| `plan` | **median** | **5.5 / 4** | **2.5 / 7.5** |",
+    ]
+    assert lines[9] == "" and lines[10].startswith("Each cell: success / into a wall (stay, past a corner, timeout)")
+    assert len(lines) == 11
+
+
+ONE = seed_ends((1, 0, 0, 0, 0))
+
+
+@pytest.mark.parametrize(
+    ("labelled", "message"),
+    [
+        ([("switch", ONE)], "ends-seeds reads LEARNER:SEED=FILE arguments, got 'switch={0}'"),
+        ([(":0", ONE)], "ends-seeds reads LEARNER:SEED=FILE arguments, got ':0={0}'"),
+        ([("switch:", ONE)], "ends-seeds reads LEARNER:SEED=FILE arguments, got 'switch:={0}'"),
+        ([("switch:0", ONE)] * 2, "{0} and {1} are both learner switch seed 0 (one file a seed)"),
+        (
+            [("switch:0", ONE), ("plan:0", seed_ends((1, 0, 0, 0, 0), body="point"))],
+            "{1} rolled out point: selection 10; {0} ant: selection 10 (one body, places and tasks a table)",
+        ),
+        ([("switch:0", ONE), ("plan:0", seed_ends((1, 0, 0, 0, 0), tasks=20))], "{1} rolled out ant: selection 20; "),
+        (
+            [("switch:0", ONE), ("plan:0", seed_ends((1, 0, 0, 0, 0), (1, 0, 0, 0, 0)))],
+            "{1} rolled out ant: selection 10, selection_8x8 10; {0} ant: selection 10 (",
+        ),
+        ([("switch:0", {"rows": [{"variant": "a"}]})], "{0} is of kind 'screen'; ends-seeds reads 'ends' files"),
+        ([("switch:0", {"body": "ant", "rows": {"u": {"tasks": 1, "ends": {}}}})], "switch:0={0}: a field is missing"),
+    ],
+)
+def test_the_ends_seeds_table_refuses_bad_labels_and_files_not_rolled_out_alike(tmp_path, capsys, labelled, message):
+    status, err, paths = seed_tables(tmp_path, capsys, *labelled)
+    assert status == 2 and err.startswith("error: " + message.format(*paths)), err
+    assert len(err.splitlines()) == 1
