@@ -9,18 +9,25 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-import torch
-from stable_baselines3 import SAC, HerReplayBuffer
 
 import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl import PathOracle
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.envs import PointGoToController
-from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
-# One thread: small networks gain nothing from two, and results stay the same on every machine.
-torch.set_num_threads(1)
+# torch, SB3 and the trainer are imported where they are used, not here: pytest-xdist's controller imports this
+# file too, and runs no test, so their imports (seconds of CPU) would only delay the workers' start.
+
+
+@pytest.fixture(scope="session", autouse=True)
+def one_torch_thread():
+    """One torch thread in every process that runs tests: small networks gain nothing from two, and results stay
+    the same on every machine."""
+    import torch
+
+    torch.set_num_threads(1)
+
 
 COMMITTED_RESULTS = str(Path(__file__).resolve().parents[1] / "results") + os.sep
 """The lab's committed results, which the unit tier never reads (its checks are integration tests)."""
@@ -88,6 +95,8 @@ def still_controller():
 
 def tiny_sac_her(env, learning_starts=100):
     """A small SB3 SAC with HER on a reach env, as a user would bring one (no antmaze_hirl glue)."""
+    from stable_baselines3 import SAC, HerReplayBuffer
+
     return SAC(
         "MultiInputPolicy",
         env,
@@ -111,6 +120,8 @@ def make_point_trainer(strategy=None, seed=0, *, env=None, learner=None, policy_
     ``learner(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
     the other keyword arguments go to ``DAggerTrainer`` (default ``gradient_steps=5``).
     """
+    from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
+
     env = env if env is not None else point_maze()
     rng = np.random.default_rng(seed)
     learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if learner is None else learner(env, rng)
@@ -158,6 +169,8 @@ def finished_experiment(tmp_path_factory, name, config, seeds=2, low_level=None)
 
     ``low_level`` goes to ``run_experiment`` (``None``: the body's shipped policy).
     """
+    from antmaze_hirl.experiments import run_experiment
+
     folder = tmp_path_factory.mktemp(name)
     run_experiment(["dagger"], seeds, config, folder, low_level=low_level, progress_bar=False, tensorboard=False)
     files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}
