@@ -1,6 +1,9 @@
 import copy
 import dataclasses
+import functools
+import itertools
 import os
+import re
 import sys
 from collections import OrderedDict
 from pathlib import Path
@@ -50,6 +53,50 @@ def pytest_configure(config):
     if "not integration" in (config.getoption("markexpr") or "") and not UNIT_TIER_GUARD:
         sys.addaudithook(_refuse_committed_results)  # for the rest of the process: a hook cannot be removed
         UNIT_TIER_GUARD = True
+
+
+WHOLE_FILE_LEFT_OUT = re.compile(r"^pytestmark = \[?\s*pytest\.mark\.(integration|slow)\b", re.MULTILINE)
+"""A test file's module-level ``pytestmark`` that puts every test of the file in the integration or slow tier."""
+
+
+def selects_a_test_marked(markexpr: str, marker: str) -> bool:
+    """Whether the ``-m`` expression ``markexpr`` selects some test marked ``marker``, whatever its other marks.
+
+    Tries every set of the other names in the expression, with pytest's own parser of ``-m``; when that cannot be
+    imported or read, or the names are too many to try, it answers yes (the file is imported, as pytest would).
+    """
+    if not markexpr:
+        return True
+    names = sorted(set(re.findall(r"[\w.+-]+", markexpr)) - {"and", "or", "not", marker})
+    try:
+        from _pytest.mark.expression import Expression
+
+        expression = Expression.compile(markexpr)
+    except Exception:  # a private module of pytest's: any change there imports every file, as before
+        return True
+    if len(names) > 12:
+        return True
+    for values in itertools.product((False, True), repeat=len(names)):
+        marks = {marker, *(name for name, value in zip(names, values, strict=True) if value)}
+        if expression.evaluate(functools.partial(_has_mark, frozenset(marks))):
+            return True
+    return False
+
+
+def _has_mark(marks: frozenset[str], name: str, /, **kwargs) -> bool:
+    return name in marks  # a mark's keyword arguments (-m "name(key=value)") are not read: both answers are tried
+
+
+def pytest_ignore_collect(collection_path, config):
+    # A file whose module-level pytestmark puts every test in a tier that -m leaves out is not imported: each
+    # pytest-xdist worker imports every test file it collects, and the lab's checks import the lab's tables, Ray
+    # and Playwright, which cost each worker of the unit tier seconds for tests it deselects.
+    if collection_path.suffix != ".py" or not collection_path.name.startswith("test_"):
+        return None
+    found = WHOLE_FILE_LEFT_OUT.search(collection_path.read_text())
+    if found and not selects_a_test_marked(config.getoption("markexpr") or "", found.group(1)):
+        return True
+    return None
 
 
 COMPILED_MODELS_KEPT = 48
