@@ -1,7 +1,10 @@
 import ast
 import copy
 import dataclasses
+import functools
+import itertools
 import os
+import re
 import sys
 from collections import OrderedDict
 from pathlib import Path
@@ -10,18 +13,25 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 import pytest
-import torch
-from stable_baselines3 import SAC, HerReplayBuffer
 
 import antmaze_hirl  # noqa: F401  (registers the env ids)
 from antmaze_hirl import PathOracle
-from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
 from antmaze_hirl.envs import PointGoToController
-from antmaze_hirl.experiments import ExperimentConfig, run_experiment
+from antmaze_hirl.experiments.config import ExperimentConfig
 from antmaze_hirl.experiments.old_folders import SETTINGS_BEFORE_PROTOCOL_2
 
-# One thread: small networks gain nothing from two, and results stay the same on every machine.
-torch.set_num_threads(1)
+# torch, SB3 and the trainer are imported where they are used, not here: pytest-xdist's controller imports this
+# file too, and runs no test, so their imports (seconds of CPU) would only delay the workers' start.
+
+
+@pytest.fixture(scope="session", autouse=True)
+def one_torch_thread():
+    """One torch thread in every process that runs tests: small networks gain nothing from two, and results stay
+    the same on every machine."""
+    import torch
+
+    torch.set_num_threads(1)
+
 
 _ROOT = Path(__file__).resolve().parents[1]
 COMMITTED_RESULTS = str(_ROOT / "results") + os.sep
@@ -62,31 +72,74 @@ LEFT_OUT = ("integration", "slow")
 """The markers that take a test out of the unit tier (pyproject.toml's addopts)."""
 
 
-def marks_out(marker: ast.AST) -> bool:
-    """Whether ``marker`` (a decorator, or a ``pytestmark`` value) is ``pytest.mark.integration`` or ``.slow``, called
-    or not, or a list of markers holding one. A ``pytest.param(..., marks=...)`` marks one case, not the test."""
+def _left_out_marks(marker: ast.AST) -> set[str]:
+    """The :data:`LEFT_OUT` markers that ``marker`` (a decorator, or a ``pytestmark`` value) applies:
+    ``pytest.mark.integration`` or ``.slow``, called or not, or a list of markers. A ``pytest.param(...,
+    marks=...)`` marks one case, not the test, and is not read."""
     if isinstance(marker, (ast.List, ast.Tuple)):
-        return any(marks_out(element) for element in marker.elts)
+        return set().union(*(_left_out_marks(element) for element in marker.elts))
     marker = marker.func if isinstance(marker, ast.Call) else marker
-    return isinstance(marker, ast.Attribute) and marker.attr in LEFT_OUT
+    return {marker.attr} if isinstance(marker, ast.Attribute) and marker.attr in LEFT_OUT else set()
+
+
+def marks_out(marker: ast.AST) -> bool:
+    """Whether ``marker`` (a decorator, or a ``pytestmark`` value) takes a test out of the unit tier."""
+    return bool(_left_out_marks(marker))
+
+
+def whole_file_marks(tree: ast.Module) -> frozenset[str]:
+    """The :data:`LEFT_OUT` markers a test module's top-level ``pytestmark`` puts on every test of it."""
+    marks: set[str] = set()
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(target, "id", "") == "pytestmark" for target in node.targets):
+            marks |= _left_out_marks(node.value)
+    return frozenset(marks)
 
 
 def marked_out_whole(tree: ast.Module) -> bool:
     """Whether a test module's top-level ``pytestmark`` takes all of it out of the unit tier."""
-    return any(
-        any(getattr(target, "id", "") == "pytestmark" for target in node.targets) and marks_out(node.value)
-        for node in tree.body
-        if isinstance(node, ast.Assign)
-    )
+    return bool(whole_file_marks(tree))
+
+
+def selects_a_test_marked(markexpr: str, markers: frozenset[str]) -> bool:
+    """Whether the ``-m`` expression ``markexpr`` selects some test marked with all of ``markers``, whatever its
+    other marks.
+
+    Tries every set of the other names in the expression, with pytest's own parser of ``-m``; when that cannot be
+    imported or read, or the names are too many to try, it answers yes (the file is imported, as pytest would).
+    """
+    if not markexpr:
+        return True
+    names = sorted(set(re.findall(r"[\w.+-]+", markexpr)) - {"and", "or", "not", *markers})
+    try:
+        from _pytest.mark.expression import Expression
+
+        expression = Expression.compile(markexpr)
+    except Exception:  # a private module of pytest's: any change there imports every file, as before
+        return True
+    if len(names) > 12:
+        return True
+    for values in itertools.product((False, True), repeat=len(names)):
+        marks = {*markers, *(name for name, value in zip(names, values, strict=True) if value)}
+        if expression.evaluate(functools.partial(_has_mark, frozenset(marks))):
+            return True
+    return False
+
+
+def _has_mark(marks: frozenset[str], name: str, /, **kwargs) -> bool:
+    return name in marks  # a mark's keyword arguments (-m "name(key=value)") are not read: both answers are tried
 
 
 def pytest_ignore_collect(collection_path, config):
-    # A module marked integration or slow as a whole has no test in the unit tier, yet collecting it would import
-    # it in every worker, and with it the lab scripts most of these modules load at import: seconds of each
-    # worker's start-up, and lab code run in a tier that runs none. Read from the source, not by importing it.
-    if UNIT_TIER_GUARD and collection_path.suffix == ".py" and collection_path.name.startswith("test_"):
-        if marked_out_whole(ast.parse(collection_path.read_bytes(), filename=str(collection_path))):
-            return True
+    # A file whose module-level pytestmark puts every test in a tier that -m leaves out is not imported: each
+    # pytest-xdist worker imports every test file it collects, and the lab's checks import the lab's tables, Ray
+    # and Playwright, which cost each worker of the unit tier seconds for tests it deselects (and would run the
+    # lab's code in a tier that runs none). The marks are read from the source, not by importing it.
+    if collection_path.suffix != ".py" or not collection_path.name.startswith("test_"):
+        return None
+    markers = whole_file_marks(ast.parse(collection_path.read_bytes(), filename=str(collection_path)))
+    if markers and not selects_a_test_marked(config.getoption("markexpr") or "", markers):
+        return True
     return None
 
 
@@ -133,6 +186,8 @@ def still_controller():
 
 def tiny_sac_her(env, learning_starts=100):
     """A small SB3 SAC with HER on a reach env, as a user would bring one (no antmaze_hirl glue)."""
+    from stable_baselines3 import SAC, HerReplayBuffer
+
     return SAC(
         "MultiInputPolicy",
         env,
@@ -156,6 +211,8 @@ def make_point_trainer(strategy=None, seed=0, *, env=None, learner=None, policy_
     ``learner(env, rng)`` builds the learner (default ``HighLevelPolicy.for_env(env, rng=rng, **policy_settings)``);
     the other keyword arguments go to ``DAggerTrainer`` (default ``gradient_steps=5``).
     """
+    from antmaze_hirl.dagger import DAggerTrainer, HighLevelPolicy
+
     env = env if env is not None else point_maze()
     rng = np.random.default_rng(seed)
     learner = HighLevelPolicy.for_env(env, rng=rng, **(policy_settings or {})) if learner is None else learner(env, rng)
@@ -203,6 +260,8 @@ def finished_experiment(tmp_path_factory, name, config, seeds=2, low_level=None)
 
     ``low_level`` goes to ``run_experiment`` (``None``: the body's shipped policy).
     """
+    from antmaze_hirl.experiments import run_experiment
+
     folder = tmp_path_factory.mktemp(name)
     run_experiment(["dagger"], seeds, config, folder, low_level=low_level, progress_bar=False, tensorboard=False)
     files = {path.name: path.read_bytes() for path in folder.rglob("*") if path.is_file() and "tb" not in path.parts}

@@ -13,7 +13,7 @@ TINY_SETTINGS = {
     "eval_every": 2,
     "eval_episodes": 1,
     "final_eval_episodes": 2,
-    "gradient_steps": 20,
+    "gradient_steps": 5,
     "background_updates": False,  # the experiments' order; tests of the background update turn it on
 }
 

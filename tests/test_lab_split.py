@@ -11,7 +11,15 @@ from itertools import pairwise
 from pathlib import Path
 
 import pytest
-from conftest import COMMITTED_RESULTS, LAB_CODE, UNIT_TIER_GUARD, marked_out_whole, marks_out
+from conftest import (
+    COMMITTED_RESULTS,
+    LAB_CODE,
+    UNIT_TIER_GUARD,
+    marked_out_whole,
+    marks_out,
+    selects_a_test_marked,
+    whole_file_marks,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "antmaze_hirl"
@@ -168,3 +176,27 @@ def test_the_unit_tier_never_imports_the_lab(tmp_path):
         if (lines := unit_tier_lab_imports(path))
     }
     assert not found, f"unit-tier tests import the lab (line, module): {found}; mark them integration"
+
+
+@pytest.mark.parametrize(
+    ("source", "markexpr", "imported"),
+    [
+        ("pytestmark = pytest.mark.integration", "not slow and not integration", False),
+        ("pytestmark = [pytest.mark.slow]", "not slow and not integration", False),
+        ("pytestmark = pytest.mark.integration", "integration or slow", True),
+        ("pytestmark = pytest.mark.slow", "not integration", True),  # a run that keeps the slow tier
+        ("pytestmark = [pytest.mark.integration, pytest.mark.slow]", "not slow", False),
+        ("pytestmark = [pytest.mark.integration, pytest.mark.slow]", "integration and not slow", False),
+        ("pytestmark = pytest.mark.integration", "not gpu", True),
+        ("pytestmark = pytest.mark.integration", "", True),
+        ("x = [pytest.param(1, marks=pytest.mark.integration)]", "not integration", True),  # one case, not the file
+        ("@pytest.mark.integration\ndef test_one():\n    pass", "not integration", True),  # one test, not the file
+    ],
+)
+def test_a_file_is_left_unimported_only_where_the_marker_expression_selects_none_of_its_tests(
+    source, markexpr, imported
+):
+    # pytest_ignore_collect's decision: a file not imported must be one whose every test -m deselects, so that
+    # no test is dropped from any tier (CI runs "not slow and not integration", then "integration or slow").
+    markers = whole_file_marks(ast.parse("import pytest\n" + source))
+    assert (not markers or selects_a_test_marked(markexpr, markers)) is imported

@@ -435,18 +435,26 @@ def test_one_participants_failing_writes_do_not_cut_short_anothers_closing(tmp_p
     monkeypatch.setattr(TrialClosing, "RETRY_FIRST_SECONDS", 3600.0)
     disk = ClosingDisk(monkeypatch, lambda path: "P01" in path.parts)  # P01's disk is full, P02's is not
     study = Study(folder)
-    slow = threading.Timer(0.5, gate.open)  # P02's final update, held until the study waits on it
+    waited_on = []
+    real_wait = TrialClosing.wait
+
+    def wait(closing, timeout=None):  # P02's final update is held until the study waits on its closing
+        waited_on.append(closing.session.participant.id)
+        if closing.session.participant.id == "P02":
+            gate.open()
+        return real_wait(closing, timeout)
+
     try:
         for participant in ("P01", "P02"):
             session = study.session(participant)
             session.start_trial()
             play_to_the_last_maze(session, gate)  # P02's first update lets P01's final update through
             assert session.next_episode()["phase"] == "questionnaire"
-        slow.start()
+        monkeypatch.setattr(TrialClosing, "wait", wait)
         with pytest.raises(RuntimeError, match=r"participant P01, trial 1: .*its writes are retried"):
             study.wait_for_closed_trials(timeout=60)
+        assert waited_on == ["P01", "P02"]  # P01's failing writes did not stop the study before it waited on P02
         assert disk.failed
         assert (folder / "participants" / "P02" / "trial1" / "learner.zip").is_file()  # waited on, not cut short
     finally:
-        slow.cancel()
         study.close()

@@ -49,6 +49,36 @@ def test_a_body_that_stalls_is_a_408_with_a_json_error(served):
     assert reply.startswith("HTTP/1.1 408") and '"error"' in reply and "stalled" in reply
 
 
+def read_response(connection):
+    """One HTTP response with a ``Content-Length`` from a kept-alive connection: its head and body."""
+    data = b""
+    while b"\r\n\r\n" not in data:
+        data += connection.recv(65536)
+    head, _, body = data.partition(b"\r\n\r\n")
+    length = next(
+        int(line.split(b":")[1]) for line in head.split(b"\r\n") if line.lower().startswith(b"content-length")
+    )
+    while len(body) < length:
+        body += connection.recv(65536)
+    return head.decode(), body
+
+
+def test_each_answer_on_a_kept_alive_connection_comes_without_waiting_for_an_ack(served):
+    # A response's head and body are two writes: under Nagle's algorithm on the server's connections the body
+    # waited for the client's delayed ACK (about 40 ms), on every request after a connection's first.
+    request = f"GET /api/study HTTP/1.1\r\nHost: 127.0.0.1:{served.port}\r\nX-Study-Token: {TOKEN}\r\n\r\n"
+    seconds = []
+    with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:
+        connection.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # the client's own writes go at once
+        for _ in range(10):
+            started = time.monotonic()
+            connection.sendall(request.encode())
+            head, body = read_response(connection)
+            seconds.append(time.monotonic() - started)
+            assert head.startswith("HTTP/1.1 200") and json.loads(body)
+    assert min(seconds[1:]) < 0.02  # a delayed ACK would hold each of them 40 ms
+
+
 def test_control_bytes_from_a_url_are_escaped_in_the_log(served, caplog):
     with caplog.at_level(logging.WARNING, logger="antmaze_hirl.study.server"):
         with socket.create_connection(("127.0.0.1", served.port), timeout=30) as connection:

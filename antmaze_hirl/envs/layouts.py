@@ -214,17 +214,25 @@ def _is_symbol(symbol: object, allowed: set[int | str]) -> bool:
 
 def bfs_distances(walls: np.ndarray, source: Cell) -> np.ndarray:
     """Grid shortest-path lengths (4-connected) from ``source``; ``-1`` where unreachable."""
-    distances = np.full(walls.shape, -1, dtype=np.int64)
-    distances[source] = 0
-    queue = deque([source])
+    n_rows, n_cols = walls.shape
+    r, c = (int(value) for value in source)
+    if not (0 <= r < n_rows and 0 <= c < n_cols):
+        raise IndexError(f"source cell {(r, c)} is outside the {n_rows}x{n_cols} grid")
+    # On Python lists, not the arrays: a maze draw runs this once per wall it tries, and an array's element
+    # reads and writes cost about ten times a list's.
+    blocked = np.asarray(walls, dtype=bool).tolist()
+    distances = [[-1] * n_cols for _ in range(n_rows)]
+    distances[r][c] = 0
+    queue = deque([(r, c)])
     while queue:
         r, c = queue.popleft()
+        step = distances[r][c] + 1
         for dr, dc in _NEIGHBOUR_STEPS:
             nr, nc = r + dr, c + dc
-            if 0 <= nr < walls.shape[0] and 0 <= nc < walls.shape[1] and not walls[nr, nc] and distances[nr, nc] < 0:
-                distances[nr, nc] = distances[r, c] + 1
+            if 0 <= nr < n_rows and 0 <= nc < n_cols and not blocked[nr][nc] and distances[nr][nc] < 0:
+                distances[nr][nc] = step
                 queue.append((nr, nc))
-    return distances
+    return np.array(distances, dtype=np.int64).reshape(n_rows, n_cols)
 
 
 def shortest_path(walls: np.ndarray, start: Cell, goal: Cell) -> list[Cell]:
