@@ -87,13 +87,39 @@ def marks_out(marker: ast.AST) -> bool:
     return bool(_left_out_marks(marker))
 
 
+def _names_pytestmark(node: ast.AST) -> bool:
+    """Whether ``node`` names ``pytestmark`` in any way the source shows: the name itself (bound, read, deleted or
+    declared global), an attribute or import alias of that name, or the string ``"pytestmark"`` (``globals()[...]``,
+    ``setattr``)."""
+    if isinstance(node, ast.Name):
+        return node.id == "pytestmark"
+    if isinstance(node, ast.Attribute):
+        return node.attr == "pytestmark"
+    if isinstance(node, ast.alias):
+        return "pytestmark" in (node.name, node.asname)
+    if isinstance(node, (ast.Global, ast.Nonlocal)):
+        return "pytestmark" in node.names
+    return isinstance(node, ast.Constant) and node.value == "pytestmark"
+
+
 def whole_file_marks(tree: ast.Module) -> frozenset[str]:
-    """The :data:`LEFT_OUT` markers a test module's top-level ``pytestmark`` puts on every test of it."""
-    marks: set[str] = set()
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(target, "id", "") == "pytestmark" for target in node.targets):
-            marks |= _left_out_marks(node.value)
-    return frozenset(marks)
+    """The :data:`LEFT_OUT` markers a test module's top-level ``pytestmark`` puts on every test of it.
+
+    Read only where the source settles the value pytest will see: pytest reads the module's ``pytestmark`` as it is
+    after the import, so the file must name ``pytestmark`` exactly once, as a target of a top-level ``=``
+    statement. Any other mention (a second assignment, one inside ``if``/``try``/a function, ``+=``, an annotated
+    assignment, a method call on it, ``globals()["pytestmark"]``) gives the empty set: the file is imported and
+    pytest decides.
+    """
+    mentions = [node for node in ast.walk(tree) if _names_pytestmark(node)]
+    assignments = [
+        node
+        for node in tree.body
+        if isinstance(node, ast.Assign) and any(_names_pytestmark(target) for target in node.targets)
+    ]
+    if len(mentions) != 1 or len(assignments) != 1 or not isinstance(mentions[0], ast.Name):
+        return frozenset()
+    return frozenset(_left_out_marks(assignments[0].value))
 
 
 def marked_out_whole(tree: ast.Module) -> bool:

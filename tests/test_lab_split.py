@@ -191,6 +191,18 @@ def test_the_unit_tier_never_imports_the_lab(tmp_path):
         ("pytestmark = pytest.mark.integration", "", True),
         ("x = [pytest.param(1, marks=pytest.mark.integration)]", "not integration", True),  # one case, not the file
         ("@pytest.mark.integration\ndef test_one():\n    pass", "not integration", True),  # one test, not the file
+        # pytest reads pytestmark as the module holds it after import: a file that binds it more than once, or
+        # other than by one top-level assignment, is imported and pytest decides.
+        ("pytestmark = pytest.mark.integration\npytestmark = []", "not integration", True),
+        ("pytestmark = []\npytestmark = pytest.mark.integration", "not integration", True),
+        ("if True:\n    pytestmark = pytest.mark.integration", "not integration", True),
+        ("try:\n    pytestmark = pytest.mark.integration\nexcept ImportError:\n    pass", "not integration", True),
+        ("def f():\n    global pytestmark\n    pytestmark = pytest.mark.integration", "not integration", True),
+        ("pytestmark = [pytest.mark.integration]\npytestmark += [pytest.mark.slow]", "not integration", True),
+        ("pytestmark: list = [pytest.mark.integration]", "not integration", True),
+        ("pytestmark = [pytest.mark.integration]\npytestmark.clear()", "not integration", True),
+        ("pytestmark = pytest.mark.integration\nglobals()['pytestmark'] = []", "not integration", True),
+        ("pytestmark = other = pytest.mark.integration", "not integration", False),  # one binding, two names
     ],
 )
 def test_a_file_is_left_unimported_only_where_the_marker_expression_selects_none_of_its_tests(
