@@ -163,7 +163,11 @@ def pytest_ignore_collect(collection_path, config):
     # lab's code in a tier that runs none). The marks are read from the source, not by importing it.
     if collection_path.suffix != ".py" or not collection_path.name.startswith("test_"):
         return None
-    markers = whole_file_marks(ast.parse(collection_path.read_bytes(), filename=str(collection_path)))
+    try:
+        tree = ast.parse(collection_path.read_bytes(), filename=str(collection_path))
+    except (OSError, SyntaxError, ValueError):  # ValueError: a null byte, before Python 3.12
+        return None  # pytest imports it and reports the file's own error; raised here, it fails the whole folder
+    markers = whole_file_marks(tree)
     if markers and not selects_a_test_marked(config.getoption("markexpr") or "", markers):
         return True
     return None

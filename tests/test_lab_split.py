@@ -9,6 +9,7 @@ import sys
 import zipfile
 from itertools import pairwise
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from conftest import (
@@ -17,6 +18,7 @@ from conftest import (
     UNIT_TIER_GUARD,
     marked_out_whole,
     marks_out,
+    pytest_ignore_collect,
     selects_a_test_marked,
     whole_file_marks,
 )
@@ -212,3 +214,22 @@ def test_a_file_is_left_unimported_only_where_the_marker_expression_selects_none
     # no test is dropped from any tier (CI runs "not slow and not integration", then "integration or slow").
     markers = whole_file_marks(ast.parse("import pytest\n" + source))
     assert (not markers or selects_a_test_marked(markexpr, markers)) is imported
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        b"import pytest\npytestmark = pytest.mark.integration\ndef test_x(:\n",
+        b"# -*- coding: no-such-codec -*-\nimport pytest\npytestmark = pytest.mark.integration\n",
+        b"import pytest\npytestmark = pytest.mark.integration\nNAME = '\xff'\n",  # not UTF-8
+        b"import pytest\x00\n",
+    ],
+    ids=["syntax", "codec", "bytes", "null"],
+)
+def test_a_file_that_does_not_parse_is_left_to_pytest(tmp_path, source):
+    # pytest imports it and reports the file's own collection error; an error raised from the hook fails the
+    # collection of the whole folder instead (no test of it is collected).
+    path = tmp_path / "test_broken.py"
+    path.write_bytes(source)
+    config = SimpleNamespace(getoption={"markexpr": "not slow and not integration"}.get)
+    assert pytest_ignore_collect(path, config) is None
