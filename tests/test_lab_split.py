@@ -3,6 +3,7 @@ unit tier reads no committed results (the lab's data; its checks run in the inte
 
 import ast
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
@@ -130,6 +131,56 @@ def test_the_unit_tier_refuses_to_run_the_lab_however_it_is_reached(tmp_path):
     with pytest.raises(ImportError, match=r"benchmarks.trial_speed\.py; mark the test integration"):
         spec.loader.exec_module(importlib.util.module_from_spec(spec))
     assert not [name for name in sys.modules if name.split(".")[0] in LAB]
+    with pytest.raises(ImportError, match=r"^the unit tier runs none of the lab's code: -c 'import antmaze_lab'; mark"):
+        subprocess.run([sys.executable, "-c", "import antmaze_lab"], capture_output=True, timeout=60)  # no hook there
+    # A bytes path names a file as a str does.
+    with pytest.raises(PermissionError, match=r"^the unit tier reads no committed results: .*index\.json; mark the"):
+        open(str(Path(COMMITTED_RESULTS) / "index.json").encode(), "rb")
+
+
+@pytest.mark.parametrize(
+    ("command", "cwd", "refused", "named"),
+    [
+        (["-c", "import antmaze_lab"], None, ImportError, r"-c 'import antmaze_lab'"),
+        (["-c", "from scripts import no_such"], None, ImportError, r"-c 'from scripts import no_such'"),
+        (["-m", "antmaze_" + "lab.no_such"], None, ImportError, r"-m antmaze_lab\.no_such"),
+        (["-Im", "benchmarks.no_such"], None, ImportError, r"-m benchmarks\.no_such"),
+        (["-mscripts.no_such"], None, ImportError, r"-m scripts\.no_such"),
+        ([ROOT / "benchmarks" / "no_such.py"], None, ImportError, r".*benchmarks.no_such\.py"),
+        ([b"scripts/no_such.py"], ROOT, ImportError, r".*scripts.no_such\.py"),
+        (["no_such.py"], ROOT / "benchmarks", ImportError, r".*benchmarks.no_such\.py"),  # the cwd given
+        (["-c", "open('results/index.json')"], ROOT, PermissionError, r"-c \"open\('results/index\.json'\)\""),
+        (
+            ["-c", f"open({COMMITTED_RESULTS + 'index.json'!r})"],
+            "/",
+            PermissionError,
+            r"-c \"open\('/.*/index\.json'\)\"",
+        ),
+    ],
+    ids=["c-import", "c-from", "m", "m-joined", "m-attached", "pathlike", "bytes", "cwd", "c-results", "c-absolute"],
+)
+def test_the_unit_tier_refuses_a_command_line_that_runs_the_lab_or_reads_the_results(command, cwd, refused, named):
+    # A child process runs without this process's audit hook: its command line is judged before it starts. The
+    # names are ones that do not exist, so that a guard that let one through fails fast.
+    if not UNIT_TIER_GUARD:
+        pytest.skip("the guard is on in the unit tier only (-m 'not integration')")
+    kind = "runs none of the lab's code" if refused is ImportError else "reads no committed results"
+    with pytest.raises(refused, match=rf"^the unit tier {kind}: {named}; mark the test integration"):
+        subprocess.run([sys.executable, *command], cwd=cwd, capture_output=True, timeout=60)
+
+
+def test_the_unit_tier_refuses_a_shell_command_that_names_the_lab():
+    if not UNIT_TIER_GUARD:
+        pytest.skip("the guard is on in the unit tier only (-m 'not integration')")
+    lab = r"^the unit tier runs none of the lab's code: -c 'python scripts/no_such\.py'; mark"
+    with pytest.raises(ImportError, match=lab):
+        subprocess.run("python scripts/no_such.py", shell=True, cwd=ROOT, capture_output=True, timeout=60)
+    results = r"^the unit tier reads no committed results: -c 'cat results/index\.json >/dev/null'; mark"
+    with pytest.raises(PermissionError, match=results):
+        os.system("cat results/index.json >/dev/null")
+    # Other commands run, from the checkout too: the package, a path that only contains a lab folder's name.
+    ok = [sys.executable, "-c", "import antmaze_hirl, sys; print(sys.argv[1:])", "docs/scripts/results", "-m", "x"]
+    assert subprocess.run(ok, cwd=ROOT, capture_output=True, text=True, timeout=120, check=True).stdout.strip()
 
 
 def unit_tier_lab_imports(path: Path) -> list[tuple[int, str]]:
