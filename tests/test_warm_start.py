@@ -1,5 +1,7 @@
 """Fine-tuning hooks (antmaze_hirl.sb3_ext.warm_start): policy-driven warm-up, a critic-only start, resume."""
 
+import pickle
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -7,7 +9,7 @@ import torch as th
 from stable_baselines3 import DDPG, SAC, TD3
 from stable_baselines3.common.noise import ActionNoise
 
-from antmaze_hirl.sb3_ext import CheckpointError, load_config, make_model, save_policy, train_low_level
+from antmaze_hirl.sb3_ext import CheckpointError, load_config, make_model, save_policy, train_low_level, warm_start
 from antmaze_hirl.sb3_ext.warm_start import WarmStartMixin, with_warm_start
 
 STARTS = 64  # learning_starts of the Pendulum models: warm-up steps, all in Pendulum's first 200-step episode
@@ -96,6 +98,22 @@ def test_the_first_actor_update_after_the_frozen_steps_moves_the_actor(algorithm
     next_actor_update = (frozen // model.policy_delay + 1) * model.policy_delay
     model.train(gradient_steps=next_actor_update - frozen, batch_size=32)
     assert none_equal(actor_tensors(model), actor)
+
+
+class OwnTD3(TD3):
+    """A user's subclass of an algorithm."""
+
+
+def test_warm_start_classes_pickle_by_reference():
+    # pickle (and so multiprocessing, Ray) finds a class by module and name: each class lives in the module it names.
+    classes = [with_warm_start(algorithm) for algorithm in (TD3, DDPG, SAC, OwnTD3)]
+    assert [cls.__name__ for cls in classes] == ["WarmStartTD3", "WarmStartDDPG", "WarmStartSAC", "WarmStartOwnTD3"]
+    assert classes[:3] == [warm_start.WarmStartTD3, warm_start.WarmStartDDPG, warm_start.WarmStartSAC]
+    same_name = type("TD3", (TD3,), {"__module__": __name__})  # another algorithm named TD3: a name of its own
+    classes.append(with_warm_start(same_name))
+    assert classes[-1] is not classes[0] and issubclass(classes[-1], same_name)
+    for cls in classes:
+        assert pickle.loads(pickle.dumps(cls)) is cls and with_warm_start(cls.__bases__[1]) is cls
 
 
 def test_options_are_checked_with_one_line_errors():

@@ -21,11 +21,11 @@ Both are plain attributes of the model, so ``model.save`` keeps them and ``load`
 from __future__ import annotations
 
 import copy
-import functools
+import itertools
 from typing import Any
 
 import numpy as np
-from stable_baselines3 import TD3
+from stable_baselines3 import DDPG, SAC, TD3
 from stable_baselines3.common.noise import ActionNoise
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
@@ -93,10 +93,38 @@ class WarmStartMixin(OffPolicyAlgorithm):
         self.logger.record("train/actor_frozen", 1)
 
 
-@functools.cache
+class WarmStartTD3(WarmStartMixin, TD3):
+    """SB3's TD3 with :class:`WarmStartMixin`'s options (``with_warm_start(TD3)``)."""
+
+
+class WarmStartDDPG(WarmStartMixin, DDPG):
+    """SB3's DDPG with :class:`WarmStartMixin`'s options (``with_warm_start(DDPG)``)."""
+
+
+class WarmStartSAC(WarmStartMixin, SAC):
+    """SB3's SAC with :class:`WarmStartMixin`'s options, the warm-up alone (``with_warm_start(SAC)``)."""
+
+
+_WARM_STARTS: dict[type, type] = {TD3: WarmStartTD3, DDPG: WarmStartDDPG, SAC: WarmStartSAC}
+
+
 def with_warm_start(algorithm: type[OffPolicyAlgorithm]) -> type[OffPolicyAlgorithm]:
-    """``algorithm`` (TD3, DDPG, SAC, TQC, ...) with :class:`WarmStartMixin`'s options; the same class each call."""
-    return type(f"WarmStart{algorithm.__name__}", (WarmStartMixin, algorithm), {"__module__": __name__})
+    """``algorithm`` (TD3, DDPG, SAC, TQC, ...) with :class:`WarmStartMixin`'s options; the same class each call.
+
+    The class is an attribute of this module under its own name (``WarmStartTD3``; another algorithm's class is
+    made on its first call, ``WarmStartTQC``, with a number added where two algorithms share a name), so pickle,
+    multiprocessing and Ray find it by reference.
+    """
+    made = _WARM_STARTS.get(algorithm)
+    if made is None:
+        name = f"WarmStart{algorithm.__name__}"
+        for number in itertools.count(2):
+            if name not in globals():
+                break
+            name = f"WarmStart{algorithm.__name__}{number}"
+        made = type(name, (WarmStartMixin, algorithm), {"__module__": __name__, "__qualname__": name})
+        globals()[name] = _WARM_STARTS[algorithm] = made
+    return made
 
 
-__all__ = ["WarmStartMixin", "with_warm_start"]
+__all__ = ["WarmStartDDPG", "WarmStartMixin", "WarmStartSAC", "WarmStartTD3", "with_warm_start"]
