@@ -1,5 +1,6 @@
 """Fine-tuning hooks (antmaze_hirl.sb3_ext.warm_start): policy-driven warm-up, a critic-only start, resume."""
 
+import csv
 import pickle
 
 import gymnasium as gym
@@ -7,6 +8,7 @@ import numpy as np
 import pytest
 import torch as th
 from stable_baselines3 import DDPG, SAC, TD3
+from stable_baselines3.common.logger import configure
 from stable_baselines3.common.noise import ActionNoise
 
 from antmaze_hirl.sb3_ext import CheckpointError, load_config, make_model, save_policy, train_low_level, warm_start
@@ -98,6 +100,17 @@ def test_the_first_actor_update_after_the_frozen_steps_moves_the_actor(algorithm
     next_actor_update = (frozen // model.policy_delay + 1) * model.policy_delay
     model.train(gradient_steps=next_actor_update - frozen, batch_size=32)
     assert none_equal(actor_tensors(model), actor)
+
+
+def test_the_frozen_share_of_each_train_call_is_logged(tmp_path):
+    model = pendulum_td3(actor_frozen_steps=20)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(STARTS)
+    for step, gradient_steps in enumerate([15, 10, 4]):  # all frozen, half (steps 16-20 of 16-25), none
+        model.train(gradient_steps=gradient_steps, batch_size=32)
+        model.logger.dump(step)
+    rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
+    assert [float(row["train/actor_frozen"]) for row in rows] == [1.0, 0.5, 0.0]
 
 
 class OwnTD3(TD3):

@@ -72,6 +72,10 @@ class WarmStartMixin(OffPolicyAlgorithm):
             self._train_critics_only(frozen, batch_size)
         if gradient_steps > frozen:
             super().train(gradient_steps - frozen, batch_size)
+        if self.actor_frozen_steps > 0 and gradient_steps > 0:
+            # The share of this call's steps that left the actor alone: 1 while frozen, 0 after, a fraction in the
+            # call that crosses the boundary (a flag would call that call all frozen or all not).
+            self.logger.record("train/actor_frozen", frozen / gradient_steps)
 
     def _train_critics_only(self, gradient_steps: int, batch_size: int) -> None:
         # SB3's own update, with the actor's parameters out of autograd: the actor loss still backpropagates
@@ -90,7 +94,6 @@ class WarmStartMixin(OffPolicyAlgorithm):
                 parameter.requires_grad_(flag)
             actor.load_state_dict(kept[0])
             actor_target.load_state_dict(kept[1])
-        self.logger.record("train/actor_frozen", 1)
 
 
 class WarmStartTD3(WarmStartMixin, TD3):
