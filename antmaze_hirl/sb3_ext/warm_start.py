@@ -13,7 +13,11 @@ SB3 then does two things that undo the warm start:
   (plus the algorithm's usual exploration: TD3's action noise, SAC's sampling) instead of a uniform one.
 - ``actor_frozen_steps=N``: the model's first ``N`` gradient steps (SB3's ``_n_updates``, which a checkpoint
   keeps) update the critics and the critics' targets only; the actor, its Adam state and its target stay as
-  they are, so the critic first fits the new reward under the actor it is about to improve.
+  they are, so the critic first fits the new reward under the actor it is about to improve. After the freeze
+  the actor resumes with the Adam moments the warm start brought (fitted to another objective; with Adam's
+  default beta2 of 0.999 they fade over about a thousand actor updates). That is left so on purpose: it is the
+  state a fine-tune without the freeze starts from too, so the freeze changes when the actor starts to learn,
+  not how.
 
 Both are plain attributes of the model, so ``model.save`` keeps them and ``load`` restores them.
 """
