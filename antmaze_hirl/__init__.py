@@ -24,5 +24,7 @@ _EXPORTS = {
 
 __getattr__, __dir__, _lazy_all = lazy_exports(__name__, _EXPORTS, globals())
 
-# Besides the lazy exports, the names defined or imported above; written out so that linters see the re-exports.
+# Besides the lazy exports, the names defined or imported above. Written out, those three are what a static reader
+# sees (ruff takes ENV_IDS and register_envs as re-exports); pyright and griffe do not evaluate *_lazy_all, so the
+# lazy exports are listed for `import *` and dir() at run time only (test_layers checks them).
 __all__ = ["ENV_IDS", "__version__", "register_envs", *_lazy_all]

@@ -13,7 +13,13 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from antmaze_hirl.atomic_io import atomic_write_json
-from antmaze_hirl.cli_validation import LOW_LEVEL_VALUE, SB3_PICKLE_WARNING, SB3_ZIP_WARNING, apply_bounds
+from antmaze_hirl.cli_validation import (
+    INIT_FROM_VALUE,
+    LOW_LEVEL_VALUE,
+    SB3_PICKLE_WARNING,
+    SB3_ZIP_WARNING,
+    apply_bounds,
+)
 from antmaze_hirl.envs.bodies import BODY_SPECS
 from antmaze_hirl.experiments.backends import add_backend_arguments, backend_settings
 from antmaze_hirl.experiments.config import (
@@ -149,8 +155,7 @@ def _add_train_low(subparsers: _Subparsers) -> None:
         "--init-from",
         type=Path,
         default=None,
-        help="warm start from this policy .zip's weights (or a low-level name: shipped); "
-        f"{SB3_ZIP_WARNING} (default: none)",
+        help=f"warm start from this policy's weights: {INIT_FROM_VALUE}; {SB3_ZIP_WARNING} (default: none)",
     )
     parser.add_argument(
         "--init-buffer",

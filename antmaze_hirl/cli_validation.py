@@ -12,7 +12,8 @@ typo exhausts memory or time; distances and rates are finite and positive.
 
 :data:`SB3_ZIP_WARNING` is the warning that every option loading an SB3 zip gives in its help, and
 :data:`SB3_PICKLE_WARNING` the one every option loading an SB3 replay-buffer pickle gives;
-:data:`LOW_LEVEL_VALUE` says what an option naming a low-level policy takes.
+:data:`LOW_LEVEL_VALUE` says what an option naming a low-level policy takes, :data:`INIT_FROM_VALUE` what
+``train-low --init-from`` (a warm start) takes.
 """
 
 from __future__ import annotations
@@ -40,6 +41,15 @@ LOW_LEVEL_VALUE = (
 """What an option that names a low-level policy to load takes (``load_low_level``'s ``path``), as its help says it.
 The names are :data:`antmaze_hirl.sb3_ext.loading.LOW_LEVEL_NAMES`'; they are written out here because that module
 imports SB3, which building the parser must not."""
+
+INIT_FROM_VALUE = (
+    "an SB3 off-policy .zip of --algo's algorithm, not an action ensemble, or a low-level name of one: the point's "
+    "shipped"
+)
+"""What ``train-low --init-from`` takes (``warm_start_parameters``' ``init_from``), as its help says it. Narrower
+than :data:`LOW_LEVEL_VALUE`: a warm start copies one actor network, and an action ensemble's actor has one head a
+member, so the names that stand for one (the ant's ``shipped`` and ``ensemble``) are refused there. Written out for
+the reason :data:`LOW_LEVEL_VALUE` is."""
 
 SB3_PICKLE_WARNING = "SB3 replay buffers are pickles that can run code: load only files you trust"
 """The help of every option that loads an SB3 replay buffer (a plain pickle, ``load_replay_buffer``) says this."""

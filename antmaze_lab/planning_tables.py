@@ -12,8 +12,8 @@ learner's medians over its seeds;
 A file that is missing, is not JSON, or is not what the table reads (a screen file given to ``ends``, a second
 file given to a one-file table), and ``tasks`` or ``trials`` files that do not belong together
 (:func:`check_together`, :func:`check_trials`: trials of two bodies, or two of one variant and seed), and
-``ends-seeds`` arguments that are not ``LEARNER:SEED=FILE`` or files not rolled out alike (:func:`seed_labels`,
-:func:`check_seeds`), are refused in one line naming the file or argument, exit status 2.
+``ends-seeds`` arguments that are not ``LEARNER:SEED=FILE``, one file given twice or files not rolled out alike
+(:func:`seed_labels`, :func:`check_seeds`), are refused in one line naming the file or argument, exit status 2.
 """
 
 from __future__ import annotations
@@ -403,23 +403,30 @@ def seed_labels(arguments: list[str]) -> list[tuple[str, str, Path]]:
     """Each ``LEARNER:SEED=FILE`` argument of ``ends-seeds`` as (learner, seed, file).
 
     The labels are given, not read: an ends file records the learner's zip, not its variant or training seed. The
-    file is what follows the first ``=``, the learner what precedes the first ``:``; neither label may be empty.
+    file is what follows the first ``=``, the learner what precedes the first ``:``; neither label may be empty, and
+    each is read without the spaces around it (``switch :0`` is ``switch:0``).
 
     Raises:
-        ValueError: One line naming the argument that is not of that form, or the two of one learner and seed.
+        ValueError: One line naming the argument that is not of that form, the two files of one learner and seed,
+            or the file given twice (the same file however spelt: one run counted as two).
     """
     labelled: list[tuple[str, str, Path]] = []
     seen: dict[tuple[str, str], str] = {}
+    files: dict[Path, tuple[str, str]] = {}
     for argument in arguments:
         label, equals, path = argument.partition("=")
-        learner, colon, seed = label.partition(":")
-        if not (equals and colon and learner.strip() and seed.strip() and path):
+        learner, colon, seed = (part.strip() for part in label.partition(":"))
+        if not (equals and colon and learner and seed and path):
             raise ValueError(f"ends-seeds reads LEARNER:SEED=FILE arguments, got {argument!r}")
         if (learner, seed) in seen:
             raise ValueError(
                 f"{seen[learner, seed]} and {path} are both learner {learner} seed {seed} (one file a seed)"
             )
+        if (file := Path(path).resolve()) in files:
+            first_path, first_label = files[file]
+            raise ValueError(f"{first_path} is given twice (as {first_label} and {learner}:{seed}; one file a seed)")
         seen[learner, seed] = path
+        files[file] = (path, f"{learner}:{seed}")
         labelled.append((learner, seed, Path(path)))
     return labelled
 

@@ -5,6 +5,7 @@ import functools
 import itertools
 import os
 import re
+import shlex
 import sys
 from collections import OrderedDict
 from pathlib import Path
@@ -36,29 +37,103 @@ def one_torch_thread():
 _ROOT = Path(__file__).resolve().parents[1]
 COMMITTED_RESULTS = str(_ROOT / "results") + os.sep
 """The lab's committed results, which the unit tier never reads (its checks are integration tests)."""
-LAB_CODE = tuple(str(_ROOT / folder) + os.sep for folder in ("antmaze_lab", "scripts", "benchmarks"))
+LAB_PACKAGES = ("antmaze_lab", "scripts", "benchmarks")
+"""The lab's top-level packages and folders, which the unit tier never runs (CONTRIBUTING.md)."""
+LAB_CODE = tuple(str(_ROOT / folder) + os.sep for folder in LAB_PACKAGES)
 """The lab's code, which the unit tier never runs: its checks are integration tests (CONTRIBUTING.md)."""
 UNIT_TIER_GUARD = False
 """Whether this run refuses to open a file under :data:`COMMITTED_RESULTS` or to run the lab's code
-(:data:`LAB_CODE`): a run that leaves out integration."""
+(:data:`LAB_CODE`), in this process or through a command line it starts: a run that leaves out integration."""
+
+_MARK_INTEGRATION = "; mark the test integration (pyproject.toml)"
+_COMMAND_LINES = {
+    # audit event: (executable, argv, cwd) from its arguments (the Python docs' audit events table)
+    "subprocess.Popen": lambda args: (args[0], args[1], args[2]),
+    "os.system": lambda args: ("/bin/sh", ["/bin/sh", "-c", args[0]], None),
+    "os.posix_spawn": lambda args: (args[0], args[1], None),
+    "os.exec": lambda args: (args[0], args[1], None),
+    "os.spawn": lambda args: (args[1], args[2], None),
+}
+
+
+def _refused_path(text: str, cwd: str, named: str | None = None) -> Exception | None:
+    """The error for a path (relative ones to ``cwd``) under the results or the lab's code, the folders themselves
+    too; ``named`` is what the message names (default: the path)."""
+    path = os.path.abspath(os.path.join(cwd, text))
+    if (path + os.sep).startswith(COMMITTED_RESULTS):
+        return PermissionError(f"the unit tier reads no committed results: {named or path}{_MARK_INTEGRATION}")
+    if (path + os.sep).startswith(LAB_CODE):
+        return ImportError(f"the unit tier runs none of the lab's code: {named or path}{_MARK_INTEGRATION}")
+    return None
+
+
+def _refused_code(code: str, cwd: str) -> Exception | None:
+    """The error for a ``-c`` string (Python's or a shell's) that names the lab or the results: ``antmaze_lab``
+    anywhere, an import of ``scripts``/``benchmarks``, or a quoted string or shell word that is such a path."""
+    named = f"-c {code[:120]!r}"
+    if "antmaze_lab" in code or re.search(r"\b(?:import|from)\s+(?:scripts|benchmarks)\b", code):
+        return ImportError(f"the unit tier runs none of the lab's code: {named}{_MARK_INTEGRATION}")
+    try:
+        words = shlex.split(code)
+    except ValueError:  # Python code is seldom a balanced shell line
+        words = []
+    quoted = [match.group(2) for match in re.finditer(r"(['\"])(.*?)\1", code)]
+    absolute = [folder for folder in (COMMITTED_RESULTS, *LAB_CODE) if folder.rstrip(os.sep) in code]
+    for text in [*absolute, *quoted, *words]:
+        if refusal := _refused_path(text, cwd, named):
+            return refusal
+    return None
+
+
+def _interpreter_options(argv: list[str]):
+    """Each ``-m``/``-c`` option of a command line and its value, joined (``-mname``) or in a cluster (``-Im``)."""
+    for index, word in enumerate(argv):
+        if not word.startswith("-") or word.startswith("--"):
+            continue
+        for position, letter in enumerate(word[1:], start=2):
+            if letter in "WX":  # options whose value may hold an m or a c (-Ximporttime)
+                break
+            if letter in "mc":
+                value = word[position:] or (argv[index + 1] if index + 1 < len(argv) else "")
+                yield f"-{letter}", value
+                break
+
+
+def _refused_command(executable, argv, cwd) -> Exception | None:
+    """The error for a command line that names the lab or the results: a path among its words (relative ones to
+    ``cwd``, else to this process's), ``-m`` with a lab package, or a ``-c`` string as :func:`_refused_code`."""
+    cwd = os.getcwd() if cwd is None else os.fsdecode(cwd)
+    argv = [argv] if isinstance(argv, (str, bytes, os.PathLike)) else list(argv)
+    words = [os.fsdecode(word) for word in (executable, *argv) if isinstance(word, (str, bytes, os.PathLike))]
+    for word in words:
+        if refusal := _refused_path(word, cwd):
+            return refusal
+    for option, value in _interpreter_options(words):
+        if option == "-m" and value.split(".")[0] in LAB_PACKAGES:
+            return ImportError(f"the unit tier runs none of the lab's code: -m {value}{_MARK_INTEGRATION}")
+        if option == "-c" and (refusal := _refused_code(value, cwd)):
+            return refusal
+    return None
 
 
 def _unit_tier_guard(event, args):
     # An audit hook (sys.addaudithook): open() and its kin raise "open" before they touch the file, and exec()
     # raises "exec" with the code object it runs, which is how every import or path load of a module runs its
-    # body. So the guard sees the lab however a test reaches it (an import, importlib by name or path, a helper
-    # module that imports it), where the static scan of tests/test_lab_split.py sees only the forms it parses.
-    if event == "open" and isinstance(args[0], (str, os.PathLike)):
-        path = os.path.abspath(os.fspath(args[0]))
-        if isinstance(path, str) and path.startswith(COMMITTED_RESULTS):
-            raise PermissionError(
-                f"the unit tier reads no committed results: {path}; mark the test integration (pyproject.toml)"
-            )
+    # body. So the guard sees the lab however a test reaches it in this process (an import, importlib by name or
+    # path, a helper module that imports it), where the static scan of tests/test_lab_split.py sees only the forms
+    # it parses. A child process has no hook: its command line is judged before it starts (subprocess, os.system,
+    # os.exec*/spawn*), which refuses a lab path, -m of a lab package, or a -c naming either. What a child does
+    # beyond its command line is not seen: a helper module it imports that imports the lab, a console script or
+    # a module of the package that loads the lab, a file path the child builds itself, PYTHONPATH/PYTHONSTARTUP
+    # in its environment.
+    if event == "open" and isinstance(args[0], (str, bytes, os.PathLike)):
+        path = os.path.abspath(os.fsdecode(args[0]))
+        if path.startswith(COMMITTED_RESULTS):
+            raise PermissionError(f"the unit tier reads no committed results: {path}{_MARK_INTEGRATION}")
     elif event == "exec" and str(getattr(args[0], "co_filename", "")).startswith(LAB_CODE):
-        raise ImportError(
-            f"the unit tier runs none of the lab's code: {args[0].co_filename}; mark the test integration "
-            "(pyproject.toml)"
-        )
+        raise ImportError(f"the unit tier runs none of the lab's code: {args[0].co_filename}{_MARK_INTEGRATION}")
+    elif event in _COMMAND_LINES and (refusal := _refused_command(*_COMMAND_LINES[event](args))):
+        raise refusal
 
 
 def pytest_configure(config):
@@ -87,13 +162,39 @@ def marks_out(marker: ast.AST) -> bool:
     return bool(_left_out_marks(marker))
 
 
+def _names_pytestmark(node: ast.AST) -> bool:
+    """Whether ``node`` names ``pytestmark`` in any way the source shows: the name itself (bound, read, deleted or
+    declared global), an attribute or import alias of that name, or the string ``"pytestmark"`` (``globals()[...]``,
+    ``setattr``)."""
+    if isinstance(node, ast.Name):
+        return node.id == "pytestmark"
+    if isinstance(node, ast.Attribute):
+        return node.attr == "pytestmark"
+    if isinstance(node, ast.alias):
+        return "pytestmark" in (node.name, node.asname)
+    if isinstance(node, (ast.Global, ast.Nonlocal)):
+        return "pytestmark" in node.names
+    return isinstance(node, ast.Constant) and node.value == "pytestmark"
+
+
 def whole_file_marks(tree: ast.Module) -> frozenset[str]:
-    """The :data:`LEFT_OUT` markers a test module's top-level ``pytestmark`` puts on every test of it."""
-    marks: set[str] = set()
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(target, "id", "") == "pytestmark" for target in node.targets):
-            marks |= _left_out_marks(node.value)
-    return frozenset(marks)
+    """The :data:`LEFT_OUT` markers a test module's top-level ``pytestmark`` puts on every test of it.
+
+    Read only where the source settles the value pytest will see: pytest reads the module's ``pytestmark`` as it is
+    after the import, so the file must name ``pytestmark`` exactly once, as a target of a top-level ``=``
+    statement. Any other mention (a second assignment, one inside ``if``/``try``/a function, ``+=``, an annotated
+    assignment, a method call on it, ``globals()["pytestmark"]``) gives the empty set: the file is imported and
+    pytest decides.
+    """
+    mentions = [node for node in ast.walk(tree) if _names_pytestmark(node)]
+    assignments = [
+        node
+        for node in tree.body
+        if isinstance(node, ast.Assign) and any(_names_pytestmark(target) for target in node.targets)
+    ]
+    if len(mentions) != 1 or len(assignments) != 1 or not isinstance(mentions[0], ast.Name):
+        return frozenset()
+    return frozenset(_left_out_marks(assignments[0].value))
 
 
 def marked_out_whole(tree: ast.Module) -> bool:
@@ -137,7 +238,11 @@ def pytest_ignore_collect(collection_path, config):
     # lab's code in a tier that runs none). The marks are read from the source, not by importing it.
     if collection_path.suffix != ".py" or not collection_path.name.startswith("test_"):
         return None
-    markers = whole_file_marks(ast.parse(collection_path.read_bytes(), filename=str(collection_path)))
+    try:
+        tree = ast.parse(collection_path.read_bytes(), filename=str(collection_path))
+    except (OSError, SyntaxError, ValueError):  # ValueError: a null byte, before Python 3.12
+        return None  # pytest imports it and reports the file's own error; raised here, it fails the whole folder
+    markers = whole_file_marks(tree)
     if markers and not selects_a_test_marked(config.getoption("markexpr") or "", markers):
         return True
     return None

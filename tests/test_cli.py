@@ -16,7 +16,13 @@ from stable_baselines3 import PPO, SAC
 
 from antmaze_hirl import load_low_level
 from antmaze_hirl.cli import SUBCOMMANDS, build_parser, main
-from antmaze_hirl.cli_validation import LOW_LEVEL_VALUE, SB3_PICKLE_WARNING, SB3_ZIP_WARNING, all_options
+from antmaze_hirl.cli_validation import (
+    INIT_FROM_VALUE,
+    LOW_LEVEL_VALUE,
+    SB3_PICKLE_WARNING,
+    SB3_ZIP_WARNING,
+    all_options,
+)
 from antmaze_hirl.envs.reach import ReachEnv
 from antmaze_hirl.experiments.config import DEFAULT_METHODS, ExperimentConfig, body_settings
 from antmaze_hirl.sb3_ext import CheckpointError
@@ -97,17 +103,37 @@ def test_every_option_that_loads_a_zip_or_pickle_warns_in_its_help():
     assert WRITTEN_NOT_LOADED <= named  # the exemptions still exist and still name a zip
 
 
-LOW_LEVEL_OPTIONS = (("eval-low", "--policy"), ("benchmark", "--low-level"))
-"""Options that load a low level by path or name (``load_low_level``'s ``path``)."""
+LOW_LEVEL_OPTIONS = {
+    ("eval-low", "--policy"): LOW_LEVEL_VALUE,
+    ("benchmark", "--low-level"): LOW_LEVEL_VALUE,
+    ("train-low", "--init-from"): INIT_FROM_VALUE,
+}
+"""Options that load a low level by path or name (``low_level_path``), with what their help says they take."""
 
 
 def test_options_that_load_a_low_level_say_which_names_they_take():
     options = _named_options()
-    for key in LOW_LEVEL_OPTIONS:
-        assert LOW_LEVEL_VALUE in options[key].help, f"{key}: {options[key].help!r}"
+    for key, value in LOW_LEVEL_OPTIONS.items():
+        assert value in options[key].help, f"{key}: {options[key].help!r}"
     # The help's words are written out (loading's module imports SB3): a name added there must join them.
     for name in {name for names in LOW_LEVEL_NAMES.values() for name in names}:
         assert re.search(rf"\b{name}\b", LOW_LEVEL_VALUE), f"LOW_LEVEL_VALUE does not name {name!r}"
+
+
+def test_init_froms_help_names_exactly_the_low_level_names_a_warm_start_accepts():
+    # A warm start copies one actor: a name that stands for an action ensemble is refused, so the help names the
+    # others, each as "the BODY's NAME".
+    from antmaze_hirl.sb3_ext.training import warm_start_parameters
+
+    for body, names in LOW_LEVEL_NAMES.items():
+        for name in names:
+            try:
+                warm_start_parameters(body, "td3", name)
+                accepted = True
+            except ValueError as error:
+                assert "is an action ensemble" in str(error), error
+                accepted = False
+            assert (f"the {body}'s {name}" in INIT_FROM_VALUE) is accepted, (body, name, INIT_FROM_VALUE)
 
 
 def test_top_level_help_has_no_markup(capsys):

@@ -3,12 +3,14 @@ unit tier reads no committed results (the lab's data; its checks run in the inte
 
 import ast
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
 import zipfile
 from itertools import pairwise
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from conftest import (
@@ -17,6 +19,7 @@ from conftest import (
     UNIT_TIER_GUARD,
     marked_out_whole,
     marks_out,
+    pytest_ignore_collect,
     selects_a_test_marked,
     whole_file_marks,
 )
@@ -128,6 +131,56 @@ def test_the_unit_tier_refuses_to_run_the_lab_however_it_is_reached(tmp_path):
     with pytest.raises(ImportError, match=r"benchmarks.trial_speed\.py; mark the test integration"):
         spec.loader.exec_module(importlib.util.module_from_spec(spec))
     assert not [name for name in sys.modules if name.split(".")[0] in LAB]
+    with pytest.raises(ImportError, match=r"^the unit tier runs none of the lab's code: -c 'import antmaze_lab'; mark"):
+        subprocess.run([sys.executable, "-c", "import antmaze_lab"], capture_output=True, timeout=60)  # no hook there
+    # A bytes path names a file as a str does.
+    with pytest.raises(PermissionError, match=r"^the unit tier reads no committed results: .*index\.json; mark the"):
+        open(str(Path(COMMITTED_RESULTS) / "index.json").encode(), "rb")
+
+
+@pytest.mark.parametrize(
+    ("command", "cwd", "refused", "named"),
+    [
+        (["-c", "import antmaze_lab"], None, ImportError, r"-c 'import antmaze_lab'"),
+        (["-c", "from scripts import no_such"], None, ImportError, r"-c 'from scripts import no_such'"),
+        (["-m", "antmaze_" + "lab.no_such"], None, ImportError, r"-m antmaze_lab\.no_such"),
+        (["-Im", "benchmarks.no_such"], None, ImportError, r"-m benchmarks\.no_such"),
+        (["-mscripts.no_such"], None, ImportError, r"-m scripts\.no_such"),
+        ([ROOT / "benchmarks" / "no_such.py"], None, ImportError, r".*benchmarks.no_such\.py"),
+        ([b"scripts/no_such.py"], ROOT, ImportError, r".*scripts.no_such\.py"),
+        (["no_such.py"], ROOT / "benchmarks", ImportError, r".*benchmarks.no_such\.py"),  # the cwd given
+        (["-c", "open('results/index.json')"], ROOT, PermissionError, r"-c \"open\('results/index\.json'\)\""),
+        (
+            ["-c", f"open({COMMITTED_RESULTS + 'index.json'!r})"],
+            "/",
+            PermissionError,
+            r"-c \"open\('/.*/index\.json'\)\"",
+        ),
+    ],
+    ids=["c-import", "c-from", "m", "m-joined", "m-attached", "pathlike", "bytes", "cwd", "c-results", "c-absolute"],
+)
+def test_the_unit_tier_refuses_a_command_line_that_runs_the_lab_or_reads_the_results(command, cwd, refused, named):
+    # A child process runs without this process's audit hook: its command line is judged before it starts. The
+    # names are ones that do not exist, so that a guard that let one through fails fast.
+    if not UNIT_TIER_GUARD:
+        pytest.skip("the guard is on in the unit tier only (-m 'not integration')")
+    kind = "runs none of the lab's code" if refused is ImportError else "reads no committed results"
+    with pytest.raises(refused, match=rf"^the unit tier {kind}: {named}; mark the test integration"):
+        subprocess.run([sys.executable, *command], cwd=cwd, capture_output=True, timeout=60)
+
+
+def test_the_unit_tier_refuses_a_shell_command_that_names_the_lab():
+    if not UNIT_TIER_GUARD:
+        pytest.skip("the guard is on in the unit tier only (-m 'not integration')")
+    lab = r"^the unit tier runs none of the lab's code: -c 'python scripts/no_such\.py'; mark"
+    with pytest.raises(ImportError, match=lab):
+        subprocess.run("python scripts/no_such.py", shell=True, cwd=ROOT, capture_output=True, timeout=60)
+    results = r"^the unit tier reads no committed results: -c 'cat results/index\.json >/dev/null'; mark"
+    with pytest.raises(PermissionError, match=results):
+        os.system("cat results/index.json >/dev/null")
+    # Other commands run, from the checkout too: the package, a path that only contains a lab folder's name.
+    ok = [sys.executable, "-c", "import antmaze_hirl, sys; print(sys.argv[1:])", "docs/scripts/results", "-m", "x"]
+    assert subprocess.run(ok, cwd=ROOT, capture_output=True, text=True, timeout=120, check=True).stdout.strip()
 
 
 def unit_tier_lab_imports(path: Path) -> list[tuple[int, str]]:
@@ -191,6 +244,18 @@ def test_the_unit_tier_never_imports_the_lab(tmp_path):
         ("pytestmark = pytest.mark.integration", "", True),
         ("x = [pytest.param(1, marks=pytest.mark.integration)]", "not integration", True),  # one case, not the file
         ("@pytest.mark.integration\ndef test_one():\n    pass", "not integration", True),  # one test, not the file
+        # pytest reads pytestmark as the module holds it after import: a file that binds it more than once, or
+        # other than by one top-level assignment, is imported and pytest decides.
+        ("pytestmark = pytest.mark.integration\npytestmark = []", "not integration", True),
+        ("pytestmark = []\npytestmark = pytest.mark.integration", "not integration", True),
+        ("if True:\n    pytestmark = pytest.mark.integration", "not integration", True),
+        ("try:\n    pytestmark = pytest.mark.integration\nexcept ImportError:\n    pass", "not integration", True),
+        ("def f():\n    global pytestmark\n    pytestmark = pytest.mark.integration", "not integration", True),
+        ("pytestmark = [pytest.mark.integration]\npytestmark += [pytest.mark.slow]", "not integration", True),
+        ("pytestmark: list = [pytest.mark.integration]", "not integration", True),
+        ("pytestmark = [pytest.mark.integration]\npytestmark.clear()", "not integration", True),
+        ("pytestmark = pytest.mark.integration\nglobals()['pytestmark'] = []", "not integration", True),
+        ("pytestmark = other = pytest.mark.integration", "not integration", False),  # one binding, two names
     ],
 )
 def test_a_file_is_left_unimported_only_where_the_marker_expression_selects_none_of_its_tests(
@@ -200,3 +265,22 @@ def test_a_file_is_left_unimported_only_where_the_marker_expression_selects_none
     # no test is dropped from any tier (CI runs "not slow and not integration", then "integration or slow").
     markers = whole_file_marks(ast.parse("import pytest\n" + source))
     assert (not markers or selects_a_test_marked(markexpr, markers)) is imported
+
+
+@pytest.mark.parametrize(
+    "source",
+    [
+        b"import pytest\npytestmark = pytest.mark.integration\ndef test_x(:\n",
+        b"# -*- coding: no-such-codec -*-\nimport pytest\npytestmark = pytest.mark.integration\n",
+        b"import pytest\npytestmark = pytest.mark.integration\nNAME = '\xff'\n",  # not UTF-8
+        b"import pytest\x00\n",
+    ],
+    ids=["syntax", "codec", "bytes", "null"],
+)
+def test_a_file_that_does_not_parse_is_left_to_pytest(tmp_path, source):
+    # pytest imports it and reports the file's own collection error; an error raised from the hook fails the
+    # collection of the whole folder instead (no test of it is collected).
+    path = tmp_path / "test_broken.py"
+    path.write_bytes(source)
+    config = SimpleNamespace(getoption={"markexpr": "not slow and not integration"}.get)
+    assert pytest_ignore_collect(path, config) is None

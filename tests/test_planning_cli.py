@@ -267,11 +267,17 @@ def seed_ends(*per_place, body="ant", tasks=10):
 
 
 def seed_tables(tmp_path, capsys, *labelled):
-    """``planning_tables ends-seeds``' exit status, output (or error line) and files, from (label, file) pairs."""
+    """``planning_tables ends-seeds``' exit status, output (or error line) and files, from (label, file) pairs.
+
+    A file given as an int ``k`` is the ``k``-th pair's file again, spelt another way (``sub/../``)."""
     arguments, paths = [], []
+    (tmp_path / "sub").mkdir(exist_ok=True)
     for index, (label, data) in enumerate(labelled):
-        path = tmp_path / f"s{index}.json"
-        path.write_text(json.dumps(data))
+        path = (
+            tmp_path / "sub" / ".." / Path(paths[data]).name if isinstance(data, int) else tmp_path / f"s{index}.json"
+        )
+        if not isinstance(data, int):
+            path.write_text(json.dumps(data))
         arguments.append(f"{label}={path}")
         paths.append(str(path))
     status = planning_tables.main(["ends-seeds", *arguments])
@@ -318,6 +324,9 @@ ONE = seed_ends((1, 0, 0, 0, 0))
         ([(":0", ONE)], "ends-seeds reads LEARNER:SEED=FILE arguments, got ':0={0}'"),
         ([("switch:", ONE)], "ends-seeds reads LEARNER:SEED=FILE arguments, got 'switch:={0}'"),
         ([("switch:0", ONE)] * 2, "{0} and {1} are both learner switch seed 0 (one file a seed)"),
+        ([("switch :0", ONE), (" switch: 0 ", ONE)], "{0} and {1} are both learner switch seed 0 (one file a seed)"),
+        ([("switch:0", ONE), ("switch:1", 0)], "{0} is given twice (as switch:0 and switch:1; one file a seed)"),
+        ([("switch:0", ONE), ("plan:0", 0)], "{0} is given twice (as switch:0 and plan:0; one file a seed)"),
         (
             [("switch:0", ONE), ("plan:0", seed_ends((1, 0, 0, 0, 0), body="point"))],
             "{1} rolled out point: selection 10; {0} ant: selection 10 (one body, places and tasks a table)",

@@ -1,13 +1,17 @@
 """Fine-tuning hooks (antmaze_hirl.sb3_ext.warm_start): policy-driven warm-up, a critic-only start, resume."""
 
+import csv
+import pickle
+
 import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-from stable_baselines3 import SAC, TD3
+from stable_baselines3 import DDPG, SAC, TD3
+from stable_baselines3.common.logger import configure
 from stable_baselines3.common.noise import ActionNoise
 
-from antmaze_hirl.sb3_ext import CheckpointError, load_config, make_model, save_policy, train_low_level
+from antmaze_hirl.sb3_ext import CheckpointError, load_config, make_model, save_policy, train_low_level, warm_start
 from antmaze_hirl.sb3_ext.warm_start import WarmStartMixin, with_warm_start
 
 STARTS = 64  # learning_starts of the Pendulum models: warm-up steps, all in Pendulum's first 200-step episode
@@ -24,9 +28,9 @@ class BoundedNoise(ActionNoise):
         return self.rng.uniform(-self.bound, self.bound, self.size)
 
 
-def pendulum_td3(**kwargs):
+def pendulum_td3(algorithm=TD3, **kwargs):
     options = {"learning_starts": STARTS, "batch_size": 32, "policy_kwargs": {"net_arch": [16, 16]}, "seed": 0}
-    return with_warm_start(TD3)("MlpPolicy", gym.make("Pendulum-v1"), verbose=0, **{**options, **kwargs})
+    return with_warm_start(algorithm)("MlpPolicy", gym.make("Pendulum-v1"), verbose=0, **{**options, **kwargs})
 
 
 def warmup_gaps(model):
@@ -81,6 +85,48 @@ def test_frozen_steps_train_the_critics_only_and_the_actor_afterwards():
     assert none_equal(critic_tensors(model), critic)  # both critics and their targets moved
     model.train(gradient_steps=6, batch_size=32)  # the boundary inside one call: steps 16-21 train the actor
     assert model._n_updates == 21 and none_equal(actor_tensors(model), actor)
+
+
+@pytest.mark.parametrize(("algorithm", "frozen"), [(TD3, 15), (TD3, 16), (DDPG, 15)])
+def test_the_first_actor_update_after_the_frozen_steps_moves_the_actor(algorithm, frozen):
+    # The boundary exactly: train(frozen) leaves the actor as it was (an off-by-one early would move it where that
+    # step is an actor update: DDPG's every step, TD3's even ones), and the next step that is an actor update
+    # (TD3 updates its actor every policy_delay = 2 steps) moves it (an off-by-one late would not).
+    model = pendulum_td3(algorithm, actor_frozen_steps=frozen)
+    model.learn(STARTS)
+    actor = actor_tensors(model)
+    model.train(gradient_steps=frozen, batch_size=32)
+    assert model._n_updates == frozen and all_equal(actor_tensors(model), actor) and not model.actor.optimizer.state
+    next_actor_update = (frozen // model.policy_delay + 1) * model.policy_delay
+    model.train(gradient_steps=next_actor_update - frozen, batch_size=32)
+    assert none_equal(actor_tensors(model), actor)
+
+
+def test_the_frozen_share_of_each_train_call_is_logged(tmp_path):
+    model = pendulum_td3(actor_frozen_steps=20)
+    model.set_logger(configure(str(tmp_path), ["csv"]))
+    model.learn(STARTS)
+    for step, gradient_steps in enumerate([15, 10, 4]):  # all frozen, half (steps 16-20 of 16-25), none
+        model.train(gradient_steps=gradient_steps, batch_size=32)
+        model.logger.dump(step)
+    rows = list(csv.DictReader((tmp_path / "progress.csv").open()))
+    assert [float(row["train/actor_frozen"]) for row in rows] == [1.0, 0.5, 0.0]
+
+
+class OwnTD3(TD3):
+    """A user's subclass of an algorithm."""
+
+
+def test_warm_start_classes_pickle_by_reference():
+    # pickle (and so multiprocessing, Ray) finds a class by module and name: each class lives in the module it names.
+    classes = [with_warm_start(algorithm) for algorithm in (TD3, DDPG, SAC, OwnTD3)]
+    assert [cls.__name__ for cls in classes] == ["WarmStartTD3", "WarmStartDDPG", "WarmStartSAC", "WarmStartOwnTD3"]
+    assert classes[:3] == [warm_start.WarmStartTD3, warm_start.WarmStartDDPG, warm_start.WarmStartSAC]
+    same_name = type("TD3", (TD3,), {"__module__": __name__})  # another algorithm named TD3: a name of its own
+    classes.append(with_warm_start(same_name))
+    assert classes[-1] is not classes[0] and issubclass(classes[-1], same_name)
+    for cls in classes:
+        assert pickle.loads(pickle.dumps(cls)) is cls and with_warm_start(cls.__bases__[1]) is cls
 
 
 def test_options_are_checked_with_one_line_errors():

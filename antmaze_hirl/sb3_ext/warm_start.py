@@ -13,7 +13,11 @@ SB3 then does two things that undo the warm start:
   (plus the algorithm's usual exploration: TD3's action noise, SAC's sampling) instead of a uniform one.
 - ``actor_frozen_steps=N``: the model's first ``N`` gradient steps (SB3's ``_n_updates``, which a checkpoint
   keeps) update the critics and the critics' targets only; the actor, its Adam state and its target stay as
-  they are, so the critic first fits the new reward under the actor it is about to improve.
+  they are, so the critic first fits the new reward under the actor it is about to improve. After the freeze
+  the actor resumes with the Adam moments the warm start brought (fitted to another objective; with Adam's
+  default beta2 of 0.999 they fade over about a thousand actor updates). That is left so on purpose: it is the
+  state a fine-tune without the freeze starts from too, so the freeze changes when the actor starts to learn,
+  not how.
 
 Both are plain attributes of the model, so ``model.save`` keeps them and ``load`` restores them.
 """
@@ -21,11 +25,11 @@ Both are plain attributes of the model, so ``model.save`` keeps them and ``load`
 from __future__ import annotations
 
 import copy
-import functools
+import itertools
 from typing import Any
 
 import numpy as np
-from stable_baselines3 import TD3
+from stable_baselines3 import DDPG, SAC, TD3
 from stable_baselines3.common.noise import ActionNoise
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 
@@ -72,6 +76,10 @@ class WarmStartMixin(OffPolicyAlgorithm):
             self._train_critics_only(frozen, batch_size)
         if gradient_steps > frozen:
             super().train(gradient_steps - frozen, batch_size)
+        if self.actor_frozen_steps > 0 and gradient_steps > 0:
+            # The share of this call's steps that left the actor alone: 1 while frozen, 0 after, a fraction in the
+            # call that crosses the boundary (a flag would call that call all frozen or all not).
+            self.logger.record("train/actor_frozen", frozen / gradient_steps)
 
     def _train_critics_only(self, gradient_steps: int, batch_size: int) -> None:
         # SB3's own update, with the actor's parameters out of autograd: the actor loss still backpropagates
@@ -90,13 +98,40 @@ class WarmStartMixin(OffPolicyAlgorithm):
                 parameter.requires_grad_(flag)
             actor.load_state_dict(kept[0])
             actor_target.load_state_dict(kept[1])
-        self.logger.record("train/actor_frozen", 1)
 
 
-@functools.cache
+class WarmStartTD3(WarmStartMixin, TD3):
+    """SB3's TD3 with :class:`WarmStartMixin`'s options (``with_warm_start(TD3)``)."""
+
+
+class WarmStartDDPG(WarmStartMixin, DDPG):
+    """SB3's DDPG with :class:`WarmStartMixin`'s options (``with_warm_start(DDPG)``)."""
+
+
+class WarmStartSAC(WarmStartMixin, SAC):
+    """SB3's SAC with :class:`WarmStartMixin`'s options, the warm-up alone (``with_warm_start(SAC)``)."""
+
+
+_WARM_STARTS: dict[type, type] = {TD3: WarmStartTD3, DDPG: WarmStartDDPG, SAC: WarmStartSAC}
+
+
 def with_warm_start(algorithm: type[OffPolicyAlgorithm]) -> type[OffPolicyAlgorithm]:
-    """``algorithm`` (TD3, DDPG, SAC, TQC, ...) with :class:`WarmStartMixin`'s options; the same class each call."""
-    return type(f"WarmStart{algorithm.__name__}", (WarmStartMixin, algorithm), {"__module__": __name__})
+    """``algorithm`` (TD3, DDPG, SAC, TQC, ...) with :class:`WarmStartMixin`'s options; the same class each call.
+
+    The class is an attribute of this module under its own name (``WarmStartTD3``; another algorithm's class is
+    made on its first call, ``WarmStartTQC``, with a number added where two algorithms share a name), so pickle,
+    multiprocessing and Ray find it by reference.
+    """
+    made = _WARM_STARTS.get(algorithm)
+    if made is None:
+        name = f"WarmStart{algorithm.__name__}"
+        for number in itertools.count(2):
+            if name not in globals():
+                break
+            name = f"WarmStart{algorithm.__name__}{number}"
+        made = type(name, (WarmStartMixin, algorithm), {"__module__": __name__, "__qualname__": name})
+        globals()[name] = _WARM_STARTS[algorithm] = made
+    return made
 
 
-__all__ = ["WarmStartMixin", "with_warm_start"]
+__all__ = ["WarmStartDDPG", "WarmStartMixin", "WarmStartSAC", "WarmStartTD3", "with_warm_start"]
