@@ -204,7 +204,6 @@ def train_low_level(
             from their stored infos (an entry they lack counts as its default: a buffer recorded without
             ``info["uprightness"]`` carries no tilt penalty); its unrelabelled transitions keep their
             stored rewards. Resume rules as ``init_from``.
-
         checkpoint_freq: Environment steps between checkpoints.
         eval_freq: Environment steps between success-rate evaluations.
         eval_episodes: Held-out subgoals per evaluation.
